@@ -1,0 +1,73 @@
+/*
+ * adapters.h — the C interface of the four C++ adapters.
+ *
+ * One adapter per library (openmesh_adapter.cpp, cgal_adapter.cpp,
+ * openvdb_adapter.cpp, draco_adapter.cpp). Each is a thin translation layer:
+ * C arrays in, C arrays out, every exception caught at the extern "C"
+ * boundary and returned as a meso_result with a message. No project logic
+ * lives in them. An adapter whose library is missing is not compiled, and
+ * MESO_HAVE_<LIB> is 0; callers then report MESO_ERR_UNSUPPORTED (exit 5).
+ */
+#ifndef MESO_ADAPTERS_H
+#define MESO_ADAPTERS_H
+
+#include "meso_bake.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* >>openmesh ------------------------------------------------------------- */
+
+/* Read OBJ, OFF, PLY, STL or OM (by extension) into `out`, triangulated, with
+ * area-weighted vertex normals computed by OpenMesh. Texture coordinates are
+ * kept when the file has per-vertex ones. Faces OpenMesh refuses (complex
+ * edges of non-manifold input) are counted in *dropped_faces (may be NULL). */
+meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint32_t* dropped_faces, meso_error* err);
+
+/* >>cgal ---------------------------------------------------------------- */
+
+typedef struct meso_cgal_inside meso_cgal_inside;
+
+/* Build an AABB tree over a closed triangle mesh for exact point-in-mesh
+ * queries (CGAL::Side_of_triangle_mesh, exact predicates). */
+meso_result meso_cgal_inside_create(const meso_mesh* m, meso_cgal_inside** out, meso_error* err);
+/* side[i] = 1 inside, -1 outside, 0 on the surface, for points xyz[3*i]. */
+meso_result meso_cgal_inside_query(const meso_cgal_inside* t, const double* xyz, size_t count, int8_t* side,
+                                   meso_error* err);
+void meso_cgal_inside_destroy(meso_cgal_inside* t);
+
+/* >>openvdb ------------------------------------------------------------- */
+
+typedef struct meso_vdb_grid meso_vdb_grid;
+
+/* Narrow-band signed distance level set of a closed mesh (OpenVDB
+ * meshToLevelSet): negative inside. half_width is in voxels. */
+meso_result meso_vdb_level_set(const meso_mesh* m, double voxel_size, float half_width, meso_vdb_grid** out,
+                               meso_error* err);
+/* Trilinearly sampled signed distance at world points. */
+meso_result meso_vdb_sample(const meso_vdb_grid* g, const double* xyz, size_t count, float* dist, meso_error* err);
+/* Active voxel count (sparse storage actually used). */
+uint64_t meso_vdb_active_voxels(const meso_vdb_grid* g);
+void meso_vdb_destroy(meso_vdb_grid* g);
+
+/* >>draco --------------------------------------------------------------- */
+
+typedef struct meso_draco_options {
+    int position_bits; /* quantisation bits, default 14 */
+    int normal_bits;   /* default 10 */
+    int uv_bits;       /* default 12 */
+    int speed;         /* 0 (best) .. 10 (fastest), default 7 */
+} meso_draco_options;
+
+/* Encode a mesh. *out is malloc'd; free it with free(). Vertex order is kept
+ * (sequential connectivity) so per-vertex chunks stay aligned with it. */
+meso_result meso_draco_encode(const meso_mesh* m, const meso_draco_options* opt, void** out, size_t* out_size,
+                              meso_error* err);
+/* Decode a Draco mesh bitstream (also .drc files). */
+meso_result meso_draco_decode(const void* data, size_t size, meso_mesh* out, meso_error* err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MESO_ADAPTERS_H */

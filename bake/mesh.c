@@ -1,0 +1,52 @@
+/* mesh.c — the bake's in-memory mesh: ownership and bounds. */
+#include "meso_bake.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void meso_mesh_free(meso_mesh* m)
+{
+    if (!m)
+        return;
+    free(m->positions);
+    free(m->normals);
+    free(m->uvs);
+    free(m->indices);
+    memset(m, 0, sizeof(*m));
+}
+
+double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = m->vertex_count ? INFINITY : 0.0;
+        hi[k] = m->vertex_count ? -INFINITY : 0.0;
+    }
+    for (uint32_t i = 0; i < m->vertex_count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            double v = m->positions[3 * i + k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k)
+        d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    return sqrt(d2);
+}
+
+meso_result meso_bake_fail(meso_error* err, meso_result r, uint32_t code, const char* fmt, ...)
+{
+    if (err) {
+        err->result = r;
+        err->code = code;
+        err->offset = UINT64_MAX;
+        err->chunk = -1;
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err->message, sizeof(err->message), fmt, ap);
+        va_end(ap);
+    }
+    return r;
+}

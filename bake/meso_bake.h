@@ -1,0 +1,47 @@
+/*
+ * meso_bake.h — the baker's C pipeline API.
+ *
+ * Every bake stage is a C11 module in bake/ named after its algorithm. The
+ * heavy C++ libraries are reached only through the adapters declared in
+ * bake/adapters/adapters.h. This header holds what the stages share.
+ */
+#ifndef MESO_BAKE_H
+#define MESO_BAKE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "meso_file.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* An indexed triangle mesh in host memory (the bake's working form).
+ * Arrays are malloc'd and owned by the struct: free with meso_mesh_free. */
+typedef struct meso_mesh {
+    uint32_t vertex_count;
+    uint32_t triangle_count;
+    float* positions; /* 3 * vertex_count */
+    float* normals;   /* 3 * vertex_count, or NULL */
+    float* uvs;       /* 2 * vertex_count, or NULL */
+    uint32_t* indices; /* 3 * triangle_count, counter-clockwise seen from outside */
+} meso_mesh;
+
+/* Frees the arrays and zeroes the struct. NULL is allowed. */
+void meso_mesh_free(meso_mesh* m);
+
+/* Axis-aligned bounds of the positions; returns the diagonal length. */
+double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
+
+/* Fill an error struct (printf-style message). Returns `r`. */
+meso_result meso_bake_fail(meso_error* err, meso_result r, uint32_t code, const char* fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MESO_BAKE_H */

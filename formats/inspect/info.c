@@ -1,0 +1,391 @@
+/*
+ * info.c — `mesoinspect info FILE [--format text|json|mini-json]`: header,
+ * objects (OBJT, with MESH counts), every chunk with its recomputed CRC32C,
+ * and the META and RPRT JSON. Schema: schema/info.schema.json.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "inspect.h"
+
+static const char* const usage_info =
+    "Usage: mesoinspect info FILE [--format text|json|mini-json]\n"
+    "\n"
+    "Print the header, the objects (OBJT records with their MESH counts), every\n"
+    "chunk (type, flags, object, lod, encoding, element type, offset, stored and\n"
+    "decoded size, CRC32C recomputed: ok or BAD), the bake metadata (META) and\n"
+    "the quality report (RPRT).\n"
+    "\n"
+    "  --format FMT   text (default), json or mini-json (one line)\n"
+    "  -h, --help     this help\n"
+    "\n"
+    "Exit codes: 0 printed, 2 I/O failure, 3 the file is not a valid .meso file.\n";
+
+typedef struct info_state {
+    const char* path;
+    meso_file* f;
+    mi_format fmt;
+    cJSON* warnings; /* array of strings */
+} info_state;
+
+static void warn(info_state* s, const char* msg)
+{
+    mi_warning("%s: %s", s->path, msg);
+    cJSON_AddItemToArray(s->warnings, cJSON_CreateString(msg));
+}
+
+/* CRC32C status of chunk i: 1 ok, 0 bad, -1 unknown (no view). */
+static int crc_status(const meso_file* f, uint32_t i)
+{
+    const meso_chunk_info* c = meso_file_chunk(f, i);
+    const uint8_t* p = mi_stored(f, i);
+    if (!c || !p || c->stored_size > SIZE_MAX)
+        return -1;
+    return meso_crc32c(0, p, (size_t)c->stored_size) == c->crc32c;
+}
+
+/* The first file-wide JSON chunk of `type` (META / RPRT), parsed; NULL when
+ * absent or unreadable (with a warning). */
+static cJSON* read_json_chunk(info_state* s, uint32_t type)
+{
+    int32_t idx = meso_file_find(s->f, type, UINT32_MAX, UINT16_MAX);
+    if (idx < 0)
+        return NULL;
+    char cc[5], msg[400];
+    mi_fourcc(type, cc);
+    uint8_t* data;
+    size_t size;
+    meso_error err;
+    memset(&err, 0, sizeof(err));
+    meso_result r = mi_read_decoded(s->f, (uint32_t)idx, &data, &size, &err);
+    if (r != MESO_OK) {
+        char line[300];
+        mi_format_issue(&err, line, sizeof(line));
+        snprintf(msg, sizeof(msg), "%s chunk %d is unreadable: %s", cc, (int)idx, line);
+        warn(s, msg);
+        return NULL;
+    }
+    cJSON* j = cJSON_ParseWithLength((const char*)data, size);
+    free(data);
+    if (!j) {
+        snprintf(msg, sizeof(msg), "%s chunk %d: JSON not understood by cJSON", cc, (int)idx);
+        warn(s, msg);
+    }
+    return j;
+}
+
+/* Objects from the OBJT chunk; *count records in a malloc'd array. */
+static meso_object_record* read_objects(info_state* s, uint32_t* count)
+{
+    *count = 0;
+    int32_t idx = meso_file_find(s->f, MESO_CHUNK_OBJT, UINT32_MAX, UINT16_MAX);
+    if (idx < 0)
+        return NULL;
+    uint8_t* data;
+    size_t size;
+    meso_error err;
+    memset(&err, 0, sizeof(err));
+    meso_result r = mi_read_decoded(s->f, (uint32_t)idx, &data, &size, &err);
+    if (r != MESO_OK) {
+        char line[300], msg[400];
+        mi_format_issue(&err, line, sizeof(line));
+        snprintf(msg, sizeof(msg), "OBJT chunk %d is unreadable: %s", (int)idx, line);
+        warn(s, msg);
+        return NULL;
+    }
+    uint32_t n = (uint32_t)(size / 64u);
+    meso_object_record* recs = calloc(n ? n : 1, sizeof(*recs));
+    if (recs)
+        for (uint32_t i = 0; i < n; ++i)
+            meso_object_record_decode(data + 64u * i, &recs[i]);
+    free(data);
+    *count = recs ? n : 0;
+    return recs;
+}
+
+/* The finest-lod MESH chunk of `object`, or -1. */
+static int32_t object_mesh(const meso_file* f, uint32_t object)
+{
+    int32_t best = -1;
+    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        if (c->type == MESO_CHUNK_MESH && c->object == object &&
+            (best < 0 || c->lod < meso_file_chunk(f, (uint32_t)best)->lod))
+            best = (int32_t)i;
+    }
+    return best;
+}
+
+static int mesh_stats(const meso_file* f, int32_t idx, mi_mesh_stats* st)
+{
+    if (idx < 0)
+        return 0;
+    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)idx);
+    return mi_mesh_header(mi_stored(f, (uint32_t)idx), (size_t)(c->stored_size < 64 ? c->stored_size : 64), st);
+}
+
+static cJSON* vec3(const float v[3])
+{
+    cJSON* a = cJSON_CreateArray();
+    for (int k = 0; k < 3; ++k)
+        cJSON_AddItemToArray(a, cJSON_CreateNumber((double)v[k]));
+    return a;
+}
+
+static void flags_text(uint32_t flags, char* dst, size_t n)
+{
+    if (flags == 0)
+        snprintf(dst, n, "-");
+    else if (flags == MESO_CHUNK_FLAG_REQUIRED)
+        snprintf(dst, n, "REQUIRED");
+    else if (flags & MESO_CHUNK_FLAG_REQUIRED)
+        snprintf(dst, n, "REQUIRED|0x%x", flags & ~MESO_CHUNK_FLAG_REQUIRED);
+    else
+        snprintf(dst, n, "0x%x", flags);
+}
+
+static void print_text(info_state* s, const meso_object_record* objs, uint32_t nobj, cJSON* meta, cJSON* rprt)
+{
+    meso_file* f = s->f;
+    uint16_t major, minor;
+    meso_file_version(f, &major, &minor);
+    const uint32_t n = meso_file_chunk_count(f);
+    printf("File:     %s\n", s->path);
+    printf("Format:   %u.%u\n", major, minor);
+    printf("Size:     %llu bytes\n", (unsigned long long)meso_file_size(f));
+    printf("Chunks:   %u\n", n);
+
+    printf("\nObjects (%u):\n", nobj);
+    if (nobj) {
+        mi_table t;
+        mi_table_init(&t, 8, (1u << 0) | (1u << 5) | (1u << 6));
+        const char* head[8] = {"id", "kind", "name", "bbox_min", "bbox_max", "vertices", "indices", "mesh"};
+        mi_table_row(&t, head);
+        for (uint32_t i = 0; i < nobj; ++i) {
+            const meso_object_record* o = &objs[i];
+            char id[16], lo[64], hi[64], nv[16] = "-", ni[16] = "-", mesh[64] = "-";
+            snprintf(id, sizeof(id), "%u", o->id);
+            snprintf(lo, sizeof(lo), "%g,%g,%g", (double)o->bbox_min[0], (double)o->bbox_min[1],
+                     (double)o->bbox_min[2]);
+            snprintf(hi, sizeof(hi), "%g,%g,%g", (double)o->bbox_max[0], (double)o->bbox_max[1],
+                     (double)o->bbox_max[2]);
+            int32_t mi = object_mesh(f, o->id);
+            mi_mesh_stats st;
+            if (mesh_stats(f, mi, &st)) {
+                const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)mi);
+                snprintf(nv, sizeof(nv), "%u", st.vertex_count);
+                snprintf(ni, sizeof(ni), "%u", st.index_count);
+                snprintf(mesh, sizeof(mesh), "chunk %d, lod %u, %s%s%s", (int)mi, (unsigned)c->lod,
+                         mi_encoding_name(c->encoding), (st.attributes & MESO_MESH_ATTR_NORMALS) ? ", normals" : "",
+                         (st.attributes & MESO_MESH_ATTR_UVS) ? ", uvs" : "");
+            }
+            const char* row[8] = {id, mi_kind_name(o->kind), o->name[0] ? o->name : "-", lo, hi, nv, ni, mesh};
+            mi_table_row(&t, row);
+        }
+        mi_table_print(&t, 2);
+        mi_table_free(&t);
+    }
+
+    printf("\nChunks (%u):\n", n);
+    if (n) {
+        mi_table t;
+        /* right-align the numeric columns */
+        mi_table_init(&t, 14, (1u << 0) | (1u << 3) | (1u << 4) | (1u << 7) | (1u << 9) | (1u << 10) | (1u << 11));
+        const char* head[14] = {"#",     "type",  "flags", "object", "lod",    "encoding", "dtype",
+                                "comp",  "dims",  "offset", "stored", "decoded", "crc32c",  "crc"};
+        mi_table_row(&t, head);
+        for (uint32_t i = 0; i < n; ++i) {
+            const meso_chunk_info* c = meso_file_chunk(f, i);
+            char idx[16], cc[5], fl[32], obj[16], lod[16], comp[16], dims[48], off[24], st[24], dec[24], crc[16];
+            snprintf(idx, sizeof(idx), "%u", i);
+            mi_fourcc(c->type, cc);
+            flags_text(c->flags, fl, sizeof(fl));
+            snprintf(obj, sizeof(obj), "%u", c->object);
+            snprintf(lod, sizeof(lod), "%u", (unsigned)c->lod);
+            snprintf(comp, sizeof(comp), "%u", (unsigned)c->components);
+            snprintf(dims, sizeof(dims), "%ux%ux%u", c->dims[0], c->dims[1], c->dims[2]);
+            snprintf(off, sizeof(off), "%llu", (unsigned long long)c->offset);
+            snprintf(st, sizeof(st), "%llu", (unsigned long long)c->stored_size);
+            snprintf(dec, sizeof(dec), "%llu", (unsigned long long)c->decoded_size);
+            snprintf(crc, sizeof(crc), "%08x", c->crc32c);
+            const int ok = crc_status(f, i);
+            const char* row[14] = {idx, cc,   fl,  obj, lod, mi_encoding_name(c->encoding), mi_dtype_name(c->dtype),
+                                   comp, dims, off, st,  dec, crc, ok < 0 ? "?" : ok ? "ok" : "BAD"};
+            mi_table_row(&t, row);
+        }
+        mi_table_print(&t, 2);
+        mi_table_free(&t);
+        /* per-MESH detail lines */
+        for (uint32_t i = 0; i < n; ++i) {
+            const meso_chunk_info* c = meso_file_chunk(f, i);
+            mi_mesh_stats ms;
+            if (c->type != MESO_CHUNK_MESH || !mesh_stats(f, (int32_t)i, &ms))
+                continue;
+            printf("  chunk %u MESH: %u vertices, %u indices (%u triangles), attributes%s%s%s", i, ms.vertex_count,
+                   ms.index_count, ms.index_count / 3u, (ms.attributes & MESO_MESH_ATTR_POSITIONS) ? " positions" : "",
+                   (ms.attributes & MESO_MESH_ATTR_NORMALS) ? " normals" : "",
+                   (ms.attributes & MESO_MESH_ATTR_UVS) ? " uvs" : "");
+            if (ms.quant_bits[0] || ms.quant_bits[1] || ms.quant_bits[2])
+                printf(", quantised %u/%u/%u bits", ms.quant_bits[0], ms.quant_bits[1], ms.quant_bits[2]);
+            fputc('\n', stdout);
+        }
+    }
+
+    char* js;
+    printf("\nMetadata (META):\n");
+    if (meta && (js = cJSON_Print(meta)) != NULL) {
+        printf("%s\n", js);
+        cJSON_free(js);
+    } else {
+        printf("  (none)\n");
+    }
+    printf("\nReport (RPRT):\n");
+    if (rprt && (js = cJSON_Print(rprt)) != NULL) {
+        printf("%s\n", js);
+        cJSON_free(js);
+    } else {
+        printf("  (none)\n");
+    }
+}
+
+static cJSON* build_json(info_state* s, const meso_object_record* objs, uint32_t nobj, cJSON* meta, cJSON* rprt)
+{
+    meso_file* f = s->f;
+    uint16_t major, minor;
+    meso_file_version(f, &major, &minor);
+    const uint32_t n = meso_file_chunk_count(f);
+    cJSON* doc = cJSON_CreateObject();
+    cJSON_AddStringToObject(doc, "file", s->path);
+    cJSON* h = cJSON_AddObjectToObject(doc, "header");
+    char ver[16];
+    snprintf(ver, sizeof(ver), "%u.%u", major, minor);
+    cJSON_AddStringToObject(h, "version", ver);
+    cJSON_AddNumberToObject(h, "major", major);
+    cJSON_AddNumberToObject(h, "minor", minor);
+    cJSON_AddNumberToObject(h, "file_size", (double)meso_file_size(f));
+    cJSON_AddNumberToObject(h, "chunk_count", n);
+
+    cJSON* oa = cJSON_AddArrayToObject(doc, "objects");
+    for (uint32_t i = 0; i < nobj; ++i) {
+        const meso_object_record* o = &objs[i];
+        cJSON* jo = cJSON_CreateObject();
+        cJSON_AddNumberToObject(jo, "id", o->id);
+        cJSON_AddNumberToObject(jo, "kind", o->kind);
+        cJSON_AddStringToObject(jo, "kind_name", mi_kind_name(o->kind));
+        cJSON_AddStringToObject(jo, "name", o->name);
+        cJSON_AddItemToObject(jo, "bbox_min", vec3(o->bbox_min));
+        cJSON_AddItemToObject(jo, "bbox_max", vec3(o->bbox_max));
+        int32_t mi = object_mesh(f, o->id);
+        mi_mesh_stats st;
+        if (mesh_stats(f, mi, &st)) {
+            cJSON* m = mi_mesh_stats_json(&st);
+            const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)mi);
+            cJSON_AddNumberToObject(m, "chunk", mi);
+            cJSON_AddNumberToObject(m, "lod", c->lod);
+            cJSON_AddStringToObject(m, "encoding", mi_encoding_name(c->encoding));
+            cJSON_AddItemToObject(jo, "mesh", m);
+        } else {
+            cJSON_AddNullToObject(jo, "mesh");
+        }
+        cJSON_AddItemToArray(oa, jo);
+    }
+
+    cJSON* ca = cJSON_AddArrayToObject(doc, "chunks");
+    for (uint32_t i = 0; i < n; ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        cJSON* jc = cJSON_CreateObject();
+        char cc[5], crc[16];
+        mi_fourcc(c->type, cc);
+        cJSON_AddNumberToObject(jc, "index", i);
+        cJSON_AddStringToObject(jc, "type", cc);
+        cJSON_AddNumberToObject(jc, "flags", c->flags);
+        cJSON_AddBoolToObject(jc, "required", (c->flags & MESO_CHUNK_FLAG_REQUIRED) != 0);
+        cJSON_AddNumberToObject(jc, "object", c->object);
+        cJSON_AddNumberToObject(jc, "lod", c->lod);
+        cJSON_AddNumberToObject(jc, "encoding", c->encoding);
+        cJSON_AddStringToObject(jc, "encoding_name", mi_encoding_name(c->encoding));
+        cJSON_AddNumberToObject(jc, "dtype", c->dtype);
+        cJSON_AddStringToObject(jc, "dtype_name", mi_dtype_name(c->dtype));
+        cJSON_AddNumberToObject(jc, "components", c->components);
+        cJSON* d = cJSON_AddArrayToObject(jc, "dims");
+        for (int k = 0; k < 3; ++k)
+            cJSON_AddItemToArray(d, cJSON_CreateNumber(c->dims[k]));
+        cJSON_AddNumberToObject(jc, "offset", (double)c->offset);
+        cJSON_AddNumberToObject(jc, "stored_size", (double)c->stored_size);
+        cJSON_AddNumberToObject(jc, "decoded_size", (double)c->decoded_size);
+        snprintf(crc, sizeof(crc), "%08x", c->crc32c);
+        cJSON_AddStringToObject(jc, "crc32c", crc);
+        const int ok = crc_status(f, i);
+        if (ok < 0)
+            cJSON_AddNullToObject(jc, "crc_ok");
+        else
+            cJSON_AddBoolToObject(jc, "crc_ok", ok);
+        mi_mesh_stats ms;
+        if (c->type == MESO_CHUNK_MESH && mesh_stats(f, (int32_t)i, &ms))
+            cJSON_AddItemToObject(jc, "mesh", mi_mesh_stats_json(&ms));
+        cJSON_AddItemToArray(ca, jc);
+    }
+    cJSON_AddItemToObject(doc, "meta", meta ? cJSON_Duplicate(meta, 1) : cJSON_CreateNull());
+    cJSON_AddItemToObject(doc, "report", rprt ? cJSON_Duplicate(rprt, 1) : cJSON_CreateNull());
+    cJSON_AddItemToObject(doc, "warnings", cJSON_Duplicate(s->warnings, 1));
+    return doc;
+}
+
+int mesoinspect_info(int argc, char** argv)
+{
+    info_state s;
+    memset(&s, 0, sizeof(s));
+    int only_positional = 0;
+    for (int i = 0; i < argc; ++i) {
+        const char* a = argv[i];
+        int k;
+        if (!only_positional && mi_is_help(a)) {
+            fputs(usage_info, stdout);
+            return mi_finish_stdout(MESO_EXIT_OK);
+        } else if (!only_positional && (k = mi_format_option(argc, argv, &i, &s.fmt)) != 0) {
+            if (k < 0)
+                return MESO_EXIT_USAGE;
+        } else if (!only_positional && !strcmp(a, "--")) {
+            only_positional = 1;
+        } else if (!only_positional && a[0] == '-' && a[1] != '\0') {
+            return mi_usage_error("unrecognized option '%s'", a);
+        } else if (!s.path) {
+            s.path = a;
+        } else {
+            return mi_usage_error("unexpected argument '%s'", a);
+        }
+    }
+    if (!s.path) {
+        fputs(usage_info, stderr);
+        return MESO_EXIT_USAGE;
+    }
+    int code = mi_open_or_report(s.path, &s.f);
+    if (code != MESO_EXIT_OK)
+        return code;
+    s.warnings = cJSON_CreateArray();
+    uint32_t nobj = 0;
+    meso_object_record* objs = read_objects(&s, &nobj);
+    cJSON* meta = read_json_chunk(&s, MESO_CHUNK_META);
+    cJSON* rprt = read_json_chunk(&s, MESO_CHUNK_RPRT);
+    for (uint32_t i = 0; i < meso_file_chunk_count(s.f); ++i)
+        if (crc_status(s.f, i) == 0) {
+            char cc[5], msg[128];
+            mi_fourcc(meso_file_chunk(s.f, i)->type, cc);
+            snprintf(msg, sizeof(msg), "chunk %u (%s): payload CRC32C does not match the TOC", i, cc);
+            warn(&s, msg);
+        }
+    if (s.fmt == MI_FORMAT_TEXT) {
+        print_text(&s, objs, nobj, meta, rprt);
+    } else {
+        cJSON* doc = build_json(&s, objs, nobj, meta, rprt);
+        mi_print_json(doc, s.fmt);
+        cJSON_Delete(doc);
+    }
+    free(objs);
+    cJSON_Delete(meta);
+    cJSON_Delete(rprt);
+    cJSON_Delete(s.warnings);
+    meso_file_close(s.f);
+    return mi_finish_stdout(MESO_EXIT_OK);
+}

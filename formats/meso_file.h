@@ -1,0 +1,432 @@
+/*
+ * meso_file.h — the .meso container: reader, writer and validator.
+ *
+ * C11, no dependencies beyond the C library (and POSIX for files/mmap).
+ * Linked by mesobake, mesoinspect and libmeso, so all three parse files with
+ * exactly the same code. The normative byte layout is formats/FORMAT.md;
+ * formats/meso_layout.h has the byte offsets as #defines (shared with GLSL).
+ *
+ *   [header 64B][TOC: chunk_count x 64B][pad to 64][payload][pad]...[payload]
+ *
+ * Ownership: every object created here is freed with its matching destroy /
+ * close call. Descs are zero-initialised to mean "defaults".
+ * Errors: every call that can fail returns a meso_result and, when the caller
+ * passes a meso_error*, fills in a stable issue code, a byte offset and a
+ * message naming the problem (codes are for programs, messages for humans).
+ */
+#ifndef MESO_FILE_H
+#define MESO_FILE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef MESO_API
+#define MESO_API
+#endif
+
+#define MESO_VERSION 100 /* tools/library 0.1.0 as one comparable integer */
+#define MESO_VERSION_STRING "0.1.0"
+#define MESO_FORMAT_MAJOR 1
+#define MESO_FORMAT_MINOR 0
+
+/* >>result ---------------------------------------------------------------- */
+
+typedef enum meso_result {
+    MESO_OK = 0,
+    MESO_ERR_TRUNCATED,        /* the data ends before a structure it declares */
+    MESO_ERR_BAD_MAGIC,        /* not a .meso file, or damaged by a text-mode transfer */
+    MESO_ERR_VERSION_TOO_NEW,  /* major version newer than this reader */
+    MESO_ERR_CORRUPT,          /* a checksum, range, count or enum is wrong */
+    MESO_ERR_OUT_OF_MEMORY,
+    MESO_ERR_IO,               /* the OS or the host read callback failed */
+    MESO_ERR_INVALID_ARG,      /* caller contract violated (NULL, bad index, small buffer) */
+    MESO_ERR_GL,               /* (runtime) a GL call or entry point failed */
+    MESO_ERR_UNSUPPORTED,      /* valid but not supported by this build (e.g. Draco without a decoder) */
+    MESO_ERR_NOT_FOUND,        /* no chunk / object matches */
+    MESO_RESULT_COUNT
+} meso_result;
+
+/* Static string for a result, never NULL. */
+MESO_API const char* meso_result_string(meso_result r);
+
+/* Detail for one failure or validation issue. `code` is a stable issue
+ * number from FORMAT.md §"Issue codes" (0 when none applies); `offset` is the
+ * byte offset in the file the issue is about (UINT64_MAX when none). */
+typedef struct meso_error {
+    meso_result result;
+    uint32_t code;
+    uint64_t offset;
+    int32_t chunk;      /* TOC index the issue is about, -1 when none */
+    char message[240];  /* NUL-terminated, human readable */
+} meso_error;
+
+/* >>memory ---------------------------------------------------------------- */
+
+/* Provide both functions or neither; zero means malloc/free. */
+typedef struct meso_allocator {
+    void* (*alloc_fn)(size_t size, void* user);
+    void (*free_fn)(void* ptr, void* user);
+    void* user;
+} meso_allocator;
+
+/* >>constants ------------------------------------------------------------- */
+
+#define MESO_FOURCC(a, b, c, d) \
+    ((uint32_t)(uint8_t)(a) | ((uint32_t)(uint8_t)(b) << 8) | ((uint32_t)(uint8_t)(c) << 16) | ((uint32_t)(uint8_t)(d) << 24))
+
+/* Chunk types. FORMAT.md defines the element layout of each. */
+#define MESO_CHUNK_META MESO_FOURCC('M', 'E', 'T', 'A') /* UTF-8 JSON: tool, version, bake parameters, provenance */
+#define MESO_CHUNK_RPRT MESO_FOURCC('R', 'P', 'R', 'T') /* UTF-8 JSON: the bake's quality report */
+#define MESO_CHUNK_OBJT MESO_FOURCC('O', 'B', 'J', 'T') /* object table: one 64B record per object */
+#define MESO_CHUNK_MESH MESO_FOURCC('M', 'E', 'S', 'H') /* triangle mesh: header + positions, normals, uvs, indices */
+#define MESO_CHUNK_SDIR MESO_FOURCC('S', 'D', 'I', 'R') /* shell directors: f32x3 per base vertex */
+#define MESO_CHUNK_STHK MESO_FOURCC('S', 'T', 'H', 'K') /* shell thickness: f32 per base vertex */
+#define MESO_CHUNK_TX2D MESO_FOURCC('T', 'X', '2', 'D') /* 2D texture, one mip level per chunk (lod = level) */
+#define MESO_CHUNK_TX3D MESO_FOURCC('T', 'X', '3', 'D') /* 3D texture, one mip level per chunk */
+#define MESO_CHUNK_DIST MESO_FOURCC('D', 'I', 'S', 'T') /* distance map for sphere tracing (3D) */
+#define MESO_CHUNK_TILE MESO_FOURCC('T', 'I', 'L', 'E') /* tile map: split-cell index per voxel (3D) */
+#define MESO_CHUNK_SPLT MESO_FOURCC('S', 'P', 'L', 'T') /* split-cell table: face codes per split cell */
+#define MESO_CHUNK_MEMB MESO_FOURCC('M', 'E', 'M', 'B') /* membership map: 2 bits per split cell per tile */
+#define MESO_CHUNK_NRMM MESO_FOURCC('N', 'R', 'M', 'M') /* normal map (3D, octahedral 2x16 bit) */
+#define MESO_CHUNK_COLR MESO_FOURCC('C', 'O', 'L', 'R') /* colour map (3D, RGBA8) */
+#define MESO_CHUNK_SKEL MESO_FOURCC('S', 'K', 'E', 'L') /* skeleton nodes */
+#define MESO_CHUNK_FRUS MESO_FOURCC('F', 'R', 'U', 'S') /* conical frusta */
+#define MESO_CHUNK_RELF MESO_FOURCC('R', 'E', 'L', 'F') /* relief map (2D height + normal) */
+
+/* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
+#define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
+
+/* Chunk encodings. */
+typedef enum meso_encoding {
+    MESO_ENCODING_RAW = 0,   /* stored bytes == decoded bytes */
+    MESO_ENCODING_DRACO = 1, /* MESH only: the 64B MESH header, then the Draco bitstream */
+    MESO_ENCODING_COUNT
+} meso_encoding;
+
+/* Element data types (TOC entry). */
+typedef enum meso_dtype {
+    MESO_DTYPE_BYTES = 0, /* opaque bytes (JSON, structured chunks) */
+    MESO_DTYPE_U8,
+    MESO_DTYPE_U16,
+    MESO_DTYPE_U32,
+    MESO_DTYPE_I8,
+    MESO_DTYPE_I16,
+    MESO_DTYPE_I32,
+    MESO_DTYPE_F16,
+    MESO_DTYPE_F32,
+    MESO_DTYPE_COUNT
+} meso_dtype;
+
+/* Size in bytes of one component of `t`, 0 for unknown. BYTES is 1. */
+MESO_API uint32_t meso_dtype_size(meso_dtype t);
+
+/* >>chunk info ------------------------------------------------------------ */
+
+/* One table-of-contents entry, decoded to host order. */
+typedef struct meso_chunk_info {
+    uint32_t type;          /* fourcc */
+    uint32_t flags;         /* MESO_CHUNK_FLAG_* */
+    uint32_t object;        /* object id the chunk belongs to (0 = file-wide) */
+    uint16_t lod;           /* level of detail / mip level: 0 = finest */
+    uint16_t encoding;      /* meso_encoding */
+    uint64_t offset;        /* byte offset of the stored payload (64-aligned) */
+    uint64_t stored_size;   /* bytes in the file */
+    uint64_t decoded_size;  /* bytes after decoding */
+    uint32_t crc32c;        /* CRC32C of the stored bytes */
+    uint16_t dtype;         /* meso_dtype of one component */
+    uint16_t components;    /* components per element (1..16) */
+    uint32_t dims[3];       /* elements along x, y, z (1 for unused axes) */
+} meso_chunk_info;
+
+/* >>reader ---------------------------------------------------------------- */
+
+typedef struct meso_file meso_file;
+
+/* Host read callback (engine virtual file systems): read exactly `size`
+ * bytes at `offset` into `dst`. Return 0 on success, non-zero on failure. */
+typedef struct meso_io {
+    int (*read_fn)(void* user, uint64_t offset, void* dst, size_t size);
+    uint64_t size; /* total size of the stream in bytes; required */
+    void* user;
+} meso_io;
+
+/* Decoder for a non-raw encoding, supplied by the host (mesobake and
+ * mesoinspect pass the Draco adapter's). Receives the whole stored payload
+ * (CRC already verified; for MESH: the 64-byte mesh header, then the
+ * bitstream) and writes exactly dst_size = decoded_size bytes: the complete
+ * decoded layout, header included. The reader then checks the result. */
+typedef struct meso_decoder {
+    uint16_t encoding; /* meso_encoding it handles */
+    meso_result (*decode_fn)(void* user, const meso_chunk_info* chunk, const void* src, size_t src_size, void* dst,
+                             size_t dst_size, meso_error* err);
+    void* user;
+} meso_decoder;
+
+typedef struct meso_open_desc {
+    meso_allocator allocator;     /* default malloc/free */
+    const meso_decoder* decoders; /* optional */
+    uint32_t decoder_count;
+    uint32_t max_chunks;          /* refuse TOCs larger than this (default 1 << 20) */
+} meso_open_desc;
+
+/* Open and run the cheap checks (FORMAT.md §Validation, tier 1): size, magic,
+ * version, header CRC, file_size, TOC bounds and CRC, every entry's range,
+ * alignment, enums and sizes. The header and TOC are read in one read.
+ * `desc` and `err` may be NULL. On success *out must be closed. */
+MESO_API meso_result meso_file_open_path(const char* path, const meso_open_desc* desc, meso_file** out,
+                                         meso_error* err);
+/* Same, mapping the file with mmap: chunk payloads can then be viewed without
+ * copying (meso_file_chunk_view). */
+MESO_API meso_result meso_file_open_mmap(const char* path, const meso_open_desc* desc, meso_file** out,
+                                         meso_error* err);
+/* Same, over caller memory that must outlive the meso_file (not copied). */
+MESO_API meso_result meso_file_open_memory(const void* data, size_t size, const meso_open_desc* desc,
+                                           meso_file** out, meso_error* err);
+/* Same, over a host read callback; chunks are fetched on demand. */
+MESO_API meso_result meso_file_open_io(const meso_io* io, const meso_open_desc* desc, meso_file** out,
+                                       meso_error* err);
+MESO_API void meso_file_close(meso_file* f);
+
+MESO_API void meso_file_version(const meso_file* f, uint16_t* major, uint16_t* minor);
+MESO_API uint64_t meso_file_size(const meso_file* f);
+MESO_API uint32_t meso_file_chunk_count(const meso_file* f);
+/* NULL when index is out of range. */
+MESO_API const meso_chunk_info* meso_file_chunk(const meso_file* f, uint32_t index);
+/* Index of the first chunk with this type/object/lod, or -1. Pass
+ * object = UINT32_MAX or lod = UINT16_MAX to match any. */
+MESO_API int32_t meso_file_find(const meso_file* f, uint32_t type, uint32_t object, uint16_t lod);
+
+/* Read the stored bytes of chunk `index` into dst (dst_size >= stored_size)
+ * and verify its CRC32C. */
+MESO_API meso_result meso_file_read_stored(meso_file* f, uint32_t index, void* dst, size_t dst_size,
+                                           meso_error* err);
+/* Read and decode chunk `index` into dst (dst_size >= decoded_size), verifying
+ * its CRC and, for structured chunks, its internal layout. Raw chunks are
+ * copied; other encodings go through the desc's decoders, or fail with
+ * MESO_ERR_UNSUPPORTED naming the encoding. */
+MESO_API meso_result meso_file_read_chunk(meso_file* f, uint32_t index, void* dst, size_t dst_size,
+                                          meso_error* err);
+/* Zero-copy pointer to the stored bytes (memory and mmap readers only;
+ * MESO_ERR_UNSUPPORTED otherwise). The CRC is not checked here. */
+MESO_API meso_result meso_file_chunk_view(const meso_file* f, uint32_t index, const void** data, meso_error* err);
+
+/* >>validation ------------------------------------------------------------ */
+
+typedef enum meso_check {
+    MESO_CHECK_CHEAP = 0, /* what open already did */
+    MESO_CHECK_FULL = 1,  /* + every payload CRC, padding zero, structured chunk contents, JSON well-formed */
+    MESO_CHECK_COUNT
+} meso_check;
+
+/* Called once per issue found; return non-zero to stop early. */
+typedef int (*meso_issue_fn)(void* user, const meso_error* issue);
+
+/* Validate an open file. Returns MESO_OK when no issue was found, otherwise
+ * the result of the first issue; every issue goes to `fn` (may be NULL).
+ * MESO_CHECK_CHEAP returns MESO_OK at once (open already refused any file
+ * failing it). MESO_CHECK_FULL reads every payload once; with a decoder for
+ * an encoded MESH it also decodes and checks it. */
+MESO_API meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn, void* user);
+
+/* >>writer ---------------------------------------------------------------- */
+
+typedef struct meso_writer meso_writer;
+
+typedef struct meso_chunk_desc {
+    uint32_t type;
+    uint32_t flags;
+    uint32_t object;
+    uint16_t lod;
+    uint16_t encoding;
+    uint64_t decoded_size; /* 0 means: same as the data size (raw) */
+    uint16_t dtype;
+    uint16_t components;   /* 0 means 1 */
+    uint32_t dims[3];      /* 0 means 1 */
+} meso_chunk_desc;
+
+/* `allocator` may be NULL. */
+MESO_API meso_result meso_writer_create(const meso_allocator* allocator, meso_writer** out);
+MESO_API void meso_writer_destroy(meso_writer* w);
+/* Add a chunk; the data is copied. Chunks are laid out coarsest level first
+ * (lod descending), then in the order added; the writer is deterministic. */
+MESO_API meso_result meso_writer_add(meso_writer* w, const meso_chunk_desc* desc, const void* data, size_t size,
+                                     meso_error* err);
+/* Serialise into dst. With dst == NULL only *needed is set. */
+MESO_API meso_result meso_writer_finish(meso_writer* w, void* dst, size_t dst_size, size_t* needed);
+/* Serialise to `path` atomically: a temporary file in the same directory,
+ * fsync, then rename over the target. On failure the target is untouched and
+ * no temporary file is left. */
+MESO_API meso_result meso_writer_write_file(meso_writer* w, const char* path, meso_error* err);
+
+/* >>chunk contents -------------------------------------------------------- */
+
+/* Issue codes (FORMAT.md §"Issue codes" gives each one's meso_result and
+ * meaning): 1xxx header, 2xxx TOC, 3xxx payload, 4xxx structured chunk
+ * contents, 5xxx I/O and API. The numbers are stable; new ones are appended. */
+#define MESO_ISSUE_NONE 0u
+#define MESO_ISSUE_HDR_TRUNCATED 1001u       /* shorter than the 64-byte header */
+#define MESO_ISSUE_HDR_MAGIC 1002u           /* not a .meso file */
+#define MESO_ISSUE_HDR_TEXT_MODE 1003u       /* magic damaged by CR/LF conversion */
+#define MESO_ISSUE_HDR_7BIT 1004u            /* magic damaged by a 7-bit transfer */
+#define MESO_ISSUE_HDR_LEGACY 1005u          /* major version 0 */
+#define MESO_ISSUE_HDR_TOO_NEW 1006u         /* major version newer than this reader */
+#define MESO_ISSUE_HDR_CRC 1007u
+#define MESO_ISSUE_HDR_FLAGS 1008u
+#define MESO_ISSUE_HDR_RESERVED 1009u
+#define MESO_ISSUE_HDR_TOC_OFFSET 1010u
+#define MESO_ISSUE_HDR_TOC_ENTRY_SIZE 1011u
+#define MESO_ISSUE_HDR_FILE_SIZE_ALIGN 1012u
+#define MESO_ISSUE_FILE_TRUNCATED 1013u      /* fewer bytes than file_size */
+#define MESO_ISSUE_FILE_TRAILING 1014u       /* more bytes than file_size */
+#define MESO_ISSUE_TOC_TOO_MANY 2001u        /* chunk_count > max_chunks */
+#define MESO_ISSUE_TOC_BOUNDS 2002u
+#define MESO_ISSUE_TOC_CRC 2003u
+#define MESO_ISSUE_CHUNK_TYPE 2004u
+#define MESO_ISSUE_CHUNK_FLAGS 2005u
+#define MESO_ISSUE_CHUNK_RESERVED 2006u
+#define MESO_ISSUE_CHUNK_ALIGN 2007u
+#define MESO_ISSUE_CHUNK_BOUNDS 2008u
+#define MESO_ISSUE_CHUNK_IN_TOC 2009u
+#define MESO_ISSUE_CHUNK_ORDER 2010u
+#define MESO_ISSUE_CHUNK_OVERLAP 2011u
+#define MESO_ISSUE_CHUNK_EMPTY 2012u
+#define MESO_ISSUE_CHUNK_ENCODING 2013u
+#define MESO_ISSUE_CHUNK_DTYPE 2014u
+#define MESO_ISSUE_CHUNK_COMPONENTS 2015u
+#define MESO_ISSUE_CHUNK_DIMS 2016u
+#define MESO_ISSUE_CHUNK_RAW_SIZE 2017u
+#define MESO_ISSUE_CHUNK_TYPED_SIZE 2018u
+#define MESO_ISSUE_CHUNK_UNKNOWN_REQUIRED 2019u
+#define MESO_ISSUE_FILE_END 2020u
+#define MESO_ISSUE_PAYLOAD_CRC 3001u
+#define MESO_ISSUE_PAYLOAD_PADDING 3002u
+#define MESO_ISSUE_ENCODING_UNSUPPORTED 3003u
+#define MESO_ISSUE_DECODE_FAILED 3004u
+#define MESO_ISSUE_TYPE_ELEMENT 4001u        /* dtype/components/dims wrong for the chunk type */
+#define MESO_ISSUE_TYPE_ENCODING 4002u
+#define MESO_ISSUE_TYPE_OBJECT 4003u
+#define MESO_ISSUE_JSON_UTF8 4101u
+#define MESO_ISSUE_JSON_SYNTAX 4102u
+#define MESO_ISSUE_JSON_DEPTH 4103u
+#define MESO_ISSUE_OBJT_SIZE 4201u
+#define MESO_ISSUE_OBJT_ID 4202u
+#define MESO_ISSUE_OBJT_DUPLICATE 4203u
+#define MESO_ISSUE_OBJT_KIND 4204u
+#define MESO_ISSUE_OBJT_NAME 4205u
+#define MESO_ISSUE_OBJT_BBOX 4206u
+#define MESO_ISSUE_MESH_SIZE 4301u
+#define MESO_ISSUE_MESH_ATTRIBUTES 4302u
+#define MESO_ISSUE_MESH_COUNTS 4303u
+#define MESO_ISSUE_MESH_RESERVED 4304u
+#define MESO_ISSUE_MESH_QUANT 4305u
+#define MESO_ISSUE_MESH_PRESENCE 4306u
+#define MESO_ISSUE_MESH_ALIGN 4307u
+#define MESO_ISSUE_MESH_OVERLAP 4308u
+#define MESO_ISSUE_MESH_BOUNDS 4309u
+#define MESO_ISSUE_MESH_TRAILING 4310u
+#define MESO_ISSUE_MESH_INDEX 4311u
+#define MESO_ISSUE_SKEL_SIZE 4401u
+#define MESO_ISSUE_SKEL_PARENT 4402u
+#define MESO_ISSUE_SKEL_VALUE 4403u
+#define MESO_ISSUE_FRUS_SIZE 4501u
+#define MESO_ISSUE_FRUS_VALUE 4502u
+#define MESO_ISSUE_API_ARG 5001u
+#define MESO_ISSUE_API_BUFFER 5002u
+#define MESO_ISSUE_API_MEMORY 5003u
+#define MESO_ISSUE_IO_OPEN 5004u
+#define MESO_ISSUE_IO_READ 5005u
+#define MESO_ISSUE_IO_MMAP 5006u
+#define MESO_ISSUE_IO_WRITE 5007u
+#define MESO_ISSUE_API_NO_VIEW 5008u
+#define MESO_ISSUE_API_TOO_LARGE 5009u
+#define MESO_ISSUE_API_WRITER_LIMIT 5010u
+
+/* MESH attribute bits (mesh header field `attributes`). */
+#define MESO_MESH_ATTR_POSITIONS 0x1u /* f32x3 per vertex; always present */
+#define MESO_MESH_ATTR_NORMALS 0x2u   /* f32x3 per vertex */
+#define MESO_MESH_ATTR_UVS 0x4u       /* f32x2 per vertex */
+
+/* The decoded layout of a MESH chunk: 64-byte header, then positions,
+ * normals, uvs and indices, each 16-byte aligned (offsets from chunk start,
+ * 0 when absent). `size` is the decoded chunk size (end of the last array). */
+typedef struct meso_mesh_layout {
+    uint32_t vertex_count;
+    uint32_t index_count;        /* multiple of 3 */
+    uint32_t attributes;         /* MESO_MESH_ATTR_* */
+    uint8_t quant_bits_position; /* 0 = never quantised */
+    uint8_t quant_bits_normal;
+    uint8_t quant_bits_uv;
+    uint64_t positions_offset;
+    uint64_t normals_offset;
+    uint64_t uvs_offset;
+    uint64_t indices_offset;
+    uint64_t size;
+} meso_mesh_layout;
+
+/* Fill *out with the canonical layout for these counts (quant bits 0).
+ * MESO_ERR_INVALID_ARG when vertex_count is 0, index_count is not a multiple
+ * of 3, positions are missing, unknown bits are set or the size overflows. */
+MESO_API meso_result meso_mesh_compute_layout(uint32_t vertex_count, uint32_t index_count, uint32_t attributes,
+                                              meso_mesh_layout* out);
+/* Write the 64-byte MESH header described by `layout` to dst. */
+MESO_API void meso_mesh_write_header(const meso_mesh_layout* layout, void* dst);
+
+/* Typed pointers into a decoded MESH chunk (NULL for absent arrays). */
+typedef struct meso_mesh_view {
+    meso_mesh_layout layout;
+    const float* positions;  /* vertex_count x 3 */
+    const float* normals;    /* vertex_count x 3 or NULL */
+    const float* uvs;        /* vertex_count x 2 or NULL */
+    const uint32_t* indices; /* index_count or NULL when index_count is 0 */
+} meso_mesh_view;
+
+/* Parse and validate a decoded MESH chunk (header, layout and every index).
+ * `data` must be 4-byte aligned (MESO_ERR_INVALID_ARG otherwise) and outlive
+ * the view. The arrays are little-endian, i.e. host order on every target
+ * meso supports. */
+MESO_API meso_result meso_mesh_parse(const void* data, size_t size, meso_mesh_view* out, meso_error* err);
+
+/* OBJT record kinds. */
+typedef enum meso_object_kind {
+    MESO_OBJECT_INVALID = 0,
+    MESO_OBJECT_MESH = 1,
+    MESO_OBJECT_SHELL = 2,
+    MESO_OBJECT_CELLS = 3,
+    MESO_OBJECT_FRUSTA = 4,
+    MESO_OBJECT_KIND_COUNT
+} meso_object_kind;
+
+/* One 64-byte OBJT record, decoded. */
+typedef struct meso_object_record {
+    uint32_t id;          /* >= 1, unique in the chunk; chunks refer to it by `object` */
+    uint32_t kind;        /* meso_object_kind */
+    float bbox_min[3];
+    float bbox_max[3];
+    char name[32];        /* NUL-terminated, NUL-padded (at most 31 characters) */
+} meso_object_record;
+
+/* Encode one record into 64 bytes at dst (the name is truncated to 31
+ * bytes and NUL-padded) / decode 64 bytes at src. */
+MESO_API void meso_object_record_encode(const meso_object_record* rec, void* dst);
+MESO_API void meso_object_record_decode(const void* src, meso_object_record* rec);
+
+/* The file's objects: reads and checks the OBJT chunk (CRC and records) and
+ * writes up to `cap` records to `out` (NULL with cap 0 only counts); *count
+ * gets the number of objects. A file without an OBJT chunk has none. */
+MESO_API meso_result meso_file_objects(meso_file* f, meso_object_record* out, uint32_t cap, uint32_t* count,
+                                       meso_error* err);
+
+/* >>checksum -------------------------------------------------------------- */
+
+/* CRC32C (Castagnoli), hardware-accelerated with SSE4.2 when the CPU has it.
+ * Pass 0 as `crc` to start. */
+MESO_API uint32_t meso_crc32c(uint32_t crc, const void* data, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MESO_FILE_H */

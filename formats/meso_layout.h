@@ -1,0 +1,101 @@
+/*
+ * meso_layout.h — byte offsets and sizes of every on-disk structure of the
+ * .meso container (format 1.0). FORMAT.md is the normative description.
+ *
+ * #define-only on purpose: this file is prepended to GLSL sources, so it must
+ * not contain typedefs, includes or C-only syntax. All values little-endian.
+ * Naming: MESO_<STRUCT>_OFF_<FIELD> is a byte offset inside the structure,
+ * MESO_<STRUCT>_SIZE_<FIELD> is a field's size in bytes.
+ */
+#ifndef MESO_LAYOUT_H
+#define MESO_LAYOUT_H
+
+/* Alignment of every payload and of the file size. */
+#define MESO_ALIGN 64
+
+/* File header: 64 bytes at offset 0. */
+#define MESO_HDR_SIZE 64
+#define MESO_HDR_OFF_MAGIC 0
+#define MESO_HDR_SIZE_MAGIC 8
+#define MESO_HDR_OFF_MAJOR 8
+#define MESO_HDR_OFF_MINOR 10
+#define MESO_HDR_OFF_FLAGS 12
+#define MESO_HDR_OFF_FILE_SIZE 16
+#define MESO_HDR_OFF_TOC_OFFSET 24
+#define MESO_HDR_OFF_CHUNK_COUNT 32
+#define MESO_HDR_OFF_TOC_ENTRY_SIZE 36
+#define MESO_HDR_OFF_TOC_CRC 40
+#define MESO_HDR_OFF_HEADER_CRC 44
+#define MESO_HDR_OFF_RESERVED 48
+#define MESO_HDR_SIZE_RESERVED 16
+
+/* Table of contents entry: 64 bytes in format 1.0 (larger in newer minors;
+ * the first 64 bytes keep this layout). */
+#define MESO_TOC_ENTRY_SIZE 64
+#define MESO_TOC_OFF_TYPE 0
+#define MESO_TOC_OFF_FLAGS 4
+#define MESO_TOC_OFF_OBJECT 8
+#define MESO_TOC_OFF_LOD 12
+#define MESO_TOC_OFF_ENCODING 14
+#define MESO_TOC_OFF_OFFSET 16
+#define MESO_TOC_OFF_STORED_SIZE 24
+#define MESO_TOC_OFF_DECODED_SIZE 32
+#define MESO_TOC_OFF_CRC 40
+#define MESO_TOC_OFF_DTYPE 44
+#define MESO_TOC_OFF_COMPONENTS 46
+#define MESO_TOC_OFF_DIMS 48
+#define MESO_TOC_SIZE_DIMS 12
+#define MESO_TOC_OFF_RESERVED 60
+
+/* MESH chunk (decoded layout): a 64-byte header, then the arrays. Offsets
+ * of the arrays are relative to the start of the chunk. */
+#define MESO_MESH_HDR_SIZE 64
+#define MESO_MESH_OFF_VERTEX_COUNT 0
+#define MESO_MESH_OFF_INDEX_COUNT 4
+#define MESO_MESH_OFF_ATTRIBUTES 8
+#define MESO_MESH_OFF_QUANT_POSITION 12
+#define MESO_MESH_OFF_QUANT_NORMAL 13
+#define MESO_MESH_OFF_QUANT_UV 14
+#define MESO_MESH_OFF_RESERVED0 15
+#define MESO_MESH_OFF_POSITIONS 16
+#define MESO_MESH_OFF_NORMALS 24
+#define MESO_MESH_OFF_UVS 32
+#define MESO_MESH_OFF_INDICES 40
+#define MESO_MESH_OFF_RESERVED1 48
+#define MESO_MESH_SIZE_RESERVED1 16
+#define MESO_MESH_ARRAY_ALIGN 16
+#define MESO_MESH_POSITION_STRIDE 12
+#define MESO_MESH_NORMAL_STRIDE 12
+#define MESO_MESH_UV_STRIDE 8
+#define MESO_MESH_INDEX_STRIDE 4
+
+/* OBJT chunk: one 64-byte record per object. */
+#define MESO_OBJT_RECORD_SIZE 64
+#define MESO_OBJT_OFF_ID 0
+#define MESO_OBJT_OFF_KIND 4
+#define MESO_OBJT_OFF_BBOX_MIN 8
+#define MESO_OBJT_OFF_BBOX_MAX 20
+#define MESO_OBJT_OFF_NAME 32
+#define MESO_OBJT_SIZE_NAME 32
+
+/* SKEL chunk: one 32-byte record per skeleton node. */
+#define MESO_SKEL_RECORD_SIZE 32
+#define MESO_SKEL_OFF_POSITION 0
+#define MESO_SKEL_OFF_RADIUS 12
+#define MESO_SKEL_OFF_PARENT 16
+#define MESO_SKEL_OFF_NODE_TYPE 20
+#define MESO_SKEL_OFF_RESERVED 24
+#define MESO_SKEL_SIZE_RESERVED 8
+
+/* FRUS chunk: one 64-byte record per conical frustum. */
+#define MESO_FRUS_RECORD_SIZE 64
+#define MESO_FRUS_OFF_CENTER0 0
+#define MESO_FRUS_OFF_RADIUS0 12
+#define MESO_FRUS_OFF_CENTER1 16
+#define MESO_FRUS_OFF_RADIUS1 28
+#define MESO_FRUS_OFF_PLANE0 32
+#define MESO_FRUS_OFF_PLANE1 44
+#define MESO_FRUS_OFF_SKEL_NODE 56
+#define MESO_FRUS_OFF_RESERVED 60
+
+#endif /* MESO_LAYOUT_H */

@@ -1,0 +1,158 @@
+/*
+ * meso_rt.c — runtime context: allocator, logger, GL function table.
+ *
+ * Loading follows sokol's X-macro table (STYLE.md §6) with one departure:
+ * the table lives inside meso_rt, not in statics, so the library keeps no
+ * global state. A missing entry point fails creation and names the function.
+ */
+#include "rt_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char* const log_item_strings[MESO_LOGITEM_COUNT] = {
+#define MESO_X_STRING(id, text) text,
+    MESO_LOG_ITEMS(MESO_X_STRING)
+#undef MESO_X_STRING
+};
+
+const char* meso_log_item_string(meso_log_item item)
+{
+    return (unsigned)item < MESO_LOGITEM_COUNT ? log_item_strings[item] : "unknown log item";
+}
+
+static void* default_alloc(size_t size, void* user)
+{
+    (void)user;
+    return malloc(size);
+}
+
+static void default_free(void* p, void* user)
+{
+    (void)user;
+    free(p);
+}
+
+void* mesoi_rt_alloc(meso_rt* rt, size_t size)
+{
+    void* p = rt->alloc.alloc_fn(size ? size : 1, rt->alloc.user);
+    if (!p)
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OUT_OF_MEMORY, "%zu bytes", size);
+    return p;
+}
+
+void mesoi_rt_free(meso_rt* rt, void* p)
+{
+    if (p)
+        rt->alloc.free_fn(p, rt->alloc.user);
+}
+
+void mesoi_log(meso_rt* rt, meso_log_level level, meso_log_item item, const char* fmt, ...)
+{
+    if (!rt->log_fn)
+        return;
+    char msg[512];
+    const char* detail = NULL;
+    if (fmt) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, sizeof(msg), fmt, ap);
+        va_end(ap);
+        detail = msg;
+    }
+    rt->log_fn(rt->log_user, level, item, detail);
+}
+
+/* Resolve every entry of MESO_GL_FUNCS; report each missing one. */
+static int load_gl(meso_rt* rt, meso_gl_get_proc_fn gpa)
+{
+    int missing = 0;
+#define MESO_X_LOAD(type, name)                                                             \
+    {                                                                                       \
+        meso_gl_fn fn = gpa("gl" #name);                                                    \
+        if (!fn) {                                                                          \
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ENTRY_POINT_MISSING, "gl" #name); \
+            ++missing;                                                                      \
+        }                                                                                   \
+        /* Function pointer conversion between GL prototypes is how every loader works. */ \
+        memcpy(&rt->gl.name, &fn, sizeof(fn));                                              \
+    }
+    MESO_GL_FUNCS(MESO_X_LOAD)
+#undef MESO_X_LOAD
+    return missing == 0;
+}
+
+meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
+{
+    if (!out)
+        return MESO_ERR_INVALID_ARG;
+    *out = NULL;
+    if (!desc || !desc->gl_get_proc_address)
+        return MESO_ERR_INVALID_ARG;
+    if (!desc->allocator.alloc_fn != !desc->allocator.free_fn)
+        return MESO_ERR_INVALID_ARG; /* both or neither (STYLE.md §5) */
+
+    meso_allocator a = desc->allocator;
+    if (!a.alloc_fn) {
+        a.alloc_fn = default_alloc;
+        a.free_fn = default_free;
+        a.user = NULL;
+    }
+    meso_rt* rt = a.alloc_fn(sizeof(meso_rt), a.user);
+    if (!rt) {
+        if (desc->log_fn)
+            desc->log_fn(desc->log_user, MESO_LOG_ERROR, MESO_LOGITEM_OUT_OF_MEMORY, "meso_rt");
+        return MESO_ERR_OUT_OF_MEMORY;
+    }
+    memset(rt, 0, sizeof(*rt));
+    rt->alloc = a;
+    rt->log_fn = desc->log_fn;
+    rt->log_user = desc->log_user;
+
+    if (!load_gl(rt, desc->gl_get_proc_address)) {
+        meso_rt_destroy(rt);
+        return MESO_ERR_GL;
+    }
+    GLint major = 0, minor = 0;
+    rt->gl.GetIntegerv(GL_MAJOR_VERSION, &major);
+    rt->gl.GetIntegerv(GL_MINOR_VERSION, &minor);
+    while (rt->gl.GetError() != GL_NO_ERROR) {
+        /* GL_MAJOR_VERSION is unknown before 3.0: leave major at 0. */
+    }
+    rt->gl_version = major * 10 + minor;
+    if (rt->gl_version < 33) {
+        const GLubyte* s = rt->gl.GetString(GL_VERSION);
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_VERSION_TOO_OLD, "context reports \"%s\"",
+                  s ? (const char*)s : "(null)");
+        meso_rt_destroy(rt);
+        return MESO_ERR_GL;
+    }
+    meso_result pr = mesoi_mesh_program_create(rt);
+    if (pr != MESO_OK) {
+        meso_rt_destroy(rt);
+        return pr;
+    }
+    const GLubyte* renderer = rt->gl.GetString(GL_RENDERER);
+    mesoi_log(rt, MESO_LOG_INFO, MESO_LOGITEM_CONTEXT_CREATED, "OpenGL %d.%d, %s", major, minor,
+              renderer ? (const char*)renderer : "unknown renderer");
+    *out = rt;
+    return MESO_OK;
+}
+
+void meso_rt_destroy(meso_rt* rt)
+{
+    if (!rt)
+        return;
+    mesoi_objects_destroy(rt);
+    if (rt->mesh_program)
+        rt->gl.DeleteProgram(rt->mesh_program);
+    meso_allocator a = rt->alloc;
+    a.free_fn(rt, a.user);
+}
+
+int meso_rt_gl_version(const meso_rt* rt)
+{
+    return rt ? rt->gl_version : 0;
+}

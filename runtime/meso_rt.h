@@ -1,0 +1,133 @@
+/*
+ * meso_rt.h — libmeso, the runtime: stream a .meso file and ray cast it with
+ * OpenGL into the host's framebuffer and depth buffer.
+ *
+ * C11. Depends on nothing but OpenGL (3.3 core or newer) and what the host
+ * passes in: its GL loader, and optionally an allocator, a logger and read
+ * callbacks. No global state: every call takes a meso_rt context, and several
+ * contexts may live side by side (one per GL context).
+ *
+ *     meso_rt* rt = NULL;
+ *     if (meso_rt_create(&(meso_rt_desc){ .gl_get_proc_address = glfwGetProcAddress }, &rt) != MESO_OK)
+ *         ...;   // the logger (if any) said why
+ *     ...
+ *     meso_rt_destroy(rt);
+ *
+ * The host makes its GL context current before every meso_rt_* call and
+ * keeps it current; the runtime never creates windows or contexts.
+ */
+#ifndef MESO_RT_H
+#define MESO_RT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "meso_file.h" /* meso_result, meso_allocator, meso_io, meso_error */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* >>logging --------------------------------------------------------------- */
+
+typedef enum meso_log_level {
+    MESO_LOG_ERROR = 0,
+    MESO_LOG_WARNING,
+    MESO_LOG_INFO,
+    MESO_LOG_LEVEL_COUNT
+} meso_log_level;
+
+/* Numbered log items: tests assert on them, hosts may filter by them. */
+#define MESO_LOG_ITEMS(X)                                                           \
+    X(OK, "no error")                                                               \
+    X(GL_ENTRY_POINT_MISSING, "a required OpenGL function was not found")          \
+    X(GL_VERSION_TOO_OLD, "OpenGL 3.3 core or newer is required")                   \
+    X(GL_ERROR, "an OpenGL call raised an error")                                   \
+    X(SHADER_COMPILE_FAILED, "a shader failed to compile")                          \
+    X(PROGRAM_LINK_FAILED, "a shader program failed to link")                       \
+    X(OUT_OF_MEMORY, "memory allocation failed")                                    \
+    X(FILE_OPEN_FAILED, "the .meso file could not be opened")                       \
+    X(CHUNK_READ_FAILED, "a chunk could not be read")                               \
+    X(OBJECT_NOT_FOUND, "the file has no drawable object with that id")             \
+    X(INVALID_ARGUMENT, "an argument violates the API contract")                    \
+    X(CONTEXT_CREATED, "runtime context created")
+
+typedef enum meso_log_item {
+#define MESO_X_ENUM(id, text) MESO_LOGITEM_##id,
+    MESO_LOG_ITEMS(MESO_X_ENUM)
+#undef MESO_X_ENUM
+        MESO_LOGITEM_COUNT
+} meso_log_item;
+
+/* Static description of an item, never NULL. */
+MESO_API const char* meso_log_item_string(meso_log_item item);
+
+/* `message` is the item's detail (e.g. the missing function's name), or NULL. */
+typedef void (*meso_log_fn)(void* user, meso_log_level level, meso_log_item item, const char* message);
+
+/* >>context --------------------------------------------------------------- */
+
+typedef void (*meso_gl_fn)(void);
+typedef meso_gl_fn (*meso_gl_get_proc_fn)(const char* name);
+
+typedef struct meso_rt_desc {
+    meso_gl_get_proc_fn gl_get_proc_address; /* required: glfwGetProcAddress, eglGetProcAddress, ... */
+    meso_allocator allocator;                /* optional (default malloc/free) */
+    meso_log_fn log_fn;                      /* optional: silent without one */
+    void* log_user;
+} meso_rt_desc;
+
+typedef struct meso_rt meso_rt;
+
+/* Create a context: loads every GL entry point the runtime uses through
+ * desc->gl_get_proc_address and checks the context is OpenGL 3.3 core or
+ * newer. Fails with MESO_ERR_GL (logging GL_ENTRY_POINT_MISSING with the
+ * function's name, or GL_VERSION_TOO_OLD), MESO_ERR_OUT_OF_MEMORY or
+ * MESO_ERR_INVALID_ARG. On success *out must be destroyed. */
+MESO_API meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out);
+/* Release every GL object and all memory of the context. NULL is allowed. */
+MESO_API void meso_rt_destroy(meso_rt* rt);
+
+/* The context's GL version as major*10+minor (e.g. 45). */
+MESO_API int meso_rt_gl_version(const meso_rt* rt);
+
+/* >>objects --------------------------------------------------------------- */
+
+/* Handle of an uploaded object; id 0 is never valid. A released handle is
+ * detected (generation counter) and refused with MESO_ERR_INVALID_ARG. */
+typedef struct meso_rt_object {
+    uint32_t id;
+} meso_rt_object;
+
+/* Stream one object from an open file and upload it: only that object's
+ * chunks are read (through whatever reader the file was opened with: path,
+ * mmap, memory or the host's meso_io callbacks). Supported kinds in this
+ * version: MESO_OBJECT_MESH (drawn as the shaded base mesh). Other kinds give
+ * MESO_ERR_UNSUPPORTED. Encoded chunks (Draco) need a decoder in the
+ * meso_open_desc the file was opened with. On failure nothing is uploaded
+ * and out->id is 0. `file` may be closed after this returns. */
+MESO_API meso_result meso_rt_load_object(meso_rt* rt, meso_file* file, uint32_t object_id, meso_rt_object* out);
+/* Free the object's GL resources. Stale or zero handles are ignored. */
+MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);
+/* Object-space bounds from the file's OBJT record. */
+MESO_API meso_result meso_rt_object_bounds(const meso_rt* rt, meso_rt_object obj, float lo[3], float hi[3]);
+
+typedef struct meso_rt_draw_desc {
+    float view[16];     /* world -> eye, column-major (OpenGL convention) */
+    float proj[16];     /* eye -> clip */
+    float model[16];    /* object -> world, rigid + uniform scale; all zero means identity */
+    float light_dir[3]; /* towards the light, world space; zero means (0.3, 0.8, 0.5) normalised */
+    float albedo[3];    /* linear RGB; zero means (0.80, 0.74, 0.66) */
+} meso_rt_draw_desc;
+
+/* Draw an object into the host's currently bound framebuffer and viewport,
+ * with depth testing (GL_LESS) and depth writes, so it sorts against the
+ * host's own geometry. The GL state the call changes (program, vertex array,
+ * depth test/func/mask) is restored before it returns. GL errors are logged
+ * (GL_ERROR) and returned as MESO_ERR_GL, never fatal. */
+MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MESO_RT_H */

@@ -1,0 +1,59 @@
+/*
+ * rt_gl.h — the runtime's GL function table (internal).
+ *
+ * Every GL function the runtime calls is listed once in MESO_GL_FUNCS and
+ * expanded into a table inside meso_rt (no statics, so several contexts can
+ * coexist). Types come from Khronos' glcorearb.h, which declares no symbols
+ * unless GL_GLEXT_PROTOTYPES is defined: the runtime links no GL library.
+ */
+#ifndef MESO_RT_GL_H
+#define MESO_RT_GL_H
+
+#include <GL/glcorearb.h>
+
+/* X(type-suffix, name) → PFN<UPPER>PROC, member `name`. */
+#define MESO_GL_FUNCS(X)                                                     \
+    X(PFNGLGETSTRINGPROC, GetString)                                         \
+    X(PFNGLGETINTEGERVPROC, GetIntegerv)                                     \
+    X(PFNGLGETERRORPROC, GetError)                                           \
+    X(PFNGLENABLEPROC, Enable)                                               \
+    X(PFNGLDISABLEPROC, Disable)                                             \
+    X(PFNGLISENABLEDPROC, IsEnabled)                                         \
+    X(PFNGLDEPTHFUNCPROC, DepthFunc)                                         \
+    X(PFNGLDEPTHMASKPROC, DepthMask)                                         \
+    X(PFNGLGENBUFFERSPROC, GenBuffers)                                       \
+    X(PFNGLDELETEBUFFERSPROC, DeleteBuffers)                                 \
+    X(PFNGLBINDBUFFERPROC, BindBuffer)                                       \
+    X(PFNGLBUFFERDATAPROC, BufferData)                                       \
+    X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                                 \
+    X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                             \
+    X(PFNGLDELETEVERTEXARRAYSPROC, DeleteVertexArrays)                       \
+    X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)                             \
+    X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer)                     \
+    X(PFNGLENABLEVERTEXATTRIBARRAYPROC, EnableVertexAttribArray)             \
+    X(PFNGLCREATESHADERPROC, CreateShader)                                   \
+    X(PFNGLSHADERSOURCEPROC, ShaderSource)                                   \
+    X(PFNGLCOMPILESHADERPROC, CompileShader)                                 \
+    X(PFNGLGETSHADERIVPROC, GetShaderiv)                                     \
+    X(PFNGLGETSHADERINFOLOGPROC, GetShaderInfoLog)                           \
+    X(PFNGLDELETESHADERPROC, DeleteShader)                                   \
+    X(PFNGLCREATEPROGRAMPROC, CreateProgram)                                 \
+    X(PFNGLATTACHSHADERPROC, AttachShader)                                   \
+    X(PFNGLLINKPROGRAMPROC, LinkProgram)                                     \
+    X(PFNGLGETPROGRAMIVPROC, GetProgramiv)                                   \
+    X(PFNGLGETPROGRAMINFOLOGPROC, GetProgramInfoLog)                         \
+    X(PFNGLDELETEPROGRAMPROC, DeleteProgram)                                 \
+    X(PFNGLUSEPROGRAMPROC, UseProgram)                                       \
+    X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)                       \
+    X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                           \
+    X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                       \
+    X(PFNGLUNIFORM1FPROC, Uniform1f)                                         \
+    X(PFNGLDRAWELEMENTSPROC, DrawElements)
+
+typedef struct mesoi_gl {
+#define MESO_X_MEMBER(type, name) type name;
+    MESO_GL_FUNCS(MESO_X_MEMBER)
+#undef MESO_X_MEMBER
+} mesoi_gl;
+
+#endif /* MESO_RT_GL_H */

@@ -1,0 +1,46 @@
+/* test_util.h — what the C tests share: assert that survives NDEBUG, data
+ * paths, a seeded RNG (deterministic tests), approximate comparison. */
+#ifndef MESO_TEST_UTIL_H
+#define MESO_TEST_UTIL_H
+
+#undef NDEBUG /* tests use assert() to verify behaviour */
+#include <assert.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#ifndef MESO_TEST_DATA
+#error "MESO_TEST_DATA must be defined by the build (tests/data)"
+#endif
+
+/* Path of a bundled test file: static buffer, valid until the next call. */
+static inline const char* test_data(const char* name)
+{
+    static char buf[4096];
+    snprintf(buf, sizeof(buf), "%s/%s", MESO_TEST_DATA, name);
+    return buf;
+}
+
+/* xorshift64*: deterministic pseudo-random numbers for sampling tests. */
+static inline uint64_t test_rng_next(uint64_t* s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return *s * 2685821657736338717ULL;
+}
+
+/* Uniform double in [lo, hi). */
+static inline double test_rng_uniform(uint64_t* s, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)(test_rng_next(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+#define TEST_RUN(fn)                              \
+    do {                                          \
+        fprintf(stderr, "  %s ...\n", #fn);       \
+        fn();                                     \
+    } while (0)
+
+#endif

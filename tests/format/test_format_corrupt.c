@@ -1,0 +1,601 @@
+/* test_format_corrupt.c — every corruption class is rejected with the right
+ * meso_result and issue code. Where a corruption would otherwise be caught by
+ * a checksum, the CRCs are recomputed (fix_crcs) to reach the deeper check. */
+#undef NDEBUG
+#include "meso_file.h"
+#include "meso_layout.h"
+#include "sample.h"
+
+#include <assert.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static uint8_t* entry(uint8_t* mem, uint32_t i) { return mem + MESO_HDR_SIZE + (size_t)i * MESO_TOC_ENTRY_SIZE; }
+
+static uint32_t chunk_of(const uint8_t* mem, uint32_t type)
+{
+    uint32_t n = get32(mem + MESO_HDR_OFF_CHUNK_COUNT);
+    for (uint32_t i = 0; i < n; i++)
+        if (get32(mem + MESO_HDR_SIZE + (size_t)i * 64) == type)
+            return i;
+    assert(0 && "chunk type not in sample");
+    return 0;
+}
+
+static uint8_t* payload(uint8_t* mem, uint32_t i) { return mem + get64(entry(mem, i) + MESO_TOC_OFF_OFFSET); }
+
+static void expect(const uint8_t* mem, size_t size, meso_result want, uint32_t code, int line)
+{
+    meso_error e;
+    memset(&e, 0, sizeof e);
+    meso_result r = open_and_validate_copy(mem, size, &e);
+    if (r != want || e.code != code) {
+        fprintf(stderr, "line %d: want %s/%u, got %s/%u: %s\n", line, meso_result_string(want), code,
+                meso_result_string(r), e.code, e.message);
+        assert(0);
+    }
+}
+#define EXPECT(mem, size, want, code) expect(mem, size, want, code, __LINE__)
+
+/* A fresh copy of the sample file. */
+static uint8_t* fresh(size_t* size) { return sample_file(size); }
+
+static void sample_is_valid(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    EXPECT(m, size, MESO_OK, 0);
+    free(m);
+}
+
+static void every_truncated_prefix_is_rejected(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    for (size_t n = 0; n < size; n++) {
+        meso_error e;
+        meso_result r = open_and_validate_copy(m, n, &e);
+        assert(r == MESO_ERR_TRUNCATED);
+        assert(e.code == (n < 64 ? MESO_ISSUE_HDR_TRUNCATED : MESO_ISSUE_FILE_TRUNCATED));
+    }
+    free(m);
+}
+
+static void every_header_and_toc_bit_flip_and_sampled_payload_flips_are_detected(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t n = get32(m + MESO_HDR_OFF_CHUNK_COUNT);
+    size_t toc_end = 64 + (size_t)n * 64;
+    for (size_t bit = 0; bit < size * 8; bit += (bit < toc_end * 8 ? 1 : 5)) {
+        m[bit / 8] ^= (uint8_t)(1u << (bit % 8));
+        meso_error e;
+        meso_result r = open_and_validate(m, size, &e);
+        if (r == MESO_OK) {
+            fprintf(stderr, "bit flip at byte %zu bit %zu went undetected\n", bit / 8, bit % 8);
+            assert(0);
+        }
+        m[bit / 8] ^= (uint8_t)(1u << (bit % 8));
+    }
+    EXPECT(m, size, MESO_OK, 0);
+    free(m);
+}
+
+static void wrong_magic_is_bad_magic(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    memcpy(m, "PK\x03\x04\x14\x00\x00\x00", 8);
+    EXPECT(m, size, MESO_ERR_BAD_MAGIC, MESO_ISSUE_HDR_MAGIC);
+    free(m);
+}
+
+/* Simulate whole-file transfers, as FTP ASCII mode would do them. */
+static void text_mode_and_7bit_damage_have_their_own_codes(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint8_t* out = (uint8_t*)malloc(size * 2);
+    size_t k = 0;
+    for (size_t i = 0; i < size; i++) /* CRLF -> LF */
+        if (!(m[i] == '\r' && i + 1 < size && m[i + 1] == '\n'))
+            out[k++] = m[i];
+    EXPECT(out, k, MESO_ERR_BAD_MAGIC, MESO_ISSUE_HDR_TEXT_MODE);
+    k = 0;
+    for (size_t i = 0; i < size; i++) { /* LF -> CRLF */
+        if (m[i] == '\n')
+            out[k++] = '\r';
+        out[k++] = m[i];
+    }
+    EXPECT(out, k, MESO_ERR_BAD_MAGIC, MESO_ISSUE_HDR_TEXT_MODE);
+    for (size_t i = 0; i < size; i++)
+        out[i] = m[i] & 0x7F;
+    EXPECT(out, size, MESO_ERR_BAD_MAGIC, MESO_ISSUE_HDR_7BIT);
+    free(out);
+    free(m);
+}
+
+static void newer_major_is_refused_and_major_zero_is_legacy(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    put16(m + MESO_HDR_OFF_MAJOR, 2);
+    EXPECT(m, size, MESO_ERR_VERSION_TOO_NEW, MESO_ISSUE_HDR_TOO_NEW); /* even before the CRC */
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_VERSION_TOO_NEW, MESO_ISSUE_HDR_TOO_NEW);
+    put16(m + MESO_HDR_OFF_MAJOR, 0);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_BAD_MAGIC, MESO_ISSUE_HDR_LEGACY);
+    free(m);
+}
+
+static void newer_minor_is_read_and_skips_unknown_optional_chunks(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    put16(m + MESO_HDR_OFF_MINOR, 3);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    uint32_t i = chunk_of(m, MESO_CHUNK_STHK);
+    put32(entry(m, i) + MESO_TOC_OFF_TYPE, MESO_FOURCC('Z', 'Z', 'Z', '1'));
+    put32(entry(m, i) + MESO_TOC_OFF_FLAGS, 0);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(m, size, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_find(f, MESO_CHUNK_STHK, UINT32_MAX, UINT16_MAX) == -1);
+    uint16_t major, minor;
+    meso_file_version(f, &major, &minor);
+    assert(major == 1 && minor == 3);
+    meso_file_close(f);
+    /* The same chunk marked REQUIRED: refused, naming the fourcc. */
+    put32(entry(m, i) + MESO_TOC_OFF_FLAGS, MESO_CHUNK_FLAG_REQUIRED);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_UNSUPPORTED, MESO_ISSUE_CHUNK_UNKNOWN_REQUIRED);
+    meso_error e;
+    assert(meso_file_open_memory(m, size, NULL, &f, &e) == MESO_ERR_UNSUPPORTED && strstr(e.message, "'ZZZ1'"));
+    assert(e.chunk == (int32_t)i);
+    free(m);
+}
+
+static void unknown_encoding_is_corrupt_in_1_0_and_unsupported_at_read_in_newer_minors(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t i = chunk_of(m, MESO_CHUNK_STHK);
+    put16(entry(m, i) + MESO_TOC_OFF_ENCODING, 7);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_ENCODING);
+    put16(m + MESO_HDR_OFF_MINOR, 1);
+    fix_crcs(m);
+    meso_file* f = NULL;
+    meso_error e;
+    assert(meso_file_open_memory(m, size, NULL, &f, &e) == MESO_OK);
+    uint8_t buf[64];
+    assert(meso_file_read_chunk(f, i, buf, sizeof buf, &e) == MESO_ERR_UNSUPPORTED);
+    assert(e.code == MESO_ISSUE_ENCODING_UNSUPPORTED);
+    meso_file_close(f);
+    free(m);
+}
+
+/* A newer minor may grow TOC entries: readers use the first 64 bytes. */
+static void larger_toc_entries_from_a_newer_minor_are_read(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t n = get32(m + MESO_HDR_OFF_CHUNK_COUNT);
+    uint64_t delta = (uint64_t)n * 64;
+    size_t big_size = size + (size_t)delta;
+    uint8_t* b = (uint8_t*)calloc(1, big_size);
+    memcpy(b, m, 64);
+    for (uint32_t i = 0; i < n; i++) {
+        uint8_t* e = b + 64 + (size_t)i * 128;
+        memcpy(e, entry(m, i), 64);
+        memset(e + 64, 0xAB, 64); /* fields this reader does not know */
+        put64(e + MESO_TOC_OFF_OFFSET, get64(entry(m, i) + MESO_TOC_OFF_OFFSET) + delta);
+    }
+    memcpy(b + 64 + (size_t)n * 128, m + 64 + (size_t)n * 64, size - 64 - (size_t)n * 64);
+    put16(b + MESO_HDR_OFF_MINOR, 1);
+    put32(b + MESO_HDR_OFF_TOC_ENTRY_SIZE, 128);
+    put64(b + MESO_HDR_OFF_FILE_SIZE, big_size);
+    fix_crcs(b);
+    EXPECT(b, big_size, MESO_OK, 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(b, big_size, NULL, &f, NULL) == MESO_OK);
+    const sample_chunk* sc;
+    size_t count = sample_chunks(&sc);
+    assert(meso_file_chunk_count(f) == count);
+    for (size_t k = 0; k < count; k++) {
+        int32_t idx = meso_file_find(f, sc[k].desc.type, sc[k].desc.object, sc[k].desc.lod);
+        uint8_t buf[1024];
+        assert(idx >= 0 && meso_file_read_chunk(f, (uint32_t)idx, buf, sizeof buf, NULL) == MESO_OK);
+        assert(memcmp(buf, sc[k].data, sc[k].size) == 0);
+    }
+    meso_file_close(f);
+    /* Smaller than 64 is never valid. */
+    put32(b + MESO_HDR_OFF_TOC_ENTRY_SIZE, 32);
+    fix_crcs(b);
+    EXPECT(b, big_size, MESO_ERR_CORRUPT, MESO_ISSUE_HDR_TOC_ENTRY_SIZE);
+    free(b);
+    free(m);
+}
+
+static void chunk_ranges_order_and_alignment_are_checked(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint8_t* e3 = entry(m, 3);
+    uint64_t off3 = get64(e3 + MESO_TOC_OFF_OFFSET), off2 = get64(entry(m, 2) + MESO_TOC_OFF_OFFSET);
+    uint64_t off4 = get64(entry(m, 4) + MESO_TOC_OFF_OFFSET);
+
+    put64(e3 + MESO_TOC_OFF_OFFSET, off2); /* same start as the previous chunk */
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_OVERLAP);
+    put64(e3 + MESO_TOC_OFF_OFFSET, off4); /* swapped with the next one */
+    put64(entry(m, 4) + MESO_TOC_OFF_OFFSET, off3);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_ORDER);
+    put64(entry(m, 4) + MESO_TOC_OFF_OFFSET, off4);
+    put64(e3 + MESO_TOC_OFF_OFFSET, off2 - 64);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_ORDER);
+    put64(e3 + MESO_TOC_OFF_OFFSET, off3 + 8);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_ALIGN);
+    put64(e3 + MESO_TOC_OFF_OFFSET, 64);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_IN_TOC);
+    put64(e3 + MESO_TOC_OFF_OFFSET, size);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_BOUNDS);
+    put64(e3 + MESO_TOC_OFF_OFFSET, UINT64_MAX - 63); /* offset + size would wrap */
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_BOUNDS);
+    put64(e3 + MESO_TOC_OFF_OFFSET, off3);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    /* Absurd sizes on a BYTES chunk (META is chunk 0). */
+    put64(entry(m, 0) + MESO_TOC_OFF_STORED_SIZE, UINT64_MAX - 1);
+    put64(entry(m, 0) + MESO_TOC_OFF_DECODED_SIZE, UINT64_MAX - 1);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_BOUNDS);
+    free(m);
+}
+
+typedef struct biggest {
+    size_t max;
+} biggest;
+
+static void* track_alloc(size_t size, void* user)
+{
+    biggest* b = (biggest*)user;
+    if (size > b->max)
+        b->max = size;
+    return malloc(size);
+}
+
+static void track_free(void* p, void* user)
+{
+    (void)user;
+    free(p);
+}
+
+static void absurd_chunk_count_allocates_nothing_large(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    put32(m + MESO_HDR_OFF_CHUNK_COUNT, 0xFFFFFFFFu);
+    /* Only the header CRC is fixed: a TOC CRC over what the count claims
+     * cannot even be computed. */
+    put32(m + MESO_HDR_OFF_HEADER_CRC, 0);
+    put32(m + MESO_HDR_OFF_HEADER_CRC, meso_crc32c(0, m, 64));
+    EXPECT(m, size, MESO_ERR_UNSUPPORTED, MESO_ISSUE_TOC_TOO_MANY);
+    biggest b = {0};
+    meso_open_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.allocator.alloc_fn = track_alloc;
+    desc.allocator.free_fn = track_free;
+    desc.allocator.user = &b;
+    desc.max_chunks = UINT32_MAX;
+    meso_file* f = NULL;
+    meso_error e;
+    assert(meso_file_open_memory(m, size, &desc, &f, &e) == MESO_ERR_CORRUPT && e.code == MESO_ISSUE_TOC_BOUNDS);
+    assert(b.max < 4096);
+    /* The limit in the desc applies. */
+    put32(m + MESO_HDR_OFF_CHUNK_COUNT, 5);
+    fix_crcs(m);
+    desc.max_chunks = 4;
+    assert(meso_file_open_memory(m, size, &desc, &f, &e) == MESO_ERR_UNSUPPORTED && e.code == MESO_ISSUE_TOC_TOO_MANY);
+    free(m);
+}
+
+static void header_size_fields_are_checked(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    put64(m + MESO_HDR_OFF_FILE_SIZE, UINT64_MAX - 63);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_TRUNCATED, MESO_ISSUE_FILE_TRUNCATED);
+    put64(m + MESO_HDR_OFF_FILE_SIZE, size + 1);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_HDR_FILE_SIZE_ALIGN);
+    put64(m + MESO_HDR_OFF_FILE_SIZE, size - 64);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_FILE_TRAILING);
+    put64(m + MESO_HDR_OFF_FILE_SIZE, size);
+    put64(m + MESO_HDR_OFF_TOC_OFFSET, 128);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_HDR_TOC_OFFSET);
+    put64(m + MESO_HDR_OFF_TOC_OFFSET, 64);
+    put32(m + MESO_HDR_OFF_FLAGS, 1);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_HDR_FLAGS);
+    put32(m + MESO_HDR_OFF_FLAGS, 0);
+    m[MESO_HDR_OFF_RESERVED + 15] = 1;
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_HDR_RESERVED);
+    m[MESO_HDR_OFF_RESERVED + 15] = 0;
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    free(m);
+}
+
+static void toc_entry_fields_are_checked(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t i = chunk_of(m, MESO_CHUNK_SDIR);
+    uint8_t* e = entry(m, i);
+    uint8_t saved[64];
+    memcpy(saved, e, 64);
+#define FIELD_CASE(stmt, want, code) \
+    do {                             \
+        stmt;                        \
+        fix_crcs(m);                 \
+        EXPECT(m, size, want, code); \
+        memcpy(e, saved, 64);        \
+    } while (0)
+    FIELD_CASE(put32(e + MESO_TOC_OFF_RESERVED, 1), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_RESERVED);
+    FIELD_CASE(put32(e + MESO_TOC_OFF_FLAGS, 2), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_FLAGS);
+    FIELD_CASE(put32(e + MESO_TOC_OFF_TYPE, 0x00444953u), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_TYPE);
+    FIELD_CASE(put16(e + MESO_TOC_OFF_DTYPE, 42), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_DTYPE);
+    FIELD_CASE(put16(e + MESO_TOC_OFF_COMPONENTS, 17), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_COMPONENTS);
+    FIELD_CASE(put16(e + MESO_TOC_OFF_COMPONENTS, 0), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_COMPONENTS);
+    FIELD_CASE(put32(e + MESO_TOC_OFF_DIMS + 4, 0), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_DIMS);
+    FIELD_CASE(put64(e + MESO_TOC_OFF_DECODED_SIZE, 47), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_RAW_SIZE);
+    FIELD_CASE(put32(e + MESO_TOC_OFF_DIMS, 5), MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_TYPED_SIZE);
+    /* dims product overflows u64: 4 x 16 x 2^32 x 2^32 x 2^32. */
+    FIELD_CASE((put16(e + MESO_TOC_OFF_COMPONENTS, 16), put32(e + MESO_TOC_OFF_DIMS, 0xFFFFFFFFu),
+                put32(e + MESO_TOC_OFF_DIMS + 4, 0xFFFFFFFFu), put32(e + MESO_TOC_OFF_DIMS + 8, 0xFFFFFFFFu)),
+               MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_TYPED_SIZE);
+    FIELD_CASE((put64(e + MESO_TOC_OFF_STORED_SIZE, 0), put64(e + MESO_TOC_OFF_DECODED_SIZE, 0)), MESO_ERR_CORRUPT,
+               MESO_ISSUE_CHUNK_EMPTY);
+    /* Full tier: the type's element rules (SDIR must be F32 x 3). */
+    FIELD_CASE(put16(e + MESO_TOC_OFF_DTYPE, MESO_DTYPE_U32), MESO_ERR_CORRUPT, MESO_ISSUE_TYPE_ELEMENT);
+    FIELD_CASE(put16(e + MESO_TOC_OFF_ENCODING, MESO_ENCODING_DRACO), MESO_ERR_CORRUPT, MESO_ISSUE_TYPE_ENCODING);
+    uint32_t meta = chunk_of(m, MESO_CHUNK_META);
+    e = entry(m, meta);
+    memcpy(saved, e, 64);
+    FIELD_CASE(put32(e + MESO_TOC_OFF_OBJECT, 3), MESO_ERR_CORRUPT, MESO_ISSUE_TYPE_OBJECT);
+#undef FIELD_CASE
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    free(m);
+}
+
+static void checksum_mismatches_are_detected(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t i = chunk_of(m, MESO_CHUNK_DIST);
+    payload(m, i)[5] ^= 0x10;
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_PAYLOAD_CRC);
+    meso_file* f = NULL;
+    meso_error e;
+    assert(meso_file_open_memory(m, size, NULL, &f, &e) == MESO_OK); /* cheap tier does not read payloads */
+    uint8_t buf[256];
+    assert(meso_file_read_chunk(f, i, buf, sizeof buf, &e) == MESO_ERR_CORRUPT && e.code == MESO_ISSUE_PAYLOAD_CRC);
+    assert(e.chunk == (int32_t)i && strstr(e.message, "DIST"));
+    meso_file_close(f);
+    payload(m, i)[5] ^= 0x10;
+    put32(entry(m, 1) + MESO_TOC_OFF_CRC, get32(entry(m, 1) + MESO_TOC_OFF_CRC) ^ 1);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_TOC_CRC);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_PAYLOAD_CRC); /* the entry's CRC is now wrong */
+    fix_payload_crc(m, 1);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    m[MESO_HDR_OFF_RESERVED] = 1;
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_HDR_CRC);
+    free(m);
+}
+
+static void trailing_bytes_and_padding_are_checked(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint8_t* big = (uint8_t*)calloc(1, size + 64);
+    memcpy(big, m, size);
+    EXPECT(big, size + 1, MESO_ERR_CORRUPT, MESO_ISSUE_FILE_TRAILING);
+    EXPECT(big, size + 64, MESO_ERR_CORRUPT, MESO_ISSUE_FILE_TRAILING);
+    put64(big + MESO_HDR_OFF_FILE_SIZE, size + 64); /* claims the extra block */
+    fix_crcs(big);
+    EXPECT(big, size + 64, MESO_ERR_CORRUPT, MESO_ISSUE_FILE_END);
+    free(big);
+    /* STHK is 16 bytes: 48 bytes of padding follow it. */
+    uint32_t i = chunk_of(m, MESO_CHUNK_STHK);
+    payload(m, i)[16 + 20] = 0x5A;
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_PAYLOAD_PADDING);
+    meso_error e;
+    assert(open_and_validate(m, size, &e) == MESO_ERR_CORRUPT);
+    assert(e.offset == get64(entry(m, i) + MESO_TOC_OFF_OFFSET) + 36);
+    free(m);
+}
+
+static void set_payload(uint8_t* m, uint32_t i, const char* s)
+{
+    size_t n = (size_t)get64(entry(m, i) + MESO_TOC_OFF_STORED_SIZE);
+    assert(strlen(s) == n);
+    memcpy(payload(m, i), s, n);
+    fix_payload_crc(m, i);
+    fix_crcs(m);
+}
+
+static void bad_json_in_meta_is_rejected(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t i = chunk_of(m, MESO_CHUNK_META);
+    size_t n = (size_t)get64(entry(m, i) + MESO_TOC_OFF_STORED_SIZE);
+    char* s = (char*)malloc(n + 1);
+    assert(n >= 140);
+    /* Syntax: a trailing comma, padded with spaces to the same length. */
+    memset(s, ' ', n);
+    s[n] = 0;
+    memcpy(s, "{\"a\":1,}", 8);
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_JSON_SYNTAX);
+    memcpy(s, "{\"a\":01}", 8);
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_JSON_SYNTAX);
+    memcpy(s, "{\"a\":\"\x01\"}", 9);
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_JSON_SYNTAX);
+    memcpy(s, "{} {}    ", 9);
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_JSON_SYNTAX);
+    memcpy(s, "\"\xED\xA0\x80\"  ", 7); /* a UTF-16 surrogate encoded in UTF-8 */
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_JSON_UTF8);
+    /* Nesting deeper than the limit: [[[[...]]]] */
+    memset(s, ' ', n);
+    for (size_t k = 0; k < 70; k++) {
+        s[k] = '[';
+        s[139 - k] = ']';
+    }
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_JSON_DEPTH);
+    memset(s, ' ', n);
+    for (size_t k = 0; k < 60; k++) {
+        s[k] = '[';
+        s[119 - k] = ']';
+    }
+    set_payload(m, i, s);
+    EXPECT(m, size, MESO_OK, 0);
+    free(s);
+    free(m);
+}
+
+static void bad_mesh_contents_are_rejected(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t i = chunk_of(m, MESO_CHUNK_MESH);
+    uint8_t* p = payload(m, i);
+    size_t n = (size_t)get64(entry(m, i) + MESO_TOC_OFF_STORED_SIZE);
+    uint8_t* saved = (uint8_t*)malloc(n);
+    memcpy(saved, p, n);
+    uint64_t idx_off = get64(p + MESO_MESH_OFF_INDICES), pos_off = get64(p + MESO_MESH_OFF_POSITIONS);
+#define MESH_CASE(stmt, code)                    \
+    do {                                         \
+        stmt;                                    \
+        fix_payload_crc(m, i);                   \
+        fix_crcs(m);                             \
+        EXPECT(m, size, MESO_ERR_CORRUPT, code); \
+        memcpy(p, saved, n);                     \
+    } while (0)
+    MESH_CASE(put32(p + idx_off + 8, 4), MESO_ISSUE_MESH_INDEX);
+    MESH_CASE(put64(p + MESO_MESH_OFF_NORMALS, pos_off), MESO_ISSUE_MESH_OVERLAP);
+    MESH_CASE(put64(p + MESO_MESH_OFF_INDICES, idx_off + 4), MESO_ISSUE_MESH_ALIGN);
+    MESH_CASE(put64(p + MESO_MESH_OFF_INDICES, idx_off + 16), MESO_ISSUE_MESH_BOUNDS);
+    MESH_CASE(put64(p + MESO_MESH_OFF_INDICES, idx_off - 16), MESO_ISSUE_MESH_OVERLAP);
+    MESH_CASE(put32(p + MESO_MESH_OFF_INDEX_COUNT, 11), MESO_ISSUE_MESH_COUNTS);
+    MESH_CASE(put32(p + MESO_MESH_OFF_INDEX_COUNT, 9), MESO_ISSUE_MESH_TRAILING);
+    MESH_CASE(put32(p + MESO_MESH_OFF_VERTEX_COUNT, 0), MESO_ISSUE_MESH_COUNTS);
+    MESH_CASE(put32(p + MESO_MESH_OFF_VERTEX_COUNT, 0x40000000u), MESO_ISSUE_MESH_BOUNDS);
+    MESH_CASE(put32(p + MESO_MESH_OFF_ATTRIBUTES, 6), MESO_ISSUE_MESH_ATTRIBUTES);
+    MESH_CASE(put32(p + MESO_MESH_OFF_ATTRIBUTES, 0xF), MESO_ISSUE_MESH_ATTRIBUTES);
+    MESH_CASE(put32(p + MESO_MESH_OFF_ATTRIBUTES, 3), MESO_ISSUE_MESH_PRESENCE);
+    MESH_CASE(p[MESO_MESH_OFF_QUANT_POSITION] = 31, MESO_ISSUE_MESH_QUANT);
+    MESH_CASE(p[MESO_MESH_OFF_RESERVED0] = 1, MESO_ISSUE_MESH_RESERVED);
+    MESH_CASE(p[MESO_MESH_OFF_RESERVED1 + 3] = 1, MESO_ISSUE_MESH_RESERVED);
+#undef MESH_CASE
+    /* read_chunk checks the mesh too. */
+    put32(p + idx_off + 8, 4);
+    fix_payload_crc(m, i);
+    fix_crcs(m);
+    meso_file* f = NULL;
+    meso_error e;
+    assert(meso_file_open_memory(m, size, NULL, &f, &e) == MESO_OK);
+    uint8_t* buf = (uint8_t*)malloc(n);
+    assert(meso_file_read_chunk(f, i, buf, n, &e) == MESO_ERR_CORRUPT && e.code == MESO_ISSUE_MESH_INDEX);
+    meso_mesh_view v;
+    assert(meso_mesh_parse(buf, n, &v, &e) == MESO_ERR_CORRUPT && e.code == MESO_ISSUE_MESH_INDEX);
+    meso_file_close(f);
+    free(buf);
+    free(saved);
+    free(m);
+}
+
+static void bad_records_are_rejected(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t o = chunk_of(m, MESO_CHUNK_OBJT), s = chunk_of(m, MESO_CHUNK_SKEL), fr = chunk_of(m, MESO_CHUNK_FRUS);
+    uint8_t saved[128];
+#define REC_CASE(i, stmt, code)                  \
+    do {                                         \
+        memcpy(saved, payload(m, i), 96);        \
+        stmt;                                    \
+        fix_payload_crc(m, i);                   \
+        fix_crcs(m);                             \
+        EXPECT(m, size, MESO_ERR_CORRUPT, code); \
+        memcpy(payload(m, i), saved, 96);        \
+        fix_payload_crc(m, i);                   \
+    } while (0)
+    uint8_t* p = payload(m, o);
+    REC_CASE(o, put32(p + 64, 1), MESO_ISSUE_OBJT_DUPLICATE);
+    REC_CASE(o, put32(p + 0, 0), MESO_ISSUE_OBJT_ID);
+    REC_CASE(o, put32(p + 4, 0), MESO_ISSUE_OBJT_KIND);
+    REC_CASE(o, put32(p + 4, 5), MESO_ISSUE_OBJT_KIND);
+    REC_CASE(o, memset(p + 32, 'a', 32), MESO_ISSUE_OBJT_NAME);
+    REC_CASE(o, p[32 + 10] = 'z', MESO_ISSUE_OBJT_NAME);          /* garbage after the NUL */
+    REC_CASE(o, put32(p + 8, 0x7FC00000u), MESO_ISSUE_OBJT_BBOX); /* NaN */
+    REC_CASE(o, put32(p + 8, 0x40000000u), MESO_ISSUE_OBJT_BBOX); /* min 2 > max 1 */
+    p = payload(m, s);
+    REC_CASE(s, put32(p + 32 + 16, 1), MESO_ISSUE_SKEL_PARENT);     /* its own parent */
+    REC_CASE(s, put32(p + 16, 2), MESO_ISSUE_SKEL_PARENT);          /* a later node */
+    REC_CASE(s, put32(p + 12, 0xBF800000u), MESO_ISSUE_SKEL_VALUE); /* radius -1 */
+    p = payload(m, fr);
+    REC_CASE(fr, put32(p + 28, 0xBF800000u), MESO_ISSUE_FRUS_VALUE);
+    REC_CASE(fr, put32(p + 60, 1), MESO_ISSUE_FRUS_VALUE);
+#undef REC_CASE
+    fix_crcs(m);
+    EXPECT(m, size, MESO_OK, 0);
+    free(m);
+}
+
+int main(void)
+{
+    sample_is_valid();
+    every_truncated_prefix_is_rejected();
+    every_header_and_toc_bit_flip_and_sampled_payload_flips_are_detected();
+    wrong_magic_is_bad_magic();
+    text_mode_and_7bit_damage_have_their_own_codes();
+    newer_major_is_refused_and_major_zero_is_legacy();
+    newer_minor_is_read_and_skips_unknown_optional_chunks();
+    unknown_encoding_is_corrupt_in_1_0_and_unsupported_at_read_in_newer_minors();
+    larger_toc_entries_from_a_newer_minor_are_read();
+    chunk_ranges_order_and_alignment_are_checked();
+    absurd_chunk_count_allocates_nothing_large();
+    header_size_fields_are_checked();
+    toc_entry_fields_are_checked();
+    checksum_mismatches_are_detected();
+    trailing_bytes_and_padding_are_checked();
+    bad_json_in_meta_is_rejected();
+    bad_mesh_contents_are_rejected();
+    bad_records_are_rejected();
+    printf("test_format_corrupt: ok\n");
+    return 0;
+}

@@ -1,0 +1,37 @@
+#!/bin/sh
+# `meson install` installs libmeso (static and shared), its headers and a
+# meso.pc that a C program builds and links against; the program runs.
+# usage: install_test.sh BUILD_DIR CC [SANITIZERS]
+set -eu
+build=$1 cc=$2 san=${3:-none}
+# A sanitized libmeso needs the sanitizer runtime in the consumer too.
+sanflags=""
+[ "$san" = none ] || sanflags="-fsanitize=$san"
+dest=$(mktemp -d)
+trap 'rm -rf "$dest"' EXIT
+meson install -C "$build" --destdir "$dest" --no-rebuild >"$dest.log" 2>&1 || { cat "$dest.log"; rm -f "$dest.log"; exit 1; }
+rm -f "$dest.log"
+pc=$(find "$dest" -name meso.pc | head -n 1)
+[ -n "$pc" ] || { echo "no meso.pc installed"; exit 1; }
+ls "$(dirname "$pc")"/../libmeso.a >/dev/null
+ls "$(dirname "$pc")"/../libmeso.so* >/dev/null
+cat > "$dest/use_meso.c" <<'C'
+#include <meso_rt.h>
+#include <stdio.h>
+#include <string.h>
+int main(void) {
+    meso_rt* rt = NULL;
+    /* No GL here: a NULL loader must be refused, and the format library answers. */
+    if (meso_rt_create(&(meso_rt_desc){0}, &rt) != MESO_ERR_INVALID_ARG) return 1;
+    if (strcmp(meso_result_string(MESO_ERR_TRUNCATED), "") == 0) return 2;
+    if (meso_crc32c(0, "123456789", 9) != 0xE3069283u) return 3;
+    printf("ok %d.%d\n", MESO_FORMAT_MAJOR, MESO_FORMAT_MINOR);
+    return 0;
+}
+C
+# The sysroot prefixes every path pkg-config prints, --variable included.
+export PKG_CONFIG_PATH="$(dirname "$pc")" PKG_CONFIG_SYSROOT_DIR="$dest"
+flags=$(pkg-config --cflags --libs meso)
+$cc -std=c99 -Wall -Werror $sanflags "$dest/use_meso.c" $flags -o "$dest/use_meso"
+LD_LIBRARY_PATH="$(pkg-config --variable=libdir meso)" "$dest/use_meso" | grep -qx "ok 1.0"
+echo "installed meso.pc builds and runs a C program"
