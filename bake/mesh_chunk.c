@@ -113,10 +113,14 @@ static meso_result draco_decode(void* user, const meso_chunk_info* chunk, const 
         return r;
     if (m.vertex_count != vc || m.triangle_count * 3u != ic || (m.normals != NULL) != (l.normals_offset != 0) ||
         (m.uvs != NULL) != (l.uvs_offset != 0)) {
+        /* meso_mesh_free zeroes the struct: keep the counts for the message. */
+        const uint32_t got_vc = m.vertex_count, got_ic = m.triangle_count * 3u;
+        const int got_n = m.normals != NULL, got_uv = m.uvs != NULL;
         meso_mesh_free(&m);
         return meso_bake_fail(err, MESO_ERR_CORRUPT, 4303,
-                              "Draco bitstream holds %u vertices / %u indices, the header says %u / %u",
-                              m.vertex_count, m.triangle_count * 3u, vc, ic);
+                              "Draco bitstream holds %u vertices / %u indices%s%s, the header says %u / %u%s%s", got_vc,
+                              got_ic, got_n ? ", normals" : "", got_uv ? ", uvs" : "", vc, ic,
+                              l.normals_offset ? ", normals" : "", l.uvs_offset ? ", uvs" : "");
     }
     l.quant_bits_position = s[MESO_MESH_OFF_QUANT_POSITION];
     l.quant_bits_normal = s[MESO_MESH_OFF_QUANT_NORMAL];

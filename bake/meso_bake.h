@@ -34,6 +34,15 @@ void meso_mesh_free(meso_mesh* m);
 /* Axis-aligned bounds of the positions; returns the diagonal length. */
 double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
 
+/* Issue codes of bake inputs (meso_error.code; mesobake prints "E<code>").
+ * Format issues keep FORMAT.md's numbers (1xxx-5xxx); inputs use 31xx:
+ *   3100 the mesh reader rejected the file     3110 non-manifold edges/vertices
+ *   3101 non-finite coordinate                 3111 inconsistent orientation
+ *   3102 face refers to a missing vertex       3112 duplicated faces
+ *                                              3113 degenerate faces
+ *                                              3114 the surface intersects itself */
+#define MESO_BAKE_ISSUE_UNREADABLE 3100u
+
 /* Fill an error struct (printf-style message). Returns `r`. */
 meso_result meso_bake_fail(meso_error* err, meso_result r, uint32_t code, const char* fmt, ...)
 #if defined(__GNUC__)

@@ -112,10 +112,19 @@ struct meso_file {
     meso_chunk_info* chunks;
     meso_decoder* decoders; /* copy of the desc's array */
     uint32_t decoder_count;
+    uint64_t max_decoded_size; /* desc's, default applied */
 };
 
 /* Read `size` bytes at file offset `off` (already range-checked). */
 meso_result mesoi_read_at(meso_file* f, uint64_t off, void* dst, size_t size, meso_error* err);
+/* Block size of mesoi_read_crc: small enough that a block read by pread or
+ * memcpy is still in L2 when it is checksummed, large enough that the
+ * syscall per block costs nothing measurable. */
+#define MESOI_READ_BLOCK ((size_t)1 << 20)
+/* mesoi_read_at + CRC32C of the bytes, one pass: reads MESOI_READ_BLOCK at a
+ * time and checksums each block right after it arrives. *crc is the running
+ * CRC (pass 0 to start). */
+meso_result mesoi_read_crc(meso_file* f, uint64_t off, void* dst, size_t size, uint32_t* crc, meso_error* err);
 const meso_decoder* mesoi_find_decoder(const meso_file* f, uint16_t encoding);
 
 /* >>checks (file_validate.c) ---------------------------------------------- */
@@ -123,9 +132,11 @@ const meso_decoder* mesoi_find_decoder(const meso_file* f, uint16_t encoding);
 int mesoi_known_type(uint32_t type);
 
 /* Per-entry checks that need no other entry (cheap tier): type, flags,
- * reserved, enums, sizes, unknown REQUIRED types. `minor` is the file's minor
- * version (unknown encodings are CORRUPT in 1.0 files only). Issues are
- * reported with result CORRUPT/UNSUPPORTED and offset `entry_off`. */
+ * reserved, enums, sizes, the Draco expansion bound, unknown REQUIRED types.
+ * `minor` is the file's minor version (unknown encodings are CORRUPT in 1.0
+ * files only). Issues are reported with result CORRUPT/UNSUPPORTED and
+ * offset `entry_off`. The reader-side max_decoded_size limit is not here
+ * (the writer has no limit): parse_toc in file_read.c applies it. */
 meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint16_t minor, int32_t chunk,
                               uint64_t entry_off, meso_error* err);
 /* Type-specific element/encoding rules (full tier, and the writer). */

@@ -147,6 +147,24 @@ meso_result mesoi_read_at(meso_file* f, uint64_t off, void* dst, size_t size, me
     }
 }
 
+meso_result mesoi_read_crc(meso_file* f, uint64_t off, void* dst, size_t size, uint32_t* crc, meso_error* err)
+{
+    uint8_t* p = (uint8_t*)dst;
+    uint32_t c = *crc;
+    while (size > 0) {
+        size_t n = size < MESOI_READ_BLOCK ? size : MESOI_READ_BLOCK;
+        meso_result r = mesoi_read_at(f, off, p, n, err);
+        if (r != MESO_OK)
+            return r;
+        c = meso_crc32c(c, p, n);
+        p += n;
+        off += n;
+        size -= n;
+    }
+    *crc = c;
+    return MESO_OK;
+}
+
 const meso_decoder* mesoi_find_decoder(const meso_file* f, uint16_t encoding)
 {
     for (uint32_t i = 0; i < f->decoder_count; i++)
@@ -307,6 +325,15 @@ static meso_result parse_toc(meso_file* f, const uint8_t* toc, uint64_t toc_end,
             return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_OVERLAP, eo + MESO_TOC_OFF_OFFSET, ci,
                                     "chunk %u (%s): offset %llu overlaps the previous chunk (ends at %llu)", i, cc,
                                     (unsigned long long)c->offset, (unsigned long long)prev_end);
+        /* A reader limit, not a format rule: checked after the entry's
+         * format rules so that a corrupt entry is reported as corrupt. */
+        if (c->encoding != MESO_ENCODING_RAW && c->decoded_size > f->max_decoded_size)
+            return mesoi_file_error(err, MESO_ERR_UNSUPPORTED, MESO_ISSUE_CHUNK_DECODED_LIMIT,
+                                    eo + MESO_TOC_OFF_DECODED_SIZE, ci,
+                                    "chunk %u (%s): decoded_size %llu exceeds this reader's limit of %llu bytes for "
+                                    "encoded chunks (meso_open_desc.max_decoded_size)",
+                                    i, cc, (unsigned long long)c->decoded_size,
+                                    (unsigned long long)f->max_decoded_size);
         prev_off = c->offset;
         /* offset + stored_size <= file_size, itself a multiple of 64. */
         prev_end = mesoi_align64(c->offset + c->stored_size);
@@ -321,6 +348,8 @@ static meso_result parse_toc(meso_file* f, const uint8_t* toc, uint64_t toc_end,
 static meso_result open_common(meso_file* f, uint64_t actual, const meso_open_desc* desc, meso_error* err)
 {
     uint32_t max_chunks = desc && desc->max_chunks ? desc->max_chunks : DEFAULT_MAX_CHUNKS;
+    f->max_decoded_size =
+        desc && desc->max_decoded_size ? desc->max_decoded_size : MESO_DEFAULT_MAX_DECODED_SIZE;
     uint8_t* owned = NULL;
     const uint8_t* buf = f->data;
     uint8_t small[MESO_HDR_SIZE] = {0};
@@ -622,10 +651,10 @@ meso_result meso_file_read_stored(meso_file* f, uint32_t index, void* dst, size_
         return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_BUFFER, UINT64_MAX, (int32_t)index,
                                 "chunk %u (%s): buffer of %zu bytes is smaller than stored_size %llu", index, cc,
                                 dst_size, (unsigned long long)c->stored_size);
-    r = mesoi_read_at(f, c->offset, dst, (size_t)c->stored_size, err);
+    uint32_t crc = 0;
+    r = mesoi_read_crc(f, c->offset, dst, (size_t)c->stored_size, &crc, err);
     if (r != MESO_OK)
         return r;
-    uint32_t crc = meso_crc32c(0, dst, (size_t)c->stored_size);
     if (crc != c->crc32c)
         return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PAYLOAD_CRC, c->offset, (int32_t)index,
                                 "chunk %u (%s, object %u): payload CRC32C 0x%08X != 0x%08X in the TOC", index, cc,
@@ -656,6 +685,9 @@ meso_result meso_file_read_chunk(meso_file* f, uint32_t index, void* dst, size_t
         return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_BUFFER, UINT64_MAX, ci,
                                 "chunk %u (%s): buffer of %zu bytes is smaller than decoded_size %llu", index, cc,
                                 dst_size, (unsigned long long)c->decoded_size);
+    r = mesoi_check_type_rules(c, ci, err);
+    if (r != MESO_OK)
+        return r;
     if (c->encoding == MESO_ENCODING_RAW) {
         r = meso_file_read_stored(f, index, dst, dst_size, err);
         if (r == MESO_OK && mesoi_known_type(c->type))
@@ -670,8 +702,10 @@ meso_result meso_file_read_chunk(meso_file* f, uint32_t index, void* dst, size_t
             c->object, encoding_name(c->encoding), c->encoding);
     const uint8_t* src = NULL;
     uint8_t* owned = NULL;
+    uint32_t crc = 0;
     if (f->data) {
         src = f->data + c->offset;
+        crc = meso_crc32c(0, src, (size_t)c->stored_size);
     } else {
         if (c->stored_size > SIZE_MAX)
             return mesoi_file_error(err, MESO_ERR_UNSUPPORTED, MESO_ISSUE_API_TOO_LARGE, c->offset, ci,
@@ -682,14 +716,13 @@ meso_result meso_file_read_chunk(meso_file* f, uint32_t index, void* dst, size_t
             return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, c->offset, ci,
                                     "chunk %u (%s): out of memory for %llu stored bytes", index, cc,
                                     (unsigned long long)c->stored_size);
-        r = mesoi_read_at(f, c->offset, owned, (size_t)c->stored_size, err);
+        r = mesoi_read_crc(f, c->offset, owned, (size_t)c->stored_size, &crc, err);
         if (r != MESO_OK) {
             mesoi_file_free(&f->alloc, owned);
             return r;
         }
         src = owned;
     }
-    uint32_t crc = meso_crc32c(0, src, (size_t)c->stored_size);
     if (crc != c->crc32c) {
         r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PAYLOAD_CRC, c->offset, ci,
                              "chunk %u (%s, object %u): payload CRC32C 0x%08X != 0x%08X in the TOC", index, cc,
@@ -743,7 +776,8 @@ meso_result meso_file_objects(meso_file* f, meso_object_record* out, uint32_t ca
     if (ci < 0)
         return MESO_OK;
     const meso_chunk_info* c = &f->chunks[ci];
-    /* The cheap tier bounded decoded_size by the file size; records are 64 B. */
+    /* Open bounded decoded_size (raw: by the file size; encoded: by
+     * max_decoded_size and the expansion rule); records are 64 B. */
     uint8_t* buf = mesoi_file_alloc(&f->alloc, (size_t)c->decoded_size);
     if (!buf)
         return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, c->offset, ci,

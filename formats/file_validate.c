@@ -109,6 +109,16 @@ meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint1
         return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_RAW_SIZE, eo + MESO_TOC_OFF_DECODED_SIZE, chunk,
                                 "chunk %d (%s): raw chunk has stored_size %llu != decoded_size %llu", (int)chunk, cc,
                                 (unsigned long long)c->stored_size, (unsigned long long)c->decoded_size);
+    /* A Draco chunk cannot expand without bound (FORMAT.md §6): otherwise a
+     * few hundred bytes could make every reader allocate gigabytes. */
+    if (c->encoding == MESO_ENCODING_DRACO &&
+        c->stored_size <= (UINT64_MAX - MESO_DRACO_EXPANSION_SLACK) / MESO_DRACO_MAX_EXPANSION &&
+        c->decoded_size > c->stored_size * MESO_DRACO_MAX_EXPANSION + MESO_DRACO_EXPANSION_SLACK)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_EXPANSION, eo + MESO_TOC_OFF_DECODED_SIZE,
+                                chunk,
+                                "chunk %d (%s): Draco decoded_size %llu exceeds %u x stored_size %llu + %u bytes",
+                                (int)chunk, cc, (unsigned long long)c->decoded_size, MESO_DRACO_MAX_EXPANSION,
+                                (unsigned long long)c->stored_size, MESO_DRACO_EXPANSION_SLACK);
     if (c->dtype != MESO_DTYPE_BYTES && c->dtype < MESO_DTYPE_COUNT) {
         uint64_t n = meso_dtype_size((meso_dtype)c->dtype);
         int ok = mul_u64(n, c->components, &n) && mul_u64(n, c->dims[0], &n) && mul_u64(n, c->dims[1], &n) &&
@@ -166,8 +176,9 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
             return elem_error(c, chunk, err, "BYTES x 1");
         return MESO_OK;
     case MESO_CHUNK_SDIR:
-        if (c->dtype != MESO_DTYPE_F32 || c->components != 3 || !flat)
-            return elem_error(c, chunk, err, "F32 x 3, dims N x 1 x 1");
+        /* Layer 0: top offsets; layer 1 (envelope shells): bottom offsets. */
+        if (c->dtype != MESO_DTYPE_F32 || c->components != 3 || c->dims[2] != 1 || c->dims[1] < 1 || c->dims[1] > 2)
+            return elem_error(c, chunk, err, "F32 x 3, dims N x (1 or 2) x 1");
         return MESO_OK;
     case MESO_CHUNK_STHK:
         if (c->dtype != MESO_DTYPE_F32 || c->components != 1 || !flat)
@@ -799,7 +810,8 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
     char cc[5];
     meso_error e;
     mesoi_fourcc_str(c->type, cc);
-    if (mesoi_check_type_rules(c, ci, &e) != MESO_OK && report(s, &e))
+    int rules_ok = mesoi_check_type_rules(c, ci, &e) == MESO_OK;
+    if (!rules_ok && report(s, &e))
         return;
     int known = mesoi_known_type(c->type);
     int structured = known && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_RPRT || c->type == MESO_CHUNK_OBJT ||
@@ -823,25 +835,27 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
             report(s, &e);
             return;
         }
-        if (mesoi_read_at(f, c->offset, owned, (size_t)c->stored_size, &e) != MESO_OK) {
+    }
+    /* One pass over the stored bytes: each block is checksummed right after
+     * it is read (into `owned`, or streamed through `buf` when the contents
+     * are not needed). */
+    uint32_t crc = 0;
+    if (f->data) {
+        crc = meso_crc32c(0, whole, (size_t)c->stored_size);
+    } else if (owned) {
+        if (mesoi_read_crc(f, c->offset, owned, (size_t)c->stored_size, &crc, &e) != MESO_OK) {
             report(s, &e);
             mesoi_file_free(&f->alloc, owned);
             return;
         }
         whole = owned;
-    }
-    /* CRC, streamed through `buf` when the chunk is not in memory. */
-    uint32_t crc = 0;
-    if (whole) {
-        crc = meso_crc32c(0, whole, (size_t)c->stored_size);
     } else {
         for (uint64_t o = 0; o < c->stored_size;) {
             size_t n = (size_t)(c->stored_size - o < buf_size ? c->stored_size - o : buf_size);
-            if (mesoi_read_at(f, c->offset + o, buf, n, &e) != MESO_OK) {
+            if (mesoi_read_crc(f, c->offset + o, buf, n, &crc, &e) != MESO_OK) {
                 report(s, &e);
                 return;
             }
-            crc = meso_crc32c(crc, buf, n);
             o += n;
         }
     }
@@ -860,9 +874,10 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
                             : mesoi_check_mesh_header(whole, c->decoded_size, NULL, ci, c->offset, &e);
         if (r != MESO_OK) {
             report(s, &e);
-        } else if (mesoi_find_decoder(f, c->encoding) && c->decoded_size <= SIZE_MAX) {
+        } else if (rules_ok && mesoi_find_decoder(f, c->encoding) && c->decoded_size <= SIZE_MAX) {
             /* With a decoder, check the decoded mesh too (read_chunk does
-             * the decode, CRC and content checks). */
+             * the decode, CRC and content checks). Open bounded
+             * decoded_size (max_decoded_size, expansion rule). */
             uint8_t* dec = (uint8_t*)mesoi_file_alloc(&f->alloc, (size_t)c->decoded_size);
             if (!dec) {
                 mesoi_file_error(&e, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, c->offset, ci,
@@ -886,7 +901,7 @@ meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn,
     if (level == MESO_CHECK_CHEAP)
         return MESO_OK; /* open refuses any file that fails the cheap tier */
     validate_state s = {fn, user, MESO_OK, 0};
-    size_t buf_size = 1u << 16;
+    size_t buf_size = MESOI_READ_BLOCK;
     uint8_t* buf = NULL;
     if (f->data == NULL) {
         buf = (uint8_t*)mesoi_file_alloc(&f->alloc, buf_size);

@@ -166,17 +166,36 @@ typedef struct meso_decoder {
     void* user;
 } meso_decoder;
 
+/* Default of meso_open_desc.max_decoded_size: 1 GiB. */
+#define MESO_DEFAULT_MAX_DECODED_SIZE ((uint64_t)1 << 30)
+/* Format rule for Draco chunks (FORMAT.md §6, issue 2021): decoded_size <=
+ * stored_size * MESO_DRACO_MAX_EXPANSION + MESO_DRACO_EXPANSION_SLACK. */
+#define MESO_DRACO_MAX_EXPANSION 1024u
+#define MESO_DRACO_EXPANSION_SLACK 65536u
+
 typedef struct meso_open_desc {
     meso_allocator allocator;     /* default malloc/free */
     const meso_decoder* decoders; /* optional */
     uint32_t decoder_count;
     uint32_t max_chunks;          /* refuse TOCs larger than this (default 1 << 20) */
+    /* Refuse, on open, any encoded (non-raw) chunk whose decoded_size is
+     * above this (0 = MESO_DEFAULT_MAX_DECODED_SIZE, 1 GiB): issue 2022,
+     * MESO_ERR_UNSUPPORTED. An encoded chunk's decoded_size is the one size
+     * in a file not backed by bytes in it; readers (and callers, who size
+     * read_chunk buffers from it) allocate it before decoding. Raw chunks
+     * are exempt: their decoded_size equals stored_size, which open already
+     * checked against the real file size. */
+    uint64_t max_decoded_size;
 } meso_open_desc;
 
 /* Open and run the cheap checks (FORMAT.md §Validation, tier 1): size, magic,
  * version, header CRC, file_size, TOC bounds and CRC, every entry's range,
- * alignment, enums and sizes. The header and TOC are read in one read.
- * `desc` and `err` may be NULL. On success *out must be closed. */
+ * alignment, enums and sizes, and the decoded-size limits of encoded chunks
+ * (so after a successful open every chunk's decoded_size is safe to
+ * allocate: raw ones are backed by the file, encoded ones are at most
+ * max_decoded_size and at most 1024 x stored_size + 64 KiB for Draco).
+ * The header and TOC are read in one read. `desc` and `err` may be NULL.
+ * On success *out must be closed. */
 MESO_API meso_result meso_file_open_path(const char* path, const meso_open_desc* desc, meso_file** out,
                                          meso_error* err);
 /* Same, mapping the file with mmap: chunk payloads can then be viewed without
@@ -201,13 +220,25 @@ MESO_API const meso_chunk_info* meso_file_chunk(const meso_file* f, uint32_t ind
 MESO_API int32_t meso_file_find(const meso_file* f, uint32_t type, uint32_t object, uint16_t lod);
 
 /* Read the stored bytes of chunk `index` into dst (dst_size >= stored_size)
- * and verify its CRC32C. */
+ * and verify its CRC32C. Path and io readers read in blocks (1 MiB) and
+ * checksum each block right after reading it, while it is in cache. */
 MESO_API meso_result meso_file_read_stored(meso_file* f, uint32_t index, void* dst, size_t dst_size,
                                            meso_error* err);
 /* Read and decode chunk `index` into dst (dst_size >= decoded_size), verifying
- * its CRC and, for structured chunks, its internal layout. Raw chunks are
- * copied; other encodings go through the desc's decoders, or fail with
- * MESO_ERR_UNSUPPORTED naming the encoding. */
+ * its CRC, its type's element/encoding rules (FORMAT.md §7 table) and, for
+ * structured chunks, its internal layout. Raw chunks are copied; other
+ * encodings go through the desc's decoders, or fail with
+ * MESO_ERR_UNSUPPORTED naming the encoding.
+ *
+ * Verified loading: open (cheap tier) + read_chunk of each chunk you use
+ * checks every byte you get (CRC, type rules, contents) and reads each byte
+ * once; over every chunk it checks all MESO_CHECK_FULL checks except the
+ * padding/gap bytes, which hold no data. That is the recommended way to load
+ * a file. Validating FULL first and then reading reads and checks every
+ * payload twice: the reader keeps no "already verified" state, because the
+ * bytes under a path, mmap or memory reader can change between calls. Use
+ * MESO_CHECK_FULL for whole-file verdicts (mesoinspect validate --full, CI,
+ * before publishing a file), not as a step before reading. */
 MESO_API meso_result meso_file_read_chunk(meso_file* f, uint32_t index, void* dst, size_t dst_size,
                                           meso_error* err);
 /* Zero-copy pointer to the stored bytes (memory and mmap readers only;
@@ -302,6 +333,8 @@ MESO_API meso_result meso_writer_write_file(meso_writer* w, const char* path, me
 #define MESO_ISSUE_CHUNK_TYPED_SIZE 2018u
 #define MESO_ISSUE_CHUNK_UNKNOWN_REQUIRED 2019u
 #define MESO_ISSUE_FILE_END 2020u
+#define MESO_ISSUE_CHUNK_EXPANSION 2021u     /* Draco decoded_size > 1024 x stored_size + 64 KiB */
+#define MESO_ISSUE_CHUNK_DECODED_LIMIT 2022u /* encoded decoded_size > meso_open_desc.max_decoded_size */
 #define MESO_ISSUE_PAYLOAD_CRC 3001u
 #define MESO_ISSUE_PAYLOAD_PADDING 3002u
 #define MESO_ISSUE_ENCODING_UNSUPPORTED 3003u

@@ -20,7 +20,8 @@ extern "C" {
 /* >>openmesh ------------------------------------------------------------- */
 
 /* Read OBJ, OFF, PLY, STL or OM (by extension) into `out`, triangulated, with
- * area-weighted vertex normals computed by OpenMesh. Texture coordinates are
+ * vertex normals computed by OpenMesh (the normalised mean of the unit face
+ * normals around the vertex: not area- or angle-weighted). Texture coordinates are
  * kept when the file has per-vertex ones. Faces OpenMesh refuses (complex
  * edges of non-manifold input) are counted in *dropped_faces (may be NULL). */
 meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint32_t* dropped_faces, meso_error* err);
@@ -36,6 +37,42 @@ meso_result meso_cgal_inside_create(const meso_mesh* m, meso_cgal_inside** out, 
 meso_result meso_cgal_inside_query(const meso_cgal_inside* t, const double* xyz, size_t count, int8_t* side,
                                    meso_error* err);
 void meso_cgal_inside_destroy(meso_cgal_inside* t);
+
+/* Exact triangle-triangle intersection counts (exact predicates on the given
+ * double coordinates, sequential and deterministic). Zero-area triangles —
+ * repeated index or collinear corners — are skipped and counted. */
+typedef struct meso_cgal_intersection_count {
+    uint64_t pairs;        /* intersecting triangle pairs */
+    uint32_t degenerate_a; /* zero-area triangles of the (first) embedding */
+    uint32_t degenerate_b; /* same for the second embedding (cross counts only) */
+} meso_cgal_intersection_count;
+
+/* Self-intersecting triangle pairs of the mesh (xyz[3*vertex_count], indices
+ * [3*triangle_count]), by CGAL::Polygon_mesh_processing::self_intersections:
+ * triangles sharing an edge count only when they overlap coplanarly, sharing
+ * a vertex only when they meet beyond it. Non-manifold connectivity (which
+ * CGAL::Surface_mesh refuses) is handled by the same rules on the triangle
+ * soup, adjacency taken from the indices; duplicate triangles count. */
+meso_result meso_cgal_self_intersections(const double* xyz, uint32_t vertex_count, const uint32_t* indices,
+                                         uint32_t triangle_count, meso_cgal_intersection_count* out, meso_error* err);
+/* Intersecting pairs (triangle s of embedding a, triangle t of embedding b) of
+ * two embeddings xyz_a, xyz_b of the same connectivity. Vertex i is a shared
+ * corner of the pair when it is a corner of both and xyz_a[i] == xyz_b[i]
+ * exactly; shared corners are handled as for adjacent triangles above, and
+ * a pair sharing all three corners (the same triangle) never counts. */
+meso_result meso_cgal_cross_intersections(const double* xyz_a, const double* xyz_b, uint32_t vertex_count,
+                                          const uint32_t* indices, uint32_t triangle_count,
+                                          meso_cgal_intersection_count* out, meso_error* err);
+/* The same counts, also setting flags[t] = 1 (flags_a / flags_b for the two
+ * embeddings) for every triangle of a counted pair; other entries are left
+ * as they are, and a NULL array is allowed. Zero-area triangles are counted
+ * in degenerate_*, not flagged. */
+meso_result meso_cgal_self_intersections_mark(const double* xyz, uint32_t vertex_count, const uint32_t* indices,
+                                              uint32_t triangle_count, uint8_t* flags,
+                                              meso_cgal_intersection_count* out, meso_error* err);
+meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, const double* xyz_b, uint32_t vertex_count,
+                                               const uint32_t* indices, uint32_t triangle_count, uint8_t* flags_a,
+                                               uint8_t* flags_b, meso_cgal_intersection_count* out, meso_error* err);
 
 /* >>openvdb ------------------------------------------------------------- */
 

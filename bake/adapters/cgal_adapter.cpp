@@ -1,15 +1,22 @@
-// cgal_adapter.cpp — CGAL behind extern "C": exact point-in-mesh queries.
-// Kernel: exact predicates, inexact constructions (the side test only needs predicates).
+// cgal_adapter.cpp — CGAL behind extern "C": exact point-in-mesh queries and exact
+// triangle intersection counts (shell validation).
+// Kernel: exact predicates, inexact constructions (both only need predicates).
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
 
+#include <boost/iterator/function_output_iterator.hpp>
+
+#include <cstdint>
 #include <exception>
 #include <memory>
 #include <new>
+#include <utility>
 #include <vector>
 
 #include "adapters.h"
@@ -75,4 +82,252 @@ extern "C" meso_result meso_cgal_inside_query(const meso_cgal_inside* t, const d
 extern "C" void meso_cgal_inside_destroy(meso_cgal_inside* t)
 {
     delete t;
+}
+
+// >>intersections --------------------------------------------------------
+// Exact triangle-triangle intersection counts (issue #4: shell validation).
+// Same kernel: do_intersect and coplanar_orientation are predicates, exact on
+// the double coordinates the caller gives.
+namespace {
+typedef K::Triangle_3 Triangle;
+typedef K::Segment_3 Segment;
+typedef CGAL::Box_intersection_d::Box_with_info_d<double, 3, uint64_t, CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>
+    Box;
+
+// One embedding of an indexed triangle set.
+struct Soup {
+    const double* xyz;
+    const uint32_t* idx;
+    Point point(uint32_t v) const { return Point(xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]); }
+    bool same_point(uint32_t v, const Soup& o) const
+    {
+        return xyz[3 * v] == o.xyz[3 * v] && xyz[3 * v + 1] == o.xyz[3 * v + 1] && xyz[3 * v + 2] == o.xyz[3 * v + 2];
+    }
+};
+
+// Zero area: a repeated index or collinear corners (exact).
+bool degenerate(const Soup& s, uint32_t t)
+{
+    const uint32_t* ix = s.idx + 3 * t;
+    if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2])
+        return true;
+    return CGAL::collinear(s.point(ix[0]), s.point(ix[1]), s.point(ix[2]));
+}
+
+// Do triangle sa of a and tb of b intersect beyond their shared corners? A
+// corner is shared when both use the vertex index and (cross) it has the same
+// coordinates in both embeddings. Rules of PMP::self_intersections
+// (do_faces_intersect): one shared corner — an opposite edge meets the other
+// triangle; two — the four points are coplanar and the third corners lie on
+// the same side of the shared edge; three — the same triangle: counts for a
+// self test (duplicate face), not for a cross test (a collapsed prism).
+bool pair_intersects(const Soup& a, uint32_t sa, const Soup& b, uint32_t tb, bool cross)
+{
+    const uint32_t* ia = a.idx + 3 * sa;
+    const uint32_t* ib = b.idx + 3 * tb;
+    int sh_a[3], sh_b[3], n = 0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (ia[i] == ib[j] && (!cross || a.same_point(ia[i], b))) {
+                sh_a[n] = i;
+                sh_b[n] = j;
+                ++n;
+            }
+    const Point pa[3] = {a.point(ia[0]), a.point(ia[1]), a.point(ia[2])};
+    const Point pb[3] = {b.point(ib[0]), b.point(ib[1]), b.point(ib[2])};
+    if (n == 0)
+        return CGAL::do_intersect(Triangle(pa[0], pa[1], pa[2]), Triangle(pb[0], pb[1], pb[2]));
+    if (n == 1) {
+        const int i = sh_a[0], j = sh_b[0];
+        return CGAL::do_intersect(Triangle(pa[0], pa[1], pa[2]), Segment(pb[(j + 1) % 3], pb[(j + 2) % 3])) ||
+               CGAL::do_intersect(Triangle(pb[0], pb[1], pb[2]), Segment(pa[(i + 1) % 3], pa[(i + 2) % 3]));
+    }
+    if (n == 2) {
+        const Point& p = pa[sh_a[0]];
+        const Point& q = pa[sh_a[1]];
+        const Point& r = pa[3 - sh_a[0] - sh_a[1]];
+        const Point& s = pb[3 - sh_b[0] - sh_b[1]];
+        return CGAL::coplanar(p, q, r, s) && CGAL::coplanar_orientation(p, q, r, s) == CGAL::POSITIVE;
+    }
+    return !cross;
+}
+
+// Boxes of the non-degenerate triangles; info = (set << 32) | triangle.
+uint32_t make_boxes(const Soup& s, uint32_t triangle_count, uint64_t set, std::vector<Box>& boxes)
+{
+    uint32_t degenerate_count = 0;
+    boxes.reserve(triangle_count);
+    for (uint32_t t = 0; t < triangle_count; ++t) {
+        if (degenerate(s, t)) {
+            ++degenerate_count;
+            continue;
+        }
+        const uint32_t* ix = s.idx + 3 * t;
+        boxes.push_back(Box(s.point(ix[0]).bbox() + s.point(ix[1]).bbox() + s.point(ix[2]).bbox(), (set << 32) | t));
+    }
+    return degenerate_count;
+}
+
+std::vector<const Box*> box_pointers(const std::vector<Box>& boxes)
+{
+    std::vector<const Box*> p;
+    p.reserve(boxes.size());
+    for (const Box& b : boxes)
+        p.push_back(&b);
+    return p;
+}
+
+// Self test on the soup (non-manifold input that Surface_mesh refuses).
+void soup_self_intersections(const Soup& s, uint32_t triangle_count, uint8_t* flags, meso_cgal_intersection_count* out)
+{
+    std::vector<Box> boxes;
+    out->degenerate_a = make_boxes(s, triangle_count, 0, boxes);
+    std::vector<const Box*> p = box_pointers(boxes);
+    uint64_t pairs = 0;
+    auto cb = [&](const Box* x, const Box* y) {
+        const uint32_t f = (uint32_t)x->info(), g = (uint32_t)y->info();
+        if (pair_intersects(s, f, s, g, false)) {
+            ++pairs;
+            if (flags)
+                flags[f] = flags[g] = 1;
+        }
+    };
+    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(p.begin(), p.end(), cb, std::ptrdiff_t(2000));
+    out->pairs = pairs;
+}
+
+bool check_indices(const uint32_t* indices, uint32_t vertex_count, uint32_t triangle_count, meso_error* err)
+{
+    for (uint64_t j = 0; j < 3 * (uint64_t)triangle_count; ++j)
+        if (indices[j] >= vertex_count) {
+            meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "triangle %u: index out of range", (unsigned)(j / 3));
+            return false;
+        }
+    return true;
+}
+
+meso_result self_intersections(const double* xyz, uint32_t vertex_count, const uint32_t* indices,
+                               uint32_t triangle_count, uint8_t* flags, meso_cgal_intersection_count* out,
+                               meso_error* err)
+{
+    try {
+        *out = meso_cgal_intersection_count();
+        if (!check_indices(indices, vertex_count, triangle_count, err))
+            return MESO_ERR_INVALID_ARG;
+        const Soup s = {xyz, indices};
+        Mesh mesh;
+        std::vector<uint32_t> triangle_of; // Face_index -> input triangle
+        std::vector<Mesh::Vertex_index> vs;
+        vs.reserve(vertex_count);
+        for (uint32_t i = 0; i < vertex_count; ++i)
+            vs.push_back(mesh.add_vertex(s.point(i)));
+        uint32_t repeated = 0;
+        for (uint32_t f = 0; f < triangle_count; ++f) {
+            const uint32_t* ix = indices + 3 * f;
+            if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2]) {
+                ++repeated; // Surface_mesh cannot hold it; zero area anyway
+                continue;
+            }
+            const Mesh::Face_index fi = mesh.add_face(vs[ix[0]], vs[ix[1]], vs[ix[2]]);
+            if (fi == Mesh::null_face()) {
+                soup_self_intersections(s, triangle_count, flags, out); // non-manifold
+                return MESO_OK;
+            }
+            if (triangle_of.size() <= (size_t)fi)
+                triangle_of.resize((size_t)fi + 1);
+            triangle_of[(size_t)fi] = f;
+        }
+        uint64_t pairs = 0;
+        uint32_t collinear = 0;
+        auto count = [&](const std::pair<Mesh::Face_index, Mesh::Face_index>& fp) {
+            if (fp.first == fp.second) {
+                ++collinear; // PMP reports a degenerate face f as (f, f), and skips it
+                return;
+            }
+            ++pairs;
+            if (flags)
+                flags[triangle_of[(size_t)fp.first]] = flags[triangle_of[(size_t)fp.second]] = 1;
+        };
+        CGAL::Polygon_mesh_processing::self_intersections<CGAL::Sequential_tag>(
+            mesh, boost::make_function_output_iterator(count));
+        out->pairs = pairs;
+        out->degenerate_a = repeated + collinear;
+        return MESO_OK;
+    } catch (const std::bad_alloc&) {
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");
+    } catch (const std::exception& e) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: %s", e.what());
+    } catch (...) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: unknown exception");
+    }
+}
+
+meso_result cross_intersections(const double* xyz_a, const double* xyz_b, uint32_t vertex_count,
+                                const uint32_t* indices, uint32_t triangle_count, uint8_t* flags_a, uint8_t* flags_b,
+                                meso_cgal_intersection_count* out, meso_error* err)
+{
+    try {
+        *out = meso_cgal_intersection_count();
+        if (!check_indices(indices, vertex_count, triangle_count, err))
+            return MESO_ERR_INVALID_ARG;
+        const Soup a = {xyz_a, indices}, b = {xyz_b, indices};
+        std::vector<Box> boxes_a, boxes_b;
+        out->degenerate_a = make_boxes(a, triangle_count, 0, boxes_a);
+        out->degenerate_b = make_boxes(b, triangle_count, 1, boxes_b);
+        std::vector<const Box*> pa = box_pointers(boxes_a), pb = box_pointers(boxes_b);
+        uint64_t pairs = 0;
+        auto cb = [&](const Box* x, const Box* y) {
+            if (x->info() >> 32) // the callback order is not relied upon
+                std::swap(x, y);
+            const uint32_t s = (uint32_t)x->info(), t = (uint32_t)y->info();
+            if (pair_intersects(a, s, b, t, true)) {
+                ++pairs;
+                if (flags_a)
+                    flags_a[s] = 1;
+                if (flags_b)
+                    flags_b[t] = 1;
+            }
+        };
+        CGAL::box_intersection_d<CGAL::Sequential_tag>(pa.begin(), pa.end(), pb.begin(), pb.end(), cb,
+                                                       std::ptrdiff_t(2000));
+        out->pairs = pairs;
+        return MESO_OK;
+    } catch (const std::bad_alloc&) {
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");
+    } catch (const std::exception& e) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: %s", e.what());
+    } catch (...) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: unknown exception");
+    }
+}
+} // namespace
+
+extern "C" meso_result meso_cgal_self_intersections(const double* xyz, uint32_t vertex_count, const uint32_t* indices,
+                                                    uint32_t triangle_count, meso_cgal_intersection_count* out,
+                                                    meso_error* err)
+{
+    return self_intersections(xyz, vertex_count, indices, triangle_count, nullptr, out, err);
+}
+
+extern "C" meso_result meso_cgal_self_intersections_mark(const double* xyz, uint32_t vertex_count,
+                                                         const uint32_t* indices, uint32_t triangle_count,
+                                                         uint8_t* flags, meso_cgal_intersection_count* out,
+                                                         meso_error* err)
+{
+    return self_intersections(xyz, vertex_count, indices, triangle_count, flags, out, err);
+}
+
+extern "C" meso_result meso_cgal_cross_intersections(const double* xyz_a, const double* xyz_b, uint32_t vertex_count,
+                                                     const uint32_t* indices, uint32_t triangle_count,
+                                                     meso_cgal_intersection_count* out, meso_error* err)
+{
+    return cross_intersections(xyz_a, xyz_b, vertex_count, indices, triangle_count, nullptr, nullptr, out, err);
+}
+
+extern "C" meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, const double* xyz_b,
+                                                          uint32_t vertex_count, const uint32_t* indices,
+                                                          uint32_t triangle_count, uint8_t* flags_a, uint8_t* flags_b,
+                                                          meso_cgal_intersection_count* out, meso_error* err)
+{
+    return cross_intersections(xyz_a, xyz_b, vertex_count, indices, triangle_count, flags_a, flags_b, out, err);
 }

@@ -3,8 +3,14 @@
 #include <OpenMesh/Core/IO/MeshIO.hh> // must come before the mesh kernel header
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <iostream>
+
 #include <cstdlib>
 #include <cstring>
+#include <sstream>
+#include <string>
 #include <exception>
 #include <new>
 
@@ -39,8 +45,35 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
         TriMesh mesh;
         mesh.request_vertex_texcoords2D();
         OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexTexCoord;
-        // OpenMesh prints complex-edge warnings to std::cerr; the caller decides what to say.
-        if (!OpenMesh::IO::read_mesh(mesh, path, opt))
+        // OpenMesh reports every face it refuses (complex edge / vertex of a
+        // non-manifold input) on omerr() and drops it. Capture those lines
+        // instead of letting them reach stderr, and count them: the caller
+        // decides what to tell the user. (omerr is process-global: reads are
+        // not meant to run concurrently.)
+        // (omerr() writes through std::cerr: swapping std::cerr's buffer for
+        // the duration of the read captures it without OpenMesh's connect(),
+        // whose target wrapper is never freed.)
+        std::ostringstream captured;
+        std::streambuf* saved = std::cerr.rdbuf(captured.rdbuf());
+        bool ok = false;
+        try {
+            ok = OpenMesh::IO::read_mesh(mesh, path, opt);
+            omerr().flush();
+        } catch (...) {
+            std::cerr.rdbuf(saved);
+            throw;
+        }
+        std::cerr.rdbuf(saved);
+        if (dropped_faces) {
+            const std::string log = captured.str();
+            uint32_t n = 0;
+            // One "complex edge" or "complex vertex" line per refused face.
+            for (size_t at = log.find("add_face: complex"); at != std::string::npos;
+                 at = log.find("add_face: complex", at + 1))
+                ++n;
+            *dropped_faces = n;
+        }
+        if (!ok)
             return meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot read mesh (unreadable, unknown extension or malformed)", path);
         if (mesh.n_vertices() == 0 || mesh.n_faces() == 0)
             return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "%s: mesh has no %s", path,

@@ -25,11 +25,11 @@ set xlabel "max vertex position error / bbox diagonal"
 set ylabel "stored bytes / raw chunk bytes"
 set yrange [0:*]
 plot for [m in meshes] csv using (strcol(1) eq m && strcol(4) eq "draco" ? $12 : 1/0):9 \
-    with linespoints title m
+    with linespoints title m noenhanced
 
-set ylabel "decode time, ms (read_chunk incl. CRC)"
+set ylabel "decode time, ms (meso\\_file\\_read\\_chunk incl. CRC)"
 set logscale y
 set yrange [*:*]
 plot for [m in meshes] csv using (strcol(1) eq m && strcol(4) eq "draco" ? $12 : 1/0):11 \
-    with linespoints title m
+    with linespoints title m noenhanced
 unset multiplot

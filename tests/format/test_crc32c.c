@@ -61,12 +61,55 @@ static void hardware_matches_software_on_all_lengths_and_alignments(void)
     printf("crc32c: hardware path %s\n", mesoi_crc32c_hw_available() ? "available (SSE4.2)" : "not available");
 }
 
+/* The hardware path runs three interleaved streams over 3 x 8 KiB and
+ * 3 x 256 B blocks and combines them (crc32c.c): check every length around
+ * each threshold and its multiples, at every alignment, with non-zero seeds,
+ * and that splitting a buffer anywhere gives the one-pass result. */
+static void hardware_matches_software_around_the_block_thresholds(void)
+{
+    enum { N = 4 * 3 * 8192 + 3 * 256 + 64 };
+    uint8_t* buf = (uint8_t*)malloc(N);
+    assert(buf);
+    uint32_t x = 7;
+    for (size_t i = 0; i < N; i++) {
+        x = x * 1664525u + 1013904223u;
+        buf[i] = (uint8_t)(x >> 24);
+    }
+    const size_t centres[] = {3 * 256, 2 * 3 * 256, 3 * 8192, 3 * 8192 + 3 * 256, 2 * 3 * 8192,
+                              3 * 3 * 8192, 4 * 3 * 8192, 4 * 3 * 8192 + 3 * 256};
+    size_t checked = 0;
+    for (size_t k = 0; k < sizeof centres / sizeof centres[0]; k++) {
+        for (size_t align = 0; align < 9; align++) {
+            for (size_t len = centres[k] - 17; len <= centres[k] + 17; len++) {
+                if (align + len > N)
+                    continue;
+                uint32_t seed = (uint32_t)(len * 2654435761u) ^ (uint32_t)align;
+                assert(mesoi_crc32c_hw(seed, buf + align, len) == mesoi_crc32c_sw(seed, buf + align, len));
+                checked++;
+            }
+        }
+    }
+    assert(checked > 2000);
+    const uint32_t whole = mesoi_crc32c_sw(0, buf, N);
+    assert(mesoi_crc32c_hw(0, buf, N) == whole);
+    for (size_t cut = 0; cut <= N; cut += 1237)
+        assert(meso_crc32c(meso_crc32c(0, buf, cut), buf + cut, N - cut) == whole);
+    /* All-zero and all-ones runs (the combination must not depend on data). */
+    memset(buf, 0, N);
+    assert(mesoi_crc32c_hw(0, buf, N) == mesoi_crc32c_sw(0, buf, N));
+    assert(mesoi_crc32c_hw(0xFFFFFFFFu, buf, N) == mesoi_crc32c_sw(0xFFFFFFFFu, buf, N));
+    memset(buf, 0xFF, N);
+    assert(mesoi_crc32c_hw(0, buf, N) == mesoi_crc32c_sw(0, buf, N));
+    free(buf);
+}
+
 int main(void)
 {
     known_answers_match_rfc3720();
     empty_input_returns_seed();
     chaining_equals_one_pass();
     hardware_matches_software_on_all_lengths_and_alignments();
+    hardware_matches_software_around_the_block_thresholds();
     printf("test_crc32c: ok\n");
     return 0;
 }

@@ -576,6 +576,220 @@ static void bad_records_are_rejected(void)
     free(m);
 }
 
+/* >>decoded sizes of encoded chunks (issues 2021, 2022) */
+
+typedef struct never_decoder {
+    int calls;
+} never_decoder;
+
+static meso_result must_not_decode(void* user, const meso_chunk_info* chunk, const void* src, size_t src_size,
+                                   void* dst, size_t dst_size, meso_error* err)
+{
+    (void)chunk, (void)src, (void)src_size, (void)dst, (void)dst_size, (void)err;
+    ((never_decoder*)user)->calls++;
+    return MESO_ERR_CORRUPT;
+}
+
+typedef struct io_over_memory {
+    const uint8_t* data;
+    size_t size;
+} io_over_memory;
+
+static int io_over_memory_read(void* user, uint64_t off, void* dst, size_t n)
+{
+    io_over_memory* m = (io_over_memory*)user;
+    if (off > m->size || n > m->size - off)
+        return 1;
+    memcpy(dst, m->data + off, n);
+    return 0;
+}
+
+/* Open over memory and over the io callback with a tracking allocator and a
+ * decoder that must never run; validate FULL when open succeeds. Both
+ * readers must agree; returns the open result, *e the open error. */
+static meso_result open_both_tracked(const uint8_t* m, size_t size, uint64_t max_decoded, meso_error* e,
+                                     size_t* largest)
+{
+    biggest b = {0};
+    never_decoder nd = {0};
+    meso_decoder dec = {MESO_ENCODING_DRACO, must_not_decode, &nd};
+    meso_open_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.allocator.alloc_fn = track_alloc;
+    desc.allocator.free_fn = track_free;
+    desc.allocator.user = &b;
+    desc.decoders = &dec;
+    desc.decoder_count = 1;
+    desc.max_decoded_size = max_decoded;
+    meso_file* f = NULL;
+    meso_result r = meso_file_open_memory(m, size, &desc, &f, e);
+    if (r == MESO_OK) {
+        meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL);
+        meso_file_close(f);
+    } else {
+        assert(f == NULL && e->result == r);
+    }
+    io_over_memory src = {m, size};
+    meso_io io = {io_over_memory_read, size, &src};
+    meso_error e2;
+    meso_result r2 = meso_file_open_io(&io, &desc, &f, &e2);
+    assert(r2 == r && (r == MESO_OK || e2.code == e->code));
+    if (r2 == MESO_OK) {
+        meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL);
+        meso_file_close(f);
+    }
+    *largest = b.max;
+    return r;
+}
+
+/* One unknown optional BYTES chunk ('ZZZ1', allowed to use any encoding on
+ * open) of `stored` bytes, Draco-encoded with the given decoded_size, which
+ * is patched in after writing (the writer refuses what the reader would). */
+static uint8_t* encoded_file(size_t stored, uint64_t decoded, size_t* size)
+{
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    uint8_t* data = (uint8_t*)malloc(stored);
+    fill_pattern(data, stored, 7);
+    meso_chunk_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = MESO_FOURCC('Z', 'Z', 'Z', '1');
+    d.encoding = MESO_ENCODING_DRACO;
+    d.decoded_size = stored;
+    meso_error e;
+    assert(meso_writer_add(w, &d, data, stored, &e) == MESO_OK);
+    uint8_t* m = writer_to_memory(w, size);
+    meso_writer_destroy(w);
+    free(data);
+    put64(entry(m, 0) + MESO_TOC_OFF_DECODED_SIZE, decoded);
+    fix_crcs(m);
+    return m;
+}
+
+static void draco_expansion_is_bounded_on_open(void)
+{
+    const size_t stored = 300;
+    const uint64_t bound = (uint64_t)stored * MESO_DRACO_MAX_EXPANSION + MESO_DRACO_EXPANSION_SLACK;
+    size_t size, largest;
+    meso_error e;
+    uint8_t* m = encoded_file(stored, bound, &size);
+    assert(open_both_tracked(m, size, 0, &e, &largest) == MESO_OK); /* at the bound: fine */
+    free(m);
+    m = encoded_file(stored, bound + 1, &size);
+    assert(open_both_tracked(m, size, 0, &e, &largest) == MESO_ERR_CORRUPT);
+    assert(e.code == MESO_ISSUE_CHUNK_EXPANSION && e.chunk == 0);
+    assert(e.offset == MESO_HDR_SIZE + MESO_TOC_OFF_DECODED_SIZE && strstr(e.message, "decoded_size"));
+    assert(largest < 65536);
+    /* No overflow in stored_size x 1024 for absurd sizes: bounds catch those. */
+    put64(entry(m, 0) + MESO_TOC_OFF_STORED_SIZE, UINT64_MAX / 2);
+    put64(entry(m, 0) + MESO_TOC_OFF_DECODED_SIZE, UINT64_MAX);
+    fix_crcs(m);
+    EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_BOUNDS);
+    free(m);
+    /* The writer refuses it too, with the reader's code. */
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    uint8_t data[300] = {0};
+    meso_chunk_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = MESO_FOURCC('Z', 'Z', 'Z', '1');
+    d.encoding = MESO_ENCODING_DRACO;
+    d.decoded_size = bound + 1;
+    assert(meso_writer_add(w, &d, data, sizeof data, &e) == MESO_ERR_INVALID_ARG);
+    assert(e.code == MESO_ISSUE_CHUNK_EXPANSION);
+    d.decoded_size = bound;
+    assert(meso_writer_add(w, &d, data, sizeof data, &e) == MESO_OK);
+    meso_writer_destroy(w);
+}
+
+static void max_decoded_size_limits_encoded_chunks_only(void)
+{
+    size_t size, largest;
+    meso_error e;
+    /* Within the expansion bound, above the caller's limit: UNSUPPORTED. */
+    uint8_t* m = encoded_file(300, 100000, &size);
+    assert(open_both_tracked(m, size, 100000, &e, &largest) == MESO_OK);
+    assert(open_both_tracked(m, size, 99999, &e, &largest) == MESO_ERR_UNSUPPORTED);
+    assert(e.code == MESO_ISSUE_CHUNK_DECODED_LIMIT && e.chunk == 0 && strstr(e.message, "max_decoded_size"));
+    assert(largest < 65536);
+    free(m);
+    /* The default is 1 GiB (a 1 MiB payload may expand that far). */
+    m = encoded_file((size_t)1 << 20, MESO_DEFAULT_MAX_DECODED_SIZE, &size);
+    assert(open_both_tracked(m, size, 0, &e, &largest) == MESO_OK);
+    put64(entry(m, 0) + MESO_TOC_OFF_DECODED_SIZE, MESO_DEFAULT_MAX_DECODED_SIZE + 1);
+    fix_crcs(m);
+    assert(open_both_tracked(m, size, 0, &e, &largest) == MESO_ERR_UNSUPPORTED);
+    assert(e.code == MESO_ISSUE_CHUNK_DECODED_LIMIT);
+    assert(open_both_tracked(m, size, MESO_DEFAULT_MAX_DECODED_SIZE + 1, &e, &largest) == MESO_OK);
+    free(m);
+    /* A corrupt entry is reported as corrupt, not as over the limit. */
+    m = encoded_file(300, 100000, &size);
+    put32(entry(m, 0) + MESO_TOC_OFF_RESERVED, 1);
+    fix_crcs(m);
+    assert(open_both_tracked(m, size, 1000, &e, &largest) == MESO_ERR_CORRUPT && e.code == MESO_ISSUE_CHUNK_RESERVED);
+    free(m);
+    /* Raw chunks are backed by the file: the limit does not apply. */
+    m = fresh(&size);
+    assert(open_both_tracked(m, size, 1, &e, &largest) == MESO_OK);
+    free(m);
+}
+
+/* The fuzzer's reproducer, rebuilt: a Draco MESH of a few hundred bytes whose
+ * (self-consistent) mesh header claims 10^9 vertices. Open refuses it before
+ * anything is allocated or decoded, on every reader. */
+static void tiny_draco_mesh_claiming_a_billion_vertices_allocates_nothing(void)
+{
+    meso_mesh_layout l;
+    assert(meso_mesh_compute_layout(1000000000u, 12, MESO_MESH_ATTR_POSITIONS | MESO_MESH_ATTR_NORMALS, &l) ==
+           MESO_OK);
+    uint8_t payload_bytes[256];
+    memset(payload_bytes, 0xA5, sizeof payload_bytes);
+    meso_mesh_write_header(&l, payload_bytes);
+    /* Write it with an honest decoded_size, then patch in the claim. */
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    meso_chunk_desc d;
+    memset(&d, 0, sizeof d);
+    d.type = MESO_FOURCC('Z', 'Z', 'Z', '1');
+    d.encoding = MESO_ENCODING_DRACO;
+    d.decoded_size = sizeof payload_bytes;
+    meso_error e;
+    assert(meso_writer_add(w, &d, payload_bytes, sizeof payload_bytes, &e) == MESO_OK);
+    size_t size, largest;
+    uint8_t* m = writer_to_memory(w, &size);
+    meso_writer_destroy(w);
+    put32(entry(m, 0) + MESO_TOC_OFF_TYPE, MESO_CHUNK_MESH);
+    put32(entry(m, 0) + MESO_TOC_OFF_OBJECT, 1);
+    put64(entry(m, 0) + MESO_TOC_OFF_DECODED_SIZE, l.size);
+    fix_crcs(m);
+    assert(l.size > ((uint64_t)20 << 30)); /* 24 GB */
+    assert(open_both_tracked(m, size, 0, &e, &largest) == MESO_ERR_CORRUPT);
+    assert(e.code == MESO_ISSUE_CHUNK_EXPANSION && largest < 65536);
+    /* Even a caller that lifts the limit gets the format rule. */
+    assert(open_both_tracked(m, size, UINT64_MAX, &e, &largest) == MESO_ERR_CORRUPT);
+    assert(e.code == MESO_ISSUE_CHUNK_EXPANSION && largest < 65536);
+    free(m);
+}
+
+/* read_chunk applies the type's element/encoding rules (FORMAT.md §7 table),
+ * so open + read_chunk checks what validate FULL checks for that chunk. */
+static void read_chunk_applies_the_type_rules(void)
+{
+    size_t size;
+    uint8_t* m = fresh(&size);
+    uint32_t i = chunk_of(m, MESO_CHUNK_SDIR);
+    put16(entry(m, i) + MESO_TOC_OFF_DTYPE, MESO_DTYPE_U32); /* SDIR must be F32 x 3; same size */
+    fix_crcs(m);
+    meso_file* f = NULL;
+    meso_error e;
+    assert(meso_file_open_memory(m, size, NULL, &f, &e) == MESO_OK);
+    uint8_t buf[4096];
+    assert(meso_file_read_chunk(f, i, buf, sizeof buf, &e) == MESO_ERR_CORRUPT && e.code == MESO_ISSUE_TYPE_ELEMENT);
+    assert(meso_file_read_stored(f, i, buf, sizeof buf, &e) == MESO_OK); /* stored bytes: CRC only */
+    meso_file_close(f);
+    free(m);
+}
+
 int main(void)
 {
     sample_is_valid();
@@ -596,6 +810,10 @@ int main(void)
     bad_json_in_meta_is_rejected();
     bad_mesh_contents_are_rejected();
     bad_records_are_rejected();
+    draco_expansion_is_bounded_on_open();
+    max_decoded_size_limits_encoded_chunks_only();
+    tiny_draco_mesh_claiming_a_billion_vertices_allocates_nothing();
+    read_chunk_applies_the_type_rules();
     printf("test_format_corrupt: ok\n");
     return 0;
 }

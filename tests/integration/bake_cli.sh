@@ -91,7 +91,7 @@ expect_only "$T" "out err" "usage errors write no output"
 # ---------------------------------------------------------- input errors
 run "$MB" mesh -i "$T/does-not-exist.obj" -o "$T/x.meso"
 expect_rc 2 "missing input file"
-expect_err '^mesobake error: ' "missing input diagnostic"
+expect_err '^mesobake error E5001: ' "missing input diagnostic (coded)"
 [ -e "$T/x.meso" ] && fail "missing input left an output file" || ok
 
 : >"$T/empty.obj"
@@ -101,7 +101,7 @@ if [ "$rc" -eq 5 ]; then
     exit 77
 fi
 expect_rc 3 "empty .obj"
-expect_err '^mesobake error: ' "empty .obj diagnostic"
+expect_err '^mesobake error E[0-9]*: ' "empty .obj diagnostic (coded)"
 printf 'this is not\na mesh \001\002\003\n' >"$T/garbage.obj"
 run "$MB" mesh -i "$T/garbage.obj" -o "$T/x.meso"
 expect_rc 3 "garbage .obj"
@@ -110,7 +110,7 @@ expect_only "$T" "out err empty.obj garbage.obj" "failed bakes leave no output o
 # ------------------------------------------------------ output errors
 run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/no/such/dir/x.meso"
 expect_rc 2 "-o into a nonexistent directory"
-expect_err '^mesobake error: ' "-o into a nonexistent directory diagnostic"
+expect_err '^mesobake error E[0-9]*: ' "-o into a nonexistent directory diagnostic (coded)"
 [ -e "$T/no" ] && fail "-o into a nonexistent directory created something" || ok
 expect_only "$T" "out err empty.obj garbage.obj" "failed write leaves nothing"
 

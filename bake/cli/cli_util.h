@@ -1,0 +1,65 @@
+/* cli_util.h — mesobake's shared command-line helpers (internal). */
+#ifndef MESO_CLI_UTIL_H
+#define MESO_CLI_UTIL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "cli_common.h"
+#include "meso_bake.h"
+
+#if defined(__GNUC__)
+#define CLI_PRINTF(a, b) __attribute__((format(printf, a, b)))
+#else
+#define CLI_PRINTF(a, b)
+#endif
+
+extern int verbose; /* -v: one line per stage on stderr */
+
+/* "mesobake error: ..." on stderr. */
+void err_msg(const char* fmt, ...) CLI_PRINTF(1, 2);
+/* "mesobake error E<code>: message" (the code is FORMAT.md's issue number
+ * or a bake code 31xx, omitted when 0). */
+void err_print(const meso_error* err);
+/* A usage error: the message, the hint "See 'mesobake --help'.", exit code 1. */
+int usage_error(const char* fmt, ...) CLI_PRINTF(1, 2);
+double now_seconds(void);
+const char* base_name(const char* path);
+int has_suffix(const char* s, const char* suffix);
+/* Read a whole file (provenance checksums, .drc input). */
+meso_result slurp(const char* path, uint8_t** data, size_t* size, meso_error* err);
+/* Load a mesh by extension (OpenMesh or Draco) and check it: finite
+ * coordinates, indices in range, nothing the reader had to drop. */
+meso_result load_mesh(const char* path, meso_mesh* m, meso_error* err);
+
+/* >>output ---------------------------------------------------------------- */
+
+typedef struct cJSON cJSON;
+
+/* Append {"name", "bytes", "crc32c"} of an input file to a META "inputs"
+ * array: enough to tell which file an asset was baked from. */
+meso_result add_input_provenance(cJSON* inputs, const char* path, meso_error* err);
+
+typedef struct bake_chunk {
+    meso_chunk_desc desc;
+    const void* data;
+    size_t size;
+} bake_chunk;
+
+/* Write META, RPRT, the one-object OBJT and `chunks` to `out` atomically
+ * (deterministic: the JSON holds no timings). *file_size gets the size. */
+meso_result write_meso(const char* out, const cJSON* meta, const cJSON* report, const meso_object_record* object,
+                       const bake_chunk* chunks, int count, size_t* file_size, meso_error* err);
+
+/* --report FILE: the report plus "bytes" and "seconds_total" (not stored in
+ * the .meso file, so bakes stay byte-identical). Returns an exit code. */
+int write_report_file(const char* path, cJSON* report, size_t file_size, double seconds);
+
+/* Parse a positive finite number; 0 on failure. */
+int parse_double(const char* s, double* out);
+int parse_int(const char* s, long lo, long hi, long* out);
+
+int cmd_mesh(int argc, char** argv);
+int cmd_shell(int argc, char** argv);
+
+#endif

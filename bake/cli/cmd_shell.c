@@ -1,0 +1,377 @@
+/*
+ * cmd_shell.c — `mesobake shell`: a base mesh plus fold-free directors
+ * (volume-textures-lp-averaged-shells.md §4), validated exactly, in one
+ * .meso SHELL object: MESH (the base), SDIR (directors), STHK (thickness).
+ */
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "adapters.h"
+#include "cli_util.h"
+#include "lp_distance.h"
+#include "mesh_check.h"
+#include "mesh_chunk.h"
+#include "shell_hybrid.h"
+#include "shell_validate.h"
+
+static const char* const usage_shell =
+    "Usage: mesobake shell -i MESH -o OUT.meso [options]\n"
+    "\n"
+    "Build a shell over a triangle mesh: per vertex a director (direction x thickness)\n"
+    "whose prisms do not fold, following the gradient of the Lp-averaged distance\n"
+    "function where normal displacement would fold or collide. Every bake is validated\n"
+    "exactly (inverted prisms, offset self-intersections) and reports the numbers.\n"
+    "\n"
+    "Input / output:\n"
+    "  -i, --input FILE        mesh: .obj .off .ply .stl .om or .drc; open surfaces are fine\n"
+    "  -o, --output FILE       .meso file to write (atomically)\n"
+    "Shell:\n"
+    "      --thickness ABS     shell thickness in mesh units\n"
+    "      --thickness-rel F   thickness as a fraction of the bounding-box diagonal (default 0.05)\n"
+    "      --kind K            exterior (default), interior, or envelope (half on each side)\n"
+    "      --directors D       hybrid (default): normal displacement where it is provably safe,\n"
+    "                          the Lp field elsewhere; lp: the field everywhere; normal: plain\n"
+    "                          normal displacement (folds at concavities and saddles)\n"
+    "Field and integration:\n"
+    "      --p P               exponent of the averaged distance, in (2, 16] (default 3: closed form)\n"
+    "      --theta T           Barnes-Hut opening angle, 0 = exact summation (default 0.5)\n"
+    "      --angle-tol DEG     largest turn of the field per Euler step (default 5)\n"
+    "      --no-repair         keep directors that still fold or collide (default: --repair,\n"
+    "                          which shortens them locally until the shell is valid; the\n"
+    "                          report says how much thickness that gave up)\n"
+    "  -j, --threads N         threads (default: all cores); the output does not depend on N\n"
+    "Reporting:\n"
+    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
+    "  -v, --verbose           one line per stage on stderr\n"
+    "  -h, --help              this help\n"
+    "\n"
+    "Input meshes must be manifold, consistently oriented, without degenerate or\n"
+    "duplicated faces, and must not intersect themselves; each problem is an error\n"
+    "naming a face (exit 3), and nothing is written.\n";
+
+static const char* const kind_names[] = {"exterior", "interior", "envelope"};
+static const char* const mode_names[] = {"hybrid", "lp", "normal"};
+
+static int lookup(const char* s, const char* const* names, int n)
+{
+    for (int i = 0; i < n; ++i)
+        if (!strcmp(s, names[i]))
+            return i;
+    return -1;
+}
+
+typedef struct shell_args {
+    const char *in, *out, *report;
+    double thickness, thickness_rel, p, theta, angle_tol_deg;
+    int kind, mode, repair;
+    long threads;
+} shell_args;
+
+static int parse_args(int argc, char** argv, shell_args* a)
+{
+    *a = (shell_args){.thickness_rel = 0.05, .p = 3.0, .theta = 0.5, .angle_tol_deg = 5.0, .repair = 1};
+    int have_abs = 0, have_rel = 0;
+    for (int i = 0; i < argc; ++i) {
+        const char* s = argv[i];
+        const char* v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
+            fputs(usage_shell, stdout);
+            return -1;
+        } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
+            verbose = 1;
+            continue;
+        } else if (!strcmp(s, "--repair") || !strcmp(s, "--no-repair")) {
+            a->repair = s[2] == 'r';
+            continue;
+        }
+        const int takes_value = !strcmp(s, "-i") || !strcmp(s, "--input") || !strcmp(s, "-o") ||
+                                !strcmp(s, "--output") || !strcmp(s, "--report") || !strcmp(s, "--thickness") ||
+                                !strcmp(s, "--thickness-rel") || !strcmp(s, "--kind") || !strcmp(s, "--directors") ||
+                                !strcmp(s, "--p") || !strcmp(s, "--theta") || !strcmp(s, "--angle-tol") ||
+                                !strcmp(s, "-j") || !strcmp(s, "--threads");
+        if (!takes_value)
+            return s[0] == '-' ? usage_error("unrecognized option '%s'", s)
+                               : usage_error("unexpected argument '%s'", s);
+        if (!v)
+            return usage_error("option '%s' needs a value", s);
+        ++i;
+        if (!strcmp(s, "-i") || !strcmp(s, "--input"))
+            a->in = v;
+        else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
+            a->out = v;
+        else if (!strcmp(s, "--report"))
+            a->report = v;
+        else if (!strcmp(s, "--thickness")) {
+            if (!parse_double(v, &a->thickness))
+                return usage_error("--thickness expects a positive length, got '%s'", v);
+            have_abs = 1;
+        } else if (!strcmp(s, "--thickness-rel")) {
+            if (!parse_double(v, &a->thickness_rel) || a->thickness_rel > 10)
+                return usage_error("--thickness-rel expects a fraction in (0, 10], got '%s'", v);
+            have_rel = 1;
+        } else if (!strcmp(s, "--kind")) {
+            if ((a->kind = lookup(v, kind_names, 3)) < 0)
+                return usage_error("--kind expects exterior, interior or envelope, got '%s'", v);
+        } else if (!strcmp(s, "--directors")) {
+            if ((a->mode = lookup(v, mode_names, 3)) < 0)
+                return usage_error("--directors expects hybrid, lp or normal, got '%s'", v);
+        } else if (!strcmp(s, "--p")) {
+            if (!parse_double(v, &a->p) || !(a->p > 2.0) || a->p > MESO_LP_MAX_P)
+                return usage_error("--p expects a number in (2, 16], got '%s'", v);
+        } else if (!strcmp(s, "--theta")) {
+            char* end = NULL;
+            a->theta = strtod(v, &end);
+            if (!end || *end || !(a->theta >= 0 && a->theta <= 1.5))
+                return usage_error("--theta expects an angle in [0, 1.5], got '%s'", v);
+        } else if (!strcmp(s, "--angle-tol")) {
+            if (!parse_double(v, &a->angle_tol_deg) || a->angle_tol_deg > 90)
+                return usage_error("--angle-tol expects degrees in (0, 90], got '%s'", v);
+        } else if (!parse_int(v, 1, 256, &a->threads)) {
+            return usage_error("-j expects a thread count in 1..256, got '%s'", v);
+        }
+    }
+    if (have_abs && have_rel)
+        return usage_error("%s", "option --thickness can not be used together with --thickness-rel");
+    if (!have_abs)
+        a->thickness = 0; /* from --thickness-rel once the mesh is known */
+    if (!a->in || !a->out) {
+        fputs(usage_shell, stderr);
+        return MESO_EXIT_USAGE;
+    }
+    return 0;
+}
+
+static cJSON* report_json(const meso_shell_report* v, const meso_hybrid_stats* hs, uint32_t lp_vertices,
+                          uint32_t nv, const meso_trace_stats* ts, const meso_field_surface* fs)
+{
+    cJSON* rep = cJSON_CreateObject();
+    cJSON_AddNumberToObject(rep, "prisms", v->prisms);
+    cJSON_AddNumberToObject(rep, "inverted_prisms", v->inverted_prisms);
+    cJSON_AddNumberToObject(rep, "undecided_prisms", v->undecided_prisms);
+    cJSON_AddNumberToObject(rep, "offset_self_intersections", (double)v->offset_self_intersections);
+    cJSON_AddNumberToObject(rep, "offset_base_intersections", (double)v->offset_base_intersections);
+    cJSON_AddNumberToObject(rep, "thickness_ratio_min", v->thickness_ratio_min);
+    cJSON_AddNumberToObject(rep, "thickness_ratio_mean", v->thickness_ratio_mean);
+    cJSON_AddNumberToObject(rep, "vertices_lp", lp_vertices);
+    cJSON_AddNumberToObject(rep, "vertices_normal", nv - lp_vertices);
+    cJSON_AddNumberToObject(rep, "hybrid_rounds", hs->rounds);
+    cJSON_AddNumberToObject(rep, "vertices_shortened", hs->vertices_normal);
+    cJSON_AddNumberToObject(rep, "field_evaluations", (double)ts->evaluations);
+    cJSON_AddNumberToObject(rep, "artificial_faces", fs->artificial_faces);
+    return rep;
+}
+
+int cmd_shell(int argc, char** argv)
+{
+    shell_args a;
+    int rc = parse_args(argc, argv, &a);
+    if (rc != 0)
+        return rc < 0 ? MESO_EXIT_OK : rc;
+    const double t0 = now_seconds();
+    meso_error err = {0};
+    meso_mesh m;
+    meso_result r = load_mesh(a.in, &m, &err);
+    if (r != MESO_OK) {
+        err_print(&err);
+        return meso_exit_for(r);
+    }
+    double lo[3], hi[3];
+    const double diag = meso_mesh_bounds(&m, lo, hi);
+    const double h = a.thickness > 0 ? a.thickness : a.thickness_rel * diag;
+    const uint32_t nv = m.vertex_count, nt = m.triangle_count;
+
+    /* Refuse what no shell can be built on, before any work. */
+    meso_mesh_topology topo;
+    r = meso_mesh_topology_compute(&m, 1e-14 * diag * diag, &topo, &err);
+    if (r == MESO_OK)
+        r = meso_mesh_topology_require_shellable(&topo, a.in, &err);
+#if MESO_HAVE_CGAL
+    if (r == MESO_OK) {
+        double* xyz = malloc(sizeof(double) * 3 * (size_t)nv);
+        meso_cgal_intersection_count c = {0, 0, 0};
+        r = xyz ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        for (size_t i = 0; xyz && i < 3 * (size_t)nv; ++i)
+            xyz[i] = m.positions[i];
+        if (r == MESO_OK)
+            r = meso_cgal_self_intersections(xyz, nv, m.indices, nt, &c, &err);
+        free(xyz);
+        if (r == MESO_OK && c.pairs)
+            r = meso_bake_fail(&err, MESO_ERR_CORRUPT, 3114,
+                               "%s: the surface intersects itself (%llu triangle pairs); no shell over it can be "
+                               "valid — repair the mesh first",
+                               a.in, (unsigned long long)c.pairs);
+    }
+#endif
+    if (r != MESO_OK) {
+        free(topo.boundary);
+        meso_mesh_free(&m);
+        err_print(&err);
+        return meso_exit_for(r);
+    }
+    if (verbose)
+        fprintf(stderr, "mesobake: %s: %u vertices, %u triangles, %u boundary edges; thickness %g (%.3g of the "
+                        "diagonal) (%.0f ms)\n",
+                base_name(a.in), nv, nt, topo.boundary_edges, h, h / diag, 1e3 * (now_seconds() - t0));
+
+    float* normals = malloc(sizeof(float) * 3 * (size_t)nv);
+    const int layers = a.kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    float* d = calloc(3 * (size_t)nv * (size_t)layers, sizeof(float));
+    uint8_t* lp_mask = calloc(nv, 1);
+    uint8_t* lp_side = calloc(nv, 1);
+    meso_field_surface fs = {0};
+    meso_lp_field* field = NULL;
+    cJSON *meta = NULL, *rep = NULL;
+    meso_mesh_chunk chunk = {0};
+    float* thick = NULL;
+    meso_hybrid_stats hs_total = {0};
+    meso_trace_stats ts = {0, 0, 0};
+    const double h_side = a.kind == MESO_SHELL_ENVELOPE ? 0.5 * h : h;
+    r = normals && d && lp_mask && lp_side ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    if (r == MESO_OK)
+        r = meso_vertex_normals(&m, normals, &err);
+    if (r == MESO_OK)
+        r = meso_field_surface_build(&m, normals, topo.boundary, topo.boundary_edges, h_side, &fs, &err);
+    if (r == MESO_OK && a.mode != 2) {
+        const meso_lp_options lo_opt = {.p = a.p, .theta = a.theta, .near_radius = 2.0 * h_side};
+        r = meso_lp_field_create(fs.positions, fs.vertex_count, fs.indices, fs.triangle_count, &lo_opt, &field, &err);
+    }
+    const meso_trace_options topt = {.thickness = h_side, .angle_tol = a.angle_tol_deg * M_PI / 180.0,
+                                     .theta = a.theta};
+    /* Exterior: layer 0 along +n. Interior: layer 0 along -n. Envelope:
+     * layer 0 (top) along +n, layer 1 (bottom) along -n. */
+    for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
+        const int sign = (a.kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
+        meso_hybrid_stats hs;
+        r = meso_shell_side_directors(field, &m, normals, sign, &topt, a.mode, (int)a.threads,
+                                      d + 3 * (size_t)nv * (size_t)layer, lp_side, &hs, &ts, &err);
+        for (uint32_t v = 0; v < nv; ++v)
+            lp_mask[v] |= lp_side[v];
+        hs_total.rounds += hs.rounds;
+        if (r == MESO_OK && a.repair) {
+            uint32_t shortened = 0, rounds = 0, left = 0;
+            r = meso_shell_repair(&m, d + 3 * (size_t)nv * (size_t)layer, sign, 30, &shortened, &rounds, &left, &err);
+            hs_total.vertices_normal += shortened; /* reused below as the repair count */
+            hs_total.bad_faces_left += left;
+            if (verbose && r == MESO_OK)
+                fprintf(stderr, "mesobake: repair: %u vertices shortened in %u rounds, %u faces still bad\n",
+                        shortened, rounds, left);
+        }
+        if (verbose && r == MESO_OK)
+            fprintf(stderr, "mesobake: directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations "
+                            "(%.0f ms)\n",
+                    sign > 0 ? "outer" : "inner", mode_names[a.mode], hs.vertices_lp, hs.vertices_normal, hs.rounds,
+                    (unsigned long long)ts.evaluations, 1e3 * (now_seconds() - t0));
+    }
+
+    /* Validate the shell as it will be rendered: prisms from bottom to top. */
+    meso_shell_report val;
+    memset(&val, 0, sizeof(val));
+    if (r == MESO_OK) {
+        if (a.kind == MESO_SHELL_ENVELOPE) {
+            meso_mesh bottom = m;
+            float* pos = malloc(sizeof(float) * 3 * (size_t)nv);
+            float* span = malloc(sizeof(float) * 3 * (size_t)nv);
+            r = pos && span ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+            for (size_t i = 0; r == MESO_OK && i < 3 * (size_t)nv; ++i) {
+                pos[i] = m.positions[i] + d[3 * (size_t)nv + i];
+                span[i] = d[i] - d[3 * (size_t)nv + i];
+            }
+            bottom.positions = pos;
+            if (r == MESO_OK)
+                r = meso_shell_validate(&bottom, span, NULL, h, 1, NULL, &val, &err);
+            free(pos);
+            free(span);
+        } else {
+            r = meso_shell_validate(&m, d, NULL, h, a.kind == MESO_SHELL_INTERIOR ? -1 : 1, NULL, &val, &err);
+        }
+        if (verbose && r == MESO_OK)
+            fprintf(stderr, "mesobake: validated: %u/%u prisms inverted (%u undecided), %llu offset self-intersections, %llu "
+                            "offset/base intersections, thickness ratio min %.3f mean %.3f (%.0f ms)\n",
+                    val.inverted_prisms, val.prisms, val.undecided_prisms,
+                    (unsigned long long)val.offset_self_intersections,
+                    (unsigned long long)val.offset_base_intersections, val.thickness_ratio_min,
+                    val.thickness_ratio_mean, 1e3 * (now_seconds() - t0));
+    }
+
+    size_t file_size = 0;
+    if (r == MESO_OK) {
+        /* Base mesh with the normals the directors started from. */
+        float* saved = m.normals;
+        m.normals = normals;
+        r = meso_bake_mesh_chunk(&m, NULL, &chunk, &err);
+        m.normals = saved;
+    }
+    if (r == MESO_OK) {
+        thick = malloc(sizeof(float) * (size_t)nv);
+        r = thick ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        for (uint32_t v = 0; thick && v < nv; ++v)
+            thick[v] = (float)h;
+    }
+    if (r == MESO_OK) {
+        meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_SHELL};
+        for (int k = 0; k < 3; ++k) {
+            rec.bbox_min[k] = (float)lo[k];
+            rec.bbox_max[k] = (float)hi[k];
+        }
+        for (size_t i = 0; i < (size_t)nv * (size_t)layers; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const float x = m.positions[3 * (i % nv) + (size_t)k] + d[3 * i + (size_t)k];
+                rec.bbox_min[k] = fminf(rec.bbox_min[k], x);
+                rec.bbox_max[k] = fmaxf(rec.bbox_max[k], x);
+            }
+        snprintf(rec.name, sizeof(rec.name), "%s", base_name(a.in));
+
+        meta = cJSON_CreateObject();
+        cJSON_AddStringToObject(meta, "generator", "mesobake " MESO_VERSION_STRING);
+        cJSON_AddStringToObject(meta, "command", "shell");
+        cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
+        cJSON_AddNumberToObject(params, "thickness", h);
+        cJSON_AddStringToObject(params, "kind", kind_names[a.kind]);
+        cJSON_AddStringToObject(params, "directors", mode_names[a.mode]);
+        cJSON_AddNumberToObject(params, "p", a.p);
+        cJSON_AddNumberToObject(params, "theta", a.theta);
+        cJSON_AddNumberToObject(params, "angle_tol_deg", a.angle_tol_deg);
+        r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
+        uint32_t lp_count = 0;
+        for (uint32_t v = 0; v < nv; ++v)
+            lp_count += lp_mask[v];
+        rep = report_json(&val, &hs_total, lp_count, nv, &ts, &fs);
+        const bake_chunk chunks[3] = {
+            {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
+                      .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
+             .data = chunk.data, .size = chunk.size},
+            {.desc = {.type = MESO_CHUNK_SDIR, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
+                      .dtype = MESO_DTYPE_F32, .components = 3, .dims = {nv, (uint32_t)layers, 1}},
+             .data = d, .size = sizeof(float) * 3 * (size_t)nv * (size_t)layers},
+            {.desc = {.type = MESO_CHUNK_STHK, .object = 1, .dtype = MESO_DTYPE_F32, .components = 1,
+                      .dims = {nv, 1, 1}},
+             .data = thick, .size = sizeof(float) * (size_t)nv},
+        };
+        if (r == MESO_OK)
+            r = write_meso(a.out, meta, rep, &rec, chunks, 3, &file_size, &err);
+    }
+    const double t_end = now_seconds();
+    if (r == MESO_OK && verbose)
+        fprintf(stderr, "mesobake: wrote %s: %zu bytes (%.0f ms total)\n", a.out, file_size, 1e3 * (t_end - t0));
+    int code = r == MESO_OK ? MESO_EXIT_OK : meso_exit_for(r);
+    if (r != MESO_OK)
+        err_print(&err);
+    else if (a.report)
+        code = write_report_file(a.report, rep, file_size, t_end - t0);
+    cJSON_Delete(meta);
+    cJSON_Delete(rep);
+    free(chunk.data);
+    free(thick);
+    meso_lp_field_destroy(field);
+    meso_field_surface_free(&fs);
+    free(normals);
+    free(d);
+    free(lp_mask);
+    free(lp_side);
+    free(topo.boundary);
+    meso_mesh_free(&m);
+    return code;
+}

@@ -1,0 +1,178 @@
+/*
+ * shell_hybrid.c — see shell_hybrid.h.
+ *
+ * Why validate-and-grow instead of a local test per vertex: what makes
+ * normal displacement fail is either local (a prism whose Jacobian changes
+ * sign: concavities, saddles) or global (an offset triangle reaching another
+ * part of the surface: the bunny's ear over its back). The exact checks of
+ * shell_validate.c find both and name the faces; a vertex keeps its normal
+ * only if no face around it fails in the final shell. The price is one exact
+ * validation per round (CGAL box intersection + exact predicates), which is
+ * cheaper than tracing the Lp field at every vertex of a mostly convex mesh.
+ */
+#include "shell_hybrid.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "adapters.h"
+#include "shell_validate.h"
+
+meso_result meso_shell_bad_faces(const meso_mesh* m, const float* d, int sign, uint8_t* bad, uint32_t* count,
+                                 meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    meso_result r = meso_shell_count_inverted(m, d, sign, bad, NULL, NULL, err);
+    if (r != MESO_OK)
+        return r;
+    for (uint32_t f = 0; f < nt; ++f)
+        bad[f] = bad[f] ? 1 : 0;
+#if MESO_HAVE_CGAL
+    double* base = malloc(sizeof(double) * 3 * (size_t)nv);
+    double* top = malloc(sizeof(double) * 3 * (size_t)nv);
+    uint8_t* flags_top = calloc(nt ? nt : 1, 1);
+    uint8_t* flags_base = calloc(nt ? nt : 1, 1);
+    if (!base || !top || !flags_top || !flags_base) {
+        free(base), free(top), free(flags_top), free(flags_base);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "shell check: out of memory");
+    }
+    for (size_t i = 0; i < 3 * (size_t)nv; ++i) {
+        base[i] = m->positions[i];
+        top[i] = (double)m->positions[i] + (double)d[i];
+    }
+    meso_cgal_intersection_count c;
+    r = meso_cgal_self_intersections_mark(top, nv, m->indices, nt, flags_top, &c, err);
+    if (r == MESO_OK)
+        r = meso_cgal_cross_intersections_mark(top, base, nv, m->indices, nt, flags_top, flags_base, &c, err);
+    for (uint32_t f = 0; r == MESO_OK && f < nt; ++f)
+        bad[f] |= flags_top[f] | flags_base[f];
+    free(base), free(top), free(flags_top), free(flags_base);
+    if (r != MESO_OK)
+        return r;
+#endif
+    uint32_t n = 0;
+    for (uint32_t f = 0; f < nt; ++f)
+        n += bad[f];
+    *count = n;
+    return MESO_OK;
+}
+
+/* add[v] = 1 for the vertices of faces with bad[f]; then one ring more. */
+static uint32_t grow(const meso_mesh* m, const uint8_t* bad, const uint8_t* have, uint8_t* add)
+{
+    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    memset(add, 0, nv);
+    for (uint32_t f = 0; f < nt; ++f)
+        if (bad[f])
+            for (int k = 0; k < 3; ++k)
+                add[m->indices[3 * (size_t)f + k]] = 1;
+    /* One ring: every face touching a marked vertex marks all its corners. */
+    uint8_t* ring = malloc(nv ? nv : 1);
+    if (!ring)
+        return 0;
+    memcpy(ring, add, nv);
+    for (uint32_t f = 0; f < nt; ++f) {
+        const uint32_t* ix = m->indices + 3 * (size_t)f;
+        if (ring[ix[0]] || ring[ix[1]] || ring[ix[2]])
+            add[ix[0]] = add[ix[1]] = add[ix[2]] = 1;
+    }
+    free(ring);
+    uint32_t fresh = 0;
+    for (uint32_t v = 0; v < nv; ++v) {
+        if (have[v])
+            add[v] = 0;
+        fresh += add[v];
+    }
+    return fresh;
+}
+
+meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mesh* m, const float* normals, int sign,
+                                      const meso_trace_options* opt, int mode, int threads, float* d,
+                                      uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
+                                      meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    memset(hs, 0, sizeof(*hs));
+    uint8_t* mask = calloc(nv ? nv : 1, 1);
+    uint8_t* add = calloc(nv ? nv : 1, 1);
+    uint8_t* bad = calloc(nt ? nt : 1, 1);
+    if (!mask || !add || !bad) {
+        free(mask), free(add), free(bad);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "directors: out of memory");
+    }
+    for (size_t i = 0; i < 3 * (size_t)nv; ++i)
+        d[i] = (float)(sign * opt->thickness * normals[i]);
+    meso_result r = MESO_OK;
+    if (mode == 1) {
+        memset(mask, 1, nv);
+        r = meso_shell_trace_all(field, m, normals, sign, opt, NULL, threads, d, ts, err);
+    } else if (mode == 0) {
+        uint32_t nbad = 0;
+        for (;;) {
+            r = meso_shell_bad_faces(m, d, sign, bad, &nbad, err);
+            if (r != MESO_OK || nbad == 0)
+                break;
+            hs->rounds++;
+            const uint32_t fresh = grow(m, bad, mask, add);
+            if (fresh == 0)
+                break; /* every vertex near a bad face already follows the field */
+            r = meso_shell_trace_all(field, m, normals, sign, opt, add, threads, d, ts, err);
+            if (r != MESO_OK)
+                break;
+            for (uint32_t v = 0; v < nv; ++v)
+                mask[v] |= add[v];
+        }
+        hs->bad_faces_left = nbad;
+    }
+    for (uint32_t v = 0; v < nv; ++v)
+        hs->vertices_lp += mask[v];
+    hs->vertices_normal = nv - hs->vertices_lp;
+    if (lp_mask)
+        memcpy(lp_mask, mask, nv);
+    free(mask), free(add), free(bad);
+    return r;
+}
+
+meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, uint32_t* shortened,
+                              uint32_t* rounds, uint32_t* bad_left, meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    uint8_t* bad = calloc(nt ? nt : 1, 1);
+    uint8_t* touched = calloc(nv ? nv : 1, 1);
+    uint8_t* now = calloc(nv ? nv : 1, 1);
+    if (!bad || !touched || !now) {
+        free(bad), free(touched), free(now);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
+    }
+    uint32_t nbad = 0, round = 0;
+    meso_result r = MESO_OK;
+    for (;;) {
+        r = meso_shell_bad_faces(m, d, sign, bad, &nbad, err);
+        if (r != MESO_OK || nbad == 0 || round == max_rounds)
+            break;
+        memset(now, 0, nv);
+        for (uint32_t f = 0; f < nt; ++f)
+            if (bad[f])
+                for (int k = 0; k < 3; ++k)
+                    now[m->indices[3 * (size_t)f + k]] = 1;
+        /* Shorten only: turning directors towards the normal was tried and
+         * gave up more thickness on the bunny (mean ratio 0.81 vs 0.965 at
+         * 10 %) for the same residue. */
+        for (uint32_t v = 0; v < nv; ++v)
+            if (now[v]) {
+                touched[v] = 1;
+                for (int k = 0; k < 3; ++k)
+                    d[3 * (size_t)v + k] *= 0.8f;
+            }
+        ++round;
+    }
+    uint32_t n = 0;
+    for (uint32_t v = 0; v < nv; ++v)
+        n += touched[v];
+    *shortened = n;
+    *rounds = round;
+    *bad_left = nbad;
+    free(bad), free(touched), free(now);
+    return r;
+}

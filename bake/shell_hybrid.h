@@ -1,0 +1,48 @@
+/*
+ * shell_hybrid.h — hybrid directors (the Lp paper's own future work, §6):
+ * plain normal displacement wherever it is provably safe, the Lp-averaged
+ * field only where it is needed.
+ */
+#ifndef MESO_SHELL_HYBRID_H
+#define MESO_SHELL_HYBRID_H
+
+#include "shell_directors.h"
+
+typedef struct meso_hybrid_stats {
+    uint32_t vertices_lp;     /* vertices whose director was traced through the field */
+    uint32_t vertices_normal; /* vertices that kept normal displacement */
+    uint32_t rounds;          /* validate-and-grow rounds */
+    uint32_t bad_faces_left;  /* faces still failing after the last round */
+} meso_hybrid_stats;
+
+/* Faces whose prism (base + w d) is not provably valid: det J not proven
+ * positive (sign: +1 exterior, -1 interior), or whose offset triangle
+ * intersects another offset triangle or the base surface (exact, CGAL).
+ * bad[f] = 1 for such faces; *count gets their number. */
+meso_result meso_shell_bad_faces(const meso_mesh* m, const float* d, int sign, uint8_t* bad, uint32_t* count,
+                                 meso_error* err);
+
+/* Directors for one side (sign * normals, thickness opt->thickness):
+ *  1. normal displacement everywhere;
+ *  2. the vertices of bad faces, and one ring around them, switch to the
+ *     Lp field (a ring, so the switch happens away from the failure);
+ *  3. validate again; vertices of faces still bad join, with their ring;
+ *     repeat until no face is bad or no vertex is left to switch.
+ * Normal displacement is kept only where the final shell passes the exact
+ * checks, which is the "provably safe" of the issue. mode: 0 hybrid,
+ * 1 all Lp, 2 all normal. lp_mask (nv, may be NULL) gets 1 for Lp vertices. */
+meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mesh* m, const float* normals, int sign,
+                                      const meso_trace_options* opt, int mode, int threads, float* d,
+                                      uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
+                                      meso_error* err);
+
+/* Repair (issue #4, --repair): shorten the directors of the vertices of
+ * still-bad faces by a factor 0.8 per round, until no face is bad or
+ * max_rounds pass. Shorter directors can only remove folds and collisions
+ * that the thickness caused; they give up thickness locally, which the
+ * report then shows (thickness_ratio_min/mean). *shortened counts the
+ * vertices touched, *bad_left the faces still bad at the end. */
+meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, uint32_t* shortened,
+                              uint32_t* rounds, uint32_t* bad_left, meso_error* err);
+
+#endif

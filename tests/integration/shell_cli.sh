@@ -1,0 +1,63 @@
+#!/bin/sh
+# mesobake shell from the command line: byte-identical output for -j 1 and
+# -j 2, the report's keys, and bad input (every file of shared/data/defective
+# when present, plus generated ones): a coded error, a non-zero exit, and no
+# output file.
+# usage: shell_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR
+set -u
+bake=$1 inspect=$2 data=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # DESCRIPTION COMMAND...
+  d=$1; shift
+  if "$@"; then echo "ok   $d"; else echo "FAIL $d"; fail=1; fi
+}
+
+"$bake" shell -i "$data/spot_low_resolution.obj" -o "$tmp/j1.meso" -j 1 --report "$tmp/r.json" >/dev/null 2>&1
+check "bake with -j 1 succeeds" test -s "$tmp/j1.meso"
+"$bake" shell -i "$data/spot_low_resolution.obj" -o "$tmp/j2.meso" -j 2 >/dev/null 2>&1
+check "-j 1 and -j 2 give byte-identical files" cmp -s "$tmp/j1.meso" "$tmp/j2.meso"
+check "the file validates fully" "$inspect" validate --full "$tmp/j1.meso" >/dev/null
+for key in prisms inverted_prisms offset_self_intersections thickness_ratio_min thickness_ratio_mean \
+           vertices_lp vertices_normal seconds_total; do
+  check "report has \"$key\"" grep -q "\"$key\":" "$tmp/r.json"
+done
+check "prisms = triangle count (1654)" grep -q '"prisms":[[:space:]]*1654,' "$tmp/r.json"
+check "SDIR and STHK chunks are present" sh -c "'$inspect' info '$tmp/j1.meso' | grep -q SDIR && '$inspect' info '$tmp/j1.meso' | grep -q STHK"
+"$bake" shell -i "$data/saddle.obj" -o "$tmp/env.meso" --kind envelope >/dev/null 2>&1
+check "envelope shells of open surfaces bake" test -s "$tmp/env.meso"
+
+refuse() { # DESCRIPTION EXPECTED_EXIT INPUT
+  rm -f "$tmp/out.meso"
+  "$bake" shell -i "$3" -o "$tmp/out.meso" >"$tmp/stdout" 2>"$tmp/stderr"
+  rc=$?
+  check "$1: exit $2 (got $rc)" test "$rc" = "$2"
+  check "$1: says 'mesobake error'" grep -q "mesobake error" "$tmp/stderr"
+  check "$1: writes no output" test ! -e "$tmp/out.meso"
+}
+: >"$tmp/empty.obj"
+refuse "empty file" 3 "$tmp/empty.obj"
+refuse "missing file" 2 "$tmp/nope.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n' >"$tmp/nan.obj"
+refuse "NaN coordinate" 3 "$tmp/nan.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 2 1 4\n' >"$tmp/fin.obj"
+refuse "non-manifold fin" 3 "$tmp/fin.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n' >"$tmp/degenerate.obj"
+refuse "degenerate face" 3 "$tmp/degenerate.obj"
+printf 'not a mesh at all\n' >"$tmp/garbage.off"
+refuse "garbage" 3 "$tmp/garbage.off"
+defective="$data/../../../shared/data/defective"
+for f in truck.obj degenerated.obj two-boxes-bad-self-union.obj two-boxes-bad-self-union.ply teapot.obj; do
+  [ -f "$defective/$f" ] && refuse "shared/data/defective/$f" 3 "$defective/$f"
+done
+# cube_with_fold is topologically clean: its fold is geometric. It must
+# either bake a valid shell or be refused; never crash.
+if [ -f "$defective/cube_with_fold.obj" ]; then
+  "$bake" shell -i "$defective/cube_with_fold.obj" -o "$tmp/fold.meso" >/dev/null 2>&1
+  rc=$?
+  check "cube_with_fold: exit 0 or 3 (got $rc)" sh -c "[ $rc = 0 ] || [ $rc = 3 ]"
+fi
+check "usage: conflicting thickness flags exit 1" sh -c "'$bake' shell -i x -o y --thickness 1 --thickness-rel 0.1 2>/dev/null; [ \$? = 1 ]"
+check "usage: bad kind exits 1" sh -c "'$bake' shell -i x -o y --kind sideways 2>/dev/null; [ \$? = 1 ]"
+exit $fail
