@@ -25,6 +25,7 @@ typedef struct meso_trace_options {
     double min_step;    /* fraction of h below which a step is accepted as is (default 1/1024) */
     double theta;       /* Barnes-Hut opening angle (<= 0: exact summation) */
     double near_radius; /* triangles closer than this are integrated exactly (0: θ decides alone) */
+    int smooth_iterations; /* Laplacian smoothing rounds of traced directors (shell_hybrid.c) */
 } meso_trace_options;
 
 typedef struct meso_trace_stats {

@@ -39,6 +39,9 @@ static const char* const usage_shell =
     "      --p P               exponent of the averaged distance, in (2, 16] (default 3: closed form)\n"
     "      --theta T           Barnes-Hut opening angle, 0 = exact summation (default 0.5)\n"
     "      --angle-tol DEG     largest turn of the field per Euler step (default 5)\n"
+    "      --smooth N          Laplacian smoothing rounds of traced directors (default 0):\n"
+    "                          removes triangle-scale noise that flips prisms on finely\n"
+    "                          tessellated scans; harmful across thin features\n"
     "      --no-repair         keep directors that still fold or collide (default: --repair,\n"
     "                          which shortens them locally until the shell is valid; the\n"
     "                          report says how much thickness that gave up)\n"
@@ -67,12 +70,13 @@ typedef struct shell_args {
     const char *in, *out, *report;
     double thickness, thickness_rel, p, theta, angle_tol_deg;
     int kind, mode, repair;
-    long threads;
+    long threads, smooth;
 } shell_args;
 
 static int parse_args(int argc, char** argv, shell_args* a)
 {
-    *a = (shell_args){.thickness_rel = 0.05, .p = 3.0, .theta = 0.5, .angle_tol_deg = 5.0, .repair = 1};
+    *a = (shell_args){.thickness_rel = 0.05, .p = 3.0, .theta = 0.5, .angle_tol_deg = 5.0, .repair = 1,
+                      .smooth = 0};
     int have_abs = 0, have_rel = 0;
     for (int i = 0; i < argc; ++i) {
         const char* s = argv[i];
@@ -91,7 +95,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
                                 !strcmp(s, "--output") || !strcmp(s, "--report") || !strcmp(s, "--thickness") ||
                                 !strcmp(s, "--thickness-rel") || !strcmp(s, "--kind") || !strcmp(s, "--directors") ||
                                 !strcmp(s, "--p") || !strcmp(s, "--theta") || !strcmp(s, "--angle-tol") ||
-                                !strcmp(s, "-j") || !strcmp(s, "--threads");
+                                !strcmp(s, "-j") || !strcmp(s, "--threads") || !strcmp(s, "--smooth");
         if (!takes_value)
             return s[0] == '-' ? usage_error("unrecognized option '%s'", s)
                                : usage_error("unexpected argument '%s'", s);
@@ -129,6 +133,9 @@ static int parse_args(int argc, char** argv, shell_args* a)
         } else if (!strcmp(s, "--angle-tol")) {
             if (!parse_double(v, &a->angle_tol_deg) || a->angle_tol_deg > 90)
                 return usage_error("--angle-tol expects degrees in (0, 90], got '%s'", v);
+        } else if (!strcmp(s, "--smooth")) {
+            if (!parse_int(v, 0, 1000, &a->smooth))
+                return usage_error("--smooth expects a round count in 0..1000, got '%s'", v);
         } else if (!parse_int(v, 1, 256, &a->threads)) {
             return usage_error("-j expects a thread count in 1..256, got '%s'", v);
         }
@@ -239,7 +246,7 @@ int cmd_shell(int argc, char** argv)
         r = meso_lp_field_create(fs.positions, fs.vertex_count, fs.indices, fs.triangle_count, &lo_opt, &field, &err);
     }
     const meso_trace_options topt = {.thickness = h_side, .angle_tol = a.angle_tol_deg * M_PI / 180.0,
-                                     .theta = a.theta};
+                                     .theta = a.theta, .smooth_iterations = (int)a.smooth};
     /* Exterior: layer 0 along +n. Interior: layer 0 along -n. Envelope:
      * layer 0 (top) along +n, layer 1 (bottom) along -n. */
     for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
@@ -334,6 +341,8 @@ int cmd_shell(int argc, char** argv)
         cJSON_AddNumberToObject(params, "p", a.p);
         cJSON_AddNumberToObject(params, "theta", a.theta);
         cJSON_AddNumberToObject(params, "angle_tol_deg", a.angle_tol_deg);
+        cJSON_AddNumberToObject(params, "smooth", (double)a.smooth);
+        cJSON_AddBoolToObject(params, "repair", a.repair);
         r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
         uint32_t lp_count = 0;
         for (uint32_t v = 0; v < nv; ++v)

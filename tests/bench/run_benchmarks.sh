@@ -22,3 +22,16 @@ echo "== bench_draco"
 echo "== plot"
 gnuplot -e "csv='$results/draco.csv'; png='$results/draco.png'" "$src/tests/bench/plot_draco.gp"
 echo "results in $results"
+
+# Shell directors (issue #4): ~15-20 min on 2 cores. Results:
+#   shell_size.csv, shell_accuracy.csv, shell_thickness.csv, shell_goals.csv
+#   and shell_size.png, shell_accuracy.png, shell_thickness.png
+# Skip with MESO_BENCH_SKIP_SHELL=1; sizes up to level 4 (423k triangles) by
+# default, `bench_shell size DIR 5` adds 1.7M (much longer).
+if [ "${MESO_BENCH_SKIP_SHELL:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_shell bake/mesobake
+    echo "== bench_shell"
+    nice "$build/tests/bench/bench_shell" all "$results" "$build/bake/mesobake"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_shell.gp"
+    echo "shell results in $results"
+fi

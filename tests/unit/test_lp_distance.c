@@ -235,14 +235,14 @@ static void test_triangle_vs_brute_force(void)
     uint64_t s = 0x1234567ULL;
     double maxI[PT_KINDS] = {0}, maxJ[PT_KINDS] = {0}, maxQ[PT_KINDS] = {0}, maxQ4[PT_KINDS] = {0};
     int npts = 0;
-    for (int tcount = 0; tcount < 12; ++tcount) {
+    for (int tcount = 0; tcount < 8; ++tcount) {
         double v[9], n[3], area;
         random_triangle(&s, v, n, &area);
         for (int kind = 0; kind < PT_KINDS; ++kind)
             for (int rep = 0; rep < 3; ++rep) {
                 double x[3], clear, ref[5], j[3];
                 random_point(&s, kind, v, n, x, &clear);
-                brute_force(v, x, 3.0, 1e-6, ref);
+                brute_force(v, x, 3.0, kind == PT_FAR ? 1e-7 : 1e-5, ref);
                 double I = meso_lp_triangle_p3(v, v + 3, v + 6, x, j);
                 assert(isfinite(I) && I > 0.0);
                 double dJ = 0.0;
@@ -260,7 +260,7 @@ static void test_triangle_vs_brute_force(void)
                 maxQ[kind] = fmax(maxQ[kind], dq);
                 /* ...and at p = 4 against brute force. */
                 double ref4[5];
-                brute_force(v, x, 4.0, 1e-6, ref4);
+                brute_force(v, x, 4.0, kind == PT_FAR ? 1e-7 : 1e-5, ref4);
                 double I4 = meso_lp_triangle_quad(v, v + 3, v + 6, x, 4.0, 0.0, jq);
                 double d4 = fabs(I4 - ref4[0]) / ref4[0];
                 for (int k = 0; k < 3; ++k)
@@ -275,9 +275,10 @@ static void test_triangle_vs_brute_force(void)
                 pt_name[kind], maxI[kind], maxJ[kind], maxQ[kind], maxQ4[kind]);
     assert(maxI[PT_FAR] < 1e-6 && maxJ[PT_FAR] < 1e-6);
     for (int kind = 0; kind < PT_KINDS; ++kind) {
-        assert(maxI[kind] < 1e-4 && maxJ[kind] < 1e-4);
+        /* measured ≤ 1.2e-8 (mostly the brute force's own error) */
+        assert(maxI[kind] < 1e-6 && maxJ[kind] < 1e-6);
         assert(maxQ[kind] < 1e-8); /* two independent derivations (default tolerance) */
-        assert(maxQ4[kind] < 1e-4);
+        assert(maxQ4[kind] < 1e-6);
     }
 
     /* Exactly in the plane outside the triangle: the 0/0 limit is finite and
