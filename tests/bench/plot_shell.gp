@@ -13,44 +13,51 @@ acc_csv = dir."/shell_accuracy.csv"
 thk_csv = dir."/shell_thickness.csv"
 cairo = strstrt(GPVAL_TERMINALS, "pngcairo") > 0
 set datafile separator ","
+# rows of a CSV whose awk condition holds (keeps line segments unbroken)
+rows(f, cond) = sprintf("< awk -F, 'NR > 1 && (%s)' '%s'", cond, f)
 set grid
 set key noenhanced
 
 # (a) ------------------------------------------------------------------------
 if (cairo) { set terminal pngcairo size 1400,600 enhanced font "sans,11" } else { set terminal png size 1400,600 }
 set output dir."/shell_size.png"
-set multiplot layout 1,2 title "mesobake shell on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, θ 0.5, 5°, repair"
+set multiplot layout 1,2 title "mesobake shell (library stages) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, θ 0.5, 5°, smoothing 20, repair"
 set logscale xy
+set xrange [1000:3e6]
 set format x "10^{%L}"
 set xlabel "triangles"
 set ylabel "seconds"
 set key top left
 set label 1 "goal 2 s @ 100k" at 1.1e5, 2 left offset 1,0
 set label 2 "goal 30 s @ 1M" at 1.1e6, 30 left offset 1,0
-plot size_csv using (strcol(3) eq "hybrid" ? $1 : 1/0):11 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid: total", \
-     size_csv using (strcol(3) eq "hybrid" ? $1 : 1/0):8 with linespoints dt 2 pt 6 lc rgb "#1f77b4" title "hybrid: directors (incl. checks of each round)", \
-     size_csv using (strcol(3) eq "hybrid" ? $1 : 1/0):($10 + $9) with linespoints dt 3 pt 4 lc rgb "#1f77b4" title "hybrid: repair + validation", \
-     size_csv using (strcol(3) eq "hybrid" ? $1 : 1/0):($7 + $6) with linespoints dt 4 pt 8 lc rgb "#1f77b4" title "hybrid: normals + field build", \
-     size_csv using (strcol(3) eq "lp" ? $1 : 1/0):11 with linespoints lw 2 pt 5 lc rgb "#d62728" title "lp (all vertices): total", \
-     size_csv using (strcol(3) eq "lp" ? $1 : 1/0):8 with linespoints dt 2 pt 4 lc rgb "#d62728" title "lp: directors", \
+H = rows(size_csv, '$3 == "hybrid"')
+L = rows(size_csv, '$3 == "lp"')
+set key bottom right
+plot H using 1:11 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid: total", \
+     H using 1:8 with linespoints dt 2 pt 6 lc rgb "#1f77b4" title "hybrid: directors (incl. checks of each round)", \
+     H using 1:($10 + $9) with linespoints dt 3 pt 4 lc rgb "#1f77b4" title "hybrid: repair + validation", \
+     H using 1:($7 + $6 + $5 + $4) with linespoints dt 4 pt 8 lc rgb "#1f77b4" title "hybrid: topology + base check + normals + field", \
+     L using 1:11 with linespoints lw 2 pt 5 lc rgb "#d62728" title "lp (all vertices): total", \
+     L using 1:8 with linespoints dt 2 pt 4 lc rgb "#d62728" title "lp: directors", \
      '+' using (1e5):(2) every ::0::0 with points pt 3 ps 3 lw 2 lc rgb "black" notitle, \
      '+' using (1e6):(30) every ::0::0 with points pt 3 ps 3 lw 2 lc rgb "black" notitle
 unset label 1
 unset label 2
 set ylabel "peak RSS, MB (own process)"
-set label 3 "goal 2 GB" at graph 0.02, first 2300 left
-plot size_csv using (strcol(3) eq "hybrid" ? $1 : 1/0):13 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid", \
-     size_csv using (strcol(3) eq "lp" ? $1 : 1/0):13 with linespoints lw 2 pt 5 lc rgb "#d62728" title "lp", \
-     2048 with lines dt 2 lc rgb "black" title "2 GB"
-unset label 3
+set key top left
+plot H using 1:13 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid", \
+     L using 1:13 with linespoints lw 2 pt 5 lc rgb "#d62728" title "lp", \
+     2048 with lines dt 2 lc rgb "black" title "goal: 2 GB"
 unset multiplot
 
 # (b) ------------------------------------------------------------------------
 meshes = system("tail -n +2 '".acc_csv."' | cut -d, -f1 | uniq | tr '\\n' ' '")
 nm = words(meshes)
-if (cairo) { set terminal pngcairo size 700*nm,560 enhanced font "sans,11" } else { set terminal png size 700*nm,560 }
+width = nm < 2 ? 1200 : 700*nm
+if (cairo) { set terminal pngcairo size width,560 enhanced font "sans,11" } else { set terminal png size width,560 }
 set output dir."/shell_accuracy.png"
-set multiplot layout 1,nm title "Director error vs time: all-Lp exterior directors at 10 %; reference θ = 0 (exact), 0.5°; points left to right: θ = 1, 0.7, 0.5, 0.35, 0.2, 0 (exact)"
+unset xrange
+set multiplot layout 1,nm title "Director error vs time: all-Lp exterior directors at 10 % (raw traces), reference θ = 0 (exact) at 0.5°\nalong each line left to right: θ = 1, 0.7, 0.5, 0.35, 0.2, 0 (exact); labels on the 5° line"
 set logscale xy
 set format x "10^{%L}"
 set format y "10^{%L}"
@@ -60,8 +67,8 @@ set key bottom left
 tols = "1 2 5 10 20"
 do for [m in meshes] {
     set title m noenhanced
-    plot for [t in tols] acc_csv using (strcol(1) eq m && $6 == real(t) ? $7 : 1/0):9 with linespoints lw 2 title "tolerance ".t."°", \
-         acc_csv using (strcol(1) eq m && $6 == 5 ? $7 : 1/0):9:(sprintf("θ %.2g", $5)) with labels offset 0,-1 font ",8" notitle
+    plot for [t in tols] rows(acc_csv, sprintf('$1 == "%s" && $6 == %s', m, t)) using 7:9 with linespoints lw 2 title "tolerance ".t."°", \
+         rows(acc_csv, sprintf('$1 == "%s" && $6 == 5', m)) using 7:9:(sprintf("θ %.2g", $5)) with labels offset 0,-1 font ",8" notitle
 }
 unset title
 unset multiplot
@@ -88,10 +95,10 @@ colors = "#2ca02c #d62728 #1f77b4"
 do for [side in "exterior interior"] {
     do for [m in meshes] {
         set title m." — ".side noenhanced
-        plot for [i=1:3] thk_csv using (strcol(1) eq m && strcol(3) eq side && strcol(5) eq word(methods,i) && $6 == 0 ? 100*$4 : 1/0):(fail($7,$9,$10)) \
-                 with linespoints lw 2 pt 7 ps 0.8 lc rgb word(colors,i) title word(methods,i), \
-             for [i=1:3] thk_csv using (strcol(1) eq m && strcol(3) eq side && strcol(5) eq word(methods,i) && $6 == 1 ? 100*$4 : 1/0):(fail($7,$9,$10)) \
-                 with linespoints lw 1 dt 2 pt 6 ps 0.8 lc rgb word(colors,i) title word(methods,i)." + repair"
+        plot for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $3 == "%s" && $5 == "%s" && $6 == 0', m, side, word(methods,i))) \
+                 using (100*$4):(fail($7,$9,$10)) with linespoints lw 2 pt 7 ps 0.8 lc rgb word(colors,i) title word(methods,i), \
+             for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $3 == "%s" && $5 == "%s" && $6 == 1', m, side, word(methods,i))) \
+                 using (100*$4):(fail($7,$9,$10)) with linespoints lw 1 dt 2 pt 6 ps 0.8 lc rgb word(colors,i) title word(methods,i)." + repair"
     }
 }
 unset multiplot
