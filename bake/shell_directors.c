@@ -37,6 +37,7 @@
 #include "shell_directors.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -247,6 +248,11 @@ meso_result meso_shell_trace_all(const meso_lp_field* field, const meso_mesh* m,
     (void)err;
     const long nv = (long)m->vertex_count;
     uint64_t evals = 0, steps = 0, halvings = 0;
+    long todo = 0;
+    for (long v = 0; v < nv; ++v)
+        todo += !mask || mask[v];
+    atomic_long done = 0;
+    const long every = todo / 100 > 0 ? todo / 100 : 1;
 #ifdef _OPENMP
     const int nt = threads > 0 ? threads : omp_get_max_threads();
 #pragma omp parallel for schedule(dynamic, 32) num_threads(nt) reduction(+ : evals, steps, halvings)
@@ -268,6 +274,13 @@ meso_result meso_shell_trace_all(const meso_lp_field* field, const meso_mesh* m,
         evals += st.evaluations;
         steps += st.steps;
         halvings += st.halvings;
+        const long k = atomic_fetch_add(&done, 1) + 1;
+        if (opt->progress && k % every == 0) {
+#ifdef _OPENMP
+#pragma omp critical(meso_progress)
+#endif
+            opt->progress(opt->progress_user, (uint64_t)k, (uint64_t)todo);
+        }
     }
     if (stats) {
         stats->evaluations += evals;

@@ -26,6 +26,10 @@ typedef struct meso_trace_options {
     double theta;       /* Barnes-Hut opening angle (<= 0: exact summation) */
     double near_radius; /* triangles closer than this are integrated exactly (0: θ decides alone) */
     int smooth_iterations; /* Laplacian smoothing rounds of traced directors (shell_hybrid.c) */
+    /* Optional progress report from the tracing loop (called by one thread
+     * at a time, about every 1 %, with done <= total vertices). */
+    void (*progress)(void* user, uint64_t done, uint64_t total);
+    void* progress_user;
 } meso_trace_options;
 
 typedef struct meso_trace_stats {

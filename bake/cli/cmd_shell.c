@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "adapters.h"
 #include "cli_util.h"
@@ -151,6 +152,18 @@ static int parse_args(int argc, char** argv, shell_args* a)
     return 0;
 }
 
+/* A one-line progress bar on a terminal (-v): redrawn in place with \r. */
+static void progress_bar(void* user, uint64_t done, uint64_t total)
+{
+    const char* what = user;
+    const int width = 30, filled = total ? (int)(width * done / total) : width;
+    fprintf(stderr, "\rmesobake: %s [%.*s%*s] %3d%%", what, filled, "##############################", width - filled,
+            "", total ? (int)(100 * done / total) : 100);
+    if (done >= total)
+        fputs("\r\033[K", stderr);
+    fflush(stderr);
+}
+
 static cJSON* report_json(const meso_shell_report* v, const meso_hybrid_stats* hs, uint32_t lp_vertices,
                           uint32_t nv, const meso_trace_stats* ts, const meso_field_surface* fs)
 {
@@ -246,7 +259,9 @@ int cmd_shell(int argc, char** argv)
         r = meso_lp_field_create(fs.positions, fs.vertex_count, fs.indices, fs.triangle_count, &lo_opt, &field, &err);
     }
     const meso_trace_options topt = {.thickness = h_side, .angle_tol = a.angle_tol_deg * M_PI / 180.0,
-                                     .theta = a.theta, .smooth_iterations = (int)a.smooth};
+                                     .theta = a.theta, .smooth_iterations = (int)a.smooth,
+                                     .progress = verbose && isatty(2) ? progress_bar : NULL,
+                                     .progress_user = (void*)"tracing directors"};
     /* Exterior: layer 0 along +n. Interior: layer 0 along -n. Envelope:
      * layer 0 (top) along +n, layer 1 (bottom) along -n. */
     for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
