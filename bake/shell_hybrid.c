@@ -203,6 +203,59 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
     return r;
 }
 
+/* A unit direction that leaves every face around v on the shell's side
+ * (d·n_f >= 0.2 for each adjacent face normal n_f, signed), found by
+ * projecting onto the violated half-spaces in turn (a few sweeps suffice
+ * for any vertex whose star is not folded over itself); starts from the
+ * mean face normal. Returns 0 when no such direction was found. */
+static int feasible_direction(const meso_mesh* m, const uint32_t* first, const uint32_t* faces, uint32_t v, int sign,
+                              double out[3])
+{
+    double fn[64][3];
+    uint32_t nf = 0;
+    double dir[3] = {0, 0, 0};
+    for (uint32_t i = first[v]; i < first[v + 1] && nf < 64; ++i) {
+        const uint32_t* ix = m->indices + 3 * (size_t)faces[i];
+        const float *a = m->positions + 3 * (size_t)ix[0], *b = m->positions + 3 * (size_t)ix[1],
+                    *c = m->positions + 3 * (size_t)ix[2];
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = (double)b[k] - a[k];
+            e2[k] = (double)c[k] - a[k];
+        }
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (l == 0.0)
+            continue;
+        for (int k = 0; k < 3; ++k) {
+            fn[nf][k] = sign * n[k] / l;
+            dir[k] += fn[nf][k];
+        }
+        ++nf;
+    }
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        double l = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        if (l == 0.0)
+            return 0;
+        for (int k = 0; k < 3; ++k)
+            dir[k] /= l;
+        int ok = 1;
+        for (uint32_t f = 0; f < nf; ++f) {
+            const double dp = dir[0] * fn[f][0] + dir[1] * fn[f][1] + dir[2] * fn[f][2];
+            if (dp < 0.2) {
+                ok = 0;
+                for (int k = 0; k < 3; ++k)
+                    dir[k] += (0.25 - dp) * fn[f][k];
+            }
+        }
+        if (ok) {
+            memcpy(out, dir, sizeof(dir));
+            return 1;
+        }
+    }
+    return 0;
+}
+
 meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, uint32_t* shortened,
                               uint32_t* rounds, uint32_t* bad_left, meso_error* err)
 {
@@ -210,10 +263,28 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
     uint8_t* bad = calloc(nt ? nt : 1, 1);
     uint8_t* touched = calloc(nv ? nv : 1, 1);
     uint8_t* now = calloc(nv ? nv : 1, 1);
-    if (!bad || !touched || !now) {
-        free(bad), free(touched), free(now);
+    uint32_t* first = calloc((size_t)nv + 1, sizeof(uint32_t));
+    uint32_t* faces = malloc(sizeof(uint32_t) * 3 * (size_t)(nt ? nt : 1));
+    if (!bad || !touched || !now || !first || !faces) {
+        free(bad), free(touched), free(now), free(first), free(faces);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
     }
+    /* Vertex -> faces (CSR), in face order: deterministic. */
+    for (size_t i = 0; i < 3 * (size_t)nt; ++i)
+        first[m->indices[i] + 1]++;
+    for (uint32_t v = 0; v < nv; ++v)
+        first[v + 1] += first[v];
+    uint32_t* fill = calloc(nv ? nv : 1, sizeof(uint32_t));
+    if (!fill) {
+        free(bad), free(touched), free(now), free(first), free(faces);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
+    }
+    for (uint32_t f = 0; f < nt; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = m->indices[3 * (size_t)f + k];
+            faces[first[v] + fill[v]++] = f;
+        }
+    free(fill);
     uint32_t nbad = 0, round = 0;
     meso_result r = MESO_OK;
     for (;;) {
@@ -225,15 +296,42 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
             if (bad[f])
                 for (int k = 0; k < 3; ++k)
                     now[m->indices[3 * (size_t)f + k]] = 1;
-        /* Shorten only: turning directors towards the normal was tried and
-         * gave up more thickness on the bunny (mean ratio 0.81 vs 0.965 at
-         * 10 %) for the same residue. */
-        for (uint32_t v = 0; v < nv; ++v)
-            if (now[v]) {
-                touched[v] = 1;
-                for (int k = 0; k < 3; ++k)
-                    d[3 * (size_t)v + k] *= 0.8f;
+        /* A director that does not leave every adjacent face on the shell's
+         * side keeps its prisms inverted at any length: turn it into a
+         * feasible direction (same length). Others are shortened by 0.8.
+         * (Turning every director towards the normal was tried and gave up
+         * more thickness on the bunny: mean ratio 0.81 vs 0.965 at 10 %.) */
+        for (uint32_t v = 0; v < nv; ++v) {
+            if (!now[v])
+                continue;
+            touched[v] = 1;
+            float* dv = d + 3 * (size_t)v;
+            const double len = sqrt((double)dv[0] * dv[0] + (double)dv[1] * dv[1] + (double)dv[2] * dv[2]);
+            double worst = 1.0;
+            for (uint32_t i = first[v]; i < first[v + 1] && len > 0; ++i) {
+                const uint32_t* ix = m->indices + 3 * (size_t)faces[i];
+                const float *a = m->positions + 3 * (size_t)ix[0], *b = m->positions + 3 * (size_t)ix[1],
+                            *c = m->positions + 3 * (size_t)ix[2];
+                double e1[3], e2[3];
+                for (int k = 0; k < 3; ++k) {
+                    e1[k] = (double)b[k] - a[k];
+                    e2[k] = (double)c[k] - a[k];
+                }
+                const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                                     e1[0] * e2[1] - e1[1] * e2[0]};
+                const double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                if (nl > 0)
+                    worst = fmin(worst, sign * (dv[0] * n[0] + dv[1] * n[1] + dv[2] * n[2]) / (nl * len));
             }
+            double dir[3];
+            if (worst < 0.1 && len > 0 && feasible_direction(m, first, faces, v, sign, dir)) {
+                for (int k = 0; k < 3; ++k)
+                    dv[k] = (float)(len * dir[k]);
+            } else {
+                for (int k = 0; k < 3; ++k)
+                    dv[k] *= 0.8f;
+            }
+        }
         ++round;
     }
     uint32_t n = 0;
@@ -242,6 +340,6 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
     *shortened = n;
     *rounds = round;
     *bad_left = nbad;
-    free(bad), free(touched), free(now);
+    free(bad), free(touched), free(now), free(first), free(faces);
     return r;
 }

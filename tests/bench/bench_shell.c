@@ -11,8 +11,8 @@
  * Meshes: tests/data/{spot_low_resolution,saddle}.obj; bunny and armadillo
  * from /work/shared/data/meshes (or $MESO_SHARED_MESHES) when present, read
  * at benchmark time only, never copied. Settings are those of `mesobake
- * shell` unless a sweep says otherwise: p = 3, θ = 0.5, angle tolerance 5°,
- * 20 Laplacian rounds ($MESO_BENCH_SMOOTH), repair (30 rounds), threads = THREADS.
+ * shell` unless a sweep says otherwise: p = 3, θ = MESO_LP_DEFAULT_THETA, angle tolerance 5°,
+ * SMOOTH_DEFAULT Laplacian rounds ($MESO_BENCH_SMOOTH), repair (30 rounds), threads = THREADS.
  *
  * size: spot subdivided 1:4 (edge midpoints, shared; no smoothing, so the
  *   surface keeps spot's shape and concavities) levels 0..MAX_LEVEL
@@ -57,9 +57,9 @@
 #include "test_util.h"
 
 #define THREADS 2
-#define THETA 0.5
+#define THETA MESO_LP_DEFAULT_THETA /* cmd_shell.c default (0.5 when the checked-in results were taken) */
 #define ANGLE_TOL_DEG 5.0
-#define SMOOTH_DEFAULT 20 /* cmd_shell.c default; $MESO_BENCH_SMOOTH overrides */
+#define SMOOTH_DEFAULT 0 /* cmd_shell.c default (20 when the checked-in results were taken); $MESO_BENCH_SMOOTH overrides */
 #define REPAIR_ROUNDS 30
 #define LP_BUDGET 120.0
 

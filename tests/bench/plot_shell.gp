@@ -21,7 +21,7 @@ set key noenhanced
 # (a) ------------------------------------------------------------------------
 if (cairo) { set terminal pngcairo size 1400,600 enhanced font "sans,11" } else { set terminal png size 1400,600 }
 set output dir."/shell_size.png"
-set multiplot layout 1,2 title "mesobake shell (library stages) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, θ 0.5, 5°, smoothing 20, repair"
+set multiplot layout 1,2 title "mesobake shell (library stages) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, CLI defaults (θ, smoothing: see the CSV), repair"
 set logscale xy
 set xrange [1000:3e6]
 set format x "10^{%L}"

@@ -28,6 +28,20 @@ check "SDIR and STHK chunks are present" sh -c "'$inspect' info '$tmp/j1.meso' |
 "$bake" shell -i "$data/saddle.obj" -o "$tmp/env.meso" --kind envelope >/dev/null 2>&1
 check "envelope shells of open surfaces bake" test -s "$tmp/env.meso"
 
+# The issue's goal, on the bundled closed meshes: zero inverted prisms and
+# zero self- or base intersections at 10 % exterior and 5 % interior with the
+# defaults (hybrid + repair).
+for mesh in spot_low_resolution blub_fish_low_resolution torus sphere; do
+  for kt in "exterior 0.1" "interior 0.05"; do
+    set -- $kt
+    "$bake" shell -i "$data/$mesh.obj" -o "$tmp/goal.meso" --kind "$1" --thickness-rel "$2" \
+      --report "$tmp/goal.json" >/dev/null 2>&1
+    for key in inverted_prisms offset_self_intersections offset_base_intersections; do
+      check "$mesh $1 $2: $key = 0" grep -q "\"$key\":[[:space:]]*0," "$tmp/goal.json"
+    done
+  done
+done
+
 refuse() { # DESCRIPTION EXPECTED_EXIT INPUT
   rm -f "$tmp/out.meso"
   "$bake" shell -i "$3" -o "$tmp/out.meso" >"$tmp/stdout" 2>"$tmp/stderr"
