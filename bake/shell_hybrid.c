@@ -111,8 +111,9 @@ static meso_result smooth_directors(const meso_mesh* m, float* d, const uint8_t*
     return MESO_OK;
 }
 
-/* add[v] = 1 for the vertices of faces with bad[f]; then one ring more. */
-static uint32_t grow(const meso_mesh* m, const uint8_t* bad, const uint8_t* have, uint8_t* add)
+/* add[v] = 1 for the vertices of faces with bad[f], then `rings` rings
+ * more (each ring: every face touching a marked vertex marks its corners). */
+static uint32_t grow(const meso_mesh* m, const uint8_t* bad, const uint8_t* have, int rings, uint8_t* add)
 {
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     memset(add, 0, nv);
@@ -120,15 +121,16 @@ static uint32_t grow(const meso_mesh* m, const uint8_t* bad, const uint8_t* have
         if (bad[f])
             for (int k = 0; k < 3; ++k)
                 add[m->indices[3 * (size_t)f + k]] = 1;
-    /* One ring: every face touching a marked vertex marks all its corners. */
     uint8_t* ring = malloc(nv ? nv : 1);
     if (!ring)
         return 0;
-    memcpy(ring, add, nv);
-    for (uint32_t f = 0; f < nt; ++f) {
-        const uint32_t* ix = m->indices + 3 * (size_t)f;
-        if (ring[ix[0]] || ring[ix[1]] || ring[ix[2]])
-            add[ix[0]] = add[ix[1]] = add[ix[2]] = 1;
+    for (int r = 0; r < rings; ++r) {
+        memcpy(ring, add, nv);
+        for (uint32_t f = 0; f < nt; ++f) {
+            const uint32_t* ix = m->indices + 3 * (size_t)f;
+            if (ring[ix[0]] || ring[ix[1]] || ring[ix[2]])
+                add[ix[0]] = add[ix[1]] = add[ix[2]] = 1;
+        }
     }
     free(ring);
     uint32_t fresh = 0;
@@ -138,6 +140,27 @@ static uint32_t grow(const meso_mesh* m, const uint8_t* bad, const uint8_t* have
         fresh += add[v];
     }
     return fresh;
+}
+
+/* Rings that span about the shell thickness: the Lp region grows by a
+ * distance, not by one ring a round, so the number of validation rounds does
+ * not grow with the resolution (it did: 6 rounds at 1.6k triangles, 43 at
+ * 106k). Capped at 16. */
+static int rings_for(const meso_mesh* m, double h)
+{
+    double sum = 0;
+    const uint32_t nt = m->triangle_count;
+    for (uint32_t f = 0; f < nt; ++f) {
+        const float* a = m->positions + 3 * (size_t)m->indices[3 * (size_t)f];
+        const float* b = m->positions + 3 * (size_t)m->indices[3 * (size_t)f + 1];
+        double l = 0;
+        for (int k = 0; k < 3; ++k)
+            l += ((double)a[k] - b[k]) * ((double)a[k] - b[k]);
+        sum += sqrt(l);
+    }
+    const double mean = nt ? sum / nt : 1.0;
+    const double r = mean > 0 ? h / mean : 1.0;
+    return r < 1.0 ? 1 : r > 16.0 ? 16 : (int)(r + 0.5);
 }
 
 meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mesh* m, const float* normals, int sign,
@@ -173,6 +196,7 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
         else
             memcpy(raw, d, sizeof(float) * 3 * (size_t)nv);
         uint32_t nbad = 0;
+        const int rings = rings_for(m, opt->thickness);
         while (r == MESO_OK) {
             memcpy(d, raw, sizeof(float) * 3 * (size_t)nv);
             if (smooth && hs->vertices_lp && (r = smooth_directors(m, d, mask, smooth, err)) != MESO_OK)
@@ -181,7 +205,7 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
             if (r != MESO_OK || nbad == 0)
                 break;
             hs->rounds++;
-            const uint32_t fresh = grow(m, bad, mask, add);
+            const uint32_t fresh = grow(m, bad, mask, rings, add);
             if (fresh == 0)
                 break; /* every vertex near a bad face already follows the field */
             r = meso_shell_trace_all(field, m, normals, sign, opt, add, threads, raw, ts, err);

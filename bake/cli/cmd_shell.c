@@ -38,7 +38,7 @@ static const char* const usage_shell =
     "                          normal displacement (folds at concavities and saddles)\n"
     "Field and integration:\n"
     "      --p P               exponent of the averaged distance, in (2, 16] (default 3: closed form)\n"
-    "      --theta T           Barnes-Hut opening angle, 0 = exact summation (default 0.3)\n"
+    "      --theta T           Barnes-Hut opening angle, 0 = exact summation (default 0.5)\n"
     "      --angle-tol DEG     largest turn of the field per Euler step (default 5)\n"
     "      --smooth N          Laplacian smoothing rounds of traced directors (default 0):\n"
     "                          removes triangle-scale noise that flips prisms on finely\n"
@@ -76,7 +76,7 @@ typedef struct shell_args {
 
 static int parse_args(int argc, char** argv, shell_args* a)
 {
-    *a = (shell_args){.thickness_rel = 0.05, .p = 3.0, .theta = MESO_LP_DEFAULT_THETA, .angle_tol_deg = 5.0, .repair = 1,
+    *a = (shell_args){.thickness_rel = 0.05, .p = 3.0, .theta = 0.5, .angle_tol_deg = 5.0, .repair = 1,
                       .smooth = 0};
     int have_abs = 0, have_rel = 0;
     for (int i = 0; i < argc; ++i) {
