@@ -165,7 +165,7 @@ static void progress_bar(void* user, uint64_t done, uint64_t total)
 }
 
 static cJSON* report_json(const meso_shell_report* v, const meso_hybrid_stats* hs, uint32_t lp_vertices,
-                          uint32_t nv, const meso_trace_stats* ts, const meso_field_surface* fs)
+                          uint32_t shortened, uint32_t nv, const meso_trace_stats* ts, const meso_field_surface* fs)
 {
     cJSON* rep = cJSON_CreateObject();
     cJSON_AddNumberToObject(rep, "prisms", v->prisms);
@@ -178,7 +178,7 @@ static cJSON* report_json(const meso_shell_report* v, const meso_hybrid_stats* h
     cJSON_AddNumberToObject(rep, "vertices_lp", lp_vertices);
     cJSON_AddNumberToObject(rep, "vertices_normal", nv - lp_vertices);
     cJSON_AddNumberToObject(rep, "hybrid_rounds", hs->rounds);
-    cJSON_AddNumberToObject(rep, "vertices_shortened", hs->vertices_normal);
+    cJSON_AddNumberToObject(rep, "vertices_shortened", shortened);
     cJSON_AddNumberToObject(rep, "field_evaluations", (double)ts->evaluations);
     cJSON_AddNumberToObject(rep, "artificial_faces", fs->artificial_faces);
     return rep;
@@ -247,6 +247,7 @@ int cmd_shell(int argc, char** argv)
     meso_mesh_chunk chunk = {0};
     float* thick = NULL;
     meso_hybrid_stats hs_total = {0};
+    uint32_t shortened_total = 0; /* vertices the repair shortened, over both sides */
     meso_trace_stats ts = {0, 0, 0};
     const double h_side = a.kind == MESO_SHELL_ENVELOPE ? 0.5 * h : h;
     r = normals && d && lp_mask && lp_side ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
@@ -272,20 +273,19 @@ int cmd_shell(int argc, char** argv)
         for (uint32_t v = 0; v < nv; ++v)
             lp_mask[v] |= lp_side[v];
         hs_total.rounds += hs.rounds;
-        if (r == MESO_OK && a.repair) {
-            uint32_t shortened = 0, rounds = 0, left = 0;
-            r = meso_shell_repair(&m, d + 3 * (size_t)nv * (size_t)layer, sign, 30, &shortened, &rounds, &left, &err);
-            hs_total.vertices_normal += shortened; /* reused below as the repair count */
-            hs_total.bad_faces_left += left;
-            if (verbose && r == MESO_OK)
-                fprintf(stderr, "mesobake: repair: %u vertices shortened in %u rounds, %u faces still bad\n",
-                        shortened, rounds, left);
-        }
         if (verbose && r == MESO_OK)
             fprintf(stderr, "mesobake: directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations "
                             "(%.0f ms)\n",
                     sign > 0 ? "outer" : "inner", mode_names[a.mode], hs.vertices_lp, hs.vertices_normal, hs.rounds,
                     (unsigned long long)ts.evaluations, 1e3 * (now_seconds() - t0));
+        if (r == MESO_OK && a.repair) {
+            uint32_t shortened = 0, rounds = 0, left = 0;
+            r = meso_shell_repair(&m, d + 3 * (size_t)nv * (size_t)layer, sign, 30, &shortened, &rounds, &left, &err);
+            shortened_total += shortened;
+            if (verbose && r == MESO_OK)
+                fprintf(stderr, "mesobake: repair: %u vertices shortened in %u rounds, %u faces still bad\n",
+                        shortened, rounds, left);
+        }
     }
 
     /* Validate the shell as it will be rendered: prisms from bottom to top. */
@@ -362,7 +362,7 @@ int cmd_shell(int argc, char** argv)
         uint32_t lp_count = 0;
         for (uint32_t v = 0; v < nv; ++v)
             lp_count += lp_mask[v];
-        rep = report_json(&val, &hs_total, lp_count, nv, &ts, &fs);
+        rep = report_json(&val, &hs_total, lp_count, shortened_total, nv, &ts, &fs);
         const bake_chunk chunks[3] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
