@@ -6,7 +6,8 @@
 #   shell_accuracy.png   max director error vs time for the θ × angle-tolerance sweep,
 #                        one line per tolerance (points: θ), one panel per mesh
 #   shell_thickness.png  inverted prisms + offset intersections vs thickness,
-#                        one panel per mesh and side, one line per method
+#                        one panel per mesh and side, one line per method; bottom
+#                        row: thickness kept by repair (mean and min ratio)
 if (!exists("dir")) dir = "tests/bench/results"
 size_csv = dir."/shell_size.csv"
 acc_csv = dir."/shell_accuracy.csv"
@@ -21,7 +22,7 @@ set key noenhanced
 # (a) ------------------------------------------------------------------------
 if (cairo) { set terminal pngcairo size 1400,600 enhanced font "sans,11" } else { set terminal png size 1400,600 }
 set output dir."/shell_size.png"
-set multiplot layout 1,2 title "mesobake shell (library stages) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, CLI defaults (θ, smoothing: see the CSV), repair"
+set multiplot layout 1,2 title "mesobake shell (library stages) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, CLI defaults (θ 0.5, no smoothing, repair)"
 set logscale xy
 set xrange [1000:3e6]
 set format x "10^{%L}"
@@ -45,8 +46,9 @@ unset label 1
 unset label 2
 set ylabel "peak RSS, MB (own process)"
 set key top left
-plot H using 1:13 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid", \
-     L using 1:13 with linespoints lw 2 pt 5 lc rgb "#d62728" title "lp", \
+# lp wide underneath: both modes hold the same arrays, so the lines coincide
+plot L using 1:13 with linespoints lw 5 pt 5 ps 1.4 lc rgb "#d62728" title "lp", \
+     H using 1:13 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid", \
      2048 with lines dt 2 lc rgb "black" title "goal: 2 GB"
 unset multiplot
 
@@ -76,9 +78,9 @@ unset multiplot
 # (c) ------------------------------------------------------------------------
 meshes = system("tail -n +2 '".thk_csv."' | cut -d, -f1 | uniq | tr '\\n' ' '")
 nm = words(meshes)
-if (cairo) { set terminal pngcairo size 460*nm,900 enhanced font "sans,10" } else { set terminal png size 460*nm,900 }
+if (cairo) { set terminal pngcairo size 460*nm,1300 enhanced font "sans,10" } else { set terminal png size 460*nm,1300 }
 set output dir."/shell_thickness.png"
-set multiplot layout 2,nm title "Where each method fails: inverted prisms + offset self- and offset/base intersections vs thickness (0 drawn at the bottom)"
+set multiplot layout 3,nm title "Where each method fails: inverted prisms + offset self- and offset/base intersections vs thickness (0 drawn at the bottom)"
 unset logscale
 set logscale y
 set format x "%g"
@@ -92,13 +94,33 @@ set key top left font ",8"
 fail(a,b,c) = (a + b + c) > 0 ? a + b + c : 0.5
 methods = "normal lp hybrid"
 colors = "#2ca02c #d62728 #1f77b4"
+# lp is drawn wide under hybrid: the two coincide wherever hybrid's Lp region is everything
+widths = "2 5 1.5"
 do for [side in "exterior interior"] {
     do for [m in meshes] {
         set title m." — ".side noenhanced
+        if (m eq word(meshes,1)) { set key top left font ",8" } else { unset key }
         plot for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $3 == "%s" && $5 == "%s" && $6 == 0', m, side, word(methods,i))) \
-                 using (100*$4):(fail($7,$9,$10)) with linespoints lw 2 pt 7 ps 0.8 lc rgb word(colors,i) title word(methods,i), \
+                 using (100*$4):(fail($7,$9,$10)) with linespoints lw word(widths,i) pt 7 ps 0.8 lc rgb word(colors,i) title word(methods,i), \
              for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $3 == "%s" && $5 == "%s" && $6 == 1', m, side, word(methods,i))) \
                  using (100*$4):(fail($7,$9,$10)) with linespoints lw 1 dt 2 pt 6 ps 0.8 lc rgb word(colors,i) title word(methods,i)." + repair"
     }
 }
+# Bottom row: with repair every run above is valid; what it costs is thickness.
+unset logscale y
+set yrange [0:1.05]
+set ytics auto
+set ylabel "thickness kept: |d| / h after repair"
+set key bottom left font ",8"
+do for [m in meshes] {
+    set title m." — with repair: mean ratio (lines), min (+)" noenhanced
+    if (m eq word(meshes,1)) { set key bottom left font ",8" } else { unset key }
+    plot for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $3 == "exterior" && $5 == "%s" && $6 == 1', m, word(methods,i))) \
+             using (100*$4):12 with linespoints lw word(widths,i) pt 7 ps 0.8 lc rgb word(colors,i) title word(methods,i)." exterior", \
+         for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $3 == "interior" && $5 == "%s" && $6 == 1', m, word(methods,i))) \
+             using (100*$4):12 with linespoints lw word(widths,i) dt 2 pt 6 ps 0.8 lc rgb word(colors,i) title word(methods,i)." interior", \
+         for [i=1:3] rows(thk_csv, sprintf('$1 == "%s" && $5 == "%s" && $6 == 1', m, word(methods,i))) \
+             using (100*$4):11 with points pt 1 ps 0.6 lc rgb word(colors,i) notitle
+}
+unset title
 unset multiplot
