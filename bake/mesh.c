@@ -18,6 +18,25 @@ void meso_mesh_free(meso_mesh* m)
     memset(m, 0, sizeof(*m));
 }
 
+double meso_mesh_face_normal(const meso_mesh* m, uint32_t f, double n[3])
+{
+    const uint32_t* ix = m->indices + 3 * (size_t)f;
+    const float *a = m->positions + 3 * (size_t)ix[0], *b = m->positions + 3 * (size_t)ix[1],
+                *c = m->positions + 3 * (size_t)ix[2];
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = (double)b[k] - a[k];
+        e2[k] = (double)c[k] - a[k];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k)
+        n[k] = l > 0 ? n[k] / l : 0.0;
+    return l;
+}
+
 double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3])
 {
     for (int k = 0; k < 3; ++k) {

@@ -10,7 +10,6 @@
  */
 #include "mesh_check.h"
 
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -42,21 +41,6 @@ static int cmp_face_key(const void* a, const void* b)
     return x->face < y->face ? -1 : x->face > y->face;
 }
 
-static double face_area(const meso_mesh* m, uint32_t f)
-{
-    const float* a = m->positions + 3 * (size_t)m->indices[3 * (size_t)f];
-    const float* b = m->positions + 3 * (size_t)m->indices[3 * (size_t)f + 1];
-    const float* c = m->positions + 3 * (size_t)m->indices[3 * (size_t)f + 2];
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; ++k) {
-        e1[k] = (double)b[k] - a[k];
-        e2[k] = (double)c[k] - a[k];
-    }
-    const double n0 = e1[1] * e2[2] - e1[2] * e2[1], n1 = e1[2] * e2[0] - e1[0] * e2[2],
-                 n2 = e1[0] * e2[1] - e1[1] * e2[0];
-    return 0.5 * sqrt(n0 * n0 + n1 * n1 + n2 * n2);
-}
-
 static void note_bad(meso_mesh_topology* t, uint32_t face)
 {
     if (face < t->first_bad_face)
@@ -80,6 +64,7 @@ meso_result meso_mesh_topology_compute(const meso_mesh* m, double area_eps, meso
     size_t ne_used = 0;
     for (size_t f = 0; f < nf; ++f) {
         const uint32_t* ix = m->indices + 3 * f;
+        double n[3];
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = ix[k], b = ix[(k + 1) % 3];
             used[a] = 1;
@@ -89,7 +74,7 @@ meso_result meso_mesh_topology_compute(const meso_mesh* m, double area_eps, meso
                                            .from = a,
                                            .face = (uint32_t)f};
         }
-        if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2] || face_area(m, (uint32_t)f) <= area_eps) {
+        if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2] || 0.5 * meso_mesh_face_normal(m, (uint32_t)f, n) <= area_eps) {
             t->degenerate_faces++;
             note_bad(t, (uint32_t)f);
         }

@@ -31,6 +31,10 @@ typedef struct meso_mesh {
 /* Frees the arrays and zeroes the struct. NULL is allowed. */
 void meso_mesh_free(meso_mesh* m);
 
+/* Unit normal of face f (CCW seen from outside) into n; returns twice the
+ * face's area (0, with n = 0, for a degenerate face). */
+double meso_mesh_face_normal(const meso_mesh* m, uint32_t f, double n[3]);
+
 /* Axis-aligned bounds of the positions; returns the diagonal length. */
 double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
 

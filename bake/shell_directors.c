@@ -121,17 +121,9 @@ meso_result meso_vertex_normals(const meso_mesh* m, float* normals, meso_error* 
         for (int c = 0; c < 3; ++c)
             for (int k = 0; k < 3; ++k)
                 p[c][k] = m->positions[3 * (size_t)ix[c] + k];
-        double e1[3], e2[3];
-        for (int k = 0; k < 3; ++k) {
-            e1[k] = p[1][k] - p[0][k];
-            e2[k] = p[2][k] - p[0][k];
-        }
-        double fn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        const double len = norm3(fn);
-        if (len == 0.0)
+        double fn[3];
+        if (meso_mesh_face_normal(m, f, fn) == 0.0)
             continue;
-        for (int k = 0; k < 3; ++k)
-            fn[k] /= len;
         for (int c = 0; c < 3; ++c) {
             double a[3], b[3];
             for (int k = 0; k < 3; ++k) {

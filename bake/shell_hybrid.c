@@ -227,28 +227,6 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
     return r;
 }
 
-/* Unit normal of face f (CCW seen from outside); 0 for a zero-area face. */
-static int face_unit_normal(const meso_mesh* m, uint32_t f, double n[3])
-{
-    const uint32_t* ix = m->indices + 3 * (size_t)f;
-    const float *a = m->positions + 3 * (size_t)ix[0], *b = m->positions + 3 * (size_t)ix[1],
-                *c = m->positions + 3 * (size_t)ix[2];
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; ++k) {
-        e1[k] = (double)b[k] - a[k];
-        e2[k] = (double)c[k] - a[k];
-    }
-    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-    const double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (l == 0.0)
-        return 0;
-    for (int k = 0; k < 3; ++k)
-        n[k] /= l;
-    return 1;
-}
-
 /* A unit direction that leaves every face around v on the shell's side
  * (d·n_f >= 0.2 for each adjacent face normal n_f, signed), found by
  * projecting onto the violated half-spaces in turn (a few sweeps suffice
@@ -262,7 +240,7 @@ static int feasible_direction(const meso_mesh* m, const uint32_t* first, const u
     double dir[3] = {0, 0, 0};
     for (uint32_t i = first[v]; i < first[v + 1] && nf < 64; ++i) {
         double n[3];
-        if (!face_unit_normal(m, faces[i], n))
+        if (meso_mesh_face_normal(m, faces[i], n) == 0.0)
             continue;
         for (int k = 0; k < 3; ++k) {
             fn[nf][k] = sign * n[k];
@@ -347,7 +325,7 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
             double worst = 1.0;
             for (uint32_t i = first[v]; i < first[v + 1] && len > 0; ++i) {
                 double n[3];
-                if (face_unit_normal(m, faces[i], n))
+                if (meso_mesh_face_normal(m, faces[i], n) > 0.0)
                     worst = fmin(worst, sign * (dv[0] * n[0] + dv[1] * n[1] + dv[2] * n[2]) / len);
             }
             double dir[3];
