@@ -81,6 +81,13 @@ static int load_gl(meso_rt* rt, meso_gl_get_proc_fn gpa)
     }
     MESO_GL_FUNCS(MESO_X_LOAD)
 #undef MESO_X_LOAD
+#define MESO_X_LOAD_OPTIONAL(type, name)         \
+    {                                            \
+        meso_gl_fn fn = gpa("gl" #name);         \
+        memcpy(&rt->gl.name, &fn, sizeof(fn));   \
+    }
+    MESO_GL_FUNCS_OPTIONAL(MESO_X_LOAD_OPTIONAL)
+#undef MESO_X_LOAD_OPTIONAL
     return missing == 0;
 }
 
@@ -146,6 +153,7 @@ void meso_rt_destroy(meso_rt* rt)
     if (!rt)
         return;
     mesoi_objects_destroy(rt);
+    mesoi_shell_programs_destroy(rt);
     if (rt->mesh_program)
         rt->gl.DeleteProgram(rt->mesh_program);
     meso_allocator a = rt->alloc;

@@ -101,8 +101,9 @@ typedef struct meso_rt_object {
 
 /* Stream one object from an open file and upload it: only that object's
  * chunks are read (through whatever reader the file was opened with: path,
- * mmap, memory or the host's meso_io callbacks). Supported kinds in this
- * version: MESO_OBJECT_MESH (drawn as the shaded base mesh). Other kinds give
+ * mmap, memory or the host's meso_io callbacks). Supported kinds:
+ * MESO_OBJECT_MESH (drawn as the shaded mesh) and MESO_OBJECT_SHELL (ray cast
+ * through its texture function, FORMAT.md §7.2). Other kinds give
  * MESO_ERR_UNSUPPORTED. Encoded chunks (Draco) need a decoder in the
  * meso_open_desc the file was opened with. On failure nothing is uploaded
  * and out->id is 0. `file` may be closed after this returns. */
@@ -112,20 +113,60 @@ MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);
 /* Object-space bounds from the file's OBJT record. */
 MESO_API meso_result meso_rt_object_bounds(const meso_rt* rt, meso_rt_object obj, float lo[3], float hi[3]);
 
+/* Shell ray-casting techniques (papers/smooth-and-curved-shell-mapping.md). */
+typedef enum meso_shell_technique {
+    MESO_SHELL_SMOOTH = 0,  /* §3.1/§4: Φ along interpolated directors, corrected ray-path sampling */
+    MESO_SHELL_CURVED,      /* §3.2/§4.5: Coons-patch curved shells (tangent-continuous) */
+    MESO_SHELL_TETRA,       /* the baseline: each prism as three tetrahedra, linear in each */
+    MESO_SHELL_SEGMENT_ONLY, /* §4.2 only: entry/exit in texture space, no sampling (Table 1's first column) */
+    MESO_SHELL_TECHNIQUE_COUNT
+} meso_shell_technique;
+
+/* Work counted by the shaders during one draw (needs OpenGL 4.3 for the
+ * counters; on older contexts `supported` is 0 and the counts are 0). */
+typedef struct meso_rt_draw_stats {
+    int supported;
+    uint64_t fragments; /* ray-casting fragment invocations */
+    uint64_t steps;     /* texture samples along rays (march + refinement) */
+    uint64_t hits;      /* fragments that found the surface */
+} meso_rt_draw_stats;
+
 typedef struct meso_rt_draw_desc {
     float view[16];     /* world -> eye, column-major (OpenGL convention) */
     float proj[16];     /* eye -> clip */
     float model[16];    /* object -> world, rigid + uniform scale; all zero means identity */
     float light_dir[3]; /* towards the light, world space; zero means (0.3, 0.8, 0.5) normalised */
     float albedo[3];    /* linear RGB; zero means (0.80, 0.74, 0.66) */
+    /* Shell knobs (ignored for meshes); zero means the default in brackets. */
+    meso_shell_technique technique; /* [MESO_SHELL_SMOOTH] */
+    float error_px;            /* image-space error bound of the corrected ray path, pixels [1] */
+    int max_steps;             /* march steps per prism and pixel before giving up [256] */
+    int bisection_steps;       /* refinement steps once the surface is bracketed [4] */
+    int segment_steps;         /* bisection steps on w for the ray segment (§4.2) [12] */
+    float uv_scale;            /* multiplies the baked texture coordinates (tiling) [1] */
+    int no_distance_map;       /* 1: march at the fixed step below instead of sphere tracing */
+    float fixed_step;          /* texture-space step without a distance map [1/256] */
+    meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) */
 } meso_rt_draw_desc;
 
 /* Draw an object into the host's currently bound framebuffer and viewport,
  * with depth testing (GL_LESS) and depth writes, so it sorts against the
- * host's own geometry. The GL state the call changes (program, vertex array,
- * depth test/func/mask) is restored before it returns. GL errors are logged
+ * host's own geometry. Shells write the exact depth of the ray's hit, and
+ * render correctly with the camera inside the shell. The GL state the call
+ * changes (program, vertex array, textures on units 0-3, depth test/func/
+ * mask, culling) is restored before it returns. GL errors are logged
  * (GL_ERROR) and returned as MESO_ERR_GL, never fatal. */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
+
+/* Animation without re-baking: replace a shell's base positions (3 floats
+ * per vertex) and directors (3 floats per vertex per SDIR layer, the layout
+ * of its SDIR chunk); either may be NULL to keep it. vertex_count must equal
+ * the shell's. Cost: one buffer upload of 24 bytes per vertex. */
+MESO_API meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object obj, const float* positions,
+                                          const float* directors, uint32_t vertex_count);
+/* Vertex count and SDIR layer count of a shell (0 for other kinds). */
+MESO_API meso_result meso_rt_shell_info(const meso_rt* rt, meso_rt_object obj, uint32_t* vertex_count,
+                                        uint32_t* layers);
 
 #ifdef __cplusplus
 }

@@ -48,11 +48,32 @@
     X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                           \
     X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                       \
     X(PFNGLUNIFORM1FPROC, Uniform1f)                                         \
-    X(PFNGLDRAWELEMENTSPROC, DrawElements)
+    X(PFNGLDRAWELEMENTSPROC, DrawElements)                                   \
+    X(PFNGLDRAWARRAYSPROC, DrawArrays)                                       \
+    X(PFNGLUNIFORM1IPROC, Uniform1i)                                         \
+    X(PFNGLUNIFORM4FVPROC, Uniform4fv)                                       \
+    X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                                 \
+    X(PFNGLBINDTEXTUREPROC, BindTexture)                                     \
+    X(PFNGLGENTEXTURESPROC, GenTextures)                                     \
+    X(PFNGLDELETETEXTURESPROC, DeleteTextures)                               \
+    X(PFNGLTEXBUFFERPROC, TexBuffer)                                         \
+    X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                       \
+    X(PFNGLTEXIMAGE3DPROC, TexImage3D)                                       \
+    X(PFNGLTEXPARAMETERIPROC, TexParameteri)                                 \
+    X(PFNGLPIXELSTOREIPROC, PixelStorei)                                     \
+    X(PFNGLCULLFACEPROC, CullFace)                                           \
+    X(PFNGLFRONTFACEPROC, FrontFace)                                         \
+    X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                               \
+    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)
+
+/* Entry points used only when the context has them (the stats counters of
+ * OpenGL 4.3); missing ones are left NULL and never fail creation. */
+#define MESO_GL_FUNCS_OPTIONAL(X) X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)
 
 typedef struct mesoi_gl {
 #define MESO_X_MEMBER(type, name) type name;
     MESO_GL_FUNCS(MESO_X_MEMBER)
+    MESO_GL_FUNCS_OPTIONAL(MESO_X_MEMBER)
 #undef MESO_X_MEMBER
 } mesoi_gl;
 

@@ -13,16 +13,16 @@
 #include <math.h>
 #include <string.h>
 
-static GLuint compile(meso_rt* rt, GLenum type, const char* src, const char* name)
+GLuint mesoi_compile(meso_rt* rt, GLenum type, const char* const* src, int count, const char* name)
 {
     mesoi_gl* gl = &rt->gl;
     GLuint s = gl->CreateShader(type);
-    gl->ShaderSource(s, 1, &src, NULL);
+    gl->ShaderSource(s, count, src, NULL);
     gl->CompileShader(s);
     GLint ok = 0;
     gl->GetShaderiv(s, GL_COMPILE_STATUS, &ok);
     if (!ok) {
-        char log[1024];
+        char log[2048];
         gl->GetShaderInfoLog(s, sizeof(log), NULL, log);
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_SHADER_COMPILE_FAILED, "%s: %s", name, log);
         gl->DeleteShader(s);
@@ -31,17 +31,16 @@ static GLuint compile(meso_rt* rt, GLenum type, const char* src, const char* nam
     return s;
 }
 
-meso_result mesoi_mesh_program_create(meso_rt* rt)
+/* Links and deletes the two shaders; 0 (logged) on failure. */
+GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name)
 {
     mesoi_gl* gl = &rt->gl;
-    GLuint vs = compile(rt, GL_VERTEX_SHADER, mesoi_glsl_mesh_vert, "mesh_vert.glsl");
-    GLuint fs = compile(rt, GL_FRAGMENT_SHADER, mesoi_glsl_mesh_frag, "mesh_frag.glsl");
     if (!vs || !fs) {
         if (vs)
             gl->DeleteShader(vs);
         if (fs)
             gl->DeleteShader(fs);
-        return MESO_ERR_GL;
+        return 0;
     }
     GLuint p = gl->CreateProgram();
     gl->AttachShader(p, vs);
@@ -52,12 +51,24 @@ meso_result mesoi_mesh_program_create(meso_rt* rt)
     GLint ok = 0;
     gl->GetProgramiv(p, GL_LINK_STATUS, &ok);
     if (!ok) {
-        char log[1024];
+        char log[2048];
         gl->GetProgramInfoLog(p, sizeof(log), NULL, log);
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_PROGRAM_LINK_FAILED, "mesh: %s", log);
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_PROGRAM_LINK_FAILED, "%s: %s", name, log);
         gl->DeleteProgram(p);
-        return MESO_ERR_GL;
+        return 0;
     }
+    return p;
+}
+
+meso_result mesoi_mesh_program_create(meso_rt* rt)
+{
+    mesoi_gl* gl = &rt->gl;
+    const char* vsrc = mesoi_glsl_mesh_vert;
+    const char* fsrc = mesoi_glsl_mesh_frag;
+    GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, &vsrc, 1, "mesh_vert.glsl"),
+                          mesoi_compile(rt, GL_FRAGMENT_SHADER, &fsrc, 1, "mesh_frag.glsl"), "mesh");
+    if (!p)
+        return MESO_ERR_GL;
     rt->mesh_program = p;
     rt->u_view = gl->GetUniformLocation(p, "u_view");
     rt->u_proj = gl->GetUniformLocation(p, "u_proj");
@@ -67,7 +78,7 @@ meso_result mesoi_mesh_program_create(meso_rt* rt)
     return MESO_OK;
 }
 
-static mesoi_object* lookup(const meso_rt* rt, meso_rt_object h)
+mesoi_object* mesoi_lookup(const meso_rt* rt, meso_rt_object h)
 {
     const uint32_t slot = h.id & 0xFFFFu, gen = h.id >> 16;
     if (!rt || h.id == 0 || slot >= rt->object_capacity)
@@ -155,19 +166,28 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
     meso_result r = find_record(rt, f, object_id, &rec);
     if (r != MESO_OK)
         return r;
+    if (rec.kind == MESO_OBJECT_SHELL) {
+        uint32_t slot;
+        mesoi_object* o = alloc_slot(rt, &slot);
+        if (!o)
+            return MESO_ERR_OUT_OF_MEMORY;
+        r = mesoi_shell_load(rt, f, object_id, o);
+        if (r != MESO_OK)
+            return r;
+        o->generation = next_generation(o->generation);
+        o->live = 1;
+        o->kind = rec.kind;
+        memcpy(o->bbox_min, rec.bbox_min, sizeof(o->bbox_min));
+        memcpy(o->bbox_max, rec.bbox_max, sizeof(o->bbox_max));
+        out->id = slot | (o->generation << 16);
+        return MESO_OK;
+    }
     if (rec.kind != MESO_OBJECT_MESH) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND,
-                  "object %u has kind %u; this runtime draws MESH objects only", object_id, rec.kind);
+                  "object %u has kind %u; this runtime draws MESH and SHELL objects", object_id, rec.kind);
         return MESO_ERR_UNSUPPORTED;
     }
-    /* The finest level present (lod 0 unless the file only has coarser ones). */
-    int32_t ci = -1;
-    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
-        const meso_chunk_info* c = meso_file_chunk(f, i);
-        if (c->type == MESO_CHUNK_MESH && c->object == object_id &&
-            (ci < 0 || c->lod < meso_file_chunk(f, (uint32_t)ci)->lod))
-            ci = (int32_t)i;
-    }
+    const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_MESH, object_id);
     if (ci < 0) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "object %u has no MESH chunk", object_id);
         return MESO_ERR_NOT_FOUND;
@@ -242,9 +262,10 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
 
 void meso_rt_release_object(meso_rt* rt, meso_rt_object h)
 {
-    mesoi_object* o = lookup(rt, h);
+    mesoi_object* o = mesoi_lookup(rt, h);
     if (!o)
         return;
+    mesoi_shell_release(rt, o);
     rt->gl.DeleteVertexArrays(1, &o->vao);
     rt->gl.DeleteBuffers(1, &o->buffer);
     const uint32_t gen = o->generation; /* kept: the next occupant gets a new one */
@@ -254,7 +275,7 @@ void meso_rt_release_object(meso_rt* rt, meso_rt_object h)
 
 meso_result meso_rt_object_bounds(const meso_rt* rt, meso_rt_object h, float lo[3], float hi[3])
 {
-    const mesoi_object* o = lookup(rt, h);
+    const mesoi_object* o = mesoi_lookup(rt, h);
     if (!o)
         return MESO_ERR_INVALID_ARG;
     memcpy(lo, o->bbox_min, sizeof(o->bbox_min));
@@ -267,6 +288,7 @@ void mesoi_objects_destroy(meso_rt* rt)
     for (uint32_t i = 0; i < rt->object_capacity; ++i) {
         mesoi_object* o = &rt->objects[i];
         if (o->live) {
+            mesoi_shell_release(rt, o);
             rt->gl.DeleteVertexArrays(1, &o->vao);
             rt->gl.DeleteBuffers(1, &o->buffer);
         }
@@ -286,12 +308,14 @@ static int all_zero(const float* v, int n)
 
 meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d)
 {
-    mesoi_object* o = lookup(rt, h);
+    mesoi_object* o = mesoi_lookup(rt, h);
     if (!o || !d) {
         if (rt)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: stale handle or NULL desc");
         return MESO_ERR_INVALID_ARG;
     }
+    if (o->kind == MESO_OBJECT_SHELL)
+        return mesoi_shell_draw(rt, o, d);
     static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     float light[3] = {0.3f, 0.8f, 0.5f}, albedo[3] = {0.80f, 0.74f, 0.66f};
     if (!all_zero(d->light_dir, 3))

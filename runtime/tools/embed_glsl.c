@@ -70,6 +70,13 @@ int main(int argc, char** argv)
         for (char* c = name; *c; ++c)
             if (!((*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9')))
                 *c = '_';
+        /* GLSL 3.30 sources are ASCII (its spec allows nothing else, even
+         * in comments), and a byte above 127 would not fit a char either. */
+        for (size_t b = 0; b < n; ++b)
+            if ((unsigned char)src[b] > 127) {
+                fprintf(stderr, "embed_glsl: %s: non-ASCII byte at offset %zu\n", argv[i], b);
+                return 1;
+            }
         fprintf(out, "static const char mesoi_glsl_%s[] = {\n", name);
         /* Keep the #version line first, then the prefix, then the rest. */
         const char* nl = (strncmp(src, "#version", 8) == 0) ? strchr(src, '\n') : NULL;

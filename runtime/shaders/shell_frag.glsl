@@ -1,0 +1,499 @@
+// shell_frag.glsl - ray casting one prism (or tetrahedron) per fragment.
+//
+// Smooth (MESO_TECHNIQUE 0), papers/smooth-and-curved-shell-mapping.md:
+//  sec. 4.2 the ray's entry/exit against the prism's hull triangles (entry = the
+//       ray origin on the near plane when only the exit is hit: camera
+//       inside), mapped to texture space by bisection on w plus the
+//       barycentric correspondence;
+//  sec. 4.3 march from entry towards exit in texture space; each candidate is
+//       mapped back with Phi and, if it is farther from the view ray than the
+//       error bound (u_err_scale * w_clip, i.e. error_px pixels), redirected
+//       towards the ray x T(w) point (<= 4 corrections);
+//  sec. 4.4 step lengths from the distance map (sphere tracing) and, once the
+//       surface is bracketed, bisection on the filtered texture.
+// Curved (1), sec. 3.2/sec. 4.5: the same march in the smooth prism's (u,v,wbar); the
+//       texture is looked up at w from the paper's eq. 2, and steps shrink by
+//       wbar(u,v,1) - wbar(u,v,0) (the paper's scaled spheres).
+// Tetra (2): the baseline - one tetrahedron per fragment, its affine map
+//       from world to texture space, a straight march between entry/exit.
+// Segment only (3): sec. 4.2 and nothing else (Table 1's first column).
+// Depth: the hit's own clip-space depth (sec. 4.3), not the hull's.
+
+flat in int v_prism;
+flat in int v_tet;
+out vec4 o_color;
+
+uniform vec4 u_viewport;
+uniform int u_tex_kind; // 0 none (all solid), 1 height field, 2 density volume
+uniform sampler2D u_height;
+uniform sampler3D u_volume;
+uniform sampler3D u_dist;
+uniform int u_has_dist;
+uniform vec3 u_tex_size;   // texels of the texture function (1 on unused axes)
+uniform vec3 u_light_obj;  // towards the light, object space, unit
+uniform vec3 u_albedo;
+uniform float u_err_scale; // error_px * object units per pixel per unit w_clip
+uniform int u_max_steps;
+uniform int u_bisect_steps;
+uniform int u_segment_steps;
+uniform float u_fixed_step;
+uniform float u_min_step;
+
+#ifdef MESO_STATS
+layout(std430, binding = 0) buffer MesoStats {
+    uint s_fragments;
+    uint s_steps;
+    uint s_hits;
+};
+#endif
+
+int g_steps = 0;
+
+// --- texture function (FORMAT.md sec. 7.2) -------------------------------------
+
+bool solid(vec3 stw)
+{
+    if (u_tex_kind == 1)
+        return stw.z <= textureLod(u_height, stw.xy, 0.0).r;
+    if (u_tex_kind == 2)
+        return textureLod(u_volume, stw, 0.0).r >= 0.5;
+    return true;
+}
+
+float tex_value(vec3 stw)
+{
+    if (u_tex_kind == 1)
+        return textureLod(u_height, stw.xy, 0.0).r;
+    return textureLod(u_volume, stw, 0.0).r;
+}
+
+// Outward direction of the solid in texture space (shell_map.h:
+// meso_texfn_gradient): central differences one texel apart.
+vec3 tex_gradient(vec3 stw)
+{
+    vec3 d = 1.0 / u_tex_size;
+    if (u_tex_kind == 1) {
+        float hs = (tex_value(stw + vec3(d.x, 0, 0)) - tex_value(stw - vec3(d.x, 0, 0))) / (2.0 * d.x);
+        float ht = (tex_value(stw + vec3(0, d.y, 0)) - tex_value(stw - vec3(0, d.y, 0))) / (2.0 * d.y);
+        return vec3(-hs, -ht, 1.0);
+    }
+    if (u_tex_kind == 2) {
+        vec3 g;
+        g.x = (tex_value(stw + vec3(d.x, 0, 0)) - tex_value(stw - vec3(d.x, 0, 0))) / (2.0 * d.x);
+        g.y = (tex_value(stw + vec3(0, d.y, 0)) - tex_value(stw - vec3(0, d.y, 0))) / (2.0 * d.y);
+        g.z = (tex_value(stw + vec3(0, 0, d.z)) - tex_value(stw - vec3(0, 0, d.z))) / (2.0 * d.z);
+        return -g;
+    }
+    return vec3(0.0, 0.0, 1.0);
+}
+
+// Sphere-tracing radius at a texture point (a lower bound on the distance
+// to the solid), or the fixed step without a distance map.
+float step_radius(vec3 stw)
+{
+    if (u_tex_kind == 0)
+        return max(stw.z - 1.0, u_min_step); // all solid below w = 1: the exact distance
+    if (u_has_dist == 0)
+        return u_fixed_step;
+    return max(textureLod(u_dist, vec3(stw.xy, clamp(stw.z, 0.0, 1.0)), 0.0).r, u_min_step);
+}
+
+// --- the mappings (shell_map.h) --------------------------------------------
+
+vec3 phi(Prism P, vec3 q)
+{
+    float t = 1.0 - q.x - q.y;
+    return t * P.b[0] + q.x * P.b[1] + q.y * P.b[2] + q.z * (t * P.n[0] + q.x * P.n[1] + q.y * P.n[2]);
+}
+
+// Barycentrics (u, v) of p projected onto the plane of triangle a0 a1 a2.
+vec2 barycentric(vec3 a0, vec3 a1, vec3 a2, vec3 p)
+{
+    vec3 e1 = a1 - a0, e2 = a2 - a0, d = p - a0;
+    float d11 = dot(e1, e1), d12 = dot(e1, e2), d22 = dot(e2, e2);
+    float d1 = dot(d, e1), d2 = dot(d, e2);
+    float den = d11 * d22 - d12 * d12;
+    return vec2(d22 * d1 - d12 * d2, d11 * d2 - d12 * d1) / den;
+}
+
+// sec. 4.2: w of a point by bisection on the sign of dot(n(T(w)), p - A0(w)),
+// over [-1/4, 5/4] so points just outside the prism still map.
+float find_w(Prism P, vec3 p)
+{
+    float lo = -0.25, hi = 1.25;
+    for (int i = 0; i < u_segment_steps; ++i) {
+        float m = 0.5 * (lo + hi);
+        vec3 a0 = P.b[0] + m * P.n[0], a1 = P.b[1] + m * P.n[1], a2 = P.b[2] + m * P.n[2];
+        if (dot(cross(a1 - a0, a2 - a0), p - a0) > 0.0)
+            lo = m;
+        else
+            hi = m;
+    }
+    return 0.5 * (lo + hi);
+}
+
+vec3 to_texture(Prism P, vec3 p)
+{
+    float w = find_w(P, p);
+    vec2 uv = barycentric(P.b[0] + w * P.n[0], P.b[1] + w * P.n[1], P.b[2] + w * P.n[2], p);
+    return vec3(uv, w);
+}
+
+// Curved shells: Coons(lambda) on T(w') (shell_map.h spells out the construction).
+float hermite_edge(vec3 ai, vec3 aj, vec3 mi, vec3 mj, float s)
+{
+    vec3 e = aj - ai;
+    float a = -dot(e, mi), b = -dot(e, mj);
+    return s * (1.0 - s) * (a * (1.0 - s) - b * s);
+}
+
+float coons(Prism P, float wp, float u, float v)
+{
+    float lam[3] = float[3](1.0 - u - v, u, v);
+    vec3 A[3], m[3];
+    for (int k = 0; k < 3; ++k) {
+        A[k] = P.b[k] + wp * P.n[k];
+        m[k] = normalize(P.n[k]);
+    }
+    float num = 0.0, den = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        int j = i == 2 ? 0 : i + 1, k = i == 0 ? 2 : i - 1;
+        float wi = lam[i] * lam[i];
+        den += wi;
+        float sjk = lam[j] + lam[k];
+        if (abs(sjk) < 1e-12)
+            continue;
+        float sig = 1.0 - lam[i];
+        vec3 qj = A[i] + sig * (A[j] - A[i]), qk = A[i] + sig * (A[k] - A[i]);
+        float hj = hermite_edge(A[i], A[j], m[i], m[j], sig);
+        float hk = hermite_edge(A[i], A[k], m[i], m[k], sig);
+        vec3 mj = normalize((1.0 - sig) * m[i] + sig * m[j]);
+        vec3 mk = normalize((1.0 - sig) * m[i] + sig * m[k]);
+        vec3 d = qk - qj;
+        float gj = -dot(d, mj), gk = -dot(d, mk);
+        float r = lam[k] / sjk, r2 = r * r, r3 = r2 * r;
+        float di = (2.0 * r3 - 3.0 * r2 + 1.0) * hj + (r3 - 2.0 * r2 + r) * gj + (-2.0 * r3 + 3.0 * r2) * hk +
+                   (r3 - r2) * gk;
+        num += wi * di;
+    }
+    return den > 0.0 ? num / den : 0.0;
+}
+
+float curved_wbar(Prism P, float u, float v, float w)
+{
+    float wp = 0.5 * w + 0.25;
+    float t = 1.0 - u - v;
+    float len = length(t * P.n[0] + u * P.n[1] + v * P.n[2]);
+    return wp + coons(P, wp, u, v) / len;
+}
+
+vec3 phi_curved(Prism P, vec3 q)
+{
+    return phi(P, vec3(q.xy, curved_wbar(P, q.x, q.y, q.z)));
+}
+
+// --- shading ---------------------------------------------------------------
+
+vec2 tex_st(Prism P, vec2 uv)
+{
+    return P.uv[0] + uv.x * (P.uv[1] - P.uv[0]) + uv.y * (P.uv[2] - P.uv[0]);
+}
+
+vec3 shade(vec3 n, float w, vec3 rd)
+{
+    n = normalize(n);
+    if (dot(n, rd) > 0.0)
+        n = -n;
+    return u_albedo * (0.25 + 0.75 * clamp(w, 0.0, 1.0)) * (0.15 + 0.85 * max(0.0, dot(n, u_light_obj)));
+}
+
+// n = J^-T g with J = dmap/d(s,t',w) by central differences in (u,v,w).
+vec3 mapped_normal(Prism P, vec3 q, vec3 g, bool curved)
+{
+    const float h = 1e-3;
+    vec3 ju, jv, jw;
+    if (curved) {
+        ju = (phi_curved(P, q + vec3(h, 0, 0)) - phi_curved(P, q - vec3(h, 0, 0))) / (2.0 * h);
+        jv = (phi_curved(P, q + vec3(0, h, 0)) - phi_curved(P, q - vec3(0, h, 0))) / (2.0 * h);
+        jw = (phi_curved(P, q + vec3(0, 0, h)) - phi_curved(P, q - vec3(0, 0, h))) / (2.0 * h);
+    } else {
+        ju = (phi(P, q + vec3(h, 0, 0)) - phi(P, q - vec3(h, 0, 0))) / (2.0 * h);
+        jv = (phi(P, q + vec3(0, h, 0)) - phi(P, q - vec3(0, h, 0))) / (2.0 * h);
+        jw = (phi(P, q + vec3(0, 0, h)) - phi(P, q - vec3(0, 0, h))) / (2.0 * h);
+    }
+    // (s,t') = A (u,v) + c  =>  [d/ds d/dt'] = [d/du d/dv] A^-1.
+    vec2 e1 = P.uv[1] - P.uv[0], e2 = P.uv[2] - P.uv[0];
+    float det = e1.x * e2.y - e2.x * e1.y;
+    vec3 js = (ju * e2.y - jv * e1.y) / det;
+    vec3 jt = (-ju * e2.x + jv * e1.x) / det;
+    mat3 J = mat3(js, jt, jw);
+    return transpose(inverse(J)) * g;
+}
+
+// --- rays ------------------------------------------------------------------
+
+void fragment_ray(out vec3 ro, out vec3 rd)
+{
+    vec2 ndc = (gl_FragCoord.xy - u_viewport.xy) / u_viewport.zw * 2.0 - 1.0;
+    vec4 a = u_inv_mvp * vec4(ndc, -1.0, 1.0);
+    vec4 b = u_inv_mvp * vec4(ndc, 1.0, 1.0);
+    ro = a.xyz / a.w;
+    rd = normalize(b.xyz / b.w - ro);
+}
+
+// Ray/triangle (Moller-Trumbore) with a small tolerance; -1 on a miss.
+float ray_triangle(vec3 ro, vec3 rd, vec3 p0, vec3 p1, vec3 p2)
+{
+    vec3 e1 = p1 - p0, e2 = p2 - p0, pv = cross(rd, e2);
+    float det = dot(e1, pv);
+    if (abs(det) < 1e-20)
+        return -1.0;
+    float inv = 1.0 / det;
+    vec3 tv = ro - p0;
+    float u = dot(tv, pv) * inv;
+    vec3 qv = cross(tv, e1);
+    float v = dot(rd, qv) * inv;
+    const float tol = 1e-4;
+    if (u < -tol || v < -tol || u + v > 1.0 + tol)
+        return -1.0;
+    return dot(e2, qv) * inv;
+}
+
+void write_depth(vec3 p)
+{
+    vec4 clip = u_mvp * vec4(p, 1.0);
+    float ndc_z = clip.z / clip.w;
+    gl_FragDepth = 0.5 * (gl_DepthRange.diff * ndc_z + gl_DepthRange.near + gl_DepthRange.far);
+}
+
+void finish(bool hit)
+{
+#ifdef MESO_STATS
+    atomicAdd(s_fragments, 1u);
+    atomicAdd(s_steps, uint(g_steps));
+    if (hit)
+        atomicAdd(s_hits, 1u);
+#endif
+    if (!hit)
+        discard;
+}
+
+#if MESO_TECHNIQUE == 2
+// --- tetrahedra ------------------------------------------------------------
+void main()
+{
+    Prism P = fetch_prism(v_prism);
+    ivec4 T = tet_corners(P, v_tet);
+    vec3 X[4];
+    vec3 C[4];
+    for (int k = 0; k < 4; ++k) {
+        int c = T[k];
+        X[k] = corner_pos(P, c);
+        C[k] = vec3(P.uv[c < 3 ? c : c - 3], c < 3 ? 0.0 : 1.0);
+    }
+    vec3 ro, rd;
+    fragment_ray(ro, rd);
+    float te = 0.0, tx = 1e30;
+    for (int f = 0; f < 4; ++f) {
+        ivec3 fi = tet_face(ivec4(0, 1, 2, 3), f);
+        vec3 a = X[fi.x], n = cross(X[fi.y] - a, X[fi.z] - a);
+        if (dot(n, X[f] - a) > 0.0)
+            n = -n;
+        float den = dot(n, rd), num = dot(n, a - ro);
+        if (abs(den) < 1e-20) {
+            if (num < 0.0)
+                te = 1e30; // parallel and outside
+        } else if (den < 0.0) {
+            te = max(te, num / den);
+        } else {
+            tx = min(tx, num / den);
+        }
+    }
+    if (!(te < tx)) {
+        finish(false);
+        return;
+    }
+    mat3 M = mat3(X[1] - X[0], X[2] - X[0], X[3] - X[0]);
+    mat3 Tm = mat3(C[1] - C[0], C[2] - C[0], C[3] - C[0]);
+    if (abs(determinant(M)) < 1e-30 || abs(determinant(Tm)) < 1e-30) {
+        finish(false);
+        return;
+    }
+    mat3 Minv = inverse(M);
+    vec3 q0 = C[0] + Tm * (Minv * (ro + te * rd - X[0]));
+    vec3 q1 = C[0] + Tm * (Minv * (ro + tx * rd - X[0]));
+    float len = length(q1 - q0);
+    float f = 0.0, fprev = 0.0;
+    bool hit = false;
+    for (int i = 0; i < u_max_steps; ++i) {
+        vec3 q = mix(q0, q1, f);
+        ++g_steps;
+        if (solid(q)) {
+            hit = true;
+            break;
+        }
+        if (f >= 1.0 || len <= 0.0)
+            break;
+        fprev = f;
+        f = min(1.0, f + step_radius(q) / len);
+    }
+    if (hit && f > fprev) {
+        float lo = fprev, hi = f;
+        for (int i = 0; i < u_bisect_steps; ++i) {
+            float m = 0.5 * (lo + hi);
+            ++g_steps;
+            if (solid(mix(q0, q1, m)))
+                hi = m;
+            else
+                lo = m;
+        }
+        f = hi;
+    }
+    if (hit) {
+        vec3 q = mix(q0, q1, f);
+        vec3 p = ro + (te + f * (tx - te)) * rd;
+        mat3 J = M * inverse(Tm); // world = X0 + J (texture - C0)
+        vec3 n = transpose(inverse(J)) * tex_gradient(q);
+        o_color = vec4(shade(n, q.z, rd), 1.0);
+        write_depth(p);
+    }
+    finish(hit);
+}
+
+#else
+// --- smooth, curved, segment only ------------------------------------------
+void main()
+{
+    Prism P = fetch_prism(v_prism);
+    vec3 ro, rd;
+    fragment_ray(ro, rd);
+    // sec. 4.2: entry and exit against the hull triangles (the same
+    // triangulation as shell_vert.glsl: hull_face).
+    vec3 c[6];
+    for (int k = 0; k < 3; ++k) {
+        c[k] = P.b[k];
+        c[k + 3] = P.b[k] + P.n[k];
+    }
+    vec3 cen = prism_centroid(P);
+    float tmin = 1e30, tmax = -1e30;
+    int nhit = 0;
+    for (int f = 0; f < 8; ++f) {
+        vec3 p0, p1, p2;
+        if (f < 2) {
+            p0 = c[f == 0 ? 0 : 3];
+            p1 = c[f == 0 ? 1 : 4];
+            p2 = c[f == 0 ? 2 : 5];
+        } else {
+            int side = (f - 2) >> 1, i = side, j = side == 2 ? 0 : side + 1;
+            vec3 bi = c[i], bj = c[j], ti = c[i + 3], tj = c[j + 3];
+            vec3 nrm = cross(bj - bi, tj - bi);
+            if (dot(nrm, cen - bi) > 0.0)
+                nrm = -nrm;
+            bool diag_bt = dot(nrm, ti - bi) <= 0.0;
+            bool first = ((f - 2) & 1) == 0;
+            p0 = first ? bi : (diag_bt ? bi : bj);
+            p1 = first ? bj : tj;
+            p2 = first ? (diag_bt ? tj : ti) : ti;
+        }
+        float t = ray_triangle(ro, rd, p0, p1, p2);
+        if (t >= 0.0) {
+            tmin = min(tmin, t);
+            tmax = max(tmax, t);
+            ++nhit;
+        }
+    }
+    if (nhit == 0) {
+        finish(false);
+        return;
+    }
+    if (nhit == 1 || tmin >= tmax)
+        tmin = 0.0; // the ray starts inside the hull (camera inside the shell)
+    vec3 q0 = to_texture(P, ro + tmin * rd);
+    vec3 q1 = to_texture(P, ro + tmax * rd);
+    g_steps = 2;
+#if MESO_TECHNIQUE == 3
+    o_color = vec4(q0.z, q1.z, 0.5, 1.0);
+    write_depth(ro + tmax * rd);
+    finish(true);
+    return;
+#else
+    vec2 e1 = P.uv[1] - P.uv[0], e2 = P.uv[2] - P.uv[0];
+    const bool curved = MESO_TECHNIQUE == 1;
+    vec3 q = q0, qprev = q0;
+    float wq = q0.z; // texture w (= q.z for smooth shells)
+    bool hit = false;
+    for (int i = 0; i < u_max_steps; ++i) {
+        bool inside = q.x >= -1e-5 && q.y >= -1e-5 && q.x + q.y <= 1.0 + 1e-5;
+        float scale = 1.0;
+        wq = q.z;
+        if (curved && inside) {
+            float w0 = curved_wbar(P, q.x, q.y, 0.0), w1 = curved_wbar(P, q.x, q.y, 1.0);
+            wq = (q.z - w0) / (w1 - w0); // eq. 2
+            scale = clamp(w1 - w0, 0.05, 1.0);
+        }
+        inside = inside && wq >= 0.0 && wq <= 1.0;
+        vec2 st = tex_st(P, q.xy);
+        ++g_steps;
+        if (inside && solid(vec3(st, wq))) {
+            hit = true;
+            break;
+        }
+        vec3 D = q1 - q;
+        float remain = length(vec3(D.x * e1 + D.y * e2, D.z));
+        if (remain <= 1e-6)
+            break;
+        float L = min(step_radius(vec3(st, wq)) * scale, remain);
+        vec3 qn = q + D * (L / remain);
+        // sec. 4.3: keep the sample within the error bound of the view ray.
+        for (int c = 0; c < 4; ++c) {
+            vec3 p = phi(P, qn);
+            vec4 clip = u_mvp * vec4(p, 1.0);
+            vec3 off = (p - ro) - dot(p - ro, rd) * rd;
+            if (length(off) <= u_err_scale * clip.w)
+                break;
+            vec3 a0 = P.b[0] + qn.z * P.n[0], a1 = P.b[1] + qn.z * P.n[1], a2 = P.b[2] + qn.z * P.n[2];
+            vec3 nn = cross(a1 - a0, a2 - a0);
+            float den = dot(nn, rd);
+            if (abs(den) < 1e-12 * length(nn))
+                break; // grazing: linear sampling is already right (sec. 4.3)
+            vec3 x = ro + (dot(nn, a0 - ro) / den) * rd;
+            vec3 target = vec3(barycentric(a0, a1, a2, x), qn.z);
+            vec3 Dn = target - q;
+            float ln = length(vec3(Dn.x * e1 + Dn.y * e2, Dn.z));
+            if (ln <= 1e-9)
+                break;
+            qn = q + Dn * min(1.0, L / ln);
+        }
+        qprev = q;
+        q = qn;
+    }
+    if (hit) {
+        // sec. 4.4: bisection between the last empty sample and the first solid one.
+        vec3 lo = qprev, hi = q;
+        float whi = wq;
+        for (int i = 0; i < u_bisect_steps; ++i) {
+            vec3 m = 0.5 * (lo + hi);
+            float wm = m.z;
+            if (curved) {
+                float w0 = curved_wbar(P, m.x, m.y, 0.0), w1 = curved_wbar(P, m.x, m.y, 1.0);
+                wm = (m.z - w0) / (w1 - w0);
+            }
+            ++g_steps;
+            bool in_ = m.x >= -1e-5 && m.y >= -1e-5 && m.x + m.y <= 1.0 + 1e-5 && wm >= 0.0 && wm <= 1.0;
+            if (in_ && solid(vec3(tex_st(P, m.xy), wm))) {
+                hi = m;
+                whi = wm;
+            } else {
+                lo = m;
+            }
+        }
+        vec3 p = phi(P, hi);
+        vec3 g = tex_gradient(vec3(tex_st(P, hi.xy), whi));
+        vec3 n = mapped_normal(P, curved ? vec3(hi.xy, whi) : hi, g, curved);
+        o_color = vec4(shade(n, whi, rd), 1.0);
+        write_depth(p);
+    }
+    finish(hit);
+#endif
+}
+#endif

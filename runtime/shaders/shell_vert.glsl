@@ -1,0 +1,53 @@
+// shell_vert.glsl - generates the rasterised hulls from gl_VertexID alone
+// (no vertex attributes), so the host can move base vertices and directors
+// every frame without any CPU-side re-triangulation.
+//
+// Smooth, curved, segment-only: each prism is its convex hull (sec. 4.1): two
+// caps and, per side, the diagonal that makes the side convex ("the fourth
+// vertex lies behind the plane of the other three"); 8 triangles = 24
+// vertices per prism. Tetra: each prism is three tetrahedra split along the
+// diagonals fixed by global vertex order (the smaller index's bottom to the
+// larger index's top on every side quad, so neighbours agree); 3 x 4 faces =
+// 36 vertices per prism. Every triangle is wound to face away from its
+// solid's center, and the runtime culls front faces: one fragment per
+// solid per pixel, even with the camera inside the shell.
+
+flat out int v_prism;
+flat out int v_tet;
+
+void main()
+{
+#if MESO_TECHNIQUE == 2
+    const int per = 36;
+#else
+    const int per = 24;
+#endif
+    int prism = gl_VertexID / per;
+    int local = gl_VertexID - prism * per;
+    int face = local / 3;
+    int k = local - face * 3;
+    Prism P = fetch_prism(prism);
+    ivec3 tri;
+    vec3 center;
+    v_tet = 0;
+#if MESO_TECHNIQUE == 2
+    int tet = face / 4;
+    ivec4 T = tet_corners(P, tet);
+    tri = tet_face(T, face - tet * 4);
+    center = 0.25 * (corner_pos(P, T.x) + corner_pos(P, T.y) + corner_pos(P, T.z) + corner_pos(P, T.w));
+    v_tet = tet;
+#else
+    tri = hull_face(P, face);
+    center = prism_centroid(P);
+#endif
+    vec3 p0 = corner_pos(P, tri.x), p1 = corner_pos(P, tri.y), p2 = corner_pos(P, tri.z);
+    // Wind away from the center (counter-clockwise seen from outside).
+    if (dot(cross(p1 - p0, p2 - p0), center - p0) > 0.0) {
+        vec3 s = p1;
+        p1 = p2;
+        p2 = s;
+    }
+    vec3 p = k == 0 ? p0 : (k == 1 ? p1 : p2);
+    v_prism = prism;
+    gl_Position = u_mvp * vec4(p, 1.0);
+}
