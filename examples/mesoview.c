@@ -3,9 +3,15 @@
  * GLFW's loader, and draws .meso files into the window's framebuffer.
  *
  *   mesoview [FILE.meso] [--size WxH] [--frames N] [--screenshot OUT.png]
+ *            [--technique smooth|curved|tetra|segment] [--error-px E] [--animate]
  *
  * Mouse: drag to orbit, scroll to zoom. Keys: Esc quits, S saves a
- * screenshot (mesoview.png). GLFW lives only in examples/: libmeso itself
+ * screenshot (mesoview.png); 1-4 pick the shell technique, [ ] halve/double
+ * the error bound, - = halve/double the step limit, B cycles the bisection
+ * steps, D toggles the distance map, A toggles the animation (a twist of the
+ * base mesh and its directors, uploaded every frame with
+ * meso_rt_shell_update: no re-bake). The title shows ms/frame and, on
+ * OpenGL 4.3+, ray steps per ray-cast fragment counted by the shaders. GLFW lives only in examples/: libmeso itself
  * never sees a window. Draco-encoded chunks are decoded with the baker's
  * decoder, passed in through meso_open_desc as any host would pass its own.
  */
@@ -27,9 +33,123 @@ static const char* const usage =
     "  --size WxH          window size (default 800x600)\n"
     "  --frames N          quit after N frames (0 = run until closed)\n"
     "  --screenshot FILE   save the last frame as PNG when quitting\n"
+    "  --technique T       shells: smooth (default), curved, tetra or segment\n"
+    "  --error-px E        shells: image-space error bound in pixels (default 1)\n"
+    "  --animate           start with the twist animation on\n"
     "  -h, --help          this help;  --version  the version\n"
     "\n"
-    "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png\n";
+    "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png,\n"
+    "1-4 technique (smooth curved tetra segment), [ ] error bound, - = step limit,\n"
+    "B bisection steps, D distance map on/off, A animation on/off\n";
+
+static const char* const technique_names[MESO_SHELL_TECHNIQUE_COUNT] = {"smooth", "curved", "tetra", "segment"};
+
+/* What the keyboard changes. */
+typedef struct knobs {
+    meso_rt_draw_desc d;
+    int animate;
+    int changed;
+} knobs;
+
+static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
+{
+    (void)scancode;
+    (void)mods;
+    if (action != GLFW_PRESS)
+        return;
+    knobs* k = ((knobs**)glfwGetWindowUserPointer(w))[1];
+    meso_rt_draw_desc* d = &k->d;
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_4)
+        d->technique = (meso_shell_technique)(key - GLFW_KEY_1);
+    else if (key == GLFW_KEY_LEFT_BRACKET)
+        d->error_px = fmaxf(d->error_px * 0.5f, 0.0625f);
+    else if (key == GLFW_KEY_RIGHT_BRACKET)
+        d->error_px = fminf(d->error_px * 2.0f, 64.0f);
+    else if (key == GLFW_KEY_MINUS)
+        d->max_steps = d->max_steps > 4 ? d->max_steps / 2 : 4;
+    else if (key == GLFW_KEY_EQUAL)
+        d->max_steps = d->max_steps < 4096 ? d->max_steps * 2 : 4096;
+    else if (key == GLFW_KEY_B)
+        d->bisection_steps = d->bisection_steps >= 8 ? 1 : d->bisection_steps + 1;
+    else if (key == GLFW_KEY_D)
+        d->no_distance_map = !d->no_distance_map;
+    else if (key == GLFW_KEY_A)
+        k->animate = !k->animate;
+    else
+        return;
+    k->changed = 1;
+}
+
+/* Host-side copy of a shell's base mesh and directors, for animation. */
+typedef struct shell_anim {
+    meso_rt_object obj;
+    uint32_t n, layers;
+    float *pos0, *dir0, *pos, *dir;
+} shell_anim;
+
+/* Reads the object's MESH positions and SDIR chunk (as a host would keep its
+ * own skinned mesh). 0 when the object is not a shell. */
+static int anim_load(meso_file* f, const meso_rt* rt, meso_rt_object obj, uint32_t id, shell_anim* a)
+{
+    memset(a, 0, sizeof(*a));
+    a->obj = obj;
+    if (meso_rt_shell_info(rt, obj, &a->n, &a->layers) != MESO_OK || a->n == 0)
+        return 0;
+    int mi = -1, di = -1;
+    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        if (c->object == id && c->lod == 0 && c->type == MESO_CHUNK_MESH)
+            mi = (int)i;
+        if (c->object == id && c->lod == 0 && c->type == MESO_CHUNK_SDIR)
+            di = (int)i;
+    }
+    if (mi < 0 || di < 0)
+        return 0;
+    const meso_chunk_info* mc = meso_file_chunk(f, (uint32_t)mi);
+    void* mesh = malloc((size_t)mc->decoded_size);
+    a->pos0 = malloc(sizeof(float) * 3 * a->n);
+    a->pos = malloc(sizeof(float) * 3 * a->n);
+    a->dir0 = malloc(sizeof(float) * 3 * a->n * a->layers);
+    a->dir = malloc(sizeof(float) * 3 * a->n * a->layers);
+    meso_error err;
+    meso_mesh_view mv;
+    int ok = mesh && a->pos0 && a->pos && a->dir0 && a->dir &&
+             meso_file_read_chunk(f, (uint32_t)mi, mesh, (size_t)mc->decoded_size, &err) == MESO_OK &&
+             meso_mesh_parse(mesh, (size_t)mc->decoded_size, &mv, &err) == MESO_OK && mv.layout.vertex_count == a->n &&
+             meso_file_read_chunk(f, (uint32_t)di, a->dir0, sizeof(float) * 3 * a->n * a->layers, &err) == MESO_OK;
+    if (ok)
+        memcpy(a->pos0, mv.positions, sizeof(float) * 3 * a->n);
+    free(mesh);
+    if (!ok) {
+        free(a->pos0);
+        free(a->pos);
+        free(a->dir0);
+        free(a->dir);
+        memset(a, 0, sizeof(*a));
+    }
+    return ok;
+}
+
+/* Twist about the vertical axis through `c`: angle grows with height. */
+static void anim_step(meso_rt* rt, shell_anim* a, double time, const double c[3], double radius)
+{
+    const double amp = 0.6 * sin(time);
+    for (uint32_t v = 0; v < a->n; ++v) {
+        const float* p = a->pos0 + 3 * (size_t)v;
+        const double ang = amp * (p[1] - c[1]) / radius, cs = cos(ang), sn = sin(ang);
+        a->pos[3 * v + 0] = (float)(c[0] + cs * (p[0] - c[0]) + sn * (p[2] - c[2]));
+        a->pos[3 * v + 1] = p[1];
+        a->pos[3 * v + 2] = (float)(c[2] - sn * (p[0] - c[0]) + cs * (p[2] - c[2]));
+        for (uint32_t l = 0; l < a->layers; ++l) {
+            const float* d = a->dir0 + 3 * ((size_t)l * a->n + v);
+            float* o = a->dir + 3 * ((size_t)l * a->n + v);
+            o[0] = (float)(cs * d[0] + sn * d[2]);
+            o[1] = d[1];
+            o[2] = (float)(-sn * d[0] + cs * d[2]);
+        }
+    }
+    meso_rt_shell_update(rt, a->obj, a->pos, a->dir, a->n);
+}
 
 typedef struct orbit {
     double yaw, pitch, zoom; /* degrees, degrees, distance factor */
@@ -40,7 +160,7 @@ typedef struct orbit {
 static void on_scroll(GLFWwindow* w, double dx, double dy)
 {
     (void)dx;
-    orbit* o = glfwGetWindowUserPointer(w);
+    orbit* o = ((orbit**)glfwGetWindowUserPointer(w))[0];
     o->zoom *= pow(0.9, dy);
     o->zoom = fmin(fmax(o->zoom, 0.05), 20.0);
 }
@@ -118,6 +238,7 @@ static void load(void* dst, const char* name, int* missing)
 int main(int argc, char** argv)
 {
     int width = 800, height = 600, frames = 0;
+    knobs kn = {.d = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4}};
     const char *file = NULL, *shot = NULL;
     for (int i = 1; i < argc; ++i) {
         const char* a = argv[i];
@@ -137,6 +258,25 @@ int main(int argc, char** argv)
             frames = atoi(argv[++i]);
         } else if (!strcmp(a, "--screenshot") && i + 1 < argc) {
             shot = argv[++i];
+        } else if (!strcmp(a, "--technique") && i + 1 < argc) {
+            const char* t = argv[++i];
+            int found = -1;
+            for (int k = 0; k < MESO_SHELL_TECHNIQUE_COUNT; ++k)
+                if (!strcmp(t, technique_names[k]))
+                    found = k;
+            if (found < 0) {
+                fprintf(stderr, "mesoview error: --technique expects smooth, curved, tetra or segment, got '%s'\n", t);
+                return 1;
+            }
+            kn.d.technique = (meso_shell_technique)found;
+        } else if (!strcmp(a, "--error-px") && i + 1 < argc) {
+            kn.d.error_px = (float)atof(argv[++i]);
+            if (!(kn.d.error_px > 0.0f)) {
+                fprintf(stderr, "mesoview error: --error-px expects a positive number\n");
+                return 1;
+            }
+        } else if (!strcmp(a, "--animate")) {
+            kn.animate = 1;
         } else if (a[0] == '-') {
             fprintf(stderr, "mesoview error: unrecognized option '%s'\nSee 'mesoview --help'.\n", a);
             return 1;
@@ -185,7 +325,8 @@ int main(int argc, char** argv)
         return 4;
     }
     meso_rt_object objs[64];
-    int nobj = 0;
+    shell_anim anims[64];
+    int nobj = 0, nanim = 0;
     double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
     if (file) {
         meso_decoder dec = meso_bake_draco_decoder();
@@ -207,6 +348,8 @@ int main(int argc, char** argv)
         for (uint32_t i = 0; i < count && i < 64; ++i) {
             if (meso_rt_load_object(rt, f, recs[i].id, &objs[nobj]) != MESO_OK)
                 continue;
+            if (anim_load(f, rt, objs[nobj], recs[i].id, &anims[nanim]))
+                ++nanim;
             float l[3], h[3];
             meso_rt_object_bounds(rt, objs[nobj], l, h);
             for (int k = 0; k < 3; ++k) {
@@ -223,8 +366,12 @@ int main(int argc, char** argv)
     const double radius = 0.5 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
     orbit cam = {.yaw = 30, .pitch = 20, .zoom = 1};
-    glfwSetWindowUserPointer(win, &cam);
+    void* user[2] = {&cam, &kn};
+    glfwSetWindowUserPointer(win, user);
     glfwSetScrollCallback(win, on_scroll);
+    glfwSetKeyCallback(win, on_key);
+    double t_last = glfwGetTime(), ms_avg = 0.0, anim_time = 0.0;
+    meso_rt_draw_stats stats = {0};
 
     int rc = 0;
     for (int frame = 0; !glfwWindowShouldClose(win); ++frame) {
@@ -235,11 +382,38 @@ int main(int argc, char** argv)
         gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         if (nobj > 0 && fw > 0 && fh > 0) {
             const double fovy = 35.0 * M_PI / 180.0, dist = cam.zoom * radius / sin(fovy / 2) * 1.05;
-            meso_rt_draw_desc d = {.light_dir = {0.3f, 0.8f, 0.5f}};
+            meso_rt_draw_desc d = kn.d;
+            d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
             orbit_view(d.view, centre, cam.yaw * M_PI / 180.0, cam.pitch * M_PI / 180.0, dist);
             perspective(d.proj, fovy, (double)fw / fh, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
-            for (int i = 0; i < nobj; ++i)
+            if (kn.animate) {
+                anim_time += 1.0 / 30.0;
+                for (int i = 0; i < nanim; ++i)
+                    anim_step(rt, &anims[i], anim_time, centre, radius);
+            }
+            meso_rt_draw_stats total = {0};
+            for (int i = 0; i < nobj; ++i) {
+                d.stats = &stats;
                 meso_rt_draw(rt, objs[i], &d);
+                total.supported |= stats.supported;
+                total.fragments += stats.fragments;
+                total.steps += stats.steps;
+            }
+            stats = total;
+        }
+        const double t_now = glfwGetTime();
+        ms_avg = frame == 0 ? 1e3 * (t_now - t_last) : 0.9 * ms_avg + 100.0 * (t_now - t_last);
+        t_last = t_now;
+        if (frame % 10 == 0 || kn.changed) {
+            char title[256];
+            snprintf(title, sizeof(title), "mesoview  %s  err %.3g px  steps %d  bisect %d%s%s  %.1f ms/frame",
+                     technique_names[kn.d.technique], kn.d.error_px, kn.d.max_steps, kn.d.bisection_steps,
+                     kn.d.no_distance_map ? "  no-dist" : "", kn.animate ? "  animated" : "", ms_avg);
+            if (stats.supported && stats.fragments)
+                snprintf(title + strlen(title), sizeof(title) - strlen(title), "  %.1f steps/fragment",
+                         (double)stats.steps / (double)stats.fragments);
+            glfwSetWindowTitle(win, title);
+            kn.changed = 0;
         }
         const int last = frames > 0 && frame + 1 >= frames;
         if (last && shot)
@@ -265,6 +439,12 @@ int main(int argc, char** argv)
         cam.last_y = my;
         if (last)
             break;
+    }
+    for (int i = 0; i < nanim; ++i) {
+        free(anims[i].pos0);
+        free(anims[i].pos);
+        free(anims[i].dir0);
+        free(anims[i].dir);
     }
     meso_rt_destroy(rt);
     glfwDestroyWindow(win);
