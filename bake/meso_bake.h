@@ -44,7 +44,11 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  *   3101 non-finite coordinate                 3111 inconsistent orientation
  *   3102 face refers to a missing vertex       3112 duplicated faces
  *                                              3113 degenerate faces
- *                                              3114 the surface intersects itself */
+ *                                              3114 the surface intersects itself
+ * Texture functions (mesobake shell --texture, bake/texture_function.h):
+ *   3120 the texture SPEC does not parse       3122 texture file content unusable
+ *   3121 texture file missing or unreadable    3123 .vdb: no such float grid, or empty
+ *   (3124..3129 reserved for texture functions and distance maps) */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */

@@ -88,6 +88,32 @@ meso_result meso_vdb_sample(const meso_vdb_grid* g, const double* xyz, size_t co
 uint64_t meso_vdb_active_voxels(const meso_vdb_grid* g);
 void meso_vdb_destroy(meso_vdb_grid* g);
 
+/* A float grid of a .vdb file, sampled densely. */
+typedef struct meso_vdb_dense {
+    float* values;     /* dims[0]*dims[1]*dims[2] samples, x fastest (malloc'd: free()) */
+    uint32_t dims[3];  /* samples along index-space x, y, z */
+    int is_level_set;  /* the grid's class is GRID_LEVEL_SET (else fog volume or unknown) */
+    double voxel_size; /* world units per voxel along x (uniform grids) */
+} meso_vdb_dense;
+
+/* Open `path`, take the float grid named `grid_name` (NULL: the first float
+ * grid), and sample it (trilinearly, in index space) at the centres of a
+ * dims[0] x dims[1] x dims[2] lattice over its active voxels' bounding box
+ * (voxel cells included whole), where dims is the box's size in voxels
+ * scaled uniformly so that no side exceeds max_res. Values are the grid's
+ * own (background outside the active region). MESO_ERR_IO when the file can
+ * not be read, MESO_ERR_CORRUPT (code `issue`) for a missing/non-float/empty
+ * grid. */
+meso_result meso_vdb_read_dense(const char* path, const char* grid_name, uint32_t max_res, uint32_t issue,
+                                meso_vdb_dense* out, meso_error* err);
+
+/* Tests only: write a .vdb holding one float grid named `grid_name`: a
+ * sphere of `radius` at `center` (world units) with `voxel_size`, as a
+ * narrow-band level set (fog = 0) or as a fog volume (fog = 1, OpenVDB's
+ * sdfToFogVolume: 1 inside, 0 outside, a linear ramp across the band). */
+meso_result meso_vdb_write_sphere(const char* path, const char* grid_name, const double center[3], double radius,
+                                  double voxel_size, int fog, meso_error* err);
+
 /* >>draco --------------------------------------------------------------- */
 
 typedef struct meso_draco_options {

@@ -1,7 +1,10 @@
 /*
  * cmd_shell.c — `mesobake shell`: a base mesh plus fold-free directors
  * (volume-textures-lp-averaged-shells.md §4), validated exactly, in one
- * .meso SHELL object: MESH (the base), SDIR (directors), STHK (thickness).
+ * .meso SHELL object: MESH (the base), SDIR (directors), STHK (thickness),
+ * and optionally a texture function (TX2D height field or TX3D density) with
+ * its distance map (DIST) and texture coordinates in the MESH (FORMAT.md
+ * §7.2, "Shell prisms and texture space").
  */
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -12,11 +15,13 @@
 
 #include "adapters.h"
 #include "cli_util.h"
+#include "distance_map.h"
 #include "lp_distance.h"
 #include "mesh_check.h"
 #include "mesh_chunk.h"
 #include "shell_hybrid.h"
 #include "shell_validate.h"
+#include "texture_function.h"
 
 static const char* const usage_shell =
     "Usage: mesobake shell -i MESH -o OUT.meso [options]\n"
@@ -47,6 +52,25 @@ static const char* const usage_shell =
     "                          which shortens them locally until the shell is valid; the\n"
     "                          report says how much thickness that gave up)\n"
     "  -j, --threads N         threads (default: all cores); the output does not depend on N\n"
+    "Texture function (what the shell holds; without one the whole shell is solid):\n"
+    "      --texture SPEC      height:FILE.png        height field (8/16-bit; grey or first channel;\n"
+    "                                                 the bottom image row is t = 0)\n"
+    "                          volume:FILE.raw:WxHxD  u8 densities, s fastest, solid where >= 1/2\n"
+    "                          volume:FILE.vdb[:GRID] OpenVDB float grid (default: the first) over its\n"
+    "                                                 active box; fog volume: density = value; level\n"
+    "                                                 set: density = 1/2 - phi / (2 voxel)\n"
+    "                          bricks[:RES] cobble[:RES]  built-in height fields (RES^2, default 256)\n"
+    "                          weave[:RES]            built-in interlaced threads (RES x RES x RES/2,\n"
+    "                                                 default 128)\n"
+    "                          cells[:RES]            built-in 3D Voronoi cell walls (RES^3, default 64)\n"
+    "      --tiling U[,V]      tiles along the texture coordinates (default 1,1). The mesh's own\n"
+    "                          uvs are multiplied by it; a mesh without uvs is projected onto the\n"
+    "                          plane of its two largest bounding-box extents, the longest spanning\n"
+    "                          U tiles (the other V/U as densely), with a warning\n"
+    "      --dist-res WxHxD    distance-map cells (each 1..512; default: half the texture's\n"
+    "                          resolution in s, t (8..128) and, in w, half a volume's depth or,\n"
+    "                          for a height field, about one cell per typical height step)\n"
+    "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n"
     "Reporting:\n"
     "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
     "  -v, --verbose           one line per stage on stderr\n"
@@ -68,16 +92,55 @@ static int lookup(const char* s, const char* const* names, int n)
 }
 
 typedef struct shell_args {
-    const char *in, *out, *report;
+    const char *in, *out, *report, *texture;
     double thickness, thickness_rel, p, theta, angle_tol_deg;
+    double tiling[2];     /* --tiling U,V */
+    uint32_t dist_res[3]; /* --dist-res; 0 = the default for the texture */
+    int dist_type;        /* index into dist_type_names */
     int kind, mode, repair;
     long threads, smooth;
 } shell_args;
 
+static const char* const dist_type_names[] = {"u8", "u16", "f32"};
+static const uint16_t dist_dtypes[] = {MESO_DTYPE_U8, MESO_DTYPE_U16, MESO_DTYPE_F32};
+
+/* "U" or "U,V": positive finite numbers. */
+static int parse_tiling(const char* v, double t[2])
+{
+    char buf[64];
+    if (strlen(v) >= sizeof(buf))
+        return 0;
+    memcpy(buf, v, strlen(v) + 1);
+    char* comma = strchr(buf, ',');
+    if (comma)
+        *comma = 0;
+    if (!parse_double(buf, &t[0]) || t[0] > 1e6)
+        return 0;
+    t[1] = t[0];
+    return !comma || (parse_double(comma + 1, &t[1]) && t[1] <= 1e6);
+}
+
+/* "WxHxD", each 1..MESO_DISTMAP_MAX_RES. */
+static int parse_res(const char* v, uint32_t res[3])
+{
+    const char* p = v;
+    for (int a = 0; a < 3; ++a) {
+        char* end = NULL;
+        if (*p < '0' || *p > '9')
+            return 0;
+        const unsigned long x = strtoul(p, &end, 10);
+        if (x < 1 || x > MESO_DISTMAP_MAX_RES || (a < 2 ? *end != 'x' : *end != 0))
+            return 0;
+        res[a] = (uint32_t)x;
+        p = end + 1;
+    }
+    return 1;
+}
+
 static int parse_args(int argc, char** argv, shell_args* a)
 {
     *a = (shell_args){.thickness_rel = 0.05, .p = 3.0, .theta = 0.5, .angle_tol_deg = 5.0, .repair = 1,
-                      .smooth = 0};
+                      .smooth = 0, .tiling = {1.0, 1.0}};
     int have_abs = 0, have_rel = 0;
     for (int i = 0; i < argc; ++i) {
         const char* s = argv[i];
@@ -96,7 +159,9 @@ static int parse_args(int argc, char** argv, shell_args* a)
                                 !strcmp(s, "--output") || !strcmp(s, "--report") || !strcmp(s, "--thickness") ||
                                 !strcmp(s, "--thickness-rel") || !strcmp(s, "--kind") || !strcmp(s, "--directors") ||
                                 !strcmp(s, "--p") || !strcmp(s, "--theta") || !strcmp(s, "--angle-tol") ||
-                                !strcmp(s, "-j") || !strcmp(s, "--threads") || !strcmp(s, "--smooth");
+                                !strcmp(s, "-j") || !strcmp(s, "--threads") || !strcmp(s, "--smooth") ||
+                                !strcmp(s, "--texture") || !strcmp(s, "--tiling") || !strcmp(s, "--dist-res") ||
+                                !strcmp(s, "--dist-type");
         if (!takes_value)
             return s[0] == '-' ? usage_error("unrecognized option '%s'", s)
                                : usage_error("unexpected argument '%s'", s);
@@ -109,7 +174,18 @@ static int parse_args(int argc, char** argv, shell_args* a)
             a->out = v;
         else if (!strcmp(s, "--report"))
             a->report = v;
-        else if (!strcmp(s, "--thickness")) {
+        else if (!strcmp(s, "--texture"))
+            a->texture = v;
+        else if (!strcmp(s, "--tiling")) {
+            if (!parse_tiling(v, a->tiling))
+                return usage_error("--tiling expects U or U,V (positive numbers), got '%s'", v);
+        } else if (!strcmp(s, "--dist-res")) {
+            if (!parse_res(v, a->dist_res))
+                return usage_error("--dist-res expects WxHxD, each in 1..%u, got '%s'", MESO_DISTMAP_MAX_RES, v);
+        } else if (!strcmp(s, "--dist-type")) {
+            if ((a->dist_type = lookup(v, dist_type_names, 3)) < 0)
+                return usage_error("--dist-type expects u8, u16 or f32, got '%s'", v);
+        } else if (!strcmp(s, "--thickness")) {
             if (!parse_double(v, &a->thickness))
                 return usage_error("--thickness expects a positive length, got '%s'", v);
             have_abs = 1;
@@ -149,6 +225,8 @@ static int parse_args(int argc, char** argv, shell_args* a)
         fputs(usage_shell, stderr);
         return MESO_EXIT_USAGE;
     }
+    if (!a->texture && (a->dist_res[0] || a->dist_type || a->tiling[0] != 1.0 || a->tiling[1] != 1.0))
+        return usage_error("%s", "--tiling, --dist-res and --dist-type need --texture");
     return 0;
 }
 
@@ -184,6 +262,108 @@ static cJSON* report_json(const meso_shell_report* v, const meso_hybrid_stats* h
     return rep;
 }
 
+/* >>texture ------------------------------------------------------------------ */
+
+typedef struct shell_texture {
+    meso_texfn fn;
+    meso_distmap dist;
+    float* uvs;            /* 2 * vertex_count texture coordinates, tiling included */
+    const char* uv_source; /* "mesh" or "planar" */
+    char plane[3];         /* planar: the two axes, e.g. "xz" (s along the first) */
+} shell_texture;
+
+static void texture_free(shell_texture* tx)
+{
+    meso_texfn_free(&tx->fn);
+    meso_distmap_free(&tx->dist);
+    free(tx->uvs);
+}
+
+/* Parse the spec, sample the function, bake its distance map. */
+static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_error* err)
+{
+    double t = now_seconds();
+    meso_result r = meso_texfn_from_spec(a->texture, &tx->fn, err);
+    if (r != MESO_OK)
+        return r;
+    const uint32_t* td = tx->fn.dims;
+    if (verbose)
+        fprintf(stderr, "mesobake: texture %s: %s %ux%ux%u %s (%.0f ms)\n", a->texture,
+                tx->fn.kind == MESO_TEXFN_HEIGHT ? "height field" : "density volume", td[0], td[1], td[2],
+                tx->fn.dtype == MESO_DTYPE_U8 ? "u8" : "u16", 1e3 * (now_seconds() - t));
+    uint32_t res[3] = {a->dist_res[0], a->dist_res[1], a->dist_res[2]};
+    if (!res[0])
+        meso_distmap_default_res(&tx->fn, res);
+    t = now_seconds();
+    r = meso_distmap_build(&tx->fn, res, dist_dtypes[a->dist_type], (int)a->threads, &tx->dist, err);
+    if (r == MESO_OK && verbose)
+        fprintf(stderr, "mesobake: distance map %ux%ux%u %s (%s): %llu of %llu cells touch the solid (%.0f ms)\n",
+                res[0], res[1], res[2], dist_type_names[a->dist_type], a->dist_res[0] ? "--dist-res" : "default",
+                (unsigned long long)tx->dist.solid_cells, (unsigned long long)res[0] * res[1] * res[2],
+                1e3 * (now_seconds() - t));
+    return r;
+}
+
+/* Texture coordinates: the mesh's own times the tiling, or (documented
+ * fallback) a planar projection onto the two largest bounding-box extents,
+ * the longest spanning U tiles and the other V/U as densely. */
+static meso_result texture_uvs(const shell_args* a, const meso_mesh* m, const double lo[3], const double hi[3],
+                               shell_texture* tx, meso_error* err)
+{
+    const uint32_t nv = m->vertex_count;
+    tx->uvs = malloc(sizeof(float) * 2 * (size_t)nv);
+    if (!tx->uvs)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    if (m->uvs) {
+        tx->uv_source = "mesh";
+        for (size_t v = 0; v < nv; ++v) {
+            tx->uvs[2 * v] = (float)(m->uvs[2 * v] * a->tiling[0]);
+            tx->uvs[2 * v + 1] = (float)(m->uvs[2 * v + 1] * a->tiling[1]);
+        }
+        return MESO_OK;
+    }
+    int ax[3] = {0, 1, 2}; /* by decreasing extent; ties keep x, y, z order */
+    for (int i = 0; i < 3; ++i)
+        for (int j = i + 1; j < 3; ++j)
+            if (hi[ax[j]] - lo[ax[j]] > hi[ax[i]] - lo[ax[i]]) {
+                const int k = ax[i];
+                ax[i] = ax[j];
+                ax[j] = k;
+            }
+    const double ext = hi[ax[0]] - lo[ax[0]] > 0 ? hi[ax[0]] - lo[ax[0]] : 1.0;
+    for (size_t v = 0; v < nv; ++v) {
+        tx->uvs[2 * v] = (float)((m->positions[3 * v + (size_t)ax[0]] - lo[ax[0]]) / ext * a->tiling[0]);
+        tx->uvs[2 * v + 1] = (float)((m->positions[3 * v + (size_t)ax[1]] - lo[ax[1]]) / ext * a->tiling[1]);
+    }
+    tx->uv_source = "planar";
+    tx->plane[0] = (char)('x' + ax[0]);
+    tx->plane[1] = (char)('x' + ax[1]);
+    tx->plane[2] = 0;
+    fprintf(stderr, "mesobake warning: %s has no texture coordinates; projecting it onto its %s plane (the two "
+                    "largest bounding-box extents), %c spanning %g tiles\n",
+            base_name(a->in), tx->plane, tx->plane[0], a->tiling[0]);
+    return MESO_OK;
+}
+
+/* META.parameters.texture and the report's "texture". */
+static void texture_json(cJSON* parent, const shell_args* a, const shell_texture* tx, int report)
+{
+    cJSON* o = cJSON_AddObjectToObject(parent, "texture");
+    cJSON_AddStringToObject(o, "spec", a->texture);
+    cJSON_AddStringToObject(o, "kind", tx->fn.kind == MESO_TEXFN_HEIGHT ? "height" : "density");
+    const double tex_dims[3] = {tx->fn.dims[0], tx->fn.dims[1], tx->fn.dims[2]};
+    cJSON_AddItemToObject(o, "texture_res", cJSON_CreateDoubleArray(tex_dims, tx->fn.kind == MESO_TEXFN_HEIGHT ? 2 : 3));
+    cJSON_AddItemToObject(o, "tiling", cJSON_CreateDoubleArray(a->tiling, 2));
+    const double dd[3] = {tx->dist.dims[0], tx->dist.dims[1], tx->dist.dims[2]};
+    cJSON_AddItemToObject(o, "dist_res", cJSON_CreateDoubleArray(dd, 3));
+    cJSON_AddStringToObject(o, "dist_type", dist_type_names[a->dist_type]);
+    cJSON_AddStringToObject(o, "uv_source", tx->uv_source);
+    if (tx->plane[0])
+        cJSON_AddStringToObject(o, "uv_plane", tx->plane);
+    if (report)
+        cJSON_AddNumberToObject(o, "dist_solid_cells", (double)tx->dist.solid_cells);
+}
+
 int cmd_shell(int argc, char** argv)
 {
     shell_args a;
@@ -192,9 +372,19 @@ int cmd_shell(int argc, char** argv)
         return rc < 0 ? MESO_EXIT_OK : rc;
     const double t0 = now_seconds();
     meso_error err = {0};
-    meso_mesh m;
-    meso_result r = load_mesh(a.in, &m, &err);
+    shell_texture tx;
+    memset(&tx, 0, sizeof(tx));
+    /* The texture first: a bad spec fails before any mesh work. */
+    meso_result r = a.texture ? texture_prepare(&a, &tx, &err) : MESO_OK;
     if (r != MESO_OK) {
+        texture_free(&tx);
+        err_print(&err);
+        return meso_exit_for(r);
+    }
+    meso_mesh m;
+    r = load_mesh(a.in, &m, &err);
+    if (r != MESO_OK) {
+        texture_free(&tx);
         err_print(&err);
         return meso_exit_for(r);
     }
@@ -225,9 +415,12 @@ int cmd_shell(int argc, char** argv)
                                a.in, (unsigned long long)c.pairs);
     }
 #endif
+    if (r == MESO_OK && a.texture)
+        r = texture_uvs(&a, &m, lo, hi, &tx, &err);
     if (r != MESO_OK) {
         free(topo.boundary);
         meso_mesh_free(&m);
+        texture_free(&tx);
         err_print(&err);
         return meso_exit_for(r);
     }
@@ -320,11 +513,26 @@ int cmd_shell(int argc, char** argv)
 
     size_t file_size = 0;
     if (r == MESO_OK) {
-        /* Base mesh with the normals the directors started from. */
-        float* saved = m.normals;
+        /* Base mesh with the normals the directors started from (and the
+         * texture coordinates of the texture function). */
+        float *saved = m.normals, *saved_uvs = m.uvs;
         m.normals = normals;
+        if (tx.uvs)
+            m.uvs = tx.uvs;
         r = meso_bake_mesh_chunk(&m, NULL, &chunk, &err);
         m.normals = saved;
+        m.uvs = saved_uvs;
+    }
+    /* SDIR as FORMAT.md §7.2 has it: L = 1 for exterior shells; L = 2 for
+     * envelopes (top, bottom) and for interior shells, whose layer 0 is zero
+     * (top = the base surface) and layer 1 the inward director (bottom). */
+    const int sdir_layers = a.kind == MESO_SHELL_EXTERIOR ? 1 : 2;
+    float* sdir = d;
+    if (r == MESO_OK && a.kind == MESO_SHELL_INTERIOR) {
+        sdir = calloc(3 * (size_t)nv * 2, sizeof(float));
+        r = sdir ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        if (sdir)
+            memcpy(sdir + 3 * (size_t)nv, d, sizeof(float) * 3 * (size_t)nv);
     }
     if (r == MESO_OK) {
         thick = malloc(sizeof(float) * (size_t)nv);
@@ -358,24 +566,36 @@ int cmd_shell(int argc, char** argv)
         cJSON_AddNumberToObject(params, "angle_tol_deg", a.angle_tol_deg);
         cJSON_AddNumberToObject(params, "smooth", (double)a.smooth);
         cJSON_AddBoolToObject(params, "repair", a.repair);
+        if (a.texture)
+            texture_json(params, &a, &tx, 0);
         r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
         uint32_t lp_count = 0;
         for (uint32_t v = 0; v < nv; ++v)
             lp_count += lp_mask[v];
         rep = report_json(&val, &hs_total, lp_count, shortened_total, nv, &ts, &fs);
-        const bake_chunk chunks[3] = {
+        if (a.texture)
+            texture_json(rep, &a, &tx, 1);
+        const int height = tx.fn.kind == MESO_TEXFN_HEIGHT;
+        const bake_chunk chunks[5] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
             {.desc = {.type = MESO_CHUNK_SDIR, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
-                      .dtype = MESO_DTYPE_F32, .components = 3, .dims = {nv, (uint32_t)layers, 1}},
-             .data = d, .size = sizeof(float) * 3 * (size_t)nv * (size_t)layers},
+                      .dtype = MESO_DTYPE_F32, .components = 3, .dims = {nv, (uint32_t)sdir_layers, 1}},
+             .data = sdir, .size = sizeof(float) * 3 * (size_t)nv * (size_t)sdir_layers},
             {.desc = {.type = MESO_CHUNK_STHK, .object = 1, .dtype = MESO_DTYPE_F32, .components = 1,
                       .dims = {nv, 1, 1}},
              .data = thick, .size = sizeof(float) * (size_t)nv},
+            /* The texture function and its distance map (object 1, lod 0). */
+            {.desc = {.type = height ? MESO_CHUNK_TX2D : MESO_CHUNK_TX3D, .object = 1, .dtype = tx.fn.dtype,
+                      .components = 1, .dims = {tx.fn.dims[0], tx.fn.dims[1], tx.fn.dims[2]}},
+             .data = tx.fn.encoded, .size = tx.fn.encoded_size},
+            {.desc = {.type = MESO_CHUNK_DIST, .object = 1, .dtype = tx.dist.dtype, .components = 1,
+                      .dims = {tx.dist.dims[0], tx.dist.dims[1], tx.dist.dims[2]}},
+             .data = tx.dist.encoded, .size = tx.dist.encoded_size},
         };
         if (r == MESO_OK)
-            r = write_meso(a.out, meta, rep, &rec, chunks, 3, &file_size, &err);
+            r = write_meso(a.out, meta, rep, &rec, chunks, a.texture ? 5 : 3, &file_size, &err);
     }
     const double t_end = now_seconds();
     if (r == MESO_OK && verbose)
@@ -389,6 +609,9 @@ int cmd_shell(int argc, char** argv)
     cJSON_Delete(rep);
     free(chunk.data);
     free(thick);
+    if (sdir != d)
+        free(sdir);
+    texture_free(&tx);
     meso_lp_field_destroy(field);
     meso_field_surface_free(&fs);
     free(normals);

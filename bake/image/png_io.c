@@ -2,6 +2,7 @@
 #include "png_io.h"
 
 #include <png.h>
+#include <setjmp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -54,4 +55,189 @@ int meso_png_read_rgba8(const char* path, uint8_t** rgba, int* width, int* heigh
     *width = (int)img.width;
     *height = (int)img.height;
     return 0;
+}
+
+/* >>data images ----------------------------------------------------------
+ * The simplified API converts between sRGB and linear when bit depths differ,
+ * which would bend a height map; these two use the low-level API, where no
+ * gamma processing happens unless asked for. libpng reports errors by
+ * longjmp from the error callback; everything that must survive it lives in
+ * a context struct reached through a pointer, never in locals modified
+ * after setjmp. */
+
+typedef struct png_ctx {
+    char* why;
+    int why_size;
+    const char* path;
+    FILE* fp;
+    uint8_t* pixels;    /* decoded image (read) */
+    png_bytep* rows;    /* row pointers */
+} png_ctx;
+
+static void ctx_error(png_structp png, png_const_charp msg)
+{
+    png_ctx* c = png_get_error_ptr(png);
+    snprintf(c->why, (size_t)c->why_size, "%s: %s", c->path, msg);
+    png_longjmp(png, 1);
+}
+
+static void ctx_warning(png_structp png, png_const_charp msg)
+{
+    (void)png;
+    (void)msg;
+}
+
+static void ctx_free(png_ctx* c)
+{
+    free(c->pixels);
+    free(c->rows);
+    if (c->fp)
+        fclose(c->fp);
+    c->pixels = NULL;
+    c->rows = NULL;
+    c->fp = NULL;
+}
+
+/* Decode after setjmp; fills c->pixels. */
+static int read_body(png_structp png, png_infop info, png_ctx* c, int* width, int* height, int* depth, int* channels)
+{
+    png_init_io(png, c->fp);
+    png_set_sig_bytes(png, 8);
+    png_set_user_limits(png, 65536, 65536);
+    png_read_info(png, info);
+    png_set_expand(png); /* palette -> RGB, grey < 8 bits -> 8 bits, tRNS -> alpha */
+    (void)png_set_interlace_handling(png);
+    png_read_update_info(png, info);
+    const png_uint_32 w = png_get_image_width(png, info), h = png_get_image_height(png, info);
+    const size_t rowbytes = png_get_rowbytes(png, info);
+    *depth = png_get_bit_depth(png, info);
+    *channels = png_get_channels(png, info);
+    if (w == 0 || h == 0 || (*depth != 8 && *depth != 16)) {
+        snprintf(c->why, (size_t)c->why_size, "%s: unsupported PNG layout", c->path);
+        return -1;
+    }
+    c->pixels = malloc(rowbytes * h);
+    c->rows = malloc(sizeof(png_bytep) * h);
+    if (!c->pixels || !c->rows) {
+        snprintf(c->why, (size_t)c->why_size, "%s: out of memory", c->path);
+        return -1;
+    }
+    for (png_uint_32 y = 0; y < h; ++y)
+        c->rows[y] = c->pixels + rowbytes * y;
+    png_read_image(png, c->rows);
+    png_read_end(png, NULL);
+    *width = (int)w;
+    *height = (int)h;
+    return 0;
+}
+
+int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int* height, int* bit_depth, char* why,
+                           int why_size)
+{
+    *values = NULL;
+    png_ctx ctx = {.why = why, .why_size = why_size, .path = path};
+    png_ctx* c = &ctx;
+    c->fp = fopen(path, "rb");
+    if (!c->fp) {
+        snprintf(why, (size_t)why_size, "%s: can not open", path);
+        return -1;
+    }
+    uint8_t sig[8];
+    if (fread(sig, 1, 8, c->fp) != 8 || png_sig_cmp(sig, 0, 8)) {
+        snprintf(why, (size_t)why_size, "%s: not a PNG file", path);
+        ctx_free(c);
+        return -1;
+    }
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, c, ctx_error, ctx_warning);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!info) {
+        snprintf(why, (size_t)why_size, "%s: out of memory", path);
+        png_destroy_read_struct(&png, NULL, NULL);
+        ctx_free(c);
+        return -1;
+    }
+    int w = 0, h = 0, depth = 0, channels = 0, rc = -1;
+    if (setjmp(png_jmpbuf(png)) == 0)
+        rc = read_body(png, info, c, &w, &h, &depth, &channels);
+    png_destroy_read_struct(&png, &info, NULL);
+    uint16_t* out = rc == 0 ? malloc(sizeof(uint16_t) * (size_t)w * (size_t)h) : NULL;
+    if (rc == 0 && !out) {
+        snprintf(why, (size_t)why_size, "%s: out of memory", path);
+        rc = -1;
+    }
+    if (rc == 0) {
+        const size_t stride = (size_t)channels * (size_t)(depth / 8);
+        for (size_t y = 0; y < (size_t)h; ++y) {
+            const uint8_t* row = c->rows[y];
+            for (size_t x = 0; x < (size_t)w; ++x)
+                out[y * (size_t)w + x] = depth == 16 ? (uint16_t)(row[x * stride] << 8 | row[x * stride + 1])
+                                                     : row[x * stride];
+        }
+        *values = out;
+        *width = w;
+        *height = h;
+        *bit_depth = depth;
+    }
+    ctx_free(c);
+    return rc;
+}
+
+static int write_body(png_structp png, png_infop info, png_ctx* c, const uint16_t* values, int width, int height,
+                      int bit_depth)
+{
+    png_init_io(png, c->fp);
+    png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, bit_depth, PNG_COLOR_TYPE_GRAY,
+                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_write_info(png, info);
+    const size_t bpp = (size_t)bit_depth / 8;
+    c->pixels = malloc(bpp * (size_t)width);
+    if (!c->pixels) {
+        snprintf(c->why, (size_t)c->why_size, "%s: out of memory", c->path);
+        return -1;
+    }
+    for (size_t y = 0; y < (size_t)height; ++y) {
+        for (size_t x = 0; x < (size_t)width; ++x) {
+            const uint16_t v = values[y * (size_t)width + x];
+            if (bpp == 2) {
+                c->pixels[2 * x] = (uint8_t)(v >> 8);
+                c->pixels[2 * x + 1] = (uint8_t)(v & 0xFF);
+            } else {
+                c->pixels[x] = (uint8_t)v;
+            }
+        }
+        png_write_row(png, c->pixels);
+    }
+    png_write_end(png, NULL);
+    return 0;
+}
+
+int meso_png_write_gray(const char* path, const uint16_t* values, int width, int height, int bit_depth, char* why,
+                        int why_size)
+{
+    if (width <= 0 || height <= 0 || (bit_depth != 8 && bit_depth != 16)) {
+        snprintf(why, (size_t)why_size, "%s: bad image size or bit depth", path);
+        return -1;
+    }
+    png_ctx ctx = {.why = why, .why_size = why_size, .path = path};
+    png_ctx* c = &ctx;
+    c->fp = fopen(path, "wb");
+    if (!c->fp) {
+        snprintf(why, (size_t)why_size, "%s: can not create", path);
+        return -1;
+    }
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, c, ctx_error, ctx_warning);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    int rc = -1;
+    if (!info)
+        snprintf(why, (size_t)why_size, "%s: out of memory", path);
+    else if (setjmp(png_jmpbuf(png)) == 0)
+        rc = write_body(png, info, c, values, width, height, bit_depth);
+    png_destroy_write_struct(&png, &info);
+    if (c->fp && fclose(c->fp) != 0 && rc == 0) {
+        snprintf(why, (size_t)why_size, "%s: write failed", path);
+        rc = -1;
+    }
+    c->fp = NULL;
+    ctx_free(c);
+    return rc;
 }

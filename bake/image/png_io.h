@@ -1,5 +1,6 @@
-/* png_io.h — 8-bit PNG read/write through libpng (shared by the baker, the
- * inspector's previews, the viewer's screenshots and the tests). */
+/* png_io.h — PNG read/write through libpng: RGBA8 images and grey data
+ * images such as height maps (shared by the baker, the inspector's previews,
+ * the viewer's screenshots and the tests). */
 #ifndef MESO_PNG_IO_H
 #define MESO_PNG_IO_H
 
@@ -11,5 +12,17 @@ int meso_png_write_rgba8(const char* path, const uint8_t* rgba, int width, int h
                          int why_size);
 /* Read any 8/16-bit PNG as RGBA8 (malloc'd, free with free()). */
 int meso_png_read_rgba8(const char* path, uint8_t** rgba, int* width, int* height, char* why, int why_size);
+/* Read the first channel of any PNG (grey, or red of RGB(A)/palette images)
+ * without gamma or colour conversion, for data images such as height maps:
+ * *values (malloc'd, free with free()) gets width*height samples, rows top to
+ * bottom, 0..255 when *bit_depth is 8 (files of 1..8 bits; 1, 2 and 4-bit grey
+ * is scaled to 8 bits) and 0..65535 when it is 16. Returns 0 on success; on
+ * failure writes a reason to `why`. */
+int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int* height, int* bit_depth, char* why,
+                           int why_size);
+/* Write a grey PNG from width*height samples, rows top to bottom, with
+ * bit_depth 8 (values 0..255) or 16. Returns 0 on success. */
+int meso_png_write_gray(const char* path, const uint16_t* values, int width, int height, int bit_depth, char* why,
+                        int why_size);
 
 #endif

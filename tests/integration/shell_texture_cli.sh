@@ -1,0 +1,105 @@
+#!/bin/sh
+# mesobake shell --texture from the command line (FORMAT.md §7.2, "Shell
+# prisms and texture space"): built-in height fields and volumes, a PNG
+# height map, the TX2D/TX3D + DIST chunks and MESH uvs they add, META and
+# report keys, --tiling/--dist-res/--dist-type, byte-identical output for
+# -j 1 and -j 2, interior shells' two-layer SDIR, and bad specs: a coded
+# error, a non-zero exit, and no output file.
+# usage: shell_texture_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR WRITE_HEIGHT_PNG
+set -u
+bake=$1 inspect=$2 data=$3 writepng=$4
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # DESCRIPTION COMMAND...
+  d=$1; shift
+  if "$@"; then echo "ok   $d"; else echo "FAIL $d"; fail=1; fi
+}
+spot="$data/spot_low_resolution.obj"
+# chunk_row FILE TYPE: the chunk's row of 'mesoinspect info'
+chunk_row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t'; }
+bytes() { wc -c <"$1" | tr -d ' '; }
+
+# 1. Built-in height field on a mesh without uvs: planar fallback + warning.
+"$bake" shell -i "$spot" -o "$tmp/bricks.meso" --texture bricks --report "$tmp/bricks.json" \
+  >/dev/null 2>"$tmp/bricks.err"
+check "bricks: bake succeeds" test -s "$tmp/bricks.meso"
+check "bricks: validates fully" sh -c "'$inspect' validate --full '$tmp/bricks.meso' >/dev/null"
+check "bricks: TX2D u16 256x256x1 on object 1" sh -c "'$inspect' info '$tmp/bricks.meso' | awk '\$2 == \"TX2D\" && \$4 == 1 && \$5 == 0 && \$7 == \"u16\" && \$9 == \"256x256x1\"' | grep -q ."
+check "bricks: DIST u8 on object 1" sh -c "'$inspect' info '$tmp/bricks.meso' | awk '\$2 == \"DIST\" && \$4 == 1 && \$7 == \"u8\"' | grep -q ."
+check "bricks: MESH carries uvs" sh -c "'$inspect' info '$tmp/bricks.meso' | grep -q 'attributes positions normals uvs'"
+check "bricks: warns about the missing uvs" grep -q "warning: .*no texture coordinates" "$tmp/bricks.err"
+check "bricks: META records the texture" sh -c "'$inspect' info '$tmp/bricks.meso' | grep -q '\"spec\":[[:space:]]*\"bricks\"'"
+for key in uv_source dist_res tiling dist_solid_cells; do
+  check "bricks: report has texture.$key" grep -q "\"$key\":" "$tmp/bricks.json"
+done
+check "bricks: report says the uvs are planar" grep -q '"uv_source":[[:space:]]*"planar"' "$tmp/bricks.json"
+"$inspect" dump "$tmp/bricks.meso" DIST:1 -o "$tmp/bricks.dist" >/dev/null 2>&1
+dims=$(chunk_row "$tmp/bricks.meso" DIST | awk '{print $9}')
+expect=$(echo "$dims" | awk -F x '{print $1 * $2 * $3}')
+check "bricks: DIST payload is W*H*D bytes ($dims)" test "$(bytes "$tmp/bricks.dist")" = "$expect"
+
+# 2. Built-in volume, twice with different thread counts.
+"$bake" shell -i "$spot" -o "$tmp/weave1.meso" --texture weave -j 1 >/dev/null 2>&1
+"$bake" shell -i "$spot" -o "$tmp/weave2.meso" --texture weave -j 2 >/dev/null 2>&1
+check "weave: bake succeeds" test -s "$tmp/weave1.meso"
+check "weave: -j 1 and -j 2 give byte-identical files" cmp -s "$tmp/weave1.meso" "$tmp/weave2.meso"
+check "weave: validates fully" sh -c "'$inspect' validate --full '$tmp/weave1.meso' >/dev/null"
+check "weave: TX3D u8 128x128x64" sh -c "'$inspect' info '$tmp/weave1.meso' | awk '\$2 == \"TX3D\" && \$4 == 1 && \$7 == \"u8\" && \$9 == \"128x128x64\"' | grep -q ."
+check "weave: default DIST is 64x64x32" sh -c "'$inspect' info '$tmp/weave1.meso' | awk '\$2 == \"DIST\" && \$9 == \"64x64x32\"' | grep -q ."
+"$inspect" dump "$tmp/weave1.meso" TX3D:1 -o "$tmp/weave.tx" >/dev/null 2>&1
+check "weave: TX3D payload is 128*128*64 bytes" test "$(bytes "$tmp/weave.tx")" = 1048576
+
+# 3. Options: tiling, distance-map resolution and store type.
+"$bake" shell -i "$spot" -o "$tmp/cells.meso" --texture cells:16 --tiling 2,3 --dist-res 8x6x4 --dist-type f32 \
+  >/dev/null 2>&1
+check "cells: bake succeeds" test -s "$tmp/cells.meso"
+check "cells: validates fully" sh -c "'$inspect' validate --full '$tmp/cells.meso' >/dev/null"
+check "cells: DIST f32 8x6x4" sh -c "'$inspect' info '$tmp/cells.meso' | awk '\$2 == \"DIST\" && \$7 == \"f32\" && \$9 == \"8x6x4\"' | grep -q ."
+"$inspect" dump "$tmp/cells.meso" DIST -o "$tmp/cells.dist" >/dev/null 2>&1
+check "cells: DIST payload is 8*6*4 floats" test "$(bytes "$tmp/cells.dist")" = 768
+check "cells: META records tiling [2, 3]" sh -c "'$inspect' info '$tmp/cells.meso' --format json | tr -d ' \t\n' | grep -q '\"tiling\":\[2,3\]'"
+
+# 4. PNG height maps (16- and 8-bit) on a mesh with its own uvs (no warning).
+"$writepng" "$tmp/h16.png" 16 32 && "$writepng" "$tmp/h8.png" 8 24
+"$bake" shell -i "$data/saddle.obj" -o "$tmp/png16.meso" --kind envelope --texture "height:$tmp/h16.png" \
+  --report "$tmp/png16.json" >/dev/null 2>"$tmp/png16.err"
+check "png16: bake succeeds" test -s "$tmp/png16.meso"
+check "png16: validates fully" sh -c "'$inspect' validate --full '$tmp/png16.meso' >/dev/null"
+check "png16: TX2D u16 32x32x1" sh -c "'$inspect' info '$tmp/png16.meso' | awk '\$2 == \"TX2D\" && \$7 == \"u16\" && \$9 == \"32x32x1\"' | grep -q ."
+check "png16: the mesh's own uvs are used" grep -q '"uv_source":[[:space:]]*"mesh"' "$tmp/png16.json"
+check "png16: no uv warning" sh -c "! grep -q warning '$tmp/png16.err'"
+"$bake" shell -i "$spot" -o "$tmp/png8.meso" --texture "height:$tmp/h8.png" >/dev/null 2>&1
+check "png8: TX2D u8 24x24x1" sh -c "'$inspect' info '$tmp/png8.meso' | awk '\$2 == \"TX2D\" && \$7 == \"u8\" && \$9 == \"24x24x1\"' | grep -q ."
+
+# 5. Interior shells: SDIR has two layers (layer 0 zero, layer 1 inwards).
+"$bake" shell -i "$spot" -o "$tmp/int.meso" --kind interior --texture bricks:64 >/dev/null 2>&1
+check "interior: validates fully" sh -c "'$inspect' validate --full '$tmp/int.meso' >/dev/null"
+check "interior: SDIR is 829x2x1" sh -c "'$inspect' info '$tmp/int.meso' | awk '\$2 == \"SDIR\" && \$9 == \"829x2x1\"' | grep -q ."
+"$inspect" dump "$tmp/int.meso" SDIR -o "$tmp/int.sdir" >/dev/null 2>&1
+check "interior: SDIR layer 0 is all zero" sh -c "head -c 9948 '$tmp/int.sdir' | od -An -v -tx1 | tr -s ' \n' '\n\n' | grep -v '^$' | grep -qv '^00$' && exit 1 || exit 0"
+check "interior: SDIR layer 1 is not" sh -c "tail -c 9948 '$tmp/int.sdir' | od -An -v -tx1 | tr -s ' \n' '\n\n' | grep -v '^$' | grep -qv '^00$'"
+
+# 6. Bad specs and options: coded error, non-zero exit, no output.
+refuse() { # DESCRIPTION EXPECTED_EXIT EXPECTED_TEXT ARGS...
+  d=$1 code=$2 text=$3; shift 3
+  rm -f "$tmp/out.meso"
+  "$bake" shell -i "$spot" -o "$tmp/out.meso" "$@" >"$tmp/stdout" 2>"$tmp/stderr"
+  rc=$?
+  check "$d: exit $code (got $rc)" test "$rc" = "$code"
+  check "$d: says '$text'" grep -q -- "$text" "$tmp/stderr"
+  check "$d: writes no output" test ! -e "$tmp/out.meso"
+}
+printf 'short' >"$tmp/short.raw"
+refuse "unknown texture" 1 "mesobake error E3120" --texture marble
+refuse "bad RES" 1 "E3120.*RES" --texture bricks:3
+refuse "raw without size" 1 "E3120" --texture "volume:$tmp/short.raw"
+refuse "missing PNG" 2 "E3121.*nope.png" --texture "height:$tmp/nope.png"
+refuse "PNG that is not a PNG" 3 "E3122.*not a PNG" --texture "height:$tmp/short.raw"
+refuse "raw of the wrong size" 3 "E3122.*expected exactly 64" --texture "volume:$tmp/short.raw:4x4x4"
+refuse "bad --dist-res" 1 "--dist-res expects" --texture bricks --dist-res 8x8
+refuse "bad --dist-type" 1 "--dist-type expects" --texture bricks --dist-type f16
+refuse "bad --tiling" 1 "--tiling expects" --texture bricks --tiling 0,1
+refuse "--tiling without --texture" 1 "need --texture" --tiling 2
+check "help documents --texture and the built-ins" sh -c "'$bake' shell --help | grep -q 'bricks\[:RES\]'"
+exit $fail
