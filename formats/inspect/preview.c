@@ -6,6 +6,11 @@
  * The camera orbits the union of the objects' bounds (from the OBJT records)
  * at --yaw/--pitch, framed so the bounding sphere fills the view. The image
  * is rendered at twice the size and box-filtered down (4 samples a pixel).
+ *
+ * --reference renders the shell objects with the exact CPU ray caster
+ * (runtime/reference/shell_reference.h) instead: no EGL, the same camera,
+ * light, clear colour and 2x2 box filter, so the two PNGs compare pixel by
+ * pixel.
  */
 #include <math.h>
 #include <stdio.h>
@@ -17,6 +22,7 @@
 #include "meso_file.h"
 #include "meso_rt.h"
 #include "png_io.h"
+#include "shell_reference.h"
 
 int mesoinspect_preview(int argc, char** argv);
 
@@ -30,12 +36,16 @@ static const char* const usage_preview =
     "      --object ID     draw only this object\n"
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
+    "      --technique T   shell technique: smooth (default), curved or tetra\n"
+    "      --reference     render the shell objects with the exact CPU reference\n"
+    "                      (runtime/reference; no EGL needed, slow). --technique\n"
+    "                      curved selects the curved mapping, smooth and tetra the\n"
+    "                      smooth one; mesh objects are skipped\n"
+    "      --samples N     reference: samples per prism along each ray (default 1024)\n"
     "  -h, --help          this help\n";
 
-#if MESO_HAVE_EGL
-#include <GL/glcorearb.h>
-
-#include "egl_context.h"
+/* Background: the GL preview's clear colour. */
+static const float clear_rgb[3] = {0.18f, 0.20f, 0.24f};
 
 static void perspective(float m[16], double fovy, double aspect, double zn, double zf)
 {
@@ -72,6 +82,166 @@ static void look_at(float m[16], const double eye[3], const double at[3])
     m[15] = 1.0f;
 }
 
+/* The preview camera and light for objects within [lo, hi] (both renderers). */
+static void preview_camera(const double lo[3], const double hi[3], int width, int height, double yaw, double pitch,
+                           meso_rt_draw_desc* d)
+{
+    const double centre[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+    const double radius = 0.5 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    const double fovy = 35.0 * M_PI / 180.0, aspect = (double)width / height;
+    const double fit = fmin(fovy, 2 * atan(tan(fovy / 2) * aspect));
+    const double dist = (radius > 0 ? radius : 1.0) / sin(fit / 2) * 1.05;
+    const double y = yaw * M_PI / 180.0, p = pitch * M_PI / 180.0;
+    const double eye[3] = {centre[0] + dist * cos(p) * sin(y), centre[1] + dist * sin(p),
+                           centre[2] + dist * cos(p) * cos(y)};
+    look_at(d->view, eye, centre);
+    perspective(d->proj, fovy, aspect, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
+    /* Light from the upper left of the viewer. */
+    const double ly = y - 0.6, lp = p + 0.7;
+    d->light_dir[0] = (float)(cos(lp) * sin(ly));
+    d->light_dir[1] = (float)sin(lp);
+    d->light_dir[2] = (float)(cos(lp) * cos(ly));
+}
+
+/* 2x2 box filter of a (2 width) x (2 height) RGBA8 image, as the GL path. */
+static void box_filter(const uint8_t* px, uint8_t* img, int width, int height)
+{
+    const size_t W = 2 * (size_t)width;
+    for (int yy = 0; yy < height; ++yy)
+        for (int xx = 0; xx < width; ++xx)
+            for (int k = 0; k < 4; ++k) {
+                const uint8_t* s = px + 4 * ((size_t)(2 * yy) * W + (size_t)(2 * xx)) + k;
+                const unsigned sum = s[0] + s[4] + s[4 * W] + s[4 * W + 4];
+                img[4 * ((size_t)yy * (size_t)width + (size_t)xx) + (size_t)k] = (uint8_t)((sum + 2) / 4);
+            }
+}
+
+static uint8_t unorm8(float c)
+{
+    return (uint8_t)lrintf(fminf(fmaxf(c, 0.0f), 1.0f) * 255.0f);
+}
+
+static int render_reference(const char* path, const char* out, int width, int height, uint32_t only, double yaw,
+                            double pitch, int curved, int samples)
+{
+    int code = MESO_EXIT_OK;
+    meso_file* f = NULL;
+    meso_ref_shell shells[64];
+    int nshell = 0;
+    uint8_t *px = NULL, *img = NULL;
+    float* zbuf = NULL;
+    meso_decoder dec = meso_bake_draco_decoder();
+    meso_error err;
+    meso_result r = meso_file_open_path(path, &(meso_open_desc){.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0},
+                                        &f, &err);
+    if (r != MESO_OK) {
+        fprintf(stderr, "mesoinspect error: %s\n", err.message);
+        return meso_exit_for(r);
+    }
+    /* The framing covers what the GL preview would draw (meshes and shells),
+     * so the two images share a camera. */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    meso_object_record recs[256];
+    uint32_t count = 0;
+    if ((r = meso_file_objects(f, recs, 256, &count, &err)) != MESO_OK) {
+        fprintf(stderr, "mesoinspect error: %s\n", err.message);
+        code = meso_exit_for(r);
+        goto done;
+    }
+    for (uint32_t i = 0; i < count && i < 256; ++i) {
+        const meso_object_record* rec = &recs[i];
+        if ((only && rec->id != only) || (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL))
+            continue;
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fmin(lo[k], rec->bbox_min[k]);
+            hi[k] = fmax(hi[k], rec->bbox_max[k]);
+        }
+        if (rec->kind != MESO_OBJECT_SHELL) {
+            fprintf(stderr, "mesoinspect warning: object %u (%s) is not a shell; --reference renders shells only\n",
+                    rec->id, rec->name);
+            continue;
+        }
+        if (nshell == 64) {
+            fprintf(stderr, "mesoinspect warning: more than 64 shells; object %u (%s) is skipped\n", rec->id,
+                    rec->name);
+            continue;
+        }
+        if ((r = meso_ref_shell_load(f, rec->id, &shells[nshell], &err)) != MESO_OK) {
+            fprintf(stderr, "mesoinspect error: %s\n", err.message);
+            code = meso_exit_for(r);
+            goto done;
+        }
+        ++nshell;
+    }
+    if (nshell == 0) {
+        fprintf(stderr, "mesoinspect error: %s: no shell object%s\n", path, only ? " with that id" : "");
+        code = only ? MESO_EXIT_USAGE : MESO_EXIT_UNSUPPORTED;
+        goto done;
+    }
+    meso_rt_draw_desc d = {0};
+    preview_camera(lo, hi, width, height, yaw, pitch, &d);
+    const int W = 2 * width, H = 2 * height;
+    meso_ref_view v = {.width = W, .height = H, .curved = curved, .samples_per_prism = samples};
+    for (int k = 0; k < 16; ++k) {
+        v.view[k] = d.view[k];
+        v.proj[k] = d.proj[k];
+    }
+    for (int k = 0; k < 3; ++k)
+        v.light_dir[k] = d.light_dir[k];
+    const size_t n = (size_t)W * (size_t)H;
+    px = malloc(n * 4);
+    img = malloc((size_t)width * (size_t)height * 4);
+    zbuf = malloc(n * sizeof(float));
+    if (!px || !img || !zbuf) {
+        fprintf(stderr, "mesoinspect error: out of memory\n");
+        code = MESO_EXIT_INTERNAL;
+        goto done;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k)
+            px[4 * i + (size_t)k] = unorm8(clear_rgb[k]);
+        px[4 * i + 3] = 255;
+        zbuf[i] = 1.0f;
+    }
+    /* Several shells: the nearest hit per sample (GL_LESS). */
+    for (int s = 0; s < nshell; ++s) {
+        meso_ref_image ri;
+        if ((r = meso_ref_render(&shells[s], &v, &ri)) != MESO_OK) {
+            fprintf(stderr, "mesoinspect error: reference render failed: %s\n", meso_result_string(r));
+            code = MESO_EXIT_INTERNAL;
+            goto done;
+        }
+        for (size_t i = 0; i < n; ++i)
+            if (ri.coverage[i] && ri.depth[i] < zbuf[i]) {
+                zbuf[i] = ri.depth[i];
+                for (int k = 0; k < 3; ++k)
+                    px[4 * i + (size_t)k] = unorm8(ri.rgb[3 * i + (size_t)k]);
+            }
+        meso_ref_image_free(&ri);
+    }
+    box_filter(px, img, width, height);
+    char why[256];
+    /* Row 0 of the reference image is the bottom, as glReadPixels'. */
+    if (meso_png_write_rgba8(out, img, width, height, 1, why, sizeof(why)) != 0) {
+        fprintf(stderr, "mesoinspect error: %s\n", why);
+        code = MESO_EXIT_IO;
+    }
+done:
+    for (int s = 0; s < nshell; ++s)
+        meso_ref_shell_free(&shells[s]);
+    free(px);
+    free(img);
+    free(zbuf);
+    meso_file_close(f);
+    return code;
+}
+
+#if MESO_HAVE_EGL
+#include <GL/glcorearb.h>
+
+#include "egl_context.h"
+
 #define PREVIEW_GL(X)                                                                                              \
     X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers) X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                        \
     X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers) X(PFNGLGENRENDERBUFFERSPROC, GenRenderbuffers)                \
@@ -95,7 +265,8 @@ static void on_log(void* user, meso_log_level level, meso_log_item item, const c
             meso_log_item_string(item), message ? ": " : "", message ? message : "");
 }
 
-static int render(const char* path, const char* out, int width, int height, uint32_t only, double yaw, double pitch)
+static int render(const char* path, const char* out, int width, int height, uint32_t only, double yaw, double pitch,
+                  meso_shell_technique technique)
 {
     char why[256];
     meso_egl* egl = meso_egl_create(why, sizeof(why));
@@ -189,26 +360,12 @@ static int render(const char* path, const char* out, int width, int height, uint
         goto done;
     }
     gl.Viewport(0, 0, W, H);
-    gl.ClearColor(0.18f, 0.20f, 0.24f, 1.0f);
+    gl.ClearColor(clear_rgb[0], clear_rgb[1], clear_rgb[2], 1.0f);
     gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
 
-    const double centre[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
-    const double radius = 0.5 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                     (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    const double fovy = 35.0 * M_PI / 180.0, aspect = (double)width / height;
-    const double fit = fmin(fovy, 2 * atan(tan(fovy / 2) * aspect));
-    const double dist = (radius > 0 ? radius : 1.0) / sin(fit / 2) * 1.05;
-    const double y = yaw * M_PI / 180.0, p = pitch * M_PI / 180.0;
-    const double eye[3] = {centre[0] + dist * cos(p) * sin(y), centre[1] + dist * sin(p),
-                           centre[2] + dist * cos(p) * cos(y)};
     meso_rt_draw_desc d = {0};
-    look_at(d.view, eye, centre);
-    perspective(d.proj, fovy, aspect, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
-    /* Light from the upper left of the viewer. */
-    const double ly = y - 0.6, lp = p + 0.7;
-    d.light_dir[0] = (float)(cos(lp) * sin(ly));
-    d.light_dir[1] = (float)sin(lp);
-    d.light_dir[2] = (float)(cos(lp) * cos(ly));
+    preview_camera(lo, hi, width, height, yaw, pitch, &d);
+    d.technique = technique;
     for (int i = 0; i < nobj; ++i)
         if (meso_rt_draw(rt, objs[i], &d) != MESO_OK) {
             code = MESO_EXIT_INTERNAL;
@@ -222,13 +379,7 @@ static int render(const char* path, const char* out, int width, int height, uint
         goto done;
     }
     gl.ReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, px);
-    for (int yy = 0; yy < height; ++yy)
-        for (int xx = 0; xx < width; ++xx)
-            for (int k = 0; k < 4; ++k) {
-                const uint8_t* s = px + 4 * ((size_t)(2 * yy) * (size_t)W + (size_t)(2 * xx)) + k;
-                const unsigned sum = s[0] + s[4] + s[4 * (size_t)W] + s[4 * (size_t)W + 4];
-                img[4 * ((size_t)yy * (size_t)width + (size_t)xx) + (size_t)k] = (uint8_t)((sum + 2) / 4);
-            }
+    box_filter(px, img, width, height);
     if (meso_png_write_rgba8(out, img, width, height, 1, why, sizeof(why)) != 0) {
         fprintf(stderr, "mesoinspect error: %s\n", why);
         code = MESO_EXIT_IO;
@@ -252,6 +403,9 @@ int mesoinspect_preview(int argc, char** argv)
     int width = 512, height = 512;
     unsigned long only = 0;
     double yaw = 30, pitch = 20;
+    meso_shell_technique technique = MESO_SHELL_SMOOTH;
+    int reference = 0;
+    long samples = 0;
     for (int i = 0; i < argc; ++i) {
         const char* a = argv[i];
         const int val = i + 1 < argc;
@@ -283,10 +437,33 @@ int mesoinspect_preview(int argc, char** argv)
                 return MESO_EXIT_USAGE;
             }
             *(a[2] == 'y' ? &yaw : &pitch) = v;
+        } else if (!strcmp(a, "--technique") && val) {
+            const char* t = argv[++i];
+            if (!strcmp(t, "smooth"))
+                technique = MESO_SHELL_SMOOTH;
+            else if (!strcmp(t, "curved"))
+                technique = MESO_SHELL_CURVED;
+            else if (!strcmp(t, "tetra"))
+                technique = MESO_SHELL_TETRA;
+            else {
+                fprintf(stderr, "mesoinspect error: --technique expects smooth, curved or tetra, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", t);
+                return MESO_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--reference")) {
+            reference = 1;
+        } else if (!strcmp(a, "--samples") && val) {
+            samples = strtol(argv[++i], &end, 10);
+            if (!end || *end || samples < 2 || samples > 1000000) {
+                fprintf(stderr, "mesoinspect error: --samples expects 2..1000000, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", argv[i]);
+                return MESO_EXIT_USAGE;
+            }
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "mesoinspect error: %s '%s'\nSee 'mesoinspect --help'.\n",
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
-                     !strcmp(a, "--yaw") || !strcmp(a, "--pitch"))
+                     !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
+                     !strcmp(a, "--samples"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
@@ -302,10 +479,14 @@ int mesoinspect_preview(int argc, char** argv)
         fputs(usage_preview, stderr);
         return MESO_EXIT_USAGE;
     }
+    if (reference)
+        return render_reference(file, out, width, height, (uint32_t)only, yaw, pitch,
+                                technique == MESO_SHELL_CURVED, (int)samples);
 #if MESO_HAVE_EGL
-    return render(file, out, width, height, (uint32_t)only, yaw, pitch);
+    return render(file, out, width, height, (uint32_t)only, yaw, pitch, technique);
 #else
-    fprintf(stderr, "mesoinspect error: preview needs EGL, which this build does not have\n");
+    (void)technique;
+    fprintf(stderr, "mesoinspect error: preview needs EGL, which this build does not have (try --reference)\n");
     return MESO_EXIT_UNSUPPORTED;
 #endif
 }

@@ -47,10 +47,15 @@
  *   which equals Φ(u,v,w̄) with w̄ = w' + Coons(λ)/|n(u,v)|: the barycentric
  *   correspondence holds and only w changes.
  *   Exact inverse (reference): invert Φ for (u,v,w̄) — allowing w̄ a margin
- *   outside [0,1] — then solve w̄(u,v,w) = w̄ for w ∈ [0,1] by bisection
- *   (60 steps on a sign change; w̄ is monotone in w in every test mesh).
+ *   outside [0,1] — then solve w̄(u,v,w) = w̄ for w ∈ [0,1] on a sign change
+ *   (bracketed false position with bisection fallback, ≤ 60 steps; w̄ is
+ *   monotone in w in every test mesh).
  *   The GL shader uses the paper's eq. 2 instead (linear in w̄ between
- *   w̄(u,v,0) and w̄(u,v,1)); tests measure the difference.
+ *   w̄(u,v,0) and w̄(u,v,1)). With this construction eq. 2 is exact, not an
+ *   approximation: A_k = B_k + w' N_k is affine in w' and nothing else (m_k,
+ *   M_j, M_k, ω_i, σ, r) depends on w', so every height and slope, hence
+ *   Coons(λ), is affine in w' and w̄(u,v,·) is affine in w. Tests measure
+ *   the difference (rounding only, ~1e-15).
  *
  * Texture space (FORMAT.md §7.2): (s,t') = uv_scale · Σ λ_k uv_k, w.
  */
@@ -85,27 +90,49 @@ double meso_coons(const meso_prism* P, double wprime, double u, double v);
 double meso_curved_wbar(const meso_prism* P, double u, double v, double w);
 /* Φ_c(u,v,w) → p. */
 void meso_phi_curved(const meso_prism* P, double u, double v, double w, double p[3]);
-/* Exact inverse of Φ_c; 1 and (u,v,w) when p has a preimage with w ∈ [0,1]. */
+/* Exact inverse of Φ_c; 1 and (u,v,w) when p has a preimage with w ∈ [0,1].
+ * The margin for w̄ is meso_curved_wbar_range's. */
 int meso_phi_curved_inverse(const meso_prism* P, const double p[3], double tol, double uvw[3]);
+/* A conservative range of w̄ over the prism — the curved shell
+ * Φ(u,v,w̄) lies in the convex hull of B_k + lo N_k, B_k + hi N_k, which is
+ * what both renderers rasterise / clip against. Derived from the
+ * construction above (w' ∈ [¼,¾]):
+ *   |Coons| ≤ max_i |D_i|  (ω is a partition of unity);
+ *   Hermite: h00 + h01 = 1, |h10|, |h11| ≤ 4/27, so |D_i| ≤ max|h| + (8/27) max|g|;
+ *   |H_ij(σ)| ≤ ¼ max(|a|, |b|) ≤ E/4;
+ *   |g_j| = σ |e_jk·((1−σ) m_i + σ m_j)| / |(1−σ) m_i + σ m_j| ≤ E / c,
+ *     c = min over vertex pairs |m_i + m_j| / 2 (the shortest blend);
+ *   E = max |e·m_l| over the edges e of T(¼) and T(¾) (e is affine in w')
+ *     and the three unit directors m_l;
+ *   |n(u,v)| ≥ min_k N_k·m̂, m̂ = normalize(m_0 + m_1 + m_2).
+ * So w̄ ∈ [¼ − K, ¾ + K], K = E (¼ + 8/(27 c)) / min_k N_k·m̂, widened to
+ * include [0,1]. Opposed directors (c or the n bound ≤ 0): [−1, 2].
+ * tests/reference checks it against dense sampling; it costs a handful of
+ * dot products, so the GLSL (shell_common.glsl) recomputes it per vertex. */
+void meso_curved_wbar_range(const meso_prism* P, double* lo, double* hi);
+/* meso_phi_curved_inverse with an explicit w̄ range (the renderer computes
+ * meso_curved_wbar_range once per prism). */
+int meso_phi_curved_inverse_in(const meso_prism* P, const double p[3], double wbar_lo, double wbar_hi, double tol,
+                               double uvw[3]);
 
 /* The texture function of a shell (FORMAT.md §7.2), values already
  * normalised to [0,1]. kind 0: none (all solid), 1: height field (W×H),
  * 2: density volume (W×H×D). */
-typedef struct meso_texfn {
+typedef struct meso_ref_texfn {
     int kind;
     uint32_t w, h, d;
     const float* values; /* w*h*d, x fastest */
-} meso_texfn;
+} meso_ref_texfn;
 
 /* Filtered value at texture point (s, t, w): bilinear height or trilinear
  * density with the wrap/clamp rules of FORMAT.md §7.2. */
-double meso_texfn_value(const meso_texfn* tf, double s, double t, double w);
+double meso_ref_texfn_value(const meso_ref_texfn* tf, double s, double t, double w);
 /* 1 when (s,t,w) is solid: w ≤ h(s,t), or α ≥ ½; kind 0: always. */
-int meso_texfn_solid(const meso_texfn* tf, double s, double t, double w);
+int meso_ref_texfn_solid(const meso_ref_texfn* tf, double s, double t, double w);
 /* Texture-space outward normal direction g (not normalised): height
  * (−∂h/∂s, −∂h/∂t, 1), density −∇α, central differences one texel apart
  * (δ = 1/W, 1/H, 1/D); kind 0: (0,0,1). */
-void meso_texfn_gradient(const meso_texfn* tf, double s, double t, double w, double g[3]);
+void meso_ref_texfn_gradient(const meso_ref_texfn* tf, double s, double t, double w, double g[3]);
 
 #ifdef __cplusplus
 }

@@ -13,7 +13,7 @@
  *  - the first point along the ray where the texture function is solid
  *    inside a prism (w ∈ [0,1], u, v, t ≥ 0) is the hit; its depth is
  *    0.5 · z_clip / w_clip + 0.5 of proj·view·model·p.
- *  - normal: g from meso_texfn_gradient at the hit, n = normalize(J⁻ᵀ g),
+ *  - normal: g from meso_ref_texfn_gradient at the hit, n = normalize(J⁻ᵀ g),
  *    J = ∂Φ/∂(s,t',w) — Φ_c for curved shells — by central differences in
  *    (u,v,w) with δ = 1e-3, then the (u,v) → (s,t') affine map; n is turned
  *    to face the ray (dot(n, dir) < 0).
@@ -40,7 +40,7 @@ typedef struct meso_ref_shell {
     float* directors;  /* 3 per vertex per layer (SDIR layout) */
     float* uvs;        /* 2 per vertex, or NULL (then all zero) */
     uint32_t* indices; /* 3 per triangle */
-    meso_texfn tex;    /* values owned here */
+    meso_ref_texfn tex;    /* values owned here */
     float* tex_values;
     float bbox_min[3], bbox_max[3];
 } meso_ref_shell;
@@ -68,6 +68,7 @@ typedef struct meso_ref_image {
     float* depth;      /* window depth in [0,1], 1 where not covered */
     uint8_t* coverage; /* 1 where the ray hit the surface */
     float* hit;        /* object-space hit point, 3 per pixel (NaN where not covered) */
+    float* normal;     /* object-space shading normal n above, 3 per pixel (0 where not covered) */
 } meso_ref_image;
 
 meso_result meso_ref_render(const meso_ref_shell* s, const meso_ref_view* v, meso_ref_image* out);
