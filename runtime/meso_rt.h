@@ -140,7 +140,8 @@ typedef struct meso_rt_draw_desc {
     /* Shell knobs (ignored for meshes); zero means the default in brackets. */
     meso_shell_technique technique; /* [MESO_SHELL_SMOOTH] */
     float error_px;            /* image-space error bound of the corrected ray path, pixels [1] */
-    int max_steps;             /* march steps per prism and pixel before giving up [256] */
+    int max_steps;             /* march steps per prism and pixel; out of steps, the surface is taken
+                                  to be at the last sample (drawn too high, never a hole) [256] */
     int bisection_steps;       /* refinement steps once the surface is bracketed [4] */
     int segment_steps;         /* bisection steps on w for the ray segment (§4.2) [12] */
     float uv_scale;            /* multiplies the baked texture coordinates (tiling) [1] */

@@ -41,6 +41,53 @@ Prism fetch_prism(int f)
     return P;
 }
 
+// Curved shells leave their prism: Phi_c(u,v,w) = Phi(u,v,wbar) with wbar
+// outside [0,1] (sec. 3.2). A conservative range of wbar over the prism
+// (shell_map.h: meso_curved_wbar_range, derived there term by term), so the
+// rasterised hull B + lo N .. B + hi N contains the whole curved prism.
+vec2 curved_wbar_range(Prism P)
+{
+    vec3 m[3];
+    for (int k = 0; k < 3; ++k)
+        m[k] = normalize(P.n[k]);
+    float E = 0.0;
+    for (int lev = 0; lev < 2; ++lev) {
+        float wp = lev == 0 ? 0.25 : 0.75;
+        for (int i = 0; i < 3; ++i) {
+            int j = i == 2 ? 0 : i + 1;
+            vec3 e = (P.b[j] + wp * P.n[j]) - (P.b[i] + wp * P.n[i]);
+            for (int l = 0; l < 3; ++l)
+                E = max(E, abs(dot(e, m[l])));
+        }
+    }
+    float cmin = 1.0;
+    for (int i = 0; i < 3; ++i)
+        cmin = min(cmin, length(0.5 * (m[i] + m[i == 2 ? 0 : i + 1])));
+    vec3 ms = m[0] + m[1] + m[2];
+    float msl = length(ms);
+    float nmin = 1e30;
+    for (int k = 0; k < 3; ++k)
+        nmin = min(nmin, msl > 0.0 ? dot(P.n[k], ms) / msl : 0.0);
+    if (!(cmin > 1e-6 && nmin > 0.0))
+        return vec2(-1.0, 2.0);
+    float K = E * (0.25 + 8.0 / (27.0 * cmin)) / nmin;
+    return vec2(min(0.25 - K, 0.0), max(0.75 + K, 1.0));
+}
+
+// The prism whose convex hull is rasterised and clipped against: the prism
+// itself, or for curved shells its levels lo .. hi (curved_wbar_range).
+Prism hull_prism(Prism P)
+{
+#if MESO_TECHNIQUE == 1
+    vec2 r = curved_wbar_range(P);
+    for (int k = 0; k < 3; ++k) {
+        P.b[k] = P.b[k] + r.x * P.n[k];
+        P.n[k] = (r.y - r.x) * P.n[k];
+    }
+#endif
+    return P;
+}
+
 vec3 corner_pos(Prism P, int c) // c: 0..2 bottom, 3..5 top
 {
     return c < 3 ? P.b[c] : P.b[c - 3] + P.n[c - 3];

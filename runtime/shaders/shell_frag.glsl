@@ -11,7 +11,8 @@
 //       towards the ray x T(w) point (<= 4 corrections);
 //  sec. 4.4 step lengths from the distance map (sphere tracing) and, once the
 //       surface is bracketed, bisection on the filtered texture.
-// Curved (1), sec. 3.2/sec. 4.5: the same march in the smooth prism's (u,v,wbar); the
+// Curved (1), sec. 3.2/sec. 4.5: the hull of the levels the curved prism spans
+//       (curved_wbar_range), then the same march in the smooth prism's (u,v,wbar); the
 //       texture is looked up at w from the paper's eq. 2, and steps shrink by
 //       wbar(u,v,1) - wbar(u,v,0) (the paper's scaled spheres).
 // Tetra (2): the baseline - one tetrahedron per fragment, its affine map
@@ -68,7 +69,7 @@ float tex_value(vec3 stw)
 }
 
 // Outward direction of the solid in texture space (shell_map.h:
-// meso_texfn_gradient): central differences one texel apart.
+// meso_ref_texfn_gradient): central differences one texel apart.
 vec3 tex_gradient(vec3 stw)
 {
     vec3 d = 1.0 / u_tex_size;
@@ -88,14 +89,19 @@ vec3 tex_gradient(vec3 stw)
 }
 
 // Sphere-tracing radius at a texture point (a lower bound on the distance
-// to the solid), or the fixed step without a distance map.
+// to the solid), or the fixed step without a distance map. All solid lies
+// in the slab 0 <= w <= 1, so a point delta outside it is at least
+// sqrt(d^2 + delta^2) from the solid, d the stored bound at the clamped
+// point (curved hulls reach far above and below the slab).
 float step_radius(vec3 stw)
 {
+    float outside = max(max(stw.z - 1.0, -stw.z), 0.0);
     if (u_tex_kind == 0)
-        return max(stw.z - 1.0, u_min_step); // all solid below w = 1: the exact distance
+        return max(outside, u_min_step); // all solid: the slab itself, the exact distance
     if (u_has_dist == 0)
-        return u_fixed_step;
-    return max(textureLod(u_dist, vec3(stw.xy, clamp(stw.z, 0.0, 1.0)), 0.0).r, u_min_step);
+        return max(outside, u_fixed_step);
+    float d = textureLod(u_dist, vec3(stw.xy, clamp(stw.z, 0.0, 1.0)), 0.0).r;
+    return max(sqrt(d * d + outside * outside), u_min_step);
 }
 
 // --- the mappings (shell_map.h) --------------------------------------------
@@ -117,10 +123,12 @@ vec2 barycentric(vec3 a0, vec3 a1, vec3 a2, vec3 p)
 }
 
 // sec. 4.2: w of a point by bisection on the sign of dot(n(T(w)), p - A0(w)),
-// over [-1/4, 5/4] so points just outside the prism still map.
-float find_w(Prism P, vec3 p)
+// over the hull's levels r widened by a quarter on each side, so points
+// just outside the hull still map.
+float find_w(Prism P, vec3 p, vec2 r)
 {
-    float lo = -0.25, hi = 1.25;
+    float pad = 0.25 * (r.y - r.x);
+    float lo = r.x - pad, hi = r.y + pad;
     for (int i = 0; i < u_segment_steps; ++i) {
         float m = 0.5 * (lo + hi);
         vec3 a0 = P.b[0] + m * P.n[0], a1 = P.b[1] + m * P.n[1], a2 = P.b[2] + m * P.n[2];
@@ -132,9 +140,9 @@ float find_w(Prism P, vec3 p)
     return 0.5 * (lo + hi);
 }
 
-vec3 to_texture(Prism P, vec3 p)
+vec3 to_texture(Prism P, vec3 p, vec2 r)
 {
-    float w = find_w(P, p);
+    float w = find_w(P, p, r);
     vec2 uv = barycentric(P.b[0] + w * P.n[0], P.b[1] + w * P.n[1], P.b[2] + w * P.n[2], p);
     return vec3(uv, w);
 }
@@ -259,6 +267,22 @@ float ray_triangle(vec3 ro, vec3 rd, vec3 p0, vec3 p1, vec3 p2)
     return dot(e2, qv) * inv;
 }
 
+// The point of the view ray at level w = q.z, as texture coordinates
+// (u, v, w): the ray meets the plane of T(w), and the barycentric
+// correspondence gives (u, v) (sec. 3.1). False for a ray parallel to T(w).
+bool onto_ray(Prism P, vec3 q, vec3 ro, vec3 rd, out vec3 r)
+{
+    vec3 a0 = P.b[0] + q.z * P.n[0], a1 = P.b[1] + q.z * P.n[1], a2 = P.b[2] + q.z * P.n[2];
+    vec3 nn = cross(a1 - a0, a2 - a0);
+    float den = dot(nn, rd);
+    r = q;
+    if (abs(den) < 1e-12 * length(nn))
+        return false;
+    vec3 x = ro + (dot(nn, a0 - ro) / den) * rd;
+    r = vec3(barycentric(a0, a1, a2, x), q.z);
+    return true;
+}
+
 void write_depth(vec3 p)
 {
     vec4 clip = u_mvp * vec4(p, 1.0);
@@ -324,7 +348,7 @@ void main()
     vec3 q1 = C[0] + Tm * (Minv * (ro + tx * rd - X[0]));
     float len = length(q1 - q0);
     float f = 0.0, fprev = 0.0;
-    bool hit = false;
+    bool hit = false, budget_spent = true;
     for (int i = 0; i < u_max_steps; ++i) {
         vec3 q = mix(q0, q1, f);
         ++g_steps;
@@ -332,10 +356,16 @@ void main()
             hit = true;
             break;
         }
-        if (f >= 1.0 || len <= 0.0)
+        if (f >= 1.0 || len <= 0.0) {
+            budget_spent = false;
             break;
+        }
         fprev = f;
         f = min(1.0, f + step_radius(q) / len);
+    }
+    if (!hit && budget_spent) {
+        hit = true; // out of steps: the last sample, as for prisms below
+        f = fprev;
     }
     if (hit && f > fprev) {
         float lo = fprev, hi = f;
@@ -368,15 +398,22 @@ void main()
     vec3 ro, rd;
     fragment_ray(ro, rd);
     // sec. 4.2: entry and exit against the hull triangles (the same
-    // triangulation as shell_vert.glsl: hull_face).
+    // triangulation as shell_vert.glsl: hull_face of hull_prism).
+#if MESO_TECHNIQUE == 1
+    vec2 range = curved_wbar_range(P);
+#else
+    vec2 range = vec2(0.0, 1.0);
+#endif
+    Prism HP = hull_prism(P);
     vec3 c[6];
     for (int k = 0; k < 3; ++k) {
-        c[k] = P.b[k];
-        c[k + 3] = P.b[k] + P.n[k];
+        c[k] = HP.b[k];
+        c[k + 3] = HP.b[k] + HP.n[k];
     }
-    vec3 cen = prism_centroid(P);
+    vec3 cen = prism_centroid(HP);
     float tmin = 1e30, tmax = -1e30;
     int nhit = 0;
+    bool origin_inside = true;
     for (int f = 0; f < 8; ++f) {
         vec3 p0, p1, p2;
         if (f < 2) {
@@ -401,15 +438,19 @@ void main()
             tmax = max(tmax, t);
             ++nhit;
         }
+        vec3 nrm = cross(p1 - p0, p2 - p0);
+        if (dot(nrm, cen - p0) > 0.0)
+            nrm = -nrm;
+        origin_inside = origin_inside && dot(nrm, ro - p0) <= 0.0;
     }
-    if (nhit == 0) {
-        finish(false);
+    if (origin_inside) {
+        tmin = 0.0; // the ray starts inside the hull (camera inside the shell)
+    } else if (nhit < 2 || !(tmin < tmax)) {
+        finish(false); // a ray grazing an edge or corner of the hull
         return;
     }
-    if (nhit == 1 || tmin >= tmax)
-        tmin = 0.0; // the ray starts inside the hull (camera inside the shell)
-    vec3 q0 = to_texture(P, ro + tmin * rd);
-    vec3 q1 = to_texture(P, ro + tmax * rd);
+    vec3 q0 = to_texture(P, ro + tmin * rd, range);
+    vec3 q1 = to_texture(P, ro + tmax * rd, range);
     g_steps = 2;
 #if MESO_TECHNIQUE == 3
     o_color = vec4(q0.z, q1.z, 0.5, 1.0);
@@ -421,7 +462,7 @@ void main()
     const bool curved = MESO_TECHNIQUE == 1;
     vec3 q = q0, qprev = q0;
     float wq = q0.z; // texture w (= q.z for smooth shells)
-    bool hit = false;
+    bool hit = false, budget_spent = true, last_inside = false;
     for (int i = 0; i < u_max_steps; ++i) {
         bool inside = q.x >= -1e-5 && q.y >= -1e-5 && q.x + q.y <= 1.0 + 1e-5;
         float scale = 1.0;
@@ -432,6 +473,7 @@ void main()
             scale = clamp(w1 - w0, 0.05, 1.0);
         }
         inside = inside && wq >= 0.0 && wq <= 1.0;
+        last_inside = inside;
         vec2 st = tex_st(P, q.xy);
         ++g_steps;
         if (inside && solid(vec3(st, wq))) {
@@ -440,8 +482,10 @@ void main()
         }
         vec3 D = q1 - q;
         float remain = length(vec3(D.x * e1 + D.y * e2, D.z));
-        if (remain <= 1e-6)
+        if (remain <= 1e-6) {
+            budget_spent = false;
             break;
+        }
         float L = min(step_radius(vec3(st, wq)) * scale, remain);
         vec3 qn = q + D * (L / remain);
         // sec. 4.3: keep the sample within the error bound of the view ray.
@@ -451,13 +495,9 @@ void main()
             vec3 off = (p - ro) - dot(p - ro, rd) * rd;
             if (length(off) <= u_err_scale * clip.w)
                 break;
-            vec3 a0 = P.b[0] + qn.z * P.n[0], a1 = P.b[1] + qn.z * P.n[1], a2 = P.b[2] + qn.z * P.n[2];
-            vec3 nn = cross(a1 - a0, a2 - a0);
-            float den = dot(nn, rd);
-            if (abs(den) < 1e-12 * length(nn))
+            vec3 target;
+            if (!onto_ray(P, qn, ro, rd, target))
                 break; // grazing: linear sampling is already right (sec. 4.3)
-            vec3 x = ro + (dot(nn, a0 - ro) / den) * rd;
-            vec3 target = vec3(barycentric(a0, a1, a2, x), qn.z);
             vec3 Dn = target - q;
             float ln = length(vec3(Dn.x * e1 + Dn.y * e2, Dn.z));
             if (ln <= 1e-9)
@@ -467,12 +507,22 @@ void main()
         qprev = q;
         q = qn;
     }
+    if (!hit && budget_spent && last_inside) {
+        // Out of steps inside the shell: the surface is taken to be at the
+        // last sample (qprev, the one tested), so a small budget shows as
+        // surfaces drawn too high, never as holes onto whatever lies behind.
+        hit = true;
+        q = qprev;
+    }
     if (hit) {
         // sec. 4.4: bisection between the last empty sample and the first solid one.
         vec3 lo = qprev, hi = q;
         float whi = wq;
         for (int i = 0; i < u_bisect_steps; ++i) {
             vec3 m = 0.5 * (lo + hi);
+            vec3 mr;
+            if (onto_ray(P, m, ro, rd, mr))
+                m = mr; // bisect along the ray itself, not the chord in texture space
             float wm = m.z;
             if (curved) {
                 float w0 = curved_wbar(P, m.x, m.y, 0.0), w1 = curved_wbar(P, m.x, m.y, 1.0);

@@ -2,7 +2,8 @@
 // (no vertex attributes), so the host can move base vertices and directors
 // every frame without any CPU-side re-triangulation.
 //
-// Smooth, curved, segment-only: each prism is its convex hull (sec. 4.1): two
+// Smooth, curved, segment-only: each prism is its convex hull (sec. 4.1; for
+// curved shells the hull of the levels the curved prism spans): two
 // caps and, per side, the diagonal that makes the side convex ("the fourth
 // vertex lies behind the plane of the other three"); 8 triangles = 24
 // vertices per prism. Tetra: each prism is three tetrahedra split along the
@@ -26,7 +27,7 @@ void main()
     int local = gl_VertexID - prism * per;
     int face = local / 3;
     int k = local - face * 3;
-    Prism P = fetch_prism(prism);
+    Prism P = hull_prism(fetch_prism(prism));
     ivec3 tri;
     vec3 center;
     v_tet = 0;
