@@ -15,6 +15,7 @@ void meso_mesh_free(meso_mesh* m)
     free(m->normals);
     free(m->uvs);
     free(m->indices);
+    free(m->corner_uvs);
     memset(m, 0, sizeof(*m));
 }
 

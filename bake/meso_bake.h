@@ -26,6 +26,12 @@ typedef struct meso_mesh {
     float* normals;   /* 3 * vertex_count, or NULL */
     float* uvs;       /* 2 * vertex_count, or NULL */
     uint32_t* indices; /* 3 * triangle_count, counter-clockwise seen from outside */
+    /* 6 * triangle_count (uv of each face corner, in `indices` order), or NULL.
+     * The OpenMesh reader sets it when the input has per-corner texture
+     * coordinates (OBJ `f v/vt`) and some vertex has more than one (a texture
+     * seam); `uvs` is then set too (one uv per vertex, as without it). NULL
+     * means `uvs` says it all. Last, so positional initialisers stay valid. */
+    float* corner_uvs;
 } meso_mesh;
 
 /* Frees the arrays and zeroes the struct. NULL is allowed. */

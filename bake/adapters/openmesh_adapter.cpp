@@ -11,8 +11,10 @@
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <algorithm>
 #include <exception>
 #include <new>
+#include <vector>
 
 #include "adapters.h"
 
@@ -33,6 +35,106 @@ template <class T> T* alloc_array(size_t n)
     return p;
 }
 
+// The stock importer plus per-corner texcoords that survive triangulation.
+// OpenMesh's OBJ reader hands a face's corner texcoords to
+// add_face_texcoords() with the face handle add_face() returned; for a
+// polygon a TriMesh returns only the last triangle of its fan, and the stock
+// importer walks that triangle's halfedges with the polygon's list, so a quad
+// gets wrong corners on one triangle and none on the other. Here each corner
+// of every triangle the polygon became takes the texcoord of its own vertex.
+// The texcoords are kept here, per halfedge, rather than in a halfedge
+// property, so that meshes without them cost nothing; corners without one
+// (faces without `vt`) fall back to the vertex texcoord.
+class CornerImporter : public OpenMesh::IO::ImporterT<TriMesh> {
+  public:
+    typedef OpenMesh::IO::ImporterT<TriMesh> Base;
+    using Base::add_face;
+    using Base::add_face_texcoords;
+    using Base::set_texcoord;
+
+    explicit CornerImporter(TriMesh& mesh) : Base(mesh), mesh_(mesh) {}
+
+    OpenMesh::FaceHandle add_face(const VHandles& indices) override
+    {
+        first_face_ = mesh_.n_faces();
+        polygon_ = indices;
+        return Base::add_face(indices);
+    }
+
+    void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle,
+                            const std::vector<OpenMesh::Vec2f>& texcoords) override
+    {
+        if (texcoords.size() != polygon_.size()) // the reader dropped repeated vertices
+            return;
+        for (size_t f = first_face_; f < mesh_.n_faces(); ++f)
+            for (auto he : mesh_.fh_range(TriMesh::FaceHandle(static_cast<int>(f))))
+                for (size_t i = 0; i < polygon_.size(); ++i)
+                    if (polygon_[i] == mesh_.to_vertex_handle(he))
+                        set_texcoord(he, texcoords[i]);
+    }
+
+    void set_texcoord(OpenMesh::HalfedgeHandle he, const OpenMesh::Vec2f& texcoord) override
+    {
+        const size_t i = static_cast<size_t>(he.idx());
+        if (flagged_.size() <= i) {
+            flagged_.resize(std::max(2 * flagged_.size(), i + 1), 0);
+            texcoords_.resize(flagged_.size());
+        }
+        flagged_[i] = 1;
+        texcoords_[i] = texcoord;
+    }
+
+    // The texcoord the file gave halfedge he, or NULL.
+    const OpenMesh::Vec2f* texcoord(OpenMesh::HalfedgeHandle he) const
+    {
+        const size_t i = static_cast<size_t>(he.idx());
+        return i < flagged_.size() && flagged_[i] ? &texcoords_[i] : nullptr;
+    }
+
+  private:
+    TriMesh& mesh_;
+    VHandles polygon_;      // the last face add_face() was given
+    size_t first_face_ = 0; // the first triangle it became
+    std::vector<char> flagged_;
+    std::vector<OpenMesh::Vec2f> texcoords_;
+};
+
+// out->corner_uvs (see meso_bake.h): the texcoord of the halfedge of face f
+// pointing to the corner's vertex, or the vertex's own where the file gave
+// none. Kept only when some vertex has two different ones: without a seam
+// out->uvs already says everything. fill_vertex_uvs: the file had no
+// per-vertex texcoords, so out->uvs takes each vertex's last corner uv.
+void read_corner_uvs(const TriMesh& mesh, const CornerImporter& importer, bool fill_vertex_uvs, meso_mesh* out)
+{
+    const size_t nf = out->triangle_count;
+    float* cuv = alloc_array<float>(6 * nf);
+    for (size_t f = 0; f < nf; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t v = out->indices[3 * f + k];
+            float* c = cuv + 6 * f + 2 * k;
+            std::memcpy(c, out->uvs + 2 * static_cast<size_t>(v), 2 * sizeof(float));
+            for (auto he : mesh.fh_range(TriMesh::FaceHandle(static_cast<int>(f)))) {
+                const OpenMesh::Vec2f* t = importer.texcoord(he);
+                if (t && static_cast<uint32_t>(mesh.to_vertex_handle(he).idx()) == v) {
+                    c[0] = (*t)[0];
+                    c[1] = (*t)[1];
+                }
+            }
+            if (fill_vertex_uvs)
+                std::memcpy(out->uvs + 2 * static_cast<size_t>(v), c, 2 * sizeof(float));
+        }
+    // A seam: a corner whose uv differs (bitwise) from its vertex's. The
+    // vertex uv is one of its corners' uvs, so this finds every vertex that
+    // has two or more.
+    bool seam = false;
+    for (size_t c = 0; c < 3 * nf && !seam; ++c)
+        seam = std::memcmp(cuv + 2 * c, out->uvs + 2 * static_cast<size_t>(out->indices[c]), 2 * sizeof(float)) != 0;
+    if (seam)
+        out->corner_uvs = cuv;
+    else
+        std::free(cuv);
+}
+
 } // namespace
 
 extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint32_t* dropped_faces,
@@ -43,8 +145,12 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
         *dropped_faces = 0;
     try {
         TriMesh mesh;
+        // Per-vertex texcoords (one per vertex: the last face to mention it
+        // wins) and per-corner ones (CornerImporter), which keep seams.
         mesh.request_vertex_texcoords2D();
+        CornerImporter importer(mesh);
         OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexTexCoord;
+        opt += OpenMesh::IO::Options::FaceTexCoord;
         // OpenMesh reports every face it refuses (complex edge / vertex of a
         // non-manifold input) on omerr() and drops it. Capture those lines
         // instead of letting them reach stderr, and count them: the caller
@@ -57,7 +163,7 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
         std::streambuf* saved = std::cerr.rdbuf(captured.rdbuf());
         bool ok = false;
         try {
-            ok = OpenMesh::IO::read_mesh(mesh, path, opt);
+            ok = OpenMesh::IO::IOManager().read(path, importer, opt); // read_mesh() with our importer
             omerr().flush();
         } catch (...) {
             std::cerr.rdbuf(saved);
@@ -91,8 +197,9 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
         out->positions = alloc_array<float>(3 * nv);
         out->normals = alloc_array<float>(3 * nv);
         out->indices = alloc_array<uint32_t>(3 * nf);
-        const bool has_uv = opt.check(OpenMesh::IO::Options::VertexTexCoord);
-        if (has_uv)
+        const bool has_vertex_uv = opt.check(OpenMesh::IO::Options::VertexTexCoord);
+        const bool has_corner_uv = opt.check(OpenMesh::IO::Options::FaceTexCoord);
+        if (has_vertex_uv || has_corner_uv)
             out->uvs = alloc_array<float>(2 * nv);
         for (auto vh : mesh.vertices()) {
             const size_t i = static_cast<size_t>(vh.idx());
@@ -102,7 +209,7 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
                 out->positions[3 * i + k] = p[k];
                 out->normals[3 * i + k] = n[k];
             }
-            if (has_uv) {
+            if (has_vertex_uv) {
                 const auto& t = mesh.texcoord2D(vh);
                 out->uvs[2 * i] = t[0];
                 out->uvs[2 * i + 1] = t[1];
@@ -117,6 +224,11 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
                 ++k;
             }
             ++f;
+        }
+        if (has_corner_uv) {
+            if (!has_vertex_uv)
+                std::memset(out->uvs, 0, sizeof(float) * 2 * nv);
+            read_corner_uvs(mesh, importer, !has_vertex_uv, out);
         }
         return MESO_OK;
     } catch (const std::bad_alloc&) {

@@ -66,7 +66,8 @@ static const char* const usage_shell =
     "      --tiling U[,V]      tiles along the texture coordinates (default 1,1). The mesh's own\n"
     "                          uvs are multiplied by it; a mesh without uvs is projected onto the\n"
     "                          plane of its two largest bounding-box extents, the longest spanning\n"
-    "                          U tiles (the other V/U as densely), with a warning\n"
+    "                          U tiles (the other V/U as densely), with a warning. At uv seams\n"
+    "                          (OBJ f v/vt) a vertex is split, one copy per distinct uv\n"
     "      --dist-res WxHxD    distance-map cells (each 1..512; default: half the texture's\n"
     "                          resolution in s, t (8..128) and, in w, half a volume's depth or,\n"
     "                          for a height field, about one cell per typical height step)\n"
@@ -267,9 +268,13 @@ static cJSON* report_json(const meso_shell_report* v, const meso_hybrid_stats* h
 typedef struct shell_texture {
     meso_texfn fn;
     meso_distmap dist;
-    float* uvs;            /* 2 * vertex_count texture coordinates, tiling included */
+    float* uvs;            /* 2 per output vertex: texture coordinates, tiling included */
     const char* uv_source; /* "mesh" or "planar" */
     char plane[3];         /* planar: the two axes, e.g. "xz" (s along the first) */
+    /* Split at uv seams (a mesh with corner uvs), else 0, NULL, NULL. */
+    uint32_t seam_vertices; /* copies added: the output has the mesh's vertices plus these */
+    uint32_t* source;       /* each output vertex's mesh vertex */
+    uint32_t* indices;      /* 3 * triangle_count: the triangles over the output vertices */
 } shell_texture;
 
 static void texture_free(shell_texture* tx)
@@ -277,6 +282,8 @@ static void texture_free(shell_texture* tx)
     meso_texfn_free(&tx->fn);
     meso_distmap_free(&tx->dist);
     free(tx->uvs);
+    free(tx->source);
+    free(tx->indices);
 }
 
 /* Parse the spec, sample the function, bake its distance map. */
@@ -304,18 +311,79 @@ static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_
     return r;
 }
 
-/* Texture coordinates: the mesh's own times the tiling, or (documented
- * fallback) a planar projection onto the two largest bounding-box extents,
- * the longest spanning U tiles and the other V/U as densely. */
+/* Per-corner uvs into one uv per vertex: each distinct (vertex, corner uv)
+ * pair (exact float bits) becomes one output vertex. Vertex v keeps index v
+ * and the uv of its first corner (faces in order, corners in order); every
+ * further uv it has appends a copy, numbered from nv in order of first
+ * appearance. A vertex no face uses keeps its per-vertex uv. Copies share
+ * position and director, so the shell stays closed across the seam. */
+static meso_result split_seams(const shell_args* a, const meso_mesh* m, shell_texture* tx, meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, none = UINT32_MAX;
+    const size_t nc = 3 * (size_t)m->triangle_count, cap = (size_t)nv + nc; /* < 2^32: the reader's limits */
+    uint32_t* next = malloc(sizeof(uint32_t) * cap); /* next copy of the same vertex, or `none` */
+    float* uv = malloc(sizeof(float) * 2 * cap);
+    uint8_t* used = calloc(nv ? nv : 1, 1);
+    tx->source = malloc(sizeof(uint32_t) * cap);
+    tx->indices = malloc(sizeof(uint32_t) * (nc ? nc : 1));
+    meso_result r = next && uv && used && tx->source && tx->indices ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    uint32_t n = nv;
+    for (uint32_t v = 0; r == MESO_OK && v < nv; ++v) {
+        next[v] = none;
+        tx->source[v] = v;
+        memcpy(uv + 2 * (size_t)v, m->uvs + 2 * (size_t)v, 2 * sizeof(float));
+    }
+    for (size_t c = 0; r == MESO_OK && c < nc; ++c) {
+        const uint32_t v = m->indices[c];
+        const float* cu = m->corner_uvs + 2 * c;
+        uint32_t o = v, last = v;
+        if (!used[v]) {
+            used[v] = 1;
+            memcpy(uv + 2 * (size_t)v, cu, 2 * sizeof(float));
+        }
+        while (o != none && memcmp(uv + 2 * (size_t)o, cu, 2 * sizeof(float)) != 0) {
+            last = o;
+            o = next[o];
+        }
+        if (o == none) {
+            o = n++;
+            next[last] = o;
+            next[o] = none;
+            tx->source[o] = v;
+            memcpy(uv + 2 * (size_t)o, cu, 2 * sizeof(float));
+        }
+        tx->indices[c] = o;
+    }
+    if (r == MESO_OK) {
+        tx->uvs = malloc(sizeof(float) * 2 * (size_t)n);
+        r = tx->uvs ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    }
+    for (size_t o = 0; r == MESO_OK && o < n; ++o) {
+        tx->uvs[2 * o] = (float)(uv[2 * o] * a->tiling[0]);
+        tx->uvs[2 * o + 1] = (float)(uv[2 * o + 1] * a->tiling[1]);
+    }
+    tx->seam_vertices = n - nv;
+    free(next);
+    free(uv);
+    free(used);
+    return r == MESO_OK ? MESO_OK : meso_bake_fail(err, r, 0, "out of memory");
+}
+
+/* Texture coordinates: the mesh's own times the tiling (split at seams when
+ * the mesh has per-corner uvs), or (documented fallback) a planar projection
+ * onto the two largest bounding-box extents, the longest spanning U tiles and
+ * the other V/U as densely. */
 static meso_result texture_uvs(const shell_args* a, const meso_mesh* m, const double lo[3], const double hi[3],
                                shell_texture* tx, meso_error* err)
 {
     const uint32_t nv = m->vertex_count;
+    tx->uv_source = "mesh";
+    if (m->corner_uvs)
+        return split_seams(a, m, tx, err);
     tx->uvs = malloc(sizeof(float) * 2 * (size_t)nv);
     if (!tx->uvs)
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
     if (m->uvs) {
-        tx->uv_source = "mesh";
         for (size_t v = 0; v < nv; ++v) {
             tx->uvs[2 * v] = (float)(m->uvs[2 * v] * a->tiling[0]);
             tx->uvs[2 * v + 1] = (float)(m->uvs[2 * v + 1] * a->tiling[1]);
@@ -360,8 +428,22 @@ static void texture_json(cJSON* parent, const shell_args* a, const shell_texture
     cJSON_AddStringToObject(o, "uv_source", tx->uv_source);
     if (tx->plane[0])
         cJSON_AddStringToObject(o, "uv_plane", tx->plane);
-    if (report)
+    if (report) {
         cJSON_AddNumberToObject(o, "dist_solid_cells", (double)tx->dist.solid_cells);
+        cJSON_AddNumberToObject(o, "seam_vertices", tx->seam_vertices);
+    }
+}
+
+/* The output's per-vertex floats from the mesh's: `layers` stacked arrays
+ * of 3 floats per vertex, output vertex o taking mesh vertex source[o].
+ * Returns NULL when out of memory. */
+static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint32_t n, int layers)
+{
+    float* out = malloc(sizeof(float) * 3 * (size_t)n * (size_t)layers);
+    for (size_t l = 0; out && l < (size_t)layers; ++l)
+        for (size_t o = 0; o < n; ++o)
+            memcpy(out + 3 * (l * n + o), in + 3 * (l * nv + source[o]), 3 * sizeof(float));
+    return out;
 }
 
 int cmd_shell(int argc, char** argv)
@@ -428,6 +510,9 @@ int cmd_shell(int argc, char** argv)
         fprintf(stderr, "mesobake: %s: %u vertices, %u triangles, %u boundary edges; thickness %g (%.3g of the "
                         "diagonal) (%.0f ms)\n",
                 base_name(a.in), nv, nt, topo.boundary_edges, h, h / diag, 1e3 * (now_seconds() - t0));
+    if (verbose && a.texture)
+        fprintf(stderr, "mesobake: texture coordinates (%s): %u seam vertices added, %u output vertices\n",
+                tx.uv_source, tx.seam_vertices, nv + tx.seam_vertices);
 
     float* normals = malloc(sizeof(float) * 3 * (size_t)nv);
     const int layers = a.kind == MESO_SHELL_ENVELOPE ? 2 : 1;
@@ -512,16 +597,28 @@ int cmd_shell(int argc, char** argv)
     }
 
     size_t file_size = 0;
+    /* Everything per vertex below is written for the output vertices: the
+     * mesh's, plus the copies split off at uv seams (tx.source). */
+    const uint32_t nv_out = nv + tx.seam_vertices;
+    float *pos_out = NULL, *normals_out = NULL, *sdir_out = NULL;
     if (r == MESO_OK) {
         /* Base mesh with the normals the directors started from (and the
          * texture coordinates of the texture function). */
-        float *saved = m.normals, *saved_uvs = m.uvs;
-        m.normals = normals;
+        meso_mesh out = m;
+        out.normals = normals;
         if (tx.uvs)
-            m.uvs = tx.uvs;
-        r = meso_bake_mesh_chunk(&m, NULL, &chunk, &err);
-        m.normals = saved;
-        m.uvs = saved_uvs;
+            out.uvs = tx.uvs;
+        if (tx.source) {
+            pos_out = gather3(m.positions, nv, tx.source, nv_out, 1);
+            normals_out = gather3(normals, nv, tx.source, nv_out, 1);
+            out.vertex_count = nv_out;
+            out.positions = pos_out;
+            out.normals = normals_out;
+            out.indices = tx.indices;
+            out.corner_uvs = NULL;
+        }
+        r = !tx.source || (pos_out && normals_out) ? meso_bake_mesh_chunk(&out, NULL, &chunk, &err)
+                                                   : meso_bake_fail(&err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
     }
     /* SDIR as FORMAT.md §7.2 has it: L = 1 for exterior shells; L = 2 for
      * envelopes (top, bottom) and for interior shells, whose layer 0 is zero
@@ -534,10 +631,14 @@ int cmd_shell(int argc, char** argv)
         if (sdir)
             memcpy(sdir + 3 * (size_t)nv, d, sizeof(float) * 3 * (size_t)nv);
     }
+    if (r == MESO_OK && tx.source) {
+        sdir_out = gather3(sdir, nv, tx.source, nv_out, sdir_layers);
+        r = sdir_out ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    }
     if (r == MESO_OK) {
-        thick = malloc(sizeof(float) * (size_t)nv);
+        thick = malloc(sizeof(float) * (size_t)nv_out);
         r = thick ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
-        for (uint32_t v = 0; thick && v < nv; ++v)
+        for (uint32_t v = 0; thick && v < nv_out; ++v)
             thick[v] = (float)h;
     }
     if (r == MESO_OK) {
@@ -581,11 +682,11 @@ int cmd_shell(int argc, char** argv)
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
             {.desc = {.type = MESO_CHUNK_SDIR, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
-                      .dtype = MESO_DTYPE_F32, .components = 3, .dims = {nv, (uint32_t)sdir_layers, 1}},
-             .data = sdir, .size = sizeof(float) * 3 * (size_t)nv * (size_t)sdir_layers},
+                      .dtype = MESO_DTYPE_F32, .components = 3, .dims = {nv_out, (uint32_t)sdir_layers, 1}},
+             .data = sdir_out ? sdir_out : sdir, .size = sizeof(float) * 3 * (size_t)nv_out * (size_t)sdir_layers},
             {.desc = {.type = MESO_CHUNK_STHK, .object = 1, .dtype = MESO_DTYPE_F32, .components = 1,
-                      .dims = {nv, 1, 1}},
-             .data = thick, .size = sizeof(float) * (size_t)nv},
+                      .dims = {nv_out, 1, 1}},
+             .data = thick, .size = sizeof(float) * (size_t)nv_out},
             /* The texture function and its distance map (object 1, lod 0). */
             {.desc = {.type = height ? MESO_CHUNK_TX2D : MESO_CHUNK_TX3D, .object = 1, .dtype = tx.fn.dtype,
                       .components = 1, .dims = {tx.fn.dims[0], tx.fn.dims[1], tx.fn.dims[2]}},
@@ -609,6 +710,9 @@ int cmd_shell(int argc, char** argv)
     cJSON_Delete(rep);
     free(chunk.data);
     free(thick);
+    free(pos_out);
+    free(normals_out);
+    free(sdir_out);
     if (sdir != d)
         free(sdir);
     texture_free(&tx);

@@ -528,7 +528,7 @@ static void bench_thickness(const char* dir)
             /* ctx_init takes the mesh: give it a copy. */
             m.positions = malloc(sizeof(float) * 3 * (size_t)m0.vertex_count);
             m.indices = malloc(sizeof(uint32_t) * 3 * (size_t)m0.triangle_count);
-            m.normals = NULL, m.uvs = NULL;
+            m.normals = NULL, m.uvs = NULL, m.corner_uvs = NULL;
             if (!m.positions || !m.indices)
                 die("out of memory", NULL);
             memcpy(m.positions, m0.positions, sizeof(float) * 3 * (size_t)m0.vertex_count);

@@ -182,7 +182,7 @@ static uint32_t tetra_idx[12] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
 
 static meso_mesh tetra(int normals, int uvs)
 {
-    meso_mesh m = {4, 4, tetra_pos, normals ? tetra_nrm : NULL, uvs ? tetra_uv : NULL, tetra_idx};
+    meso_mesh m = {4, 4, tetra_pos, normals ? tetra_nrm : NULL, uvs ? tetra_uv : NULL, tetra_idx, NULL};
     return m;
 }
 

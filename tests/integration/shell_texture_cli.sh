@@ -3,8 +3,8 @@
 # prisms and texture space"): built-in height fields and volumes, a PNG
 # height map, the TX2D/TX3D + DIST chunks and MESH uvs they add, META and
 # report keys, --tiling/--dist-res/--dist-type, byte-identical output for
-# -j 1 and -j 2, interior shells' two-layer SDIR, and bad specs: a coded
-# error, a non-zero exit, and no output file.
+# -j 1 and -j 2, interior shells' two-layer SDIR, bad specs (a coded
+# error, a non-zero exit, and no output file) and meshes split at uv seams.
 # usage: shell_texture_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR WRITE_HEIGHT_PNG
 set -u
 bake=$1 inspect=$2 data=$3 writepng=$4
@@ -102,4 +102,77 @@ refuse "bad --dist-type" 1 "--dist-type expects" --texture bricks --dist-type f1
 refuse "bad --tiling" 1 "--tiling expects" --texture bricks --tiling 0,1
 refuse "--tiling without --texture" 1 "need --texture" --tiling 2
 check "help documents --texture and the built-ins" sh -c "'$bake' shell --help | grep -q 'bricks\[:RES\]'"
+
+# 7. uv seams: each distinct (vertex, corner uv) pair is one MESH vertex, the
+# copies sharing position and director; seam_vertices counts the copies.
+# vertex_count FILE: the MESH vertex count of object 1
+vertex_count() { "$inspect" info "$1" --format json | tr -d ' \t\n' | grep -o '"vertex_count":[0-9]*' | head -n 1 | cut -d: -f2; }
+# floats FILE OFFSET COUNT: COUNT f32 from OFFSET, one per line
+floats() { od -An -v -tf4 -j "$2" -N $(($3 * 4)) "$1" | tr -s ' \n' '\n\n' | grep -v '^$'; }
+# shared FILE.meso: every MESH position has a single director (SDIR layer 0)
+shared() {
+  "$inspect" dump "$1" MESH -o "$tmp/s.mesh" >/dev/null 2>&1 && "$inspect" dump "$1" SDIR -o "$tmp/s.sdir" >/dev/null 2>&1 || return 1
+  n=$(od -An -tu4 -N4 "$tmp/s.mesh" | tr -d ' ') off=$(od -An -tu8 -j16 -N8 "$tmp/s.mesh" | tr -d ' ')
+  floats "$tmp/s.mesh" "$off" $((3 * n)) | paste -d ' ' - - - >"$tmp/s.pos"
+  test "$(wc -l <"$tmp/s.pos" | tr -d ' ')" = "$n" || return 1
+  floats "$tmp/s.sdir" 0 $((3 * n)) | paste -d ' ' - - - | paste -d '|' "$tmp/s.pos" - |
+    awk -F '|' 'NF != 2 { bad = 1 } ($1 in d) && d[$1] != $2 { bad = 1 } { d[$1] = $2 } END { exit bad }'
+}
+# seams FILE.json N: the report's texture.seam_vertices is N
+seams() { tr -d ' \t\n' <"$1" | grep -q "\"seam_vertices\":$2[,}]"; }
+octa_vertices() {
+  printf 'v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n'
+}
+# An octahedron, 6 vertices: vt k is vertex k's uv in every face but two.
+# Vertex 5 takes vt 7 in faces 3 and 4, vertex 1 takes vt 8 in face 8:
+# 6 + 2 distinct (vertex, uv) pairs.
+{
+  octa_vertices
+  printf 'vt 0.75 0.5\nvt 0.25 0.5\nvt 0.5 0.75\nvt 0.5 0.25\nvt 0.5 0.5\nvt 0 0\nvt 0.9 0.9\nvt 0.1 0.9\n'
+  printf 'f 1/1 3/3 5/5\nf 3/3 2/2 5/5\nf 2/2 4/4 5/7\nf 4/4 1/1 5/7\n'
+  printf 'f 3/3 1/1 6/6\nf 2/2 3/3 6/6\nf 4/4 2/2 6/6\nf 1/8 4/4 6/6\n'
+} >"$tmp/octa.obj"
+{
+  octa_vertices
+  printf 'f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n'
+} >"$tmp/octa_plain.obj"
+# A cube of quads, each mapped onto the unit square in listing order. Per
+# vertex the distinct uvs of its three faces: 2 3 3 2 3 3 2 2 = 20 pairs.
+{
+  printf 'v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n'
+  printf 'vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n'
+  printf 'f 1/1 4/2 3/3 2/4\nf 5/1 6/2 7/3 8/4\nf 1/1 2/2 6/3 5/4\n'
+  printf 'f 2/1 3/2 7/3 6/4\nf 3/1 4/2 8/3 7/4\nf 4/1 1/2 5/3 8/4\n'
+} >"$tmp/quads.obj"
+"$bake" shell -i "$tmp/octa.obj" -o "$tmp/seam1.meso" --texture bricks:64 -j 1 --report "$tmp/seam.json" -v \
+  >/dev/null 2>"$tmp/seam.err"
+"$bake" shell -i "$tmp/octa.obj" -o "$tmp/seam2.meso" --texture bricks:64 -j 2 >/dev/null 2>&1
+check "seam: bake succeeds" test -s "$tmp/seam1.meso"
+check "seam: validates fully" sh -c "'$inspect' validate --full '$tmp/seam1.meso' >/dev/null"
+check "seam: MESH has 6 + 2 vertices" test "$(vertex_count "$tmp/seam1.meso")" = 8
+check "seam: SDIR and STHK follow (8)" sh -c "'$inspect' info '$tmp/seam1.meso' | awk '(\$2 == \"SDIR\" || \$2 == \"STHK\") && \$9 == \"8x1x1\"' | grep -c . | grep -qx 2"
+check "seam: report says seam_vertices 2" seams "$tmp/seam.json" 2
+check "seam: -v says so" grep -q "2 seam vertices" "$tmp/seam.err"
+check "seam: copies share position and director" shared "$tmp/seam1.meso"
+check "seam: -j 1 and -j 2 give byte-identical files" cmp -s "$tmp/seam1.meso" "$tmp/seam2.meso"
+"$bake" shell -i "$tmp/octa.obj" -o "$tmp/seam_env.meso" --kind envelope --texture bricks:64 >/dev/null 2>&1
+check "seam envelope: validates fully" sh -c "'$inspect' validate --full '$tmp/seam_env.meso' >/dev/null"
+check "seam envelope: SDIR is 8x2x1" sh -c "'$inspect' info '$tmp/seam_env.meso' | awk '\$2 == \"SDIR\" && \$9 == \"8x2x1\"' | grep -q ."
+"$bake" shell -i "$tmp/quads.obj" -o "$tmp/quads.meso" --texture bricks:64 --report "$tmp/quads.json" >/dev/null 2>&1
+check "seam quads: validates fully" sh -c "'$inspect' validate --full '$tmp/quads.meso' >/dev/null"
+check "seam quads: MESH has 8 + 12 vertices" test "$(vertex_count "$tmp/quads.meso")" = 20
+check "seam quads: report says seam_vertices 12" seams "$tmp/quads.json" 12
+check "seam quads: copies share position and director" shared "$tmp/quads.meso"
+# Without --texture nothing is split (one uv per vertex, as before) and the
+# report has no seam_vertices.
+"$bake" shell -i "$tmp/octa.obj" -o "$tmp/seam_notex.meso" --report "$tmp/seam_notex.json" >/dev/null 2>&1
+check "seam, no texture: MESH keeps 6 vertices" test "$(vertex_count "$tmp/seam_notex.meso")" = 6
+check "seam, no texture: no seam_vertices" sh -c "! grep -q seam_vertices '$tmp/seam_notex.json'"
+# Without per-face uvs, or with one uv per vertex, the vertices are the input's.
+"$bake" shell -i "$tmp/octa_plain.obj" -o "$tmp/plain.meso" --texture bricks:64 --report "$tmp/plain.json" \
+  >/dev/null 2>&1
+check "no uvs: MESH keeps 6 vertices" test "$(vertex_count "$tmp/plain.meso")" = 6
+check "no uvs: seam_vertices 0" seams "$tmp/plain.json" 0
+check "one uv per vertex (saddle): MESH keeps 1089 vertices" test "$(vertex_count "$tmp/png16.meso")" = 1089
+check "one uv per vertex (saddle): seam_vertices 0" seams "$tmp/png16.json" 0
 exit $fail

@@ -1,5 +1,5 @@
-/* OpenMesh adapter: reads OBJ, OFF and PLY (ASCII and binary) and computes
- * vertex normals. Expectations are analytic: an octahedron written here in
+/* OpenMesh adapter: reads OBJ, OFF and PLY (ASCII and binary), computes
+ * vertex normals and keeps per-corner uvs at seams. Expectations are analytic: an octahedron written here in
  * each format (vertex normals = normalised positions by symmetry) and the
  * bundled unit sphere (normals ~ positions). */
 #include "test_util.h"
@@ -127,6 +127,59 @@ static void sphere_normals_point_outwards(void)
     meso_mesh_free(&m);
 }
 
+/* A cube of quads, each mapped onto the unit square in listing order: every
+ * vertex gets two or three uvs. Each triangle of a quad's fan must carry the
+ * quad's uv at each of its corners (OpenMesh alone mislabels them). */
+static void reads_corner_uvs_of_quads(void)
+{
+    static const float uvsq[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    static const uint32_t quads[6][4] = {{1, 4, 3, 2}, {5, 6, 7, 8}, {1, 2, 6, 5},
+                                         {2, 3, 7, 6}, {3, 4, 8, 7}, {4, 1, 5, 8}};
+    FILE* f = fopen(tmp_path("quads.obj"), "wb");
+    assert(f);
+    for (int i = 0; i < 8; ++i)
+        fprintf(f, "v %d %d %d\n", i == 1 || i == 2 || i == 5 || i == 6 ? 1 : -1, i % 4 >= 2 ? 1 : -1, i >= 4 ? 1 : -1);
+    for (int i = 0; i < 4; ++i)
+        fprintf(f, "vt %g %g\n", uvsq[i][0], uvsq[i][1]);
+    for (int q = 0; q < 6; ++q)
+        fprintf(f, "f %u/1 %u/2 %u/3 %u/4\n", quads[q][0], quads[q][1], quads[q][2], quads[q][3]);
+    fclose(f);
+    meso_mesh m;
+    meso_error err = {0};
+    assert(meso_openmesh_read(tmp_path("quads.obj"), &m, NULL, &err) == MESO_OK);
+    assert(m.vertex_count == 8 && m.triangle_count == 12 && m.uvs && m.corner_uvs);
+    for (uint32_t t = 0; t < 12; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t* q = quads[t / 2];
+            const uint32_t v = m.indices[3 * t + (uint32_t)k];
+            int i = 0;
+            while (i < 4 && q[i] - 1 != v)
+                ++i;
+            assert(i < 4);
+            assert(m.corner_uvs[6 * t + 2 * (uint32_t)k] == uvsq[i][0]);
+            assert(m.corner_uvs[6 * t + 2 * (uint32_t)k + 1] == uvsq[i][1]);
+        }
+    meso_mesh_free(&m);
+    unlink(tmp_path("quads.obj"));
+}
+
+/* One uv per vertex (saddle.obj: vt k with vertex k' throughout): no seam, so
+ * no corner uvs; no uvs at all (sphere.obj): neither. */
+static void corner_uvs_only_at_seams(void)
+{
+    meso_mesh m;
+    meso_error err = {0};
+    assert(meso_openmesh_read(test_data("saddle.obj"), &m, NULL, &err) == MESO_OK);
+    assert(m.uvs && !m.corner_uvs);
+    meso_mesh_free(&m);
+    assert(meso_openmesh_read(test_data("sphere.obj"), &m, NULL, &err) == MESO_OK);
+    assert(!m.uvs && !m.corner_uvs);
+    meso_mesh_free(&m);
+    assert(meso_openmesh_read(test_data("cube_no_bottom.obj"), &m, NULL, &err) == MESO_OK);
+    assert(m.uvs && m.corner_uvs);
+    meso_mesh_free(&m);
+}
+
 static void missing_and_malformed_files_fail_cleanly(void)
 {
     meso_mesh m;
@@ -148,6 +201,8 @@ int main(void)
     assert(mkdtemp(tmpdir));
     TEST_RUN(reads_obj_off_ply_with_normals);
     TEST_RUN(sphere_normals_point_outwards);
+    TEST_RUN(reads_corner_uvs_of_quads);
+    TEST_RUN(corner_uvs_only_at_seams);
     TEST_RUN(missing_and_malformed_files_fail_cleanly);
     rmdir(tmpdir);
     return 0;

@@ -171,7 +171,7 @@ static uint64_t one_triangle_cross(const float d[9], uint64_t* offset_self)
 {
     static float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     static uint32_t idx[3] = {0, 1, 2};
-    meso_mesh m = {3, 1, pos, NULL, NULL, idx};
+    meso_mesh m = {3, 1, pos, NULL, NULL, idx, NULL};
     meso_shell_report rep;
     meso_error err = {0};
     assert(meso_shell_validate(&m, d, NULL, 0.3, 1, NULL, &rep, &err) == MESO_OK);
@@ -213,7 +213,7 @@ static void degenerate_triangles(void)
     /* A unit square (2 triangles) + a collinear triangle + a repeated index. */
     float pos[18] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 0, 0, 3, 0, 0};
     uint32_t idx[12] = {0, 1, 2, 0, 2, 3, 1, 4, 5, 2, 2, 3};
-    meso_mesh m = {6, 4, pos, NULL, NULL, idx};
+    meso_mesh m = {6, 4, pos, NULL, NULL, idx, NULL};
     float d[18];
     for (int v = 0; v < 6; ++v) {
         d[3 * v] = d[3 * v + 1] = 0;

@@ -255,7 +255,7 @@ static uint32_t tet_idx[12] = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
 
 static void thickness_ratios(void)
 {
-    meso_mesh m = {4, 4, (float*)tet_pos, NULL, NULL, tet_idx};
+    meso_mesh m = {4, 4, (float*)tet_pos, NULL, NULL, tet_idx, NULL};
     const float dir[12] = {0, 0, 0.1f, 0.2f, 0, 0, 0, 0.3f, 0, 0, 0, 0.4f};
     double lo, mean;
     uint32_t n;
@@ -270,7 +270,7 @@ static void thickness_ratios(void)
     /* An unused vertex (index 4) does not count. */
     const float pos5[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 9, 9, 9};
     const float dir5[15] = {0, 0, 0.1f, 0.2f, 0, 0, 0, 0.3f, 0, 0, 0, 0.4f, 0, 0, 0};
-    meso_mesh m5 = {5, 4, (float*)pos5, NULL, NULL, tet_idx};
+    meso_mesh m5 = {5, 4, (float*)pos5, NULL, NULL, tet_idx, NULL};
     assert(meso_shell_thickness_ratio(&m5, dir5, NULL, 0.2, &lo, &mean, &n, &err) == MESO_OK);
     assert(n == 4 && fabs(lo - 0.5) < 1e-6);
 }
@@ -283,7 +283,7 @@ static void validate_entry_point(void)
 {
     /* Radial directors of length 0.05: the offset is the octahedron scaled by
      * 1.05, clean. */
-    meso_mesh m = {6, 8, (float*)oct_pos, NULL, NULL, oct_idx};
+    meso_mesh m = {6, 8, (float*)oct_pos, NULL, NULL, oct_idx, NULL};
     float dir[18];
     for (int j = 0; j < 18; ++j)
         dir[j] = 0.05f * oct_pos[j];
@@ -326,7 +326,7 @@ static void validate_entry_point(void)
     uint32_t bad_idx[24];
     memcpy(bad_idx, oct_idx, sizeof(bad_idx));
     bad_idx[7] = 6;
-    meso_mesh mb = {6, 8, (float*)oct_pos, NULL, NULL, bad_idx};
+    meso_mesh mb = {6, 8, (float*)oct_pos, NULL, NULL, bad_idx, NULL};
     assert(meso_shell_validate(&mb, dir, NULL, 0.05, 1, NULL, &rep, &err) == MESO_ERR_INVALID_ARG);
     (void)r;
 }
