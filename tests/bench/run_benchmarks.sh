@@ -35,3 +35,16 @@ if [ "${MESO_BENCH_SKIP_SHELL:-0}" != 1 ]; then
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_shell.gp"
     echo "shell results in $results"
 fi
+
+# Shell ray casting (issue #5): Table 1 on llvmpipe, error against the exact
+# reference, cost-vs-error sweeps. Results: table1.csv, shell_render_sweep.csv,
+# shell_render_cost_error.png, shell_render_table1.png. Skip with
+# MESO_BENCH_SKIP_RENDER=1; `quick` as a 4th argument for a smoke run.
+if [ "${MESO_BENCH_SKIP_RENDER:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_shell_render bake/mesobake
+    echo "== bench_shell_render"
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_shell_render" "$results" "$build/bake/mesobake" \
+        "$src/tests/data"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_shell_render.gp"
+    echo "render results in $results"
+fi
