@@ -139,7 +139,8 @@ typedef struct meso_rt_draw_desc {
     float albedo[3];    /* linear RGB; zero means (0.80, 0.74, 0.66) */
     /* Shell knobs (ignored for meshes); zero means the default in brackets. */
     meso_shell_technique technique; /* [MESO_SHELL_SMOOTH] */
-    float error_px;            /* image-space error bound of the corrected ray path, pixels [1] */
+    float error_px;            /* image-space error bound of the corrected ray path, pixels; a quarter
+                                  of it is the smallest step near surfaces [1] */
     int max_steps;             /* march steps per prism and pixel; out of steps, the surface is taken
                                   to be at the last sample (drawn too high, never a hole) [256] */
     int bisection_steps;       /* refinement steps once the surface is bracketed [4] */
@@ -154,7 +155,7 @@ typedef struct meso_rt_draw_desc {
  * with depth testing (GL_LESS) and depth writes, so it sorts against the
  * host's own geometry. Shells write the exact depth of the ray's hit, and
  * render correctly with the camera inside the shell. The GL state the call
- * changes (program, vertex array, textures on units 0-3, depth test/func/
+ * changes (program, vertex array, textures on units 0-4, depth test/func/
  * mask, culling) is restored before it returns. GL errors are logged
  * (GL_ERROR) and returned as MESO_ERR_GL, never fatal. */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
