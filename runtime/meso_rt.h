@@ -163,7 +163,11 @@ MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt
 /* Animation without re-baking: replace a shell's base positions (3 floats
  * per vertex) and directors (3 floats per vertex per SDIR layer, the layout
  * of its SDIR chunk); either may be NULL to keep it. vertex_count must equal
- * the shell's. Cost: one buffer upload of 24 bytes per vertex. */
+ * the shell's, in the order of its MESH chunk: a textured bake splits
+ * vertices at uv seams (mesobake's report: texture.seam_vertices), the
+ * copies first appearing after the mesh's own vertices and sharing their
+ * positions, so give every copy its source vertex's values. Cost: one buffer
+ * upload of 24 bytes per vertex. */
 MESO_API meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object obj, const float* positions,
                                           const float* directors, uint32_t vertex_count);
 /* Vertex count and SDIR layer count of a shell (0 for other kinds). */
