@@ -10,8 +10,8 @@
 //       error bound (u_err_scale * w_clip, i.e. error_px pixels), redirected
 //       towards the ray x T(w) point (<= 4 corrections);
 //  sec. 4.4 step lengths from the distance map (sphere tracing; near the
-//       surface at least the error bound's size, see step_radius) and, once
-//       the surface is bracketed, bisection on the filtered texture.
+//       surface at least a quarter of the error bound, see step_radius) and,
+//       once the surface is bracketed, bisection on the filtered texture.
 // Curved (1), sec. 3.2/sec. 4.5: the hull of the levels the curved prism spans
 //       (curved_wbar_range), then the same march in the smooth prism's (u,v,wbar); the
 //       texture is looked up at w from the paper's eq. 2, and steps shrink by
@@ -232,10 +232,6 @@ vec3 phi_curved(Prism P, vec3 q)
 {
     return phi(P, vec3(q.xy, curved_wbar(P, q.x, q.y, q.z)));
 }
-
-#ifndef CLIP_MARGIN
-#define CLIP_MARGIN 0.02
-#endif
 
 // --- shading ---------------------------------------------------------------
 
@@ -507,10 +503,10 @@ void main()
     set_view_floor(ro + tmin * rd, ro + tmax * rd, length(vec3(dq.x * e1 + dq.y * e2, dq.z)));
     // The hull is larger than the prism (sides are bilinear, curved prisms
     // are bounded loosely): clip the chord q0 -> q1 to the prism's texture
-    // domain, widened by CLIP_MARGIN (the ray's texture-space path bends
+    // domain, widened by m (the ray's texture-space path bends
     // away from the chord by little more than the error bound).
     {
-        const float m = CLIP_MARGIN;
+        const float m = 0.02; // barycentric / w units
         float wlo = curved ? range.x : -m, whi = curved ? range.y : 1.0 + m;
         float c0[5] = float[5](q0.x + m, q0.y + m, 1.0 + m - q0.x - q0.y, q0.z - wlo, whi - q0.z);
         float c1[5] = float[5](q1.x + m, q1.y + m, 1.0 + m - q1.x - q1.y, q1.z - wlo, whi - q1.z);
