@@ -8,24 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "bake_threads.h"
 
 /* The runtime filters in float: its values may differ from ours (double,
  * from the same quantised texels) by a few ulps. Cells are marked against a
  * threshold lowered by this much. */
 #define MARGIN 1e-6
-
-static int thread_count(int threads)
-{
-#ifdef _OPENMP
-    return threads > 0 ? threads : omp_get_max_threads();
-#else
-    (void)threads;
-    return 1;
-#endif
-}
 
 /* >>cell maxima ----------------------------------------------------------------
  * Along one axis, cell c of n covers [c/n, (c+1)/n]; the filtered function is
@@ -98,7 +86,7 @@ meso_result meso_distmap_cell_max(const meso_texfn* f, const uint32_t dims[3], i
         for (int d = 0; d < 3; ++d)
             for (uint32_t p = 0; p < ax[d].start[nd[d]]; ++p)
                 meso_texfn_axis(f, d, ax[d].x[p], &ax[d].i0[p], &ax[d].i1[p], &ax[d].frac[p]);
-        const int nt = thread_count(threads);
+        const int nt = meso_bake_thread_count(threads);
         (void)nt;
 #ifdef _OPENMP
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
@@ -174,7 +162,7 @@ meso_result meso_distmap_edt(const uint8_t* mask, const uint32_t dims[3], const 
         sqdist[c] = mask[c] ? 0.0 : INFINITY;
     const size_t stride[3] = {1, dims[0], (size_t)dims[0] * dims[1]};
     int failed = 0;
-    const int nt = thread_count(threads);
+    const int nt = meso_bake_thread_count(threads);
     (void)nt;
     /* Axis w first (usually the shortest lines), then t, then s. */
     for (int axis = 2; axis >= 0; --axis) {

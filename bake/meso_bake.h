@@ -54,7 +54,10 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  * Texture functions (mesobake shell --texture, bake/texture_function.h):
  *   3120 the texture SPEC does not parse       3122 texture file content unusable
  *   3121 texture file missing or unreadable    3123 .vdb: no such float grid, or empty
- *   (3124..3129 reserved for texture functions and distance maps) */
+ *   (3124..3129 reserved for texture functions and distance maps)
+ * Skeletons (bake/skeleton_swc.h): 3140..3149, each listed there.
+ * Cell tile maps and split cells (bake/tile_map.h, bake/split_cells.h):
+ *   3150..3153, listed in tile_map.h. */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */
