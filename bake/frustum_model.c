@@ -1,0 +1,613 @@
+/*
+ * frustum_model.c — skeleton → conical frusta (frustum_model.h, which
+ * states every construction and the decisions taken where the paper is
+ * vague).
+ */
+#include "frustum_model.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "meso_bake.h"
+
+#define TAU 6.283185307179586
+#define CUT_SAMPLES 512
+#define SEAM_SAMPLES 128
+
+/* >>vectors ---------------------------------------------------------------- */
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double a[3], const double b[3], double o[3])
+{
+    double t[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    memcpy(o, t, sizeof(t));
+}
+
+static double normalize3(double v[3])
+{
+    double l = sqrt(dot3(v, v));
+    if (l > 0)
+        for (int i = 0; i < 3; ++i)
+            v[i] /= l;
+    return l;
+}
+
+static void any_perp(const double a[3], double o[3])
+{
+    double e[3] = {0, 0, 0};
+    int m = fabs(a[0]) < fabs(a[1]) ? (fabs(a[0]) < fabs(a[2]) ? 0 : 2) : (fabs(a[1]) < fabs(a[2]) ? 1 : 2);
+    e[m] = 1;
+    cross3(a, e, o);
+    normalize3(o);
+}
+
+/* >>segment geometry ------------------------------------------------------- */
+
+static double seg_axis(const meso_frustum_segment* s, double a[3])
+{
+    for (int i = 0; i < 3; ++i)
+        a[i] = s->c1[i] - s->c0[i];
+    return normalize3(a);
+}
+
+int meso_frustum_generator_plane(const meso_frustum_segment* s, int e, const double w[3], double* y)
+{
+    double a[3];
+    double h = seg_axis(s, a);
+    double k = h > 0 ? (s->r1 - s->r0) / h : 0.0;
+    const double* n = s->plane_n[e];
+    double nw = dot3(n, w);
+    double den = dot3(n, a) + k * nw;
+    if (fabs(den) < 1e-300)
+        return 0;
+    *y = (s->plane_d[e] - dot3(n, s->c0) - s->r0 * nw) / den;
+    return 1;
+}
+
+/* Unit radial direction of angle φ in a frame (x, z = x × a). */
+static void radial_dir(const double a[3], const double x[3], double phi, double w[3])
+{
+    double z[3];
+    cross3(x, a, z);
+    for (int i = 0; i < 3; ++i)
+        w[i] = sin(phi) * x[i] + cos(phi) * z[i];
+}
+
+/* Point of the generator with direction w at axial coordinate y. */
+static void generator_point(const meso_frustum_segment* s, const double a[3], double k, const double w[3], double y,
+    double p[3])
+{
+    double r = s->r0 + k * y;
+    for (int i = 0; i < 3; ++i)
+        p[i] = s->c0[i] + y * a[i] + r * w[i];
+}
+
+/* Validity of a segment's cut (frustum_model.h, "Cap intersections").
+ * Returns the margin min(y1 − y0) in world units, or −1 when an orientation
+ * or nappe condition fails. */
+static double cut_margin(const meso_frustum_segment* s)
+{
+    double a[3];
+    double h = seg_axis(s, a);
+    double k = (s->r1 - s->r0) / h;
+    double ext[2][2];
+    for (int e = 0; e < 2; ++e) {
+        const double* n = s->plane_n[e];
+        double m = dot3(n, a);
+        double np[3] = {n[0] - m * a[0], n[1] - m * a[1], n[2] - m * a[2]};
+        double sa = sqrt(dot3(np, np));
+        double dn[2] = {m + k * sa, m - k * sa};
+        double en = s->plane_d[e] - dot3(n, s->c0);
+        for (int j = 0; j < 2; ++j) {
+            if (e == 0 ? dn[j] >= 0 : dn[j] <= 0)
+                return -1;
+            ext[e][j] = (en - (j == 0 ? 1 : -1) * s->r0 * sa) / dn[j];
+            if (s->r0 + k * ext[e][j] < -1e-12 * (h + s->r0 + s->r1))
+                return -1;
+        }
+    }
+    double x[3];
+    any_perp(a, x);
+    double margin = DBL_MAX;
+    for (int j = 0; j < CUT_SAMPLES; ++j) {
+        double w[3], y0, y1;
+        radial_dir(a, x, TAU * j / CUT_SAMPLES, w);
+        if (!meso_frustum_generator_plane(s, 0, w, &y0) || !meso_frustum_generator_plane(s, 1, w, &y1))
+            return -1;
+        margin = fmin(margin, y1 - y0);
+    }
+    return margin * sqrt(1 + k * k);
+}
+
+double meso_frustum_lateral_area(const meso_frustum_segment* s, uint32_t samples)
+{
+    if (samples == 0)
+        samples = 1024;
+    double a[3], x[3];
+    double h = seg_axis(s, a);
+    double k = (s->r1 - s->r0) / h;
+    any_perp(a, x);
+    double sum = 0;
+    for (uint32_t j = 0; j < samples; ++j) {
+        double w[3], y0, y1;
+        radial_dir(a, x, TAU * j / samples, w);
+        if (!meso_frustum_generator_plane(s, 0, w, &y0) || !meso_frustum_generator_plane(s, 1, w, &y1))
+            continue;
+        /* ∫ r(y) dy from y0 to y1; the area element is r dφ · √(1+k²) dy. */
+        sum += s->r0 * (y1 - y0) + 0.5 * k * (y1 * y1 - y0 * y0);
+    }
+    return sum * sqrt(1 + k * k) * TAU / samples;
+}
+
+/* >>joint planes ----------------------------------------------------------- */
+
+/* Intersection of the lines p + α u and q + β v lying in one plane (2-D
+ * solve in the basis e1, e2 of that plane). Returns 0 when parallel. */
+static int line_line(const double p[3], const double u[3], const double q[3], const double v[3], const double e1[3],
+    const double e2[3], double out[3])
+{
+    double pu[2] = {dot3(u, e1), dot3(u, e2)}, pv[2] = {dot3(v, e1), dot3(v, e2)};
+    double dq[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+    double r[2] = {dot3(dq, e1), dot3(dq, e2)};
+    double det = pu[0] * (-pv[1]) - pu[1] * (-pv[0]);
+    double lu = sqrt(pu[0] * pu[0] + pu[1] * pu[1]), lv = sqrt(pv[0] * pv[0] + pv[1] * pv[1]);
+    if (!(lu > 0 && lv > 0) || fabs(det) < 1e-9 * lu * lv)
+        return 0;
+    double alpha = (r[0] * (-pv[1]) - r[1] * (-pv[0])) / det;
+    for (int i = 0; i < 3; ++i)
+        out[i] = p[i] + alpha * u[i];
+    return 1;
+}
+
+typedef struct end_ref {
+    uint32_t seg;
+    int end;
+} end_ref;
+
+static const double* seg_end_point(const meso_frustum_segment* s, int e)
+{
+    return e == 0 ? s->c0 : s->c1;
+}
+
+static double seg_end_radius(const meso_frustum_segment* s, int e)
+{
+    return e == 0 ? s->r0 : s->r1;
+}
+
+static void set_perpendicular_plane(meso_frustum_segment* s, int e)
+{
+    double a[3];
+    seg_axis(s, a);
+    double sg = e == 0 ? -1.0 : 1.0;
+    for (int i = 0; i < 3; ++i)
+        s->plane_n[e][i] = sg * a[i];
+    s->plane_d[e] = dot3(s->plane_n[e], seg_end_point(s, e));
+}
+
+/* The §2.2 plane of joint j (frustum_model.h, "Joint plane"). */
+static void joint_plane(meso_frustum_model* m, meso_frustum_joint* j)
+{
+    const meso_frustum_segment* s1 = &m->segments[j->segment[0]];
+    const meso_frustum_segment* s2 = &m->segments[j->segment[1]];
+    int e1 = j->end[0], e2 = j->end[1];
+    const double* J = seg_end_point(s1, e1);
+    const double* O1 = seg_end_point(s1, 1 - e1);
+    const double* J2 = seg_end_point(s2, e2);
+    const double* O2 = seg_end_point(s2, 1 - e2);
+    double rO1 = seg_end_radius(s1, 1 - e1), rJ1 = seg_end_radius(s1, e1);
+    double rJ2 = seg_end_radius(s2, e2), rO2 = seg_end_radius(s2, 1 - e2);
+    double M1[3], M2[3], Nm[3], p1[3], p2[3];
+    for (int i = 0; i < 3; ++i) {
+        M1[i] = J[i] - O1[i];
+        M2[i] = O2[i] - J2[i];
+    }
+    normalize3(M1);
+    normalize3(M2);
+    cross3(M1, M2, Nm);
+    if (normalize3(Nm) < 1e-9)
+        any_perp(M1, Nm);
+    cross3(M1, Nm, p1);
+    cross3(M2, Nm, p2);
+    double e2d[3];
+    cross3(Nm, M1, e2d); /* in-plane basis (M1, e2d) */
+    double pts[2][3];
+    for (int side = 0; side < 2; ++side) {
+        double sg = side == 0 ? -1.0 : 1.0;
+        double L1[3], L2[3], L3[3], L4[3], u[3], v[3];
+        for (int i = 0; i < 3; ++i) {
+            L1[i] = O1[i] + sg * rO1 * p1[i];
+            L2[i] = J[i] + sg * rJ1 * p1[i];
+            L3[i] = J2[i] + sg * rJ2 * p2[i];
+            L4[i] = O2[i] + sg * rO2 * p2[i];
+            u[i] = L2[i] - L1[i];
+            v[i] = L4[i] - L3[i];
+        }
+        if (!line_line(L1, u, L3, v, M1, e2d, pts[side]))
+            for (int i = 0; i < 3; ++i)
+                pts[side][i] = 0.5 * (L2[i] + L3[i]);
+    }
+    memcpy(j->a, pts[0], sizeof(j->a));
+    memcpy(j->b, pts[1], sizeof(j->b));
+    double ab[3] = {pts[0][0] - pts[1][0], pts[0][1] - pts[1][1], pts[0][2] - pts[1][2]};
+    double scale = sqrt(dot3(ab, ab));
+    double bis[3] = {M1[0] + M2[0], M1[1] + M2[1], M1[2] + M2[2]};
+    double n[3];
+    cross3(ab, Nm, n);
+    if (scale < 1e-12 * (rO1 + rO2 + 1e-300) || normalize3(n) == 0) {
+        memcpy(n, bis, sizeof(n));
+        if (normalize3(n) == 0)
+            memcpy(n, M1, sizeof(n));
+        j->plane_d = dot3(n, J);
+    } else {
+        if (dot3(n, bis) < 0)
+            for (int i = 0; i < 3; ++i)
+                n[i] = -n[i];
+        j->plane_d = dot3(n, pts[0]);
+    }
+    memcpy(j->plane_n, n, sizeof(n));
+}
+
+/* Applies joint j's plane (or its ball) to its two segments. */
+static void joint_apply(meso_frustum_model* m, uint32_t ji)
+{
+    meso_frustum_joint* j = &m->joints[ji];
+    for (int k = 0; k < 2; ++k) {
+        meso_frustum_segment* s = &m->segments[j->segment[k]];
+        int e = j->end[k];
+        s->cap[e] = 0;
+        if (j->ball) {
+            set_perpendicular_plane(s, e);
+            s->end_kind[e] = MESO_FRUSTUM_END_BALL;
+            continue;
+        }
+        /* Outward: the first segment arrives along +Nc, the second leaves. */
+        double sg = k == 0 ? 1.0 : -1.0;
+        for (int i = 0; i < 3; ++i)
+            s->plane_n[e][i] = sg * j->plane_n[i];
+        s->plane_d[e] = sg * j->plane_d;
+        s->end_kind[e] = MESO_FRUSTUM_END_JOINT;
+    }
+}
+
+/* Seam gap of a §2.2 joint (frustum_model.h). */
+static double seam_gap(const meso_frustum_model* m, const meso_frustum_joint* j)
+{
+    double gap = 0;
+    for (int dir = 0; dir < 2; ++dir) {
+        const meso_frustum_segment* sa = &m->segments[j->segment[dir]];
+        const meso_frustum_segment* sb = &m->segments[j->segment[1 - dir]];
+        int ea = j->end[dir], eb = j->end[1 - dir];
+        double aa[3], ab[3], xa[3];
+        double ha = seg_axis(sa, aa), hb = seg_axis(sb, ab);
+        double ka = (sa->r1 - sa->r0) / ha, kb = (sb->r1 - sb->r0) / hb;
+        any_perp(aa, xa);
+        for (int t = 0; t < SEAM_SAMPLES; ++t) {
+            double w[3], y, X[3], q[3], X2[3];
+            radial_dir(aa, xa, TAU * t / SEAM_SAMPLES, w);
+            if (!meso_frustum_generator_plane(sa, ea, w, &y))
+                return INFINITY;
+            generator_point(sa, aa, ka, w, y, X);
+            double yb = 0;
+            for (int i = 0; i < 3; ++i)
+                yb += (X[i] - sb->c0[i]) * ab[i];
+            for (int i = 0; i < 3; ++i)
+                q[i] = X[i] - sb->c0[i] - yb * ab[i];
+            if (normalize3(q) == 0)
+                any_perp(ab, q);
+            if (!meso_frustum_generator_plane(sb, eb, q, &yb))
+                return INFINITY;
+            generator_point(sb, ab, kb, q, yb, X2);
+            double d[3] = {X[0] - X2[0], X[1] - X2[1], X[2] - X2[2]};
+            gap = fmax(gap, sqrt(dot3(d, d)));
+        }
+    }
+    return gap;
+}
+
+/* >>u alignment ------------------------------------------------------------ */
+
+/* u of point p in segment s's frame, offsets excluded (turns). */
+static double raw_u(const meso_frustum_segment* s, const double p[3])
+{
+    double a[3], z[3], q[3];
+    seg_axis(s, a);
+    double y = 0;
+    for (int i = 0; i < 3; ++i)
+        y += (p[i] - s->c0[i]) * a[i];
+    for (int i = 0; i < 3; ++i)
+        q[i] = p[i] - s->c0[i] - y * a[i];
+    cross3(s->frame_x, a, z);
+    return atan2(dot3(q, s->frame_x), dot3(q, z)) / TAU;
+}
+
+static void project_frame(meso_frustum_segment* s, const double x[3])
+{
+    double a[3];
+    seg_axis(s, a);
+    double m = dot3(x, a);
+    for (int i = 0; i < 3; ++i)
+        s->frame_x[i] = x[i] - m * a[i];
+    if (normalize3(s->frame_x) < 1e-6)
+        any_perp(a, s->frame_x);
+}
+
+/* Frames segment `to` from `from` across joint j (or a ball when j < 0). */
+static void align_across(meso_frustum_model* m, uint32_t from, int from_end, uint32_t to, int to_end, int32_t ji)
+{
+    meso_frustum_segment* sf = &m->segments[from];
+    meso_frustum_segment* st = &m->segments[to];
+    project_frame(st, sf->frame_x);
+    st->u_offset = 0;
+    if (ji < 0 || m->joints[ji].ball)
+        return;
+    /* The u = 0 generator of `from` at its joint end: raw angle =
+     * u_offset − v·twist/2π with v = from_end. */
+    double a[3], w[3];
+    double h = seg_axis(sf, a);
+    double k = (sf->r1 - sf->r0) / h;
+    double ang = sf->u_offset - (double)from_end * sf->twist / TAU;
+    radial_dir(a, sf->frame_x, TAU * ang, w);
+    double y, X[3];
+    if (!meso_frustum_generator_plane(sf, from_end, w, &y))
+        return;
+    generator_point(sf, a, k, w, y, X);
+    double ut = raw_u(st, X) + (double)to_end * st->twist / TAU;
+    st->u_offset = ut - floor(ut);
+}
+
+/* >>build ------------------------------------------------------------------ */
+
+static uint32_t find_rep(uint32_t* rep, uint32_t i)
+{
+    while (rep[i] != i) {
+        rep[i] = rep[rep[i]];
+        i = rep[i];
+    }
+    return i;
+}
+
+void meso_frustum_model_free(meso_frustum_model* m)
+{
+    if (!m)
+        return;
+    free(m->segments);
+    free(m->joints);
+    free(m->balls);
+    memset(m, 0, sizeof(*m));
+}
+
+meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum_options* opt, meso_frustum_model* out,
+    meso_error* err)
+{
+    if (!sk || !out)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "frusta: skeleton or out is NULL");
+    memset(out, 0, sizeof(*out));
+    meso_frustum_options o = {0};
+    if (opt)
+        o = *opt;
+    uint32_t n = sk->node_count;
+    meso_frustum_model m = {0};
+    uint32_t* rep = malloc((size_t)(n ? n : 1) * sizeof(*rep));
+    uint32_t* deg = calloc(n ? n : 1, sizeof(*deg));
+    uint32_t* first = calloc((size_t)n + 1, sizeof(*first));
+    end_ref* ends = malloc((size_t)(2 * n + 1) * sizeof(*ends));
+    uint32_t* queue = malloc((size_t)(n + 1) * sizeof(*queue));
+    uint8_t* seen = NULL;
+    m.segments = calloc(n ? n : 1, sizeof(*m.segments));
+    m.joints = calloc(n ? n : 1, sizeof(*m.joints));
+    m.balls = calloc(n ? n : 1, sizeof(*m.balls));
+    meso_result r = MESO_OK;
+    if (!rep || !deg || !first || !ends || !queue || !m.segments || !m.joints || !m.balls) {
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory (%u nodes)", n);
+        goto done;
+    }
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    for (uint32_t i = 0; i < n; ++i) {
+        rep[i] = i;
+        for (int c = 0; c < 3; ++c) {
+            lo[c] = fmin(lo[c], sk->nodes[i].pos[c]);
+            hi[c] = fmax(hi[c], sk->nodes[i].pos[c]);
+        }
+    }
+    double diag = n ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                             (hi[2] - lo[2]) * (hi[2] - lo[2]))
+                    : 0;
+    double eps_len = 1e-12 * diag;
+    /* Segments and zero-length merges (union-find: order-independent). */
+    for (uint32_t i = 0; i < n; ++i) {
+        int32_t p = sk->nodes[i].parent;
+        if (p < 0)
+            continue;
+        const meso_skeleton_node* a = &sk->nodes[p];
+        const meso_skeleton_node* b = &sk->nodes[i];
+        double d[3] = {b->pos[0] - a->pos[0], b->pos[1] - a->pos[1], b->pos[2] - a->pos[2]};
+        if (sqrt(dot3(d, d)) <= eps_len) {
+            uint32_t ra = find_rep(rep, (uint32_t)p), rb = find_rep(rep, i);
+            if (ra != rb)
+                rep[rb] = ra;
+            m.stats.degenerate_segments++;
+            continue;
+        }
+        meso_frustum_segment* s = &m.segments[m.segment_count++];
+        s->node[0] = (uint32_t)p;
+        s->node[1] = i;
+        memcpy(s->c0, a->pos, sizeof(s->c0));
+        memcpy(s->c1, b->pos, sizeof(s->c1));
+        s->r0 = a->radius;
+        s->r1 = b->radius;
+        s->joint[0] = s->joint[1] = s->ball[0] = s->ball[1] = -1;
+        set_perpendicular_plane(s, 0);
+        set_perpendicular_plane(s, 1);
+        s->cap[0] = s->r0 > 0;
+        s->cap[1] = s->r1 > 0;
+        s->end_kind[0] = s->end_kind[1] = MESO_FRUSTUM_END_TIP;
+    }
+    if (m.segment_count == 0) {
+        r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 3149u, "frusta: the skeleton has no segment of non-zero length");
+        goto done;
+    }
+    /* Incidence lists per representative node (counting sort). */
+    for (uint32_t s = 0; s < m.segment_count; ++s)
+        for (int e = 0; e < 2; ++e)
+            deg[find_rep(rep, m.segments[s].node[e])]++;
+    for (uint32_t i = 0; i < n; ++i)
+        first[i + 1] = first[i] + deg[i];
+    memset(queue, 0, (size_t)(n + 1) * sizeof(*queue)); /* fill counters */
+    for (uint32_t s = 0; s < m.segment_count; ++s)
+        for (int e = 0; e < 2; ++e) {
+            uint32_t v = find_rep(rep, m.segments[s].node[e]);
+            ends[first[v] + queue[v]++] = (end_ref){s, e};
+        }
+    for (uint32_t v = 0; v < n; ++v) {
+        if (deg[v] == 1)
+            m.stats.tips++;
+        else if (deg[v] == 2) {
+            meso_frustum_joint* j = &m.joints[m.joint_count];
+            j->node = v;
+            for (int k = 0; k < 2; ++k) {
+                j->segment[k] = ends[first[v] + k].seg;
+                j->end[k] = ends[first[v] + k].end;
+                m.segments[j->segment[k]].joint[j->end[k]] = (int32_t)m.joint_count;
+            }
+            /* First segment arrives at the joint: if it starts there, swap
+             * when the other one ends there (so a chain reads parent→child). */
+            if (j->end[0] == 0 && j->end[1] == 1) {
+                uint32_t ts = j->segment[0];
+                int te = j->end[0];
+                j->segment[0] = j->segment[1];
+                j->end[0] = j->end[1];
+                j->segment[1] = ts;
+                j->end[1] = te;
+            }
+            joint_plane(&m, j);
+            joint_apply(&m, m.joint_count);
+            m.joint_count++;
+        } else if (deg[v] >= 3)
+            m.stats.branch_points++;
+    }
+    /* Cap intersections: find, then turn joints at failing segments into
+     * ball joints until nothing changes. */
+    for (uint32_t s = 0; s < m.segment_count; ++s) {
+        m.segments[s].cut_margin = cut_margin(&m.segments[s]);
+        if (m.segments[s].cut_margin <= 0)
+            m.stats.cap_intersections_found++;
+    }
+    if (!o.keep_cap_intersections) {
+        int changed = 1;
+        while (changed) {
+            changed = 0;
+            for (uint32_t s = 0; s < m.segment_count; ++s) {
+                if (m.segments[s].cut_margin > 0)
+                    continue;
+                for (int e = 0; e < 2; ++e) {
+                    int32_t ji = m.segments[s].joint[e];
+                    if (ji < 0 || m.joints[ji].ball)
+                        continue;
+                    m.joints[ji].ball = 1;
+                    m.stats.ball_joints++;
+                    joint_apply(&m, (uint32_t)ji);
+                    for (int k = 0; k < 2; ++k) {
+                        meso_frustum_segment* t = &m.segments[m.joints[ji].segment[k]];
+                        t->cut_margin = cut_margin(t);
+                    }
+                    changed = 1;
+                }
+            }
+        }
+    }
+    for (uint32_t s = 0; s < m.segment_count; ++s)
+        if (m.segments[s].cut_margin <= 0)
+            m.stats.cap_intersections_unhandled++;
+    /* Balls: branch points and ball joints. */
+    for (uint32_t v = 0; v < n; ++v) {
+        int is_ball = deg[v] >= 3;
+        if (deg[v] == 2) {
+            const end_ref* er = &ends[first[v]];
+            int32_t ji = m.segments[er->seg].joint[er->end];
+            is_ball = ji >= 0 && m.joints[ji].ball;
+        }
+        if (!is_ball)
+            continue;
+        meso_frustum_ball* b = &m.balls[m.ball_count];
+        b->node = v;
+        b->radius = 0;
+        for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
+            meso_frustum_segment* s = &m.segments[ends[k].seg];
+            if (k == first[v])
+                memcpy(b->center, seg_end_point(s, ends[k].end), sizeof(b->center));
+            b->radius = fmax(b->radius, seg_end_radius(s, ends[k].end));
+            if (deg[v] >= 3) {
+                set_perpendicular_plane(s, ends[k].end);
+                s->cap[ends[k].end] = 0;
+                s->end_kind[ends[k].end] = MESO_FRUSTUM_END_BALL;
+            }
+            s->ball[ends[k].end] = (int32_t)m.ball_count;
+        }
+        m.ball_count++;
+    }
+    m.stats.segments = m.segment_count;
+    m.stats.joints = m.joint_count;
+    /* Seam gaps of the §2.2 joints. */
+    uint32_t gap_n = 0;
+    double gap_sum = 0;
+    for (uint32_t ji = 0; ji < m.joint_count; ++ji) {
+        meso_frustum_joint* j = &m.joints[ji];
+        if (j->ball)
+            continue;
+        j->seam_gap = seam_gap(&m, j);
+        m.stats.seam_gap_max = fmax(m.stats.seam_gap_max, j->seam_gap);
+        gap_sum += j->seam_gap;
+        gap_n++;
+    }
+    m.stats.seam_gap_mean = gap_n ? gap_sum / gap_n : 0;
+    /* Frames and u alignment: breadth-first over segments through nodes. */
+    seen = calloc(m.segment_count, 1);
+    if (!seen) {
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory");
+        goto done;
+    }
+    for (uint32_t s0 = 0; s0 < m.segment_count; ++s0) {
+        if (seen[s0])
+            continue;
+        meso_frustum_segment* s = &m.segments[s0];
+        double a[3];
+        seg_axis(s, a);
+        any_perp(a, s->frame_x);
+        s->u_offset = 0;
+        seen[s0] = 1;
+        uint32_t qh = 0, qt = 0;
+        queue[qt++] = s0;
+        while (qh < qt) {
+            uint32_t cur = queue[qh++];
+            for (int e = 0; e < 2; ++e) {
+                uint32_t v = find_rep(rep, m.segments[cur].node[e]);
+                for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
+                    uint32_t nb = ends[k].seg;
+                    if (seen[nb])
+                        continue;
+                    seen[nb] = 1;
+                    align_across(&m, cur, e, nb, ends[k].end, deg[v] == 2 ? m.segments[cur].joint[e] : -1);
+                    if (qt < n + 1)
+                        queue[qt++] = nb;
+                }
+            }
+        }
+    }
+    *out = m;
+    memset(&m, 0, sizeof(m));
+done:
+    free(rep);
+    free(deg);
+    free(first);
+    free(ends);
+    free(queue);
+    free(seen);
+    meso_frustum_model_free(&m);
+    return r;
+}

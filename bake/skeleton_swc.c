@@ -1,0 +1,385 @@
+/*
+ * skeleton_swc.c — the SWC reader (skeleton_swc.h).
+ *
+ * Two passes: lines → nodes (fields checked one by one), then ids → indices
+ * (a sorted id table, so ids may be sparse, unsorted and forward-referenced),
+ * duplicate ids, unknown parents, cycles (every chain of parents must reach
+ * a root), and the child lists. Tokens are copied into a small local buffer
+ * before strtod/strtoll, so the input never needs a terminating NUL.
+ */
+#include "skeleton_swc.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "meso_bake.h"
+
+#define SWC_FIELDS 7
+#define TOKEN_MAX 63 /* longer tokens are not numbers we accept */
+
+static const char* const field_names[SWC_FIELDS] = {"id", "type", "x", "y", "z", "radius", "parent"};
+
+typedef struct token {
+    const char* p;
+    size_t n;
+} token;
+
+static int is_space(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
+
+/* Copies a token for printing in a message: at most 24 characters, and
+ * non-printable bytes as '?'. */
+static void token_show(token t, char* buf, size_t size)
+{
+    size_t n = t.n < 24 ? t.n : 24, k;
+    for (k = 0; k < n && k + 1 < size; ++k) {
+        unsigned char c = (unsigned char)t.p[k];
+        buf[k] = (c >= 32 && c < 127) ? (char)c : '?';
+    }
+    buf[k] = '\0';
+    if (t.n > n && k + 4 < size)
+        memcpy(buf + k, "...", 4);
+}
+
+/* 1 when the whole token is an integer in int64 range. */
+static int parse_int(token t, int64_t* v)
+{
+    char buf[TOKEN_MAX + 1];
+    if (t.n == 0 || t.n > TOKEN_MAX)
+        return 0;
+    memcpy(buf, t.p, t.n);
+    buf[t.n] = '\0';
+    char* end = NULL;
+    errno = 0;
+    long long x = strtoll(buf, &end, 10);
+    if (errno != 0 || end != buf + t.n)
+        return 0;
+    *v = (int64_t)x;
+    return 1;
+}
+
+/* 1 when the whole token is a number (strtod syntax, which admits "nan" and
+ * "inf": the caller checks finiteness separately to say so). */
+static int parse_double(token t, double* v)
+{
+    char buf[TOKEN_MAX + 1];
+    if (t.n == 0 || t.n > TOKEN_MAX)
+        return 0;
+    memcpy(buf, t.p, t.n);
+    buf[t.n] = '\0';
+    char* end = NULL;
+    double x = strtod(buf, &end);
+    if (end != buf + t.n)
+        return 0;
+    *v = x;
+    return 1;
+}
+
+typedef struct id_entry {
+    int64_t id;
+    uint32_t index;
+} id_entry;
+
+static int id_cmp(const void* a, const void* b)
+{
+    const id_entry* x = a;
+    const id_entry* y = b;
+    if (x->id != y->id)
+        return x->id < y->id ? -1 : 1;
+    return x->index < y->index ? -1 : (x->index > y->index);
+}
+
+static int64_t find_id(const id_entry* tab, uint32_t n, int64_t id)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (tab[mid].id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return (lo < n && tab[lo].id == id) ? (int64_t)tab[lo].index : -1;
+}
+
+/* Parses one line's tokens into a node, or fails naming the line. */
+static meso_result parse_node(const token* tok, uint32_t ntok, uint32_t line, meso_skeleton_node* nd, int64_t* parent_id,
+    meso_error* err)
+{
+    char show[32];
+    if (ntok != SWC_FIELDS)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_FIELD_COUNT,
+            "swc line %u: %u fields, expected 7 (id type x y z radius parent)", line, ntok);
+    int64_t iv[3];
+    const int int_field[3] = {0, 1, 6};
+    for (int k = 0; k < 3; ++k) {
+        if (!parse_int(tok[int_field[k]], &iv[k])) {
+            token_show(tok[int_field[k]], show, sizeof(show));
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NOT_A_NUMBER,
+                "swc line %u: %s '%s' is not an integer", line, field_names[int_field[k]], show);
+        }
+    }
+    if (iv[1] < INT32_MIN || iv[1] > INT32_MAX)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NOT_A_NUMBER,
+            "swc line %u: type %lld is out of range", line, (long long)iv[1]);
+    double dv[4];
+    for (int k = 0; k < 4; ++k) {
+        if (!parse_double(tok[2 + k], &dv[k])) {
+            token_show(tok[2 + k], show, sizeof(show));
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NOT_A_NUMBER,
+                "swc line %u: %s '%s' is not a number", line, field_names[2 + k], show);
+        }
+        if (!isfinite(dv[k])) {
+            token_show(tok[2 + k], show, sizeof(show));
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NON_FINITE,
+                "swc line %u: %s '%s' is not finite", line, field_names[2 + k], show);
+        }
+    }
+    if (dv[3] < 0.0)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NEGATIVE_RADIUS,
+            "swc line %u: negative radius %g", line, dv[3]);
+    if (iv[2] < 0 && iv[2] != -1)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_UNKNOWN_PARENT,
+            "swc line %u: parent %lld (a root's parent is -1)", line, (long long)iv[2]);
+    memset(nd, 0, sizeof(*nd));
+    nd->id = iv[0];
+    nd->type = (int32_t)iv[1];
+    nd->line = line;
+    nd->pos[0] = dv[0];
+    nd->pos[1] = dv[1];
+    nd->pos[2] = dv[2];
+    nd->radius = dv[3];
+    nd->parent = -1;
+    *parent_id = iv[2];
+    return MESO_OK;
+}
+
+/* Resolves parents, checks ids and cycles, builds child lists. */
+static meso_result link_nodes(meso_skeleton* s, const int64_t* parent_id, meso_error* err)
+{
+    uint32_t n = s->node_count;
+    id_entry* tab = malloc((size_t)n * sizeof(*tab));
+    uint8_t* state = calloc(n, 1);
+    uint32_t* stack = malloc((size_t)n * sizeof(*stack));
+    uint32_t* fill = calloc(n, sizeof(*fill));
+    s->children = malloc((size_t)(n ? n : 1) * sizeof(*s->children));
+    meso_result r = MESO_OK;
+    if (!tab || !state || !stack || !fill || !s->children) {
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "swc: out of memory (%u nodes)", n);
+        goto done;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        tab[i].id = s->nodes[i].id;
+        tab[i].index = i;
+    }
+    qsort(tab, n, sizeof(*tab), id_cmp);
+    for (uint32_t i = 1; i < n; ++i) {
+        if (tab[i].id == tab[i - 1].id) {
+            const meso_skeleton_node* a = &s->nodes[tab[i - 1].index];
+            const meso_skeleton_node* b = &s->nodes[tab[i].index];
+            r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_DUPLICATE_ID,
+                "swc line %u: id %lld is already defined on line %u", b->line, (long long)b->id, a->line);
+            goto done;
+        }
+    }
+    s->root_count = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        meso_skeleton_node* nd = &s->nodes[i];
+        if (parent_id[i] == -1) {
+            ++s->root_count;
+            continue;
+        }
+        int64_t p = find_id(tab, n, parent_id[i]);
+        if (p < 0) {
+            r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_UNKNOWN_PARENT,
+                "swc line %u: parent %lld of node %lld is not defined", nd->line, (long long)parent_id[i],
+                (long long)nd->id);
+            goto done;
+        }
+        nd->parent = (int32_t)p;
+        s->nodes[p].child_count++;
+    }
+    /* Cycles: walk up from every unvisited node; state 1 = on the current
+     * walk, 2 = known to reach a root. Meeting a 1 closes a cycle. */
+    for (uint32_t i = 0; i < n; ++i) {
+        uint32_t depth = 0, j = i;
+        while (state[j] == 0) {
+            state[j] = 1;
+            stack[depth++] = j;
+            if (s->nodes[j].parent < 0)
+                break;
+            j = (uint32_t)s->nodes[j].parent;
+        }
+        if (state[j] == 1 && s->nodes[j].parent >= 0) {
+            r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_CYCLE,
+                "swc line %u: node %lld is its own ancestor (the parent links form a cycle)", s->nodes[j].line,
+                (long long)s->nodes[j].id);
+            goto done;
+        }
+        for (uint32_t k = 0; k < depth; ++k)
+            state[stack[k]] = 2;
+    }
+    uint32_t off = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        s->nodes[i].first_child = off;
+        off += s->nodes[i].child_count;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        int32_t p = s->nodes[i].parent;
+        if (p >= 0)
+            s->children[s->nodes[p].first_child + fill[p]++] = i;
+    }
+done:
+    free(tab);
+    free(state);
+    free(stack);
+    free(fill);
+    return r;
+}
+
+meso_result meso_skeleton_parse_swc(const char* text, size_t len, meso_skeleton* out, meso_error* err)
+{
+    if (!out)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "swc: out is NULL");
+    memset(out, 0, sizeof(*out));
+    if (!text && len > 0)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "swc: text is NULL");
+    meso_skeleton s = {0};
+    int64_t* parent_id = NULL;
+    uint32_t cap = 0;
+    uint32_t line = 0;
+    meso_result r = MESO_OK;
+    size_t pos = 0;
+    while (pos < len) {
+        size_t start = pos;
+        while (pos < len && text[pos] != '\n' && text[pos] != '\r')
+            ++pos;
+        size_t end = pos;
+        if (pos < len) { /* \n, \r or \r\n */
+            if (text[pos] == '\r' && pos + 1 < len && text[pos + 1] == '\n')
+                ++pos;
+            ++pos;
+        }
+        if (line == UINT32_MAX) {
+            r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_UNREADABLE, "swc: too many lines");
+            goto fail;
+        }
+        ++line;
+        for (size_t k = start; k < end; ++k)
+            if (text[k] == '#') {
+                end = k;
+                break;
+            }
+        token tok[SWC_FIELDS + 1];
+        uint32_t ntok = 0, ntotal = 0;
+        size_t k = start;
+        for (;;) {
+            while (k < end && is_space(text[k]))
+                ++k;
+            if (k >= end)
+                break;
+            size_t b = k;
+            while (k < end && !is_space(text[k]))
+                ++k;
+            if (ntok < SWC_FIELDS + 1)
+                tok[ntok++] = (token){text + b, k - b};
+            ++ntotal;
+        }
+        if (ntotal == 0)
+            continue;
+        if (s.node_count == cap) {
+            if (cap >= MESO_SKEL_MAX_NODES) {
+                r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_UNREADABLE,
+                    "swc line %u: more than %u nodes", line, MESO_SKEL_MAX_NODES);
+                goto fail;
+            }
+            uint32_t ncap = cap ? cap * 2 : 64;
+            meso_skeleton_node* nn = realloc(s.nodes, (size_t)ncap * sizeof(*nn));
+            if (nn)
+                s.nodes = nn;
+            int64_t* np = realloc(parent_id, (size_t)ncap * sizeof(*np));
+            if (np)
+                parent_id = np;
+            if (!nn || !np) {
+                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "swc: out of memory at line %u", line);
+                goto fail;
+            }
+            cap = ncap;
+        }
+        r = parse_node(tok, ntotal, line, &s.nodes[s.node_count], &parent_id[s.node_count], err);
+        if (r != MESO_OK)
+            goto fail;
+        ++s.node_count;
+    }
+    if (s.node_count == 0) {
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_EMPTY, "swc: no node in the input (%u lines)", line);
+        goto fail;
+    }
+    r = link_nodes(&s, parent_id, err);
+    if (r != MESO_OK)
+        goto fail;
+    free(parent_id);
+    *out = s;
+    return MESO_OK;
+fail:
+    free(parent_id);
+    meso_skeleton_free(&s);
+    return r;
+}
+
+meso_result meso_skeleton_load_swc(const char* path, meso_skeleton* out, meso_error* err)
+{
+    if (out)
+        memset(out, 0, sizeof(*out));
+    if (!path || !out)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "swc: path or out is NULL");
+    FILE* f = fopen(path, "rb");
+    if (!f)
+        return meso_bake_fail(err, MESO_ERR_IO, MESO_SKEL_ISSUE_UNREADABLE, "swc: can't open '%s': %s", path,
+            strerror(errno));
+    char* buf = NULL;
+    size_t len = 0, cap = 0;
+    meso_result r = MESO_OK;
+    for (;;) {
+        if (len == cap) {
+            if (cap >= ((size_t)1 << 31)) {
+                r = meso_bake_fail(err, MESO_ERR_IO, MESO_SKEL_ISSUE_UNREADABLE, "swc: '%s' is larger than 2 GiB", path);
+                break;
+            }
+            size_t ncap = cap ? cap * 2 : 65536;
+            char* nb = realloc(buf, ncap);
+            if (!nb) {
+                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "swc: out of memory reading '%s'", path);
+                break;
+            }
+            buf = nb;
+            cap = ncap;
+        }
+        size_t got = fread(buf + len, 1, cap - len, f);
+        len += got;
+        if (got == 0) {
+            if (ferror(f))
+                r = meso_bake_fail(err, MESO_ERR_IO, MESO_SKEL_ISSUE_UNREADABLE, "swc: read error on '%s'", path);
+            break;
+        }
+    }
+    fclose(f);
+    if (r == MESO_OK)
+        r = meso_skeleton_parse_swc(buf, len, out, err);
+    free(buf);
+    return r;
+}
+
+void meso_skeleton_free(meso_skeleton* s)
+{
+    if (!s)
+        return;
+    free(s->nodes);
+    free(s->children);
+    memset(s, 0, sizeof(*s));
+}

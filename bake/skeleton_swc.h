@@ -1,0 +1,89 @@
+/*
+ * skeleton_swc.h — skeletons (trees of spheres joined by segments) and the
+ * SWC reader.
+ *
+ * SWC is one node per line, seven whitespace-separated fields:
+ *     id type x y z radius parent
+ * `id` and `parent` are integers, `parent` = -1 marks a root, `type` is an
+ * integer tag (1 soma, 2 axon, 3 dendrite, ... — kept, not interpreted),
+ * x y z radius are decimal numbers. '#' starts a comment that runs to the
+ * end of the line; blank lines are skipped; line ends may be \n, \r\n or \r.
+ * Ids need not be contiguous or sorted, and a parent may come after its
+ * child. A file may hold several trees (several roots).
+ *
+ * Every malformed input is refused with MESO_ERR_CORRUPT (MESO_ERR_IO when
+ * the file can't be read, MESO_ERR_OUT_OF_MEMORY) and an issue code in
+ * meso_error.code (mesobake prints "E<code>"); the message names the
+ * problem and the 1-based line:
+ *   3140 no node in the input (empty, or comments only)
+ *   3141 a line does not have exactly 7 fields
+ *   3142 a field is not a number (or not an integer where one is needed)
+ *   3143 a coordinate or radius is NaN or infinite
+ *   3144 negative radius
+ *   3145 the same id on two lines
+ *   3146 parent id that no line defines (or a negative parent other than -1)
+ *   3147 the parent links form a cycle (a node is its own ancestor)
+ *   3148 the file can't be read, or is too large (more than 2^26 nodes)
+ * (The 3140s are the skeleton inputs' range; 3149 is kept for them.)
+ */
+#ifndef MESO_SKELETON_SWC_H
+#define MESO_SKELETON_SWC_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "meso_file.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MESO_SKEL_ISSUE_EMPTY 3140u
+#define MESO_SKEL_ISSUE_FIELD_COUNT 3141u
+#define MESO_SKEL_ISSUE_NOT_A_NUMBER 3142u
+#define MESO_SKEL_ISSUE_NON_FINITE 3143u
+#define MESO_SKEL_ISSUE_NEGATIVE_RADIUS 3144u
+#define MESO_SKEL_ISSUE_DUPLICATE_ID 3145u
+#define MESO_SKEL_ISSUE_UNKNOWN_PARENT 3146u
+#define MESO_SKEL_ISSUE_CYCLE 3147u
+#define MESO_SKEL_ISSUE_UNREADABLE 3148u
+
+/* Largest node count accepted (keeps every index and size in 32 bits). */
+#define MESO_SKEL_MAX_NODES (1u << 26)
+
+typedef struct meso_skeleton_node {
+    int64_t id;           /* the file's id */
+    int32_t type;         /* the file's type tag, not interpreted */
+    uint32_t line;        /* 1-based line in the input */
+    double pos[3];        /* position (the file's units) */
+    double radius;        /* >= 0 (0: the surface pinches to a point here) */
+    int32_t parent;       /* index into nodes[], -1 for a root */
+    uint32_t first_child; /* children of node i: children[first_child .. +child_count) */
+    uint32_t child_count;
+} meso_skeleton_node;
+
+/* A forest of nodes in input-line order. Arrays are malloc'd and owned by
+ * the struct: free with meso_skeleton_free. */
+typedef struct meso_skeleton {
+    uint32_t node_count;
+    uint32_t root_count;
+    meso_skeleton_node* nodes;
+    uint32_t* children; /* node_count - root_count indices, grouped per parent, in input order */
+} meso_skeleton;
+
+/* Parses SWC text (`len` bytes, need not be NUL-terminated; a NUL byte is
+ * data and refused as a non-number). On success fills `out` (caller frees
+ * with meso_skeleton_free); on failure `out` is zeroed and `err` (may be
+ * NULL) says why. Never reads outside [text, text + len). */
+meso_result meso_skeleton_parse_swc(const char* text, size_t len, meso_skeleton* out, meso_error* err);
+
+/* Reads the file at `path` and parses it as above. */
+meso_result meso_skeleton_load_swc(const char* path, meso_skeleton* out, meso_error* err);
+
+/* Frees the arrays and zeroes the struct. NULL is allowed. */
+void meso_skeleton_free(meso_skeleton* s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* MESO_SKELETON_SWC_H */
