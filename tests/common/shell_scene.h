@@ -95,11 +95,13 @@ static inline void planar_uvs(meso_mesh* m, double tiles)
     }
 }
 
-/* A shell file in memory: MESH (+uvs) + SDIR (normal displacement by h) + texture. */
-/* A shell file: MESH, SDIR (normal displacement by h), the texture and,
- * when with_dist, its conservative distance map at the baker's default
- * resolution (bake/distance_map.c, as mesobake writes it). */
-static inline uint8_t* shell_file(const meso_mesh* m, double h, const texture* tex, int with_dist, size_t* size)
+/* A shell file in memory: MESH (+uvs), SDIR (normal displacement by h), the
+ * texture and, when with_dist, its conservative distance map at the baker's
+ * default resolution (bake/distance_map.c, as mesobake writes it), and
+ * optionally one more chunk as given (for malformed-input tests). */
+static inline uint8_t* shell_file_extra(const meso_mesh* m, double h, const texture* tex, int with_dist,
+                                        const meso_chunk_desc* extra, const void* extra_data, size_t extra_size,
+                                        size_t* size)
 {
     meso_mesh_chunk chunk;
     meso_error err;
@@ -133,6 +135,8 @@ static inline uint8_t* shell_file(const meso_mesh* m, double h, const texture* t
                                                  .object = 1, .dtype = MESO_DTYPE_U8, .components = 1,
                                                  .dims = {tex->w, tex->h, tex->d}},
                               tex->texels, (size_t)tex->w * tex->h * tex->d, &err) == MESO_OK);
+    if (extra)
+        CHECK(meso_writer_add(w, extra, extra_data, extra_size, &err) == MESO_OK);
     if (tex && tex->kind && with_dist) {
         const size_t n = (size_t)tex->w * tex->h * tex->d;
         float* v = malloc(sizeof(float) * n);
@@ -162,6 +166,11 @@ static inline uint8_t* shell_file(const meso_mesh* m, double h, const texture* t
     free(dirs);
     free(chunk.data);
     return buf;
+}
+
+static inline uint8_t* shell_file(const meso_mesh* m, double h, const texture* tex, int with_dist, size_t* size)
+{
+    return shell_file_extra(m, h, tex, with_dist, NULL, NULL, 0, size);
 }
 
 typedef struct camera {

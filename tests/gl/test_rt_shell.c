@@ -457,6 +457,44 @@ int main(void)
         meso_mesh_free(&m);
     }
 
+    /* 7. Malformed texture chunks: a clear error from meso_rt_load_object,
+     * never a crash or a broken draw. */
+    {
+        meso_mesh m = load(MESO_TEST_DATA "/sphere.obj");
+        static uint8_t rgb[4 * 4 * 3];
+        static float f32[4 * 4];
+        static uint8_t wide[20000];
+        const struct {
+            const char* what;
+            meso_chunk_desc desc;
+            const void* data;
+            size_t size;
+            meso_result want;
+        } bad[] = {
+            {"TX2D with 3 components", {.type = MESO_CHUNK_TX2D, .object = 1, .dtype = MESO_DTYPE_U8, .components = 3,
+                                        .dims = {4, 4, 1}}, rgb, sizeof(rgb), MESO_ERR_UNSUPPORTED},
+            {"TX2D as F32 (heights are U8/U16)", {.type = MESO_CHUNK_TX2D, .object = 1, .dtype = MESO_DTYPE_F32,
+                                                  .components = 1, .dims = {4, 4, 1}}, f32, sizeof(f32),
+             MESO_ERR_UNSUPPORTED},
+            {"TX2D wider than GL allows", {.type = MESO_CHUNK_TX2D, .object = 1, .dtype = MESO_DTYPE_U8,
+                                           .components = 1, .dims = {20000, 1, 1}}, wide, sizeof(wide), MESO_ERR_GL},
+        };
+        for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); ++i) {
+            size_t size;
+            uint8_t* file = shell_file_extra(&m, 0.1, NULL, 0, &bad[i].desc, bad[i].data, bad[i].size, &size);
+            meso_file* f = NULL;
+            meso_error err;
+            CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
+            meso_rt_object obj;
+            const meso_result r = meso_rt_load_object(c.rt, f, 1, &obj);
+            printf("malformed: %-34s -> %s\n", bad[i].what, meso_result_string(r));
+            CHECK_MSG(r == bad[i].want, "%s: got %s", bad[i].what, meso_result_string(r));
+            meso_file_close(f);
+            free(file);
+        }
+        meso_mesh_free(&m);
+    }
+
     free(height.texels);
     free(volume.texels);
     free(c.rgba);
