@@ -180,6 +180,20 @@ vec3 to_texture(Prism P, vec3 p, vec2 r)
     return vec3(uv, w);
 }
 
+// A point on the hull, hit through hull face `face` (0: the cap at level
+// r.x, 1: the cap at r.y, else a side, -1: not on the hull). On a cap, w is
+// the cap's level exactly and no search is needed; elsewhere the sec. 4.2
+// bisection runs, and counts as one step.
+vec3 hull_point_to_texture(Prism P, vec3 p, int face, vec2 r)
+{
+    if (face == 0 || face == 1) {
+        float w = face == 0 ? r.x : r.y;
+        return vec3(barycentric(P.b[0] + w * P.n[0], P.b[1] + w * P.n[1], P.b[2] + w * P.n[2], p), w);
+    }
+    ++g_steps;
+    return to_texture(P, p, r);
+}
+
 // Curved shells: Coons(lambda) on T(w') (shell_map.h spells out the construction).
 float hermite_edge(vec3 ai, vec3 aj, vec3 mi, vec3 mj, float s)
 {
@@ -450,47 +464,57 @@ void main()
         c[k + 3] = HP.b[k] + HP.n[k];
     }
     vec3 cen = prism_centroid(HP);
+    // Ray/triangle tests against the eight hull triangles (the same
+    // triangulation as shell_vert.glsl: each side split once, by the diagonal
+    // that makes it convex). Only when fewer than two are hit is the origin
+    // tested against the faces' planes (camera inside the shell).
+    vec3 T[24];
+    T[0] = c[0], T[1] = c[1], T[2] = c[2];
+    T[3] = c[3], T[4] = c[4], T[5] = c[5];
+    for (int side = 0; side < 3; ++side) {
+        int i = side, j = side == 2 ? 0 : side + 1;
+        vec3 bi = c[i], bj = c[j], ti = c[i + 3], tj = c[j + 3];
+        vec3 nrm = cross(bj - bi, tj - bi);
+        if (dot(nrm, cen - bi) > 0.0)
+            nrm = -nrm;
+        bool diag_bt = dot(nrm, ti - bi) <= 0.0;
+        int k = 6 + 6 * side;
+        T[k] = bi, T[k + 1] = bj, T[k + 2] = diag_bt ? tj : ti;
+        T[k + 3] = diag_bt ? bi : bj, T[k + 4] = tj, T[k + 5] = ti;
+    }
     float tmin = 1e30, tmax = -1e30;
-    int nhit = 0;
-    bool origin_inside = true;
+    int nhit = 0, fmin = -1, fmax = -1;
     for (int f = 0; f < 8; ++f) {
-        vec3 p0, p1, p2;
-        if (f < 2) {
-            p0 = c[f == 0 ? 0 : 3];
-            p1 = c[f == 0 ? 1 : 4];
-            p2 = c[f == 0 ? 2 : 5];
-        } else {
-            int side = (f - 2) >> 1, i = side, j = side == 2 ? 0 : side + 1;
-            vec3 bi = c[i], bj = c[j], ti = c[i + 3], tj = c[j + 3];
-            vec3 nrm = cross(bj - bi, tj - bi);
-            if (dot(nrm, cen - bi) > 0.0)
-                nrm = -nrm;
-            bool diag_bt = dot(nrm, ti - bi) <= 0.0;
-            bool first = ((f - 2) & 1) == 0;
-            p0 = first ? bi : (diag_bt ? bi : bj);
-            p1 = first ? bj : tj;
-            p2 = first ? (diag_bt ? tj : ti) : ti;
-        }
-        float t = ray_triangle(ro, rd, p0, p1, p2);
+        float t = ray_triangle(ro, rd, T[3 * f], T[3 * f + 1], T[3 * f + 2]);
         if (t >= 0.0) {
-            tmin = min(tmin, t);
-            tmax = max(tmax, t);
+            if (t < tmin) {
+                tmin = t;
+                fmin = f;
+            }
+            if (t > tmax) {
+                tmax = t;
+                fmax = f;
+            }
             ++nhit;
         }
-        vec3 nrm = cross(p1 - p0, p2 - p0);
-        if (dot(nrm, cen - p0) > 0.0)
-            nrm = -nrm;
-        origin_inside = origin_inside && dot(nrm, ro - p0) <= 0.0;
     }
-    if (origin_inside) {
+    if (nhit < 2 || !(tmin < tmax)) {
+        bool origin_inside = true;
+        for (int f = 0; f < 8; ++f) {
+            vec3 p0 = T[3 * f], nrm = cross(T[3 * f + 1] - p0, T[3 * f + 2] - p0);
+            if (dot(nrm, cen - p0) > 0.0)
+                nrm = -nrm;
+            origin_inside = origin_inside && dot(nrm, ro - p0) <= 0.0;
+        }
+        if (!origin_inside || nhit < 1) {
+            finish(false); // a ray grazing an edge or corner of the hull
+            return;
+        }
         tmin = 0.0; // the ray starts inside the hull (camera inside the shell)
-    } else if (nhit < 2 || !(tmin < tmax)) {
-        finish(false); // a ray grazing an edge or corner of the hull
-        return;
+        fmin = -1;
     }
-    vec3 q0 = to_texture(P, ro + tmin * rd, range);
-    vec3 q1 = to_texture(P, ro + tmax * rd, range);
-    g_steps = 2;
+    vec3 q0 = hull_point_to_texture(P, ro + tmin * rd, fmin, range);
+    vec3 q1 = hull_point_to_texture(P, ro + tmax * rd, fmax, range);
 #if MESO_TECHNIQUE == 3
     o_color = vec4(q0.z, q1.z, 0.5, 1.0);
     write_depth(ro + tmax * rd);
