@@ -57,7 +57,8 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  *   (3124..3129 reserved for texture functions and distance maps)
  * Skeletons (bake/skeleton_swc.h): 3140..3149, each listed there.
  * Cell tile maps and split cells (bake/tile_map.h, bake/split_cells.h):
- *   3150..3153, listed in tile_map.h. */
+ *   3150..3153, listed in tile_map.h.
+ * Winding numbers (bake/winding_number.h): 3160..3169, listed there. */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */
