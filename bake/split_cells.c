@@ -145,9 +145,18 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
     const uint32_t R = m->res;
     const size_t n = (size_t)R * R * R, RR = (size_t)R * R;
     const uint16_t* cells = m->cells;
+    /* Everything below is freed at `done`; on failure `out` too. */
+    meso_result r = MESO_OK;
+    prov* pv = NULL;
+    sets u = {NULL, NULL, NULL};
+    key* keys = NULL;
+    uint32_t *final_id = NULL, *cell_of_root = NULL;
+    uint32_t S = 0, C = 0;
     uint32_t* lab = malloc(n * sizeof(uint32_t));
-    if (!lab)
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory (R = %u)", R);
+    if (!lab) {
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory (R = %u)", R);
+        goto done;
+    }
 
     /* 1. Split cells: join each voxel with its 13 earlier 26-neighbours. */
     for (size_t v = 0; v < n; ++v)
@@ -176,11 +185,10 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
     /* Label in scan order: a root opens a split cell; any other voxel's
      * parent is earlier and already labelled with its set's id. */
     size_t cap = 64;
-    uint32_t S = 0;
-    prov* pv = malloc(cap * sizeof(prov));
+    pv = malloc(cap * sizeof(prov));
     if (!pv) {
-        free(lab);
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory");
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory");
+        goto done;
     }
     for (uint32_t z = 0; z < R; ++z)
         for (uint32_t y = 0; y < R; ++y)
@@ -195,9 +203,8 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
                     if (S == cap) {
                         prov* grown = realloc(pv, 2 * cap * sizeof(prov));
                         if (!grown) {
-                            free(pv);
-                            free(lab);
-                            return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory");
+                            r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory");
+                            goto done;
                         }
                         pv = grown;
                         cap *= 2;
@@ -213,22 +220,16 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
             }
 
     /* 2. Cells: join split cells across the border, with tile offsets. */
-    sets u = {malloc((S + 1) * sizeof(uint32_t)), malloc((S + 1) * sizeof(*u.off)), calloc(S + 1, 1)};
-    key* keys = malloc((S + 1) * sizeof(key));
-    uint32_t* final_id = malloc((S + 1) * sizeof(uint32_t));
-    uint32_t* cell_of_root = calloc(S + 1, sizeof(uint32_t));
+    u.parent = malloc((S + 1) * sizeof(uint32_t));
+    u.off = malloc((S + 1) * sizeof(*u.off));
+    u.wraps = calloc(S + 1, 1);
+    keys = malloc((S + 1) * sizeof(key));
+    final_id = malloc((S + 1) * sizeof(uint32_t));
+    cell_of_root = calloc(S + 1, sizeof(uint32_t));
     out->splits = calloc(S ? S : 1, sizeof(meso_split_cell));
     if (!u.parent || !u.off || !u.wraps || !keys || !final_id || !cell_of_root || !out->splits) {
-        free(u.parent);
-        free(u.off);
-        free(u.wraps);
-        free(keys);
-        free(final_id);
-        free(cell_of_root);
-        free(pv);
-        free(lab);
-        meso_split_cells_free(out);
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory (%u split cells)", S);
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory (%u split cells)", S);
+        goto done;
     }
     for (uint32_t s = 0; s <= S; ++s) { /* ids 1..S; 0 unused */
         u.parent[s] = s;
@@ -265,23 +266,14 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
 
     /* 3. Number cells by (tile index, first voxel); roots are the smallest
      * provisional id of their set, i.e. the cell's first split cell. */
-    uint32_t C = 0;
     for (uint32_t s = 1; s <= S; ++s)
         if (u.parent[s] == s)
             keys[C++] = (key){pv[s - 1].tile_index, 0, s};
     qsort(keys, C, sizeof(key), cmp_key);
     out->cells = calloc(C ? C : 1, sizeof(meso_cell));
     if (!out->cells) {
-        free(u.parent);
-        free(u.off);
-        free(u.wraps);
-        free(keys);
-        free(final_id);
-        free(cell_of_root);
-        free(pv);
-        free(lab);
-        meso_split_cells_free(out);
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory (%u cells)", C);
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "split cells: out of memory (%u cells)", C);
+        goto done;
     }
     for (uint32_t c = 0; c < C; ++c) {
         cell_of_root[keys[c].prov] = c + 1;
@@ -291,8 +283,8 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
     }
     for (uint32_t s = 1; s <= S; ++s) {
         int32_t o[3];
-        const uint32_t r = sfind(&u, s, o);
-        keys[s - 1] = (key){cell_of_root[r], pv[s - 1].face_code, s};
+        const uint32_t root = sfind(&u, s, o);
+        keys[s - 1] = (key){cell_of_root[root], pv[s - 1].face_code, s};
     }
     qsort(keys, S, sizeof(key), cmp_key);
     for (uint32_t i = 0; i < S; ++i) {
@@ -331,6 +323,8 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
     out->split_count = S;
     out->cell_count = C;
     out->voxel_split = lab;
+    lab = NULL;
+done:
     free(u.parent);
     free(u.off);
     free(u.wraps);
@@ -338,7 +332,10 @@ meso_result meso_split_cells_compute(const meso_tile_map* m, int threads, meso_s
     free(final_id);
     free(cell_of_root);
     free(pv);
-    return MESO_OK;
+    free(lab);
+    if (r != MESO_OK)
+        meso_split_cells_free(out);
+    return r;
 }
 
 /* >>packing ------------------------------------------------------------------ */
