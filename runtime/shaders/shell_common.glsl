@@ -74,17 +74,25 @@ vec2 curved_wbar_range(Prism P)
     return vec2(min(0.25 - K, 0.0), max(0.75 + K, 1.0));
 }
 
-// The prism whose convex hull is rasterised and clipped against: the prism
-// itself, or for curved shells its levels lo .. hi (curved_wbar_range).
-Prism hull_prism(Prism P)
+// The levels the hull spans: the prism's own [0, 1], or for curved shells
+// the range its Coons patches reach (curved_wbar_range).
+vec2 hull_levels(Prism P)
 {
 #if MESO_TECHNIQUE == 1
-    vec2 r = curved_wbar_range(P);
+    return curved_wbar_range(P);
+#else
+    return vec2(0.0, 1.0);
+#endif
+}
+
+// The prism whose convex hull is rasterised and clipped against: its
+// levels r.x .. r.y (hull_levels).
+Prism hull_prism(Prism P, vec2 r)
+{
     for (int k = 0; k < 3; ++k) {
         P.b[k] = P.b[k] + r.x * P.n[k];
         P.n[k] = (r.y - r.x) * P.n[k];
     }
-#endif
     return P;
 }
 

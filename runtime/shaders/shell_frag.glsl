@@ -452,12 +452,8 @@ void main()
     fragment_ray(ro, rd);
     // sec. 4.2: entry and exit against the hull triangles (the same
     // triangulation as shell_vert.glsl: hull_face of hull_prism).
-#if MESO_TECHNIQUE == 1
-    vec2 range = curved_wbar_range(P);
-#else
-    vec2 range = vec2(0.0, 1.0);
-#endif
-    Prism HP = hull_prism(P);
+    vec2 range = hull_levels(P);
+    Prism HP = hull_prism(P, range);
     vec3 c[6];
     for (int k = 0; k < 3; ++k) {
         c[k] = HP.b[k];

@@ -27,7 +27,10 @@ void main()
     int local = gl_VertexID - prism * per;
     int face = local / 3;
     int k = local - face * 3;
-    Prism P = hull_prism(fetch_prism(prism));
+    Prism P = fetch_prism(prism);
+#if MESO_TECHNIQUE != 2
+    P = hull_prism(P, hull_levels(P));
+#endif
     ivec3 tri;
     vec3 center;
     v_tet = 0;
