@@ -10,33 +10,13 @@
  */
 #include "frustum_reference.h"
 
+#include "vec3d.h"
+
 #include <float.h>
 #include <math.h>
 #include <string.h>
 
 #define TAU 6.283185307179586
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double o[3])
-{
-    double t[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    memcpy(o, t, sizeof(t));
-}
-
-static double normalize3(double v[3])
-{
-    double l = sqrt(dot3(v, v));
-    if (l > 0) {
-        v[0] /= l;
-        v[1] /= l;
-        v[2] /= l;
-    }
-    return l;
-}
 
 /* Per-segment quantities the queries share. */
 typedef struct seg_geom {
@@ -96,16 +76,6 @@ int meso_ref_frustum_contains(const meso_ref_frustum* f, const double p[3])
     return r >= 0 && dot3(q, q) <= r * r && inside_planes(f, &g, p, 0.0);
 }
 
-/* A unit vector perpendicular to a (for points on the axis). */
-static void any_perp(const double a[3], double o[3])
-{
-    double e[3] = {0, 0, 0};
-    int m = fabs(a[0]) < fabs(a[1]) ? (fabs(a[0]) < fabs(a[2]) ? 0 : 2) : (fabs(a[1]) < fabs(a[2]) ? 1 : 2);
-    e[m] = 1;
-    cross3(a, e, o);
-    normalize3(o);
-}
-
 static void uv_impl(const meso_ref_frustum* f, const seg_geom* g, const double p[3], double* u, double* v, double sn[3])
 {
     double q[3];
@@ -115,7 +85,7 @@ static void uv_impl(const meso_ref_frustum* f, const seg_geom* g, const double p
         if (dot3(f->frame_x, f->frame_x) > 0.5)
             memcpy(w, f->frame_x, sizeof(w));
         else
-            any_perp(g->a, w);
+            any_perp3(g->a, w);
     }
     double y0 = 0, y1 = g->h;
     int ok0 = generator_plane(f, g, 0, w, &y0);

@@ -10,35 +10,15 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "vec3d.h"
+
 /* >>vectors ---------------------------------------------------------------- */
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 static double det3(const double a[3], const double b[3], const double c[3])
 {
     double bc[3];
     cross3(b, c, bc);
     return dot3(a, bc);
-}
-
-static void normalize3(double v[3])
-{
-    const double l = sqrt(dot3(v, v));
-    if (l > 0) {
-        v[0] /= l;
-        v[1] /= l;
-        v[2] /= l;
-    }
 }
 
 /* >>smooth map ------------------------------------------------------------- */
