@@ -13,6 +13,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "adapters.h"
 #include "winding_number.h"
 
 /* Largest |fast - exact| accepted for a surface taken once (beta =
@@ -22,43 +23,12 @@
 
 /* >>mesh helpers ------------------------------------------------------------ */
 
-/* A minimal OBJ reader (v and f lines; "f a/b/c ..." keeps the vertex index;
- * polygons are fanned), so the test does not need the OpenMesh adapter. */
+/* A bundled mesh, read by the project's reader (bake/adapters). */
 static meso_mesh load_obj(const char* name)
 {
-    FILE* f = fopen(test_data(name), "r");
-    assert(f);
-    meso_mesh m = {0};
-    uint32_t vcap = 1024, tcap = 1024;
-    m.positions = malloc(sizeof(float) * 3 * vcap);
-    m.indices = malloc(sizeof(uint32_t) * 3 * tcap);
-    char line[1024];
-    while (fgets(line, sizeof(line), f)) {
-        if (line[0] == 'v' && line[1] == ' ') {
-            if (m.vertex_count == vcap) {
-                vcap *= 2;
-                m.positions = realloc(m.positions, sizeof(float) * 3 * vcap);
-            }
-            float* p = &m.positions[3 * (size_t)m.vertex_count++];
-            assert(sscanf(line + 2, "%f %f %f", &p[0], &p[1], &p[2]) == 3);
-        } else if (line[0] == 'f' && line[1] == ' ') {
-            uint32_t poly[64], n = 0;
-            char* s = line + 2;
-            for (char* tok = strtok(s, " \t\r\n"); tok && n < 64; tok = strtok(NULL, " \t\r\n"))
-                poly[n++] = (uint32_t)strtoul(tok, NULL, 10) - 1;
-            for (uint32_t k = 1; k + 1 < n; ++k) {
-                if (m.triangle_count == tcap) {
-                    tcap *= 2;
-                    m.indices = realloc(m.indices, sizeof(uint32_t) * 3 * tcap);
-                }
-                uint32_t* t = &m.indices[3 * (size_t)m.triangle_count++];
-                t[0] = poly[0];
-                t[1] = poly[k];
-                t[2] = poly[k + 1];
-            }
-        }
-    }
-    fclose(f);
+    meso_mesh m;
+    meso_error err = {0};
+    assert(meso_openmesh_read(test_data(name), &m, NULL, &err) == MESO_OK);
     assert(m.vertex_count > 0 && m.triangle_count > 0);
     return m;
 }
