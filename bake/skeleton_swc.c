@@ -46,14 +46,22 @@ static void token_show(token t, char* buf, size_t size)
         memcpy(buf + k, "...", 4);
 }
 
-/* 1 when the whole token is an integer in int64 range. */
-static int parse_int(token t, int64_t* v)
+/* The token as a C string in buf; 0 when empty or too long to be a number. */
+static int token_cstr(token t, char buf[TOKEN_MAX + 1])
 {
-    char buf[TOKEN_MAX + 1];
     if (t.n == 0 || t.n > TOKEN_MAX)
         return 0;
     memcpy(buf, t.p, t.n);
     buf[t.n] = '\0';
+    return 1;
+}
+
+/* 1 when the whole token is an integer in int64 range. */
+static int parse_int(token t, int64_t* v)
+{
+    char buf[TOKEN_MAX + 1];
+    if (!token_cstr(t, buf))
+        return 0;
     char* end = NULL;
     errno = 0;
     long long x = strtoll(buf, &end, 10);
@@ -68,10 +76,8 @@ static int parse_int(token t, int64_t* v)
 static int parse_double(token t, double* v)
 {
     char buf[TOKEN_MAX + 1];
-    if (t.n == 0 || t.n > TOKEN_MAX)
+    if (!token_cstr(t, buf))
         return 0;
-    memcpy(buf, t.p, t.n);
-    buf[t.n] = '\0';
     char* end = NULL;
     double x = strtod(buf, &end);
     if (end != buf + t.n)
