@@ -207,25 +207,18 @@ int main(int argc, char** argv)
     }
     fclose(t1);
     meso_rt_shell_update(b.rt, obj, NULL, dirs, nv);
-    if (table_only) {
-        meso_ref_shell_free(&ref);
-        free(dirs);
-        free(scaled);
-        meso_rt_release_object(b.rt, obj);
-        test_fbo_destroy(&b.fbo);
-        meso_rt_destroy(b.rt);
-        meso_egl_destroy(egl);
-        unlink(path);
-        rmdir(tmp);
-        return 0;
-    }
+    uint8_t* rgba = NULL;
+    float* depth = NULL;
+    meso_ref_image refimg[2];
+    memset(refimg, 0, sizeof(refimg));
+    if (table_only)
+        goto finish;
 
     /* --- error against the reference and the sweeps, at 400x300 ---------- */
     set_size(&b, quick ? 200 : 400, quick ? 150 : 300);
     const size_t npx = (size_t)scene_w * scene_h;
-    uint8_t* rgba = malloc(npx * 4);
-    float* depth = malloc(sizeof(float) * npx);
-    meso_ref_image refimg[2];
+    rgba = malloc(npx * 4);
+    depth = malloc(sizeof(float) * npx);
     for (int cv = 0; cv < 2; ++cv) {
         meso_ref_view v = {.width = scene_w, .height = scene_h, .curved = cv, .samples_per_prism = 512};
         for (int i = 0; i < 16; ++i)
@@ -292,6 +285,7 @@ int main(int argc, char** argv)
         unlink(p2);
     }
     fclose(sw);
+finish:
     unlink(path);
     rmdir(tmp);
     meso_ref_image_free(&refimg[0]);
