@@ -47,6 +47,8 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_COLR:
     case MESO_CHUNK_SKEL:
     case MESO_CHUNK_FRUS:
+    case MESO_CHUNK_FSEG:
+    case MESO_CHUNK_BALL:
     case MESO_CHUNK_RELF: return 1;
     default: return 0;
     }
@@ -172,6 +174,8 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_MESH:
     case MESO_CHUNK_SKEL:
     case MESO_CHUNK_FRUS:
+    case MESO_CHUNK_FSEG:
+    case MESO_CHUNK_BALL:
         if (c->dtype != MESO_DTYPE_BYTES || c->components != 1)
             return elem_error(c, chunk, err, "BYTES x 1");
         return MESO_OK;
@@ -635,6 +639,75 @@ static meso_result check_frus(const uint8_t* d, size_t n, int32_t chunk, uint64_
     return MESO_OK;
 }
 
+static int finite_f32s(const uint8_t* p, int count)
+{
+    for (int i = 0; i < count; i++)
+        if (!isfinite(mesoi_ldf32(p + 4 * i)))
+            return 0;
+    return 1;
+}
+
+static int zero_bytes(const uint8_t* p, size_t count)
+{
+    for (size_t i = 0; i < count; i++)
+        if (p[i])
+            return 0;
+    return 1;
+}
+
+static meso_result check_fseg(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err)
+{
+    if (n % MESO_FSEG_RECORD_SIZE != 0)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_FSEG_SIZE, at(base, 0), chunk,
+                                "chunk %d (FSEG): size %zu is not a multiple of 80", (int)chunk, n);
+    size_t count = n / MESO_FSEG_RECORD_SIZE;
+    for (size_t i = 0; i < count; i++) {
+        const uint8_t* p = d + i * MESO_FSEG_RECORD_SIZE;
+        uint32_t flags = mesoi_ld32(p + MESO_FSEG_OFF_FLAGS);
+        uint32_t k0 = (flags >> MESO_FSEG_KIND0_SHIFT) & 3u, k1 = (flags >> MESO_FSEG_KIND1_SHIFT) & 3u;
+        int32_t align = (int32_t)mesoi_ld32(p + MESO_FSEG_OFF_ALIGN_FROM);
+        int32_t other[2] = {(int32_t)mesoi_ld32(p + MESO_FSEG_OFF_OTHER0), (int32_t)mesoi_ld32(p + MESO_FSEG_OFF_OTHER1)};
+        const char* why = NULL;
+        if ((flags & ~MESO_FSEG_FLAGS_KNOWN) || k0 > MESO_FSEG_END_BALL || k1 > MESO_FSEG_END_BALL)
+            why = "unknown flag bits or end kind";
+        else if (align < -1 || (align >= 0 && (size_t)align >= i))
+            why = "align_from is not -1 or an earlier frustum";
+        else if ((k0 == MESO_FSEG_END_JOINT) != (other[0] >= 0) || (k1 == MESO_FSEG_END_JOINT) != (other[1] >= 0) ||
+                 other[0] < -1 || other[1] < -1 || (other[0] >= 0 && (size_t)other[0] >= count) ||
+                 (other[1] >= 0 && (size_t)other[1] >= count) || (size_t)other[0] == i || (size_t)other[1] == i)
+            why = "a joint end without a valid other frustum (or a neighbour at a non-joint end)";
+        else if (!finite_f32s(p + MESO_FSEG_OFF_NODE_RADIUS0, 2) || !finite_f32s(p + MESO_FSEG_OFF_FRAME_X, 9) ||
+                 mesoi_ldf32(p + MESO_FSEG_OFF_NODE_RADIUS0) < 0.0f ||
+                 mesoi_ldf32(p + MESO_FSEG_OFF_NODE_RADIUS1) < 0.0f ||
+                 mesoi_ldf32(p + MESO_FSEG_OFF_RELIEF_DEPTH) < 0.0f)
+            why = "a non-finite value, or a negative radius or relief depth";
+        else if (!zero_bytes(p + MESO_FSEG_OFF_RESERVED, MESO_FSEG_SIZE_RESERVED))
+            why = "non-zero reserved bytes";
+        if (why)
+            return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_FSEG_VALUE, at(base, i * MESO_FSEG_RECORD_SIZE),
+                                    chunk, "chunk %d (FSEG): frustum %zu: %s", (int)chunk, i, why);
+    }
+    return MESO_OK;
+}
+
+static meso_result check_ball(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err)
+{
+    if (n % MESO_BALL_RECORD_SIZE != 0)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_BALL_SIZE, at(base, 0), chunk,
+                                "chunk %d (BALL): size %zu is not a multiple of 32", (int)chunk, n);
+    for (size_t i = 0; i < n / MESO_BALL_RECORD_SIZE; i++) {
+        const uint8_t* p = d + i * MESO_BALL_RECORD_SIZE;
+        if (!finite_f32s(p, 4) || mesoi_ldf32(p + MESO_BALL_OFF_RADIUS) < 0.0f ||
+            !zero_bytes(p + MESO_BALL_OFF_RESERVED, MESO_BALL_SIZE_RESERVED))
+            return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_BALL_VALUE, at(base, i * MESO_BALL_RECORD_SIZE),
+                                    chunk,
+                                    "chunk %d (BALL): ball %zu has a non-finite value, negative radius or non-zero "
+                                    "reserved bytes",
+                                    (int)chunk, i);
+    }
+    return MESO_OK;
+}
+
 meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, size_t size, int32_t chunk,
                                  uint64_t base, meso_error* err)
 {
@@ -645,6 +718,8 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
     case MESO_CHUNK_MESH: return check_mesh(data, size, chunk, base, err);
     case MESO_CHUNK_SKEL: return check_skel(data, size, chunk, base, err);
     case MESO_CHUNK_FRUS: return check_frus(data, size, chunk, base, err);
+    case MESO_CHUNK_FSEG: return check_fseg(data, size, chunk, base, err);
+    case MESO_CHUNK_BALL: return check_ball(data, size, chunk, base, err);
     default: return MESO_OK;
     }
 }
@@ -815,7 +890,8 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
         return;
     int known = mesoi_known_type(c->type);
     int structured = known && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_RPRT || c->type == MESO_CHUNK_OBJT ||
-                               c->type == MESO_CHUNK_MESH || c->type == MESO_CHUNK_SKEL || c->type == MESO_CHUNK_FRUS);
+                               c->type == MESO_CHUNK_MESH || c->type == MESO_CHUNK_SKEL || c->type == MESO_CHUNK_FRUS ||
+                               c->type == MESO_CHUNK_FSEG || c->type == MESO_CHUNK_BALL);
     const uint8_t* whole = NULL;
     uint8_t* owned = NULL;
     if (f->data) {

@@ -96,6 +96,8 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_SKEL MESO_FOURCC('S', 'K', 'E', 'L') /* skeleton nodes */
 #define MESO_CHUNK_FRUS MESO_FOURCC('F', 'R', 'U', 'S') /* conical frusta */
 #define MESO_CHUNK_RELF MESO_FOURCC('R', 'E', 'L', 'F') /* relief map (2D height + normal) */
+#define MESO_CHUNK_FSEG MESO_FOURCC('F', 'S', 'E', 'G') /* per-frustum topology and parametrisation */
+#define MESO_CHUNK_BALL MESO_FOURCC('B', 'A', 'L', 'L') /* balls closing branch points */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -367,6 +369,10 @@ MESO_API meso_result meso_writer_write_file(meso_writer* w, const char* path, me
 #define MESO_ISSUE_SKEL_VALUE 4403u
 #define MESO_ISSUE_FRUS_SIZE 4501u
 #define MESO_ISSUE_FRUS_VALUE 4502u
+#define MESO_ISSUE_FSEG_SIZE 4601u
+#define MESO_ISSUE_FSEG_VALUE 4602u
+#define MESO_ISSUE_BALL_SIZE 4701u
+#define MESO_ISSUE_BALL_VALUE 4702u
 #define MESO_ISSUE_API_ARG 5001u
 #define MESO_ISSUE_API_BUFFER 5002u
 #define MESO_ISSUE_API_MEMORY 5003u

@@ -98,4 +98,45 @@
 #define MESO_FRUS_OFF_SKEL_NODE 56
 #define MESO_FRUS_OFF_RESERVED 60
 
+/* FSEG chunk: one 80-byte record per frustum (same order as FRUS): its
+ * skeleton nodes, joint neighbours, end kinds and §2.3 parametrisation. */
+#define MESO_FSEG_RECORD_SIZE 80
+#define MESO_FSEG_OFF_NODE0 0
+#define MESO_FSEG_OFF_NODE1 4
+#define MESO_FSEG_OFF_NODE_RADIUS0 8
+#define MESO_FSEG_OFF_NODE_RADIUS1 12
+#define MESO_FSEG_OFF_OTHER0 16
+#define MESO_FSEG_OFF_OTHER1 20
+#define MESO_FSEG_OFF_FLAGS 24
+#define MESO_FSEG_OFF_ALIGN_FROM 28
+#define MESO_FSEG_OFF_FRAME_X 32
+#define MESO_FSEG_OFF_U_OFFSET 44
+#define MESO_FSEG_OFF_TWIST 48
+#define MESO_FSEG_OFF_U_SCALE 52
+#define MESO_FSEG_OFF_V_OFFSET 56
+#define MESO_FSEG_OFF_V_SCALE 60
+#define MESO_FSEG_OFF_RELIEF_DEPTH 64
+#define MESO_FSEG_OFF_RESERVED 68
+#define MESO_FSEG_SIZE_RESERVED 12
+/* FSEG flags: end kinds (2 bits each), caps, which ends the u frame is
+ * carried across (bits 6, 7). */
+#define MESO_FSEG_END_TIP 0u
+#define MESO_FSEG_END_JOINT 1u
+#define MESO_FSEG_END_BALL 2u
+#define MESO_FSEG_KIND0_SHIFT 0
+#define MESO_FSEG_KIND1_SHIFT 2
+#define MESO_FSEG_CAP0 (1u << 4)
+#define MESO_FSEG_CAP1 (1u << 5)
+#define MESO_FSEG_ALIGN_END (1u << 6)      /* end of this segment at the shared node (0: c0, 1: c1) */
+#define MESO_FSEG_ALIGN_FROM_END (1u << 7) /* end of the align_from segment at the shared node */
+#define MESO_FSEG_FLAGS_KNOWN 0xFFu
+
+/* BALL chunk: one 32-byte record per ball closing a branch point or ball joint. */
+#define MESO_BALL_RECORD_SIZE 32
+#define MESO_BALL_OFF_CENTER 0
+#define MESO_BALL_OFF_RADIUS 12
+#define MESO_BALL_OFF_NODE 16
+#define MESO_BALL_OFF_RESERVED 20
+#define MESO_BALL_SIZE_RESERVED 12
+
 #endif /* MESO_LAYOUT_H */

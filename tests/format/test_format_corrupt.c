@@ -576,6 +576,107 @@ static void bad_records_are_rejected(void)
     free(m);
 }
 
+/* FSEG and BALL records (FORMAT.md §7.6, §7.7): a valid pair is accepted,
+ * and each broken rule is refused by the writer with the reader's code. */
+static void putf(uint8_t* p, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    put32(p, u);
+}
+
+static void fseg_record(uint8_t* r, uint32_t flags, int32_t other0, int32_t other1, int32_t align)
+{
+    memset(r, 0, MESO_FSEG_RECORD_SIZE);
+    put32(r + MESO_FSEG_OFF_NODE0, 0);
+    put32(r + MESO_FSEG_OFF_NODE1, 1);
+    putf(r + MESO_FSEG_OFF_NODE_RADIUS0, 0.3f);
+    putf(r + MESO_FSEG_OFF_NODE_RADIUS1, 0.2f);
+    put32(r + MESO_FSEG_OFF_OTHER0, (uint32_t)other0);
+    put32(r + MESO_FSEG_OFF_OTHER1, (uint32_t)other1);
+    put32(r + MESO_FSEG_OFF_FLAGS, flags);
+    put32(r + MESO_FSEG_OFF_ALIGN_FROM, (uint32_t)align);
+    putf(r + MESO_FSEG_OFF_FRAME_X, 1.0f);
+    putf(r + MESO_FSEG_OFF_U_SCALE, 1.0f);
+    putf(r + MESO_FSEG_OFF_V_SCALE, 1.0f);
+}
+
+static meso_result add_records(uint32_t type, const uint8_t* data, size_t size, meso_error* e)
+{
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    meso_chunk_desc d = {.type = type, .object = 1, .dims = {1, 1, 1}};
+    meso_result r = meso_writer_add(w, &d, data, size, e);
+    meso_writer_destroy(w);
+    return r;
+}
+
+static void bad_frusta_records_are_rejected(void)
+{
+    const uint32_t joint1 = MESO_FSEG_END_JOINT << MESO_FSEG_KIND1_SHIFT;
+    const uint32_t joint0 = MESO_FSEG_END_JOINT << MESO_FSEG_KIND0_SHIFT;
+    uint8_t seg[2 * MESO_FSEG_RECORD_SIZE], ball[MESO_BALL_RECORD_SIZE];
+    meso_error e;
+    /* frustum 0 (tip, cap | joint with 1), frustum 1 (joint with 0 | ball), aligned from 0 */
+    fseg_record(seg, joint1 | MESO_FSEG_CAP0, -1, 1, -1);
+    fseg_record(seg + MESO_FSEG_RECORD_SIZE, joint0 | (MESO_FSEG_END_BALL << MESO_FSEG_KIND1_SHIFT), 0, -1, 0);
+    assert(add_records(MESO_CHUNK_FSEG, seg, sizeof seg, &e) == MESO_OK);
+    memset(ball, 0, sizeof ball);
+    putf(ball + MESO_BALL_OFF_RADIUS, 0.25f);
+    put32(ball + MESO_BALL_OFF_NODE, 2);
+    assert(add_records(MESO_CHUNK_BALL, ball, sizeof ball, &e) == MESO_OK);
+    uint8_t* r1 = seg + MESO_FSEG_RECORD_SIZE;
+#define FSEG_CASE(stmt, want)                                                            \
+    do {                                                                                 \
+        uint8_t keep[sizeof seg];                                                        \
+        memcpy(keep, seg, sizeof seg);                                                   \
+        stmt;                                                                            \
+        memset(&e, 0, sizeof e);                                                         \
+        assert(add_records(MESO_CHUNK_FSEG, seg, sizeof seg, &e) == MESO_ERR_INVALID_ARG); \
+        assert(e.code == (want));                                                        \
+        memcpy(seg, keep, sizeof seg);                                                   \
+    } while (0)
+    const uint32_t V = MESO_ISSUE_FSEG_VALUE;
+    FSEG_CASE(put32(r1 + MESO_FSEG_OFF_FLAGS, get32(r1 + MESO_FSEG_OFF_FLAGS) | (1u << 8)), V); /* unknown bit */
+    FSEG_CASE(put32(seg + MESO_FSEG_OFF_FLAGS, 3u), V);                         /* end kind 3 */
+    FSEG_CASE(put32(seg + MESO_FSEG_OFF_ALIGN_FROM, 1), V);                     /* aligned from a later one */
+    FSEG_CASE(put32(r1 + MESO_FSEG_OFF_ALIGN_FROM, 0xFFFFFFFEu), V);            /* -2 */
+    FSEG_CASE(put32(r1 + MESO_FSEG_OFF_OTHER0, 0xFFFFFFFFu), V);                /* joint without a partner */
+    FSEG_CASE(put32(seg + MESO_FSEG_OFF_OTHER0, 1), V);                         /* partner at a tip */
+    FSEG_CASE(put32(r1 + MESO_FSEG_OFF_OTHER0, 1), V);                          /* its own partner */
+    FSEG_CASE(put32(r1 + MESO_FSEG_OFF_OTHER0, 5), V);                          /* out of range */
+    FSEG_CASE(put32(seg + MESO_FSEG_OFF_FRAME_X + 4, 0x7FC00000u), V);          /* NaN */
+    FSEG_CASE(putf(seg + MESO_FSEG_OFF_RELIEF_DEPTH, -1.0f), V);                /* negative depth */
+    FSEG_CASE(putf(r1 + MESO_FSEG_OFF_NODE_RADIUS1, -0.5f), V);                 /* negative radius */
+    FSEG_CASE(seg[MESO_FSEG_OFF_RESERVED + 11] = 1, V);                         /* reserved */
+#undef FSEG_CASE
+    assert(add_records(MESO_CHUNK_FSEG, seg, sizeof seg - 1, &e) == MESO_ERR_INVALID_ARG &&
+           e.code == MESO_ISSUE_FSEG_SIZE);
+    uint8_t b2[sizeof ball];
+#define BALL_CASE(stmt, want)                                                              \
+    do {                                                                                   \
+        memcpy(b2, ball, sizeof ball);                                                     \
+        stmt;                                                                              \
+        memset(&e, 0, sizeof e);                                                           \
+        assert(add_records(MESO_CHUNK_BALL, b2, sizeof b2, &e) == MESO_ERR_INVALID_ARG);   \
+        assert(e.code == (want));                                                          \
+    } while (0)
+    BALL_CASE(putf(b2 + MESO_BALL_OFF_RADIUS, -1.0f), MESO_ISSUE_BALL_VALUE);
+    BALL_CASE(put32(b2 + MESO_BALL_OFF_CENTER + 8, 0x7F800000u), MESO_ISSUE_BALL_VALUE); /* inf */
+    BALL_CASE(b2[MESO_BALL_OFF_RESERVED] = 1, MESO_ISSUE_BALL_VALUE);
+#undef BALL_CASE
+    assert(add_records(MESO_CHUNK_BALL, ball, sizeof ball - 4, &e) == MESO_ERR_INVALID_ARG &&
+           e.code == MESO_ISSUE_BALL_SIZE);
+    /* FSEG and BALL must be BYTES x 1 */
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    meso_chunk_desc d = {.type = MESO_CHUNK_BALL, .object = 1, .dtype = MESO_DTYPE_F32, .components = 4,
+                         .dims = {2, 1, 1}};
+    assert(meso_writer_add(w, &d, ball, sizeof ball, &e) == MESO_ERR_INVALID_ARG &&
+           e.code == MESO_ISSUE_TYPE_ELEMENT);
+    meso_writer_destroy(w);
+}
+
 /* >>decoded sizes of encoded chunks (issues 2021, 2022) */
 
 typedef struct never_decoder {
@@ -810,6 +911,7 @@ int main(void)
     bad_json_in_meta_is_rejected();
     bad_mesh_contents_are_rejected();
     bad_records_are_rejected();
+    bad_frusta_records_are_rejected();
     draco_expansion_is_bounded_on_open();
     max_decoded_size_limits_encoded_chunks_only();
     tiny_draco_mesh_claiming_a_billion_vertices_allocates_nothing();
