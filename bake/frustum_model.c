@@ -10,11 +10,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frusta_pose.h"
 #include "meso_bake.h"
 
 #define TAU 6.283185307179586
 #define CUT_SAMPLES 512
 #define SEAM_SAMPLES 128
+#define SEAM_TOLERANCE 1e-6 /* of the joint radius: a closed seam */
+#define FIT_RANGE 1.25 /* the §2.2 fit may scale a radius by 1/1.25 .. 1.25 */
 
 /* >>vectors ---------------------------------------------------------------- */
 
@@ -147,24 +150,6 @@ double meso_frustum_lateral_area(const meso_frustum_segment* s, uint32_t samples
 
 /* >>joint planes ----------------------------------------------------------- */
 
-/* Intersection of the lines p + α u and q + β v lying in one plane (2-D
- * solve in the basis e1, e2 of that plane). Returns 0 when parallel. */
-static int line_line(const double p[3], const double u[3], const double q[3], const double v[3], const double e1[3],
-    const double e2[3], double out[3])
-{
-    double pu[2] = {dot3(u, e1), dot3(u, e2)}, pv[2] = {dot3(v, e1), dot3(v, e2)};
-    double dq[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
-    double r[2] = {dot3(dq, e1), dot3(dq, e2)};
-    double det = pu[0] * (-pv[1]) - pu[1] * (-pv[0]);
-    double lu = sqrt(pu[0] * pu[0] + pu[1] * pu[1]), lv = sqrt(pv[0] * pv[0] + pv[1] * pv[1]);
-    if (!(lu > 0 && lv > 0) || fabs(det) < 1e-9 * lu * lv)
-        return 0;
-    double alpha = (r[0] * (-pv[1]) - r[1] * (-pv[0])) / det;
-    for (int i = 0; i < 3; ++i)
-        out[i] = p[i] + alpha * u[i];
-    return 1;
-}
-
 typedef struct end_ref {
     uint32_t seg;
     int end;
@@ -196,61 +181,84 @@ static void joint_plane(meso_frustum_model* m, meso_frustum_joint* j)
     const meso_frustum_segment* s1 = &m->segments[j->segment[0]];
     const meso_frustum_segment* s2 = &m->segments[j->segment[1]];
     int e1 = j->end[0], e2 = j->end[1];
-    const double* J = seg_end_point(s1, e1);
-    const double* O1 = seg_end_point(s1, 1 - e1);
-    const double* J2 = seg_end_point(s2, e2);
-    const double* O2 = seg_end_point(s2, 1 - e2);
-    double rO1 = seg_end_radius(s1, 1 - e1), rJ1 = seg_end_radius(s1, e1);
-    double rJ2 = seg_end_radius(s2, e2), rO2 = seg_end_radius(s2, 1 - e2);
-    double M1[3], M2[3], Nm[3], p1[3], p2[3];
-    for (int i = 0; i < 3; ++i) {
-        M1[i] = J[i] - O1[i];
-        M2[i] = O2[i] - J2[i];
+    meso_frustum_joint_plane(seg_end_point(s1, 1 - e1), seg_end_radius(s1, 1 - e1), seg_end_point(s1, e1),
+        seg_end_radius(s1, e1), seg_end_point(s2, e2), seg_end_radius(s2, e2), seg_end_point(s2, 1 - e2),
+        seg_end_radius(s2, 1 - e2), j->plane_n, &j->plane_d, j->a, j->b);
+}
+
+/* Minor semi-axis of the ellipse where the plane through A, B (⟂ the
+ * medial plane) cuts the cone of segment s: at the ellipse's centre M (the
+ * midpoint of AB) the minor axis runs along Nm, ⟂ the medial plane that
+ * holds the axis, so b² = r(y_M)² − dist(M, axis)². */
+static double minor_semi_axis(const meso_frustum_segment* s, const double A[3], const double B[3])
+{
+    double a[3], M[3], q[3];
+    double h = seg_axis(s, a);
+    double y = 0;
+    for (int i = 0; i < 3; ++i)
+        M[i] = 0.5 * (A[i] + B[i]);
+    for (int i = 0; i < 3; ++i)
+        y += (M[i] - s->c0[i]) * a[i];
+    for (int i = 0; i < 3; ++i)
+        q[i] = M[i] - s->c0[i] - y * a[i];
+    double r = s->r0 + (s->r1 - s->r0) * y / h;
+    return sqrt(fmax(0.0, r * r - dot3(q, q)));
+}
+
+/* Minor-axis mismatch b2 − b1 of joint j when segment 2's radius at the
+ * joint is set to `rj2`. */
+static double minor_mismatch(meso_frustum_model* m, meso_frustum_joint* j, double rj2)
+{
+    meso_frustum_segment* s2 = &m->segments[j->segment[1]];
+    double* rp = j->end[1] == 0 ? &s2->r0 : &s2->r1;
+    double keep = *rp;
+    *rp = rj2;
+    joint_plane(m, j);
+    double d = minor_semi_axis(s2, j->a, j->b) - minor_semi_axis(&m->segments[j->segment[0]], j->a, j->b);
+    *rp = keep;
+    return d;
+}
+
+/* The §2.2 fit of one joint (frustum_model.h, "Minor-axis fit"): segment
+ * 2's radius at the joint such that both cut ellipses have the same minor
+ * axis, by bisection on a bracket around its node radius. Returns the
+ * radius change, or NaN when no radius within FIT_RANGE of it fits. */
+static double minor_axis_fit(meso_frustum_model* m, meso_frustum_joint* j)
+{
+    meso_frustum_segment* s2 = &m->segments[j->segment[1]];
+    double* rp = j->end[1] == 0 ? &s2->r0 : &s2->r1;
+    double r_in = *rp;
+    if (r_in <= 0)
+        return NAN;
+    double lo = r_in / FIT_RANGE, hi = r_in * FIT_RANGE;
+    double flo = minor_mismatch(m, j, lo), fhi = minor_mismatch(m, j, hi), f0 = minor_mismatch(m, j, r_in);
+    if (fabs(f0) <= 1e-12 * r_in) {
+        joint_plane(m, j);
+        return 0;
     }
-    normalize3(M1);
-    normalize3(M2);
-    cross3(M1, M2, Nm);
-    if (normalize3(Nm) < 1e-9)
-        any_perp(M1, Nm);
-    cross3(M1, Nm, p1);
-    cross3(M2, Nm, p2);
-    double e2d[3];
-    cross3(Nm, M1, e2d); /* in-plane basis (M1, e2d) */
-    double pts[2][3];
-    for (int side = 0; side < 2; ++side) {
-        double sg = side == 0 ? -1.0 : 1.0;
-        double L1[3], L2[3], L3[3], L4[3], u[3], v[3];
-        for (int i = 0; i < 3; ++i) {
-            L1[i] = O1[i] + sg * rO1 * p1[i];
-            L2[i] = J[i] + sg * rJ1 * p1[i];
-            L3[i] = J2[i] + sg * rJ2 * p2[i];
-            L4[i] = O2[i] + sg * rO2 * p2[i];
-            u[i] = L2[i] - L1[i];
-            v[i] = L4[i] - L3[i];
-        }
-        if (!line_line(L1, u, L3, v, M1, e2d, pts[side]))
-            for (int i = 0; i < 3; ++i)
-                pts[side][i] = 0.5 * (L2[i] + L3[i]);
-    }
-    memcpy(j->a, pts[0], sizeof(j->a));
-    memcpy(j->b, pts[1], sizeof(j->b));
-    double ab[3] = {pts[0][0] - pts[1][0], pts[0][1] - pts[1][1], pts[0][2] - pts[1][2]};
-    double scale = sqrt(dot3(ab, ab));
-    double bis[3] = {M1[0] + M2[0], M1[1] + M2[1], M1[2] + M2[2]};
-    double n[3];
-    cross3(ab, Nm, n);
-    if (scale < 1e-12 * (rO1 + rO2 + 1e-300) || normalize3(n) == 0) {
-        memcpy(n, bis, sizeof(n));
-        if (normalize3(n) == 0)
-            memcpy(n, M1, sizeof(n));
-        j->plane_d = dot3(n, J);
+    /* The bracket nearest r_in. */
+    if ((f0 < 0) == (flo < 0)) {
+        lo = r_in;
+        flo = f0;
     } else {
-        if (dot3(n, bis) < 0)
-            for (int i = 0; i < 3; ++i)
-                n[i] = -n[i];
-        j->plane_d = dot3(n, pts[0]);
+        hi = r_in;
+        fhi = f0;
     }
-    memcpy(j->plane_n, n, sizeof(n));
+    if ((flo < 0) == (fhi < 0)) {
+        joint_plane(m, j);
+        return NAN;
+    }
+    for (int it = 0; it < 100 && hi - lo > 1e-13 * r_in; ++it) {
+        double mid = 0.5 * (lo + hi), fm = minor_mismatch(m, j, mid);
+        if ((fm < 0) == (flo < 0)) {
+            lo = mid;
+            flo = fm;
+        } else
+            hi = mid;
+    }
+    *rp = 0.5 * (lo + hi);
+    joint_plane(m, j);
+    return *rp - r_in;
 }
 
 /* Applies joint j's plane (or its ball) to its two segments. */
@@ -379,6 +387,7 @@ void meso_frustum_model_free(meso_frustum_model* m)
     free(m->segments);
     free(m->joints);
     free(m->balls);
+    free(m->order);
     memset(m, 0, sizeof(*m));
 }
 
@@ -491,6 +500,56 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         } else if (deg[v] >= 3)
             m.stats.branch_points++;
     }
+    /* Joints bending more than the limit are ball joints. */
+    for (uint32_t ji = 0; o.max_joint_angle_deg > 0 && ji < m.joint_count; ++ji) {
+        meso_frustum_joint* j = &m.joints[ji];
+        const meso_frustum_segment* s1 = &m.segments[j->segment[0]];
+        const meso_frustum_segment* s2 = &m.segments[j->segment[1]];
+        double m1[3], m2[3];
+        for (int i = 0; i < 3; ++i) {
+            m1[i] = seg_end_point(s1, j->end[0])[i] - seg_end_point(s1, 1 - j->end[0])[i];
+            m2[i] = seg_end_point(s2, 1 - j->end[1])[i] - seg_end_point(s2, j->end[1])[i];
+        }
+        normalize3(m1);
+        normalize3(m2);
+        double bend = acos(fmax(-1.0, fmin(1.0, dot3(m1, m2)))) * 360.0 / TAU;
+        if (bend > o.max_joint_angle_deg) {
+            j->ball = 1;
+            m.stats.sharp_joints++;
+            m.stats.ball_joints++;
+            joint_apply(&m, ji);
+        }
+    }
+    /* §2.2 minor-axis fit: joints in breadth-first order would converge in
+     * one sweep; sweeping until nothing moves needs no order. */
+    for (int sweep = 0; !o.no_minor_axis_fit && sweep < 32; ++sweep) {
+        double moved = 0;
+        for (uint32_t ji = 0; ji < m.joint_count; ++ji) {
+            if (m.joints[ji].ball)
+                continue;
+            double dr = minor_axis_fit(&m, &m.joints[ji]);
+            if (isnan(dr)) {
+                m.joints[ji].ball = 1;
+                m.stats.unfitted_joints++;
+                m.stats.ball_joints++;
+            } else
+                moved = fmax(moved, fabs(dr));
+            joint_apply(&m, ji);
+        }
+        for (uint32_t ji = 0; ji < m.joint_count; ++ji) {
+            if (!m.joints[ji].ball)
+                joint_plane(&m, &m.joints[ji]);
+            joint_apply(&m, ji);
+        }
+        if (moved <= 1e-12 * diag)
+            break;
+    }
+    for (uint32_t s = 0; s < m.segment_count; ++s)
+        for (int e = 0; e < 2; ++e) {
+            const meso_skeleton_node* nd = &sk->nodes[m.segments[s].node[e]];
+            double dr = fabs((e ? m.segments[s].r1 : m.segments[s].r0) - nd->radius);
+            m.stats.radius_change_max = fmax(m.stats.radius_change_max, dr);
+        }
     /* Cap intersections: find, then turn joints at failing segments into
      * ball joints until nothing changes. */
     for (uint32_t s = 0; s < m.segment_count; ++s) {
@@ -524,6 +583,21 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
     for (uint32_t s = 0; s < m.segment_count; ++s)
         if (m.segments[s].cut_margin <= 0)
             m.stats.cap_intersections_unhandled++;
+    /* A seam the fit left open (no radius closed it, or the cut is not an
+     * ellipse) becomes a ball joint: a knob, never a crack. */
+    for (uint32_t ji = 0; !o.no_minor_axis_fit && ji < m.joint_count; ++ji) {
+        meso_frustum_joint* j = &m.joints[ji];
+        if (j->ball)
+            continue;
+        const meso_frustum_segment* s1 = &m.segments[j->segment[0]];
+        double scale = j->end[0] ? s1->r1 : s1->r0;
+        if (!(seam_gap(&m, j) <= SEAM_TOLERANCE * scale)) {
+            j->ball = 1;
+            m.stats.unfitted_joints++;
+            m.stats.ball_joints++;
+            joint_apply(&m, ji);
+        }
+    }
     /* Balls: branch points and ball joints. */
     for (uint32_t v = 0; v < n; ++v) {
         int is_ball = deg[v] >= 3;
@@ -568,7 +642,9 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
     m.stats.seam_gap_mean = gap_n ? gap_sum / gap_n : 0;
     /* Frames and u alignment: breadth-first over segments through nodes. */
     seen = calloc(m.segment_count, 1);
-    if (!seen) {
+    m.order = malloc(m.segment_count * sizeof(*m.order));
+    uint32_t order_n = 0;
+    if (!seen || !m.order) {
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory");
         goto done;
     }
@@ -581,10 +657,12 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         any_perp(a, s->frame_x);
         s->u_offset = 0;
         seen[s0] = 1;
+        s->align_from = -1;
         uint32_t qh = 0, qt = 0;
         queue[qt++] = s0;
         while (qh < qt) {
             uint32_t cur = queue[qh++];
+            m.order[order_n++] = cur;
             for (int e = 0; e < 2; ++e) {
                 uint32_t v = find_rep(rep, m.segments[cur].node[e]);
                 for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
@@ -593,6 +671,9 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
                         continue;
                     seen[nb] = 1;
                     align_across(&m, cur, e, nb, ends[k].end, deg[v] == 2 ? m.segments[cur].joint[e] : -1);
+                    m.segments[nb].align_from = (int32_t)cur;
+                    m.segments[nb].align_end = ends[k].end;
+                    m.segments[nb].align_from_end = e;
                     if (qt < n + 1)
                         queue[qt++] = nb;
                 }

@@ -25,7 +25,7 @@
  *    What this guarantees: A and B lie on both cones, so the two elliptical
  *    cut curves share the major axis AB; the minor axes agree only in
  *    special cases (equal radii: a mitred pipe, exact), otherwise there is a
- *    seam gap (§2.2 says so; its iterative radius fit is not done here).
+ *    seam gap (§2.2 says so) until the minor-axis fit below closes it.
  *    `joints[i].seam_gap` measures it: the largest distance, within the
  *    plane, between a point on one cut curve and the point of the other
  *    curve at the same angle around that other cone's axis, both ways.
@@ -60,7 +60,21 @@
  *    Across a ball joint the frame is projected the same way and
  *    u_offset = 0 (no alignment is defined there). twist = 0 (a per-segment
  *    artist parameter in the paper).
- * What remains: the §2.2 minor-axis fit, u running in opposite senses across
+ *  *  - Minor-axis fit (§2.2): at each joint the radius of segment 2 (the one
+ *    leaving the joint) at the joint is adjusted until the minor semi-axes
+ *    of the two cut ellipses agree (bisection on [r/4, 4r] around the node
+ *    radius, the bracket nearest the node radius); the plane is recomputed
+ *    with it. Then the two ellipses share centre, major axis AB and minor
+ *    axis, so they are the same curve and the seam closes (seam_gap → 0,
+ *    tests/frusta). Segment 2's far radius is kept, so the shape changes
+ *    only near the joint; radius_change_max reports how far it moved. All
+ *    joints are swept until no radius moves (planes depend on neighbours'
+ *    radii). Where no radius within a factor 1.25 of the node's closes the
+ *    seam (short, fat segments: neurons), or where the seam gap measured
+ *    after the fit is still above 1e-6 of the joint radius, the joint
+ *    becomes a ball joint (`unfitted_joints`): a knob, never a crack.
+ *    The seam gap below is measured after the fit.
+ * What remains: u running in opposite senses across
  * a joint where both segments point away from it (a root with two children),
  * §2.4 normals across ball joints, bounding pyramids (§2.6).
  */
@@ -97,6 +111,9 @@ typedef struct meso_frustum_segment {
     double u_offset;          /* turns, subtracted from u */
     double twist;             /* radians over v in [0, 1] (0) */
     double cut_margin;        /* min over generators of (y1 − y0) in world units; <= 0: caps cross */
+    int32_t align_from;       /* segment whose frame this one's is carried from (breadth-first), or -1 */
+    int align_end;            /* end of this segment at the node shared with align_from */
+    int align_from_end;       /* end of align_from there */
 } meso_frustum_segment;
 
 typedef struct meso_frustum_joint {
@@ -118,6 +135,8 @@ typedef struct meso_frustum_ball {
 
 typedef struct meso_frustum_options {
     int keep_cap_intersections; /* 1: report them but keep the paper's planes (default 0: ball joints) */
+    int no_minor_axis_fit;      /* 1: skip the §2.2 minor-axis fit (default 0: fit) */
+    double max_joint_angle_deg; /* joints bending more than this become ball joints; <= 0: no limit */
 } meso_frustum_options;
 
 typedef struct meso_frustum_stats {
@@ -131,6 +150,9 @@ typedef struct meso_frustum_stats {
     uint32_t ball_joints;                 /* joints turned into balls by the handling */
     double seam_gap_max;                  /* over §2.2 joints (not ball joints), world units */
     double seam_gap_mean;
+    double radius_change_max;             /* largest radius the §2.2 fit moved away from its node's */
+    uint32_t unfitted_joints;             /* joints the §2.2 fit could not close: made ball joints */
+    uint32_t sharp_joints;                /* joints over max_joint_angle_deg: made ball joints */
 } meso_frustum_stats;
 
 /* The frustum model. Arrays are malloc'd and owned: free with
@@ -140,6 +162,7 @@ typedef struct meso_frustum_model {
     meso_frustum_segment* segments; /* in skeleton child-node order */
     meso_frustum_joint* joints;
     meso_frustum_ball* balls;
+    uint32_t* order;                /* segments in breadth-first order: align_from comes before */
     meso_frustum_stats stats;
 } meso_frustum_model;
 

@@ -165,6 +165,54 @@ static meso_result parse_node(const token* tok, uint32_t ntok, uint32_t line, me
     return MESO_OK;
 }
 
+/* One line of the text skeleton format (skeleton_swc.h): x y z radius
+ * [parent]. `index` is the node's 0-based index; ids are index + 1. */
+static meso_result parse_text_node(const token* tok, uint32_t ntok, uint32_t line, uint32_t index,
+    meso_skeleton_node* nd, int64_t* parent_id, meso_error* err)
+{
+    static const char* const names[4] = {"x", "y", "z", "radius"};
+    char show[32];
+    if (ntok != 4 && ntok != 5)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_FIELD_COUNT,
+            "skeleton line %u: %u fields, expected 4 or 5 (x y z radius [parent])", line, ntok);
+    double dv[4];
+    for (int k = 0; k < 4; ++k) {
+        if (!parse_double(tok[k], &dv[k])) {
+            token_show(tok[k], show, sizeof(show));
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NOT_A_NUMBER,
+                "skeleton line %u: %s '%s' is not a number", line, names[k], show);
+        }
+        if (!isfinite(dv[k])) {
+            token_show(tok[k], show, sizeof(show));
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NON_FINITE,
+                "skeleton line %u: %s '%s' is not finite", line, names[k], show);
+        }
+    }
+    if (dv[3] < 0.0)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NEGATIVE_RADIUS,
+            "skeleton line %u: negative radius %g", line, dv[3]);
+    int64_t parent = index; /* the previous node (1-based id = index) */
+    if (ntok == 5) {
+        if (!parse_int(tok[4], &parent)) {
+            token_show(tok[4], show, sizeof(show));
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NOT_A_NUMBER,
+                "skeleton line %u: parent '%s' is not an integer", line, show);
+        }
+        if (parent < 0)
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_UNKNOWN_PARENT,
+                "skeleton line %u: parent %lld (0 starts a new tree, k > 0 is the k-th node)", line, (long long)parent);
+    }
+    memset(nd, 0, sizeof(*nd));
+    nd->id = (int64_t)index + 1;
+    nd->line = line;
+    for (int k = 0; k < 3; ++k)
+        nd->pos[k] = dv[k];
+    nd->radius = dv[3];
+    nd->parent = -1;
+    *parent_id = parent == 0 ? -1 : parent;
+    return MESO_OK;
+}
+
 /* Resolves parents, checks ids and cycles, builds child lists. */
 static meso_result link_nodes(meso_skeleton* s, const int64_t* parent_id, meso_error* err)
 {
@@ -248,7 +296,8 @@ done:
     return r;
 }
 
-meso_result meso_skeleton_parse_swc(const char* text, size_t len, meso_skeleton* out, meso_error* err)
+meso_result meso_skeleton_parse(const char* text, size_t len, meso_skeleton_format fmt, meso_skeleton* out,
+    meso_error* err)
 {
     if (!out)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "swc: out is NULL");
@@ -317,7 +366,9 @@ meso_result meso_skeleton_parse_swc(const char* text, size_t len, meso_skeleton*
             }
             cap = ncap;
         }
-        r = parse_node(tok, ntotal, line, &s.nodes[s.node_count], &parent_id[s.node_count], err);
+        r = fmt == MESO_SKELETON_TEXT
+                ? parse_text_node(tok, ntotal, line, s.node_count, &s.nodes[s.node_count], &parent_id[s.node_count], err)
+                : parse_node(tok, ntotal, line, &s.nodes[s.node_count], &parent_id[s.node_count], err);
         if (r != MESO_OK)
             goto fail;
         ++s.node_count;
@@ -338,7 +389,17 @@ fail:
     return r;
 }
 
+meso_result meso_skeleton_parse_swc(const char* text, size_t len, meso_skeleton* out, meso_error* err)
+{
+    return meso_skeleton_parse(text, len, MESO_SKELETON_SWC, out, err);
+}
+
 meso_result meso_skeleton_load_swc(const char* path, meso_skeleton* out, meso_error* err)
+{
+    return meso_skeleton_load(path, MESO_SKELETON_SWC, out, err);
+}
+
+meso_result meso_skeleton_load(const char* path, meso_skeleton_format fmt, meso_skeleton* out, meso_error* err)
 {
     if (out)
         memset(out, 0, sizeof(*out));
@@ -376,7 +437,7 @@ meso_result meso_skeleton_load_swc(const char* path, meso_skeleton* out, meso_er
     }
     fclose(f);
     if (r == MESO_OK)
-        r = meso_skeleton_parse_swc(buf, len, out, err);
+        r = meso_skeleton_parse(buf, len, fmt, out, err);
     free(buf);
     return r;
 }

@@ -25,6 +25,20 @@
  *   3147 the parent links form a cycle (a node is its own ancestor)
  *   3148 the file can't be read, or is too large (more than 2^26 nodes)
  * (The 3140s are the skeleton inputs' range; 3149 is kept for them.)
+ *
+ * The text skeleton format (mesobake's `.skel`, for hand-written and
+ * generated skeletons) is one node per line, four or five fields:
+ *     x y z radius [parent]
+ * `parent` is the 1-based number of another node line (any order), or 0
+ * for a root; without it the node's parent is the node on the previous
+ * node line (the first node is a root), so a chain is just its points:
+ *     # a bent tube
+ *     0 0 0 0.2
+ *     0 1 0 0.2
+ *     1 2 0 0.15
+ *     -1 2 0 0.1 2    # a branch from node 2
+ * Comments, blank lines, line ends and the issue codes are as for SWC
+ * (3141: not 4 or 5 fields); node ids are the 1-based node numbers.
  */
 #ifndef MESO_SKELETON_SWC_H
 #define MESO_SKELETON_SWC_H
@@ -71,6 +85,11 @@ typedef struct meso_skeleton {
     uint32_t* children; /* node_count - root_count indices, grouped per parent, in input order */
 } meso_skeleton;
 
+typedef enum meso_skeleton_format {
+    MESO_SKELETON_SWC = 0, /* id type x y z radius parent */
+    MESO_SKELETON_TEXT,    /* x y z radius [parent] (above) */
+} meso_skeleton_format;
+
 /* Parses SWC text (`len` bytes, need not be NUL-terminated; a NUL byte is
  * data and refused as a non-number). On success fills `out` (caller frees
  * with meso_skeleton_free); on failure `out` is zeroed and `err` (may be
@@ -79,6 +98,11 @@ meso_result meso_skeleton_parse_swc(const char* text, size_t len, meso_skeleton*
 
 /* Reads the file at `path` and parses it as above. */
 meso_result meso_skeleton_load_swc(const char* path, meso_skeleton* out, meso_error* err);
+
+/* The same for either format. */
+meso_result meso_skeleton_parse(const char* text, size_t len, meso_skeleton_format fmt, meso_skeleton* out,
+    meso_error* err);
+meso_result meso_skeleton_load(const char* path, meso_skeleton_format fmt, meso_skeleton* out, meso_error* err);
 
 /* Frees the arrays and zeroes the struct. NULL is allowed. */
 void meso_skeleton_free(meso_skeleton* s);

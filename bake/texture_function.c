@@ -316,6 +316,20 @@ static double cells_density(double s, double t, double w)
     return clamp01(0.5 + (half_wall - border) / (2 * soft));
 }
 
+/* Cactus ribs: one rib per tile along t (a relief repeated N times around
+ * a frustum gives N ribs), a cosine profile from 0.15 in the valley to 0.75
+ * on the crest, and 4 areoles (spine cushions, domes 0.07 wide, +0.25) per
+ * tile along the crest. */
+static double ribs_height(double s, double t)
+{
+    const double ds = s - floor(s) - 0.5;
+    const double profile = 0.15 + 0.6 * (0.5 + 0.5 * cos(2 * M_PI * ds));
+    const double y = t * 4 - floor(t * 4) - 0.5;
+    const double rho = hypot(ds, y / 4);
+    const double bump = 0.25 * fmax(0.0, 1.0 - (rho / 0.07) * (rho / 0.07));
+    return fmin(1.0, profile + bump);
+}
+
 typedef struct builtin {
     const char* name;
     meso_texfn_kind kind;
@@ -328,6 +342,7 @@ typedef struct builtin {
 static const builtin builtins[] = {
     {"bricks", MESO_TEXFN_HEIGHT, 256, 1024, bricks_height, NULL, 0},
     {"cobble", MESO_TEXFN_HEIGHT, 256, 1024, cobble_height, NULL, 0},
+    {"ribs", MESO_TEXFN_HEIGHT, 256, 1024, ribs_height, NULL, 0},
     {"weave", MESO_TEXFN_DENSITY, 128, 256, NULL, weave_density, 2},
     {"cells", MESO_TEXFN_DENSITY, 64, 256, NULL, cells_density, 1},
 };
@@ -373,7 +388,7 @@ static meso_result spec_error(meso_error* err, const char* spec, const char* wha
 {
     return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
                           "texture '%s': %s (expected height:FILE.png, volume:FILE.raw:WxHxD, "
-                          "volume:FILE.vdb[:GRID], bricks[:RES], cobble[:RES], weave[:RES] or cells[:RES])",
+                          "volume:FILE.vdb[:GRID], bricks[:RES], cobble[:RES], ribs[:RES], weave[:RES] or cells[:RES])",
                           spec, what);
 }
 

@@ -20,6 +20,8 @@
  *   bricks[:RES]             running-bond bricks, bevelled mortar, mild
  *                            per-brick height variation; RES² U16 (default 256)
  *   cobble[:RES]             periodic Voronoi stones, domed; RES² U16 (default 256)
+ *   ribs[:RES]               cactus ribs: one rib along t per tile with 4 areoles
+ *                            on its crest; RES² U16 (default 256)
  *   weave[:RES]              interlaced threads, over/under (overhangs);
  *                            RES × RES × RES/2 U8 (default 128)
  *   cells[:RES]              3D periodic Voronoi cell walls; RES³ U8 (default 64)

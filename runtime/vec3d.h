@@ -1,6 +1,7 @@
 /*
- * vec3d.h — the double-precision 3-vector helpers the CPU references share
- * (shell_map.c, frustum_reference.c). Internal, header-only.
+ * vec3d.h — the double-precision 3-vector helpers shared by the CPU
+ * references (shell_map.c, frustum_reference.c) and the frusta pose rebuild
+ * (frusta_pose.c, which mesobake also compiles). Internal, header-only.
  */
 #ifndef MESO_REF_VEC3D_H
 #define MESO_REF_VEC3D_H

@@ -61,5 +61,6 @@ int parse_int(const char* s, long lo, long hi, long* out);
 
 int cmd_mesh(int argc, char** argv);
 int cmd_shell(int argc, char** argv);
+int cmd_frusta(int argc, char** argv);
 
 #endif

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "inspect.h"
+#include "meso_layout.h"
 
 static const char* const usage_info =
     "Usage: mesoinspect info FILE [--format text|json|mini-json]\n"
@@ -145,6 +146,61 @@ static void flags_text(uint32_t flags, char* dst, size_t n)
         snprintf(dst, n, "0x%x", flags);
 }
 
+static uint32_t ld_u32(const uint8_t* p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static float ld_f32(const uint8_t* p)
+{
+    uint32_t u = ld_u32(p);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+/* One line about a frusta object's FSEG (end kinds, caps, relief) or BALL
+ * chunk, for someone checking what a bake made of a skeleton. Nothing when
+ * the chunk is not raw, its CRC fails or its size is not whole records. */
+static void frusta_detail(const meso_file* f, uint32_t i)
+{
+    const meso_chunk_info* c = meso_file_chunk(f, i);
+    const uint8_t* p = mi_stored(f, i);
+    if (!p || c->encoding != MESO_ENCODING_RAW || crc_status(f, i) <= 0)
+        return;
+    if (c->type == MESO_CHUNK_FSEG && c->stored_size % MESO_FSEG_RECORD_SIZE == 0) {
+        uint64_t n = c->stored_size / MESO_FSEG_RECORD_SIZE, kinds[3] = {0, 0, 0}, caps = 0, roots = 0, relief = 0;
+        double dmax = 0;
+        for (uint64_t k = 0; k < n; ++k) {
+            const uint8_t* r = p + k * MESO_FSEG_RECORD_SIZE;
+            uint32_t fl = ld_u32(r + MESO_FSEG_OFF_FLAGS);
+            for (int e = 0; e < 2; ++e) {
+                uint32_t kind = (fl >> (e ? MESO_FSEG_KIND1_SHIFT : MESO_FSEG_KIND0_SHIFT)) & 3u;
+                kinds[kind < 3 ? kind : 0]++;
+            }
+            caps += ((fl & MESO_FSEG_CAP0) != 0) + ((fl & MESO_FSEG_CAP1) != 0);
+            roots += (int32_t)ld_u32(r + MESO_FSEG_OFF_ALIGN_FROM) < 0;
+            double d = ld_f32(r + MESO_FSEG_OFF_RELIEF_DEPTH);
+            relief += d > 0;
+            dmax = d > dmax ? d : dmax;
+        }
+        printf("  chunk %u FSEG: %llu frusta; ends: %llu tip, %llu joint, %llu ball; %llu caps; %llu u-frame roots; "
+               "relief on %llu (depth up to %g)\n",
+               i, (unsigned long long)n, (unsigned long long)kinds[0], (unsigned long long)kinds[1],
+               (unsigned long long)kinds[2], (unsigned long long)caps, (unsigned long long)roots,
+               (unsigned long long)relief, dmax);
+    } else if (c->type == MESO_CHUNK_BALL && c->stored_size % MESO_BALL_RECORD_SIZE == 0) {
+        uint64_t n = c->stored_size / MESO_BALL_RECORD_SIZE;
+        double lo = n ? ld_f32(p + MESO_BALL_OFF_RADIUS) : 0, hi = lo;
+        for (uint64_t k = 0; k < n; ++k) {
+            double r = ld_f32(p + k * MESO_BALL_RECORD_SIZE + MESO_BALL_OFF_RADIUS);
+            lo = r < lo ? r : lo;
+            hi = r > hi ? r : hi;
+        }
+        printf("  chunk %u BALL: %llu balls, radius %g to %g\n", i, (unsigned long long)n, lo, hi);
+    }
+}
+
 static void print_text(info_state* s, const meso_object_record* objs, uint32_t nobj, cJSON* meta, cJSON* rprt)
 {
     meso_file* f = s->f;
@@ -216,9 +272,10 @@ static void print_text(info_state* s, const meso_object_record* objs, uint32_t n
         }
         mi_table_print(&t, 2);
         mi_table_free(&t);
-        /* per-MESH detail lines */
+        /* per-MESH (and frusta) detail lines */
         for (uint32_t i = 0; i < n; ++i) {
             const meso_chunk_info* c = meso_file_chunk(f, i);
+            frusta_detail(f, i);
             mi_mesh_stats ms;
             if (c->type != MESO_CHUNK_MESH || !mesh_stats(f, (int32_t)i, &ms))
                 continue;

@@ -14,9 +14,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frusta_chunks.h"
+#include "frustum_model.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "mesh_chunk.h"
+#include "skeleton_swc.h"
 #include "test_util.h"
 
 static const char* out_dir;
@@ -474,6 +477,65 @@ static void hand_made(void)
     free(d);
 }
 
+/* A frusta object (kind 4) as mesobake writes it: a bent, branching
+ * skeleton with a ball, plus a variant whose FSEG names a joint partner at
+ * a tip (CRC fixed, so only the record check finds it). */
+static void frusta(void)
+{
+    static const char text[] = "0 0 0 0.3\n0 2 0 0.3\n1 3 0 0.2\n2 3.5 0 0.1\n-1 3 0 0.2 2\n";
+    meso_skeleton sk;
+    meso_frustum_model m;
+    meso_frusta_object o;
+    meso_error e;
+    assert(meso_skeleton_parse(text, sizeof text - 1, MESO_SKELETON_TEXT, &sk, &e) == MESO_OK);
+    assert(meso_frustum_model_build(&sk, NULL, &m, &e) == MESO_OK);
+    meso_frusta_relief_params rp = {.depth = 0.05, .u_repeat = 3};
+    assert(meso_frusta_object_build(&sk, &m, &rp, &o, &e) == MESO_OK);
+    uint8_t *frus, *fseg, *ball;
+    assert(meso_frusta_object_encode(&o, &frus, &fseg, &ball, &e) == MESO_OK);
+    meso_writer* w;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    meso_object_record r = {.id = 1, .kind = MESO_OBJECT_FRUSTA};
+    memcpy(r.bbox_min, o.bbox_min, sizeof r.bbox_min);
+    memcpy(r.bbox_max, o.bbox_max, sizeof r.bbox_max);
+    snprintf(r.name, sizeof r.name, "frusta");
+    uint8_t objt[MESO_OBJT_RECORD_SIZE];
+    meso_object_record_encode(&r, objt);
+    add(w, MESO_CHUNK_OBJT, MESO_CHUNK_FLAG_REQUIRED, 0, 0, MESO_ENCODING_RAW, 0, MESO_DTYPE_BYTES, 1, 1, 1, 1, objt,
+        sizeof objt);
+    add(w, MESO_CHUNK_SKEL, 0, 1, 0, MESO_ENCODING_RAW, 0, MESO_DTYPE_BYTES, 1, o.node_count, 1, 1, o.skel,
+        (size_t)o.node_count * MESO_SKEL_RECORD_SIZE);
+    add(w, MESO_CHUNK_FRUS, MESO_CHUNK_FLAG_REQUIRED, 1, 0, MESO_ENCODING_RAW, 0, MESO_DTYPE_BYTES, 1, o.count, 1, 1,
+        frus, (size_t)o.count * MESO_FRUS_RECORD_SIZE);
+    add(w, MESO_CHUNK_FSEG, MESO_CHUNK_FLAG_REQUIRED, 1, 0, MESO_ENCODING_RAW, 0, MESO_DTYPE_BYTES, 1, o.count, 1, 1,
+        fseg, (size_t)o.count * MESO_FSEG_RECORD_SIZE);
+    add(w, MESO_CHUNK_BALL, MESO_CHUNK_FLAG_REQUIRED, 1, 0, MESO_ENCODING_RAW, 0, MESO_DTYPE_BYTES, 1, o.ball_count, 1,
+        1, ball, (size_t)o.ball_count * MESO_BALL_RECORD_SIZE);
+    add_typed(w, MESO_CHUNK_RELF, 1, 0, MESO_DTYPE_U8, 1, 8, 8, 1, 31);
+    size_t n;
+    uint8_t* d = finish(w, &n);
+    save_expect("frusta.meso", d, n, MESO_OK, MESO_OK);
+    /* The first FSEG record: a joint partner at its tip end (kind 0). */
+    uint32_t count = ld32(d + MESO_HDR_OFF_CHUNK_COUNT);
+    for (uint32_t i = 0; i < count; i++) {
+        const uint8_t* en = d + MESO_HDR_SIZE + (size_t)i * MESO_TOC_ENTRY_SIZE;
+        if (ld32(en) != MESO_CHUNK_FSEG)
+            continue;
+        uint8_t* rec = d + ld64(en + MESO_TOC_OFF_OFFSET);
+        st32(rec + MESO_FSEG_OFF_FLAGS, ld32(rec + MESO_FSEG_OFF_FLAGS) & ~3u);
+        st32(rec + MESO_FSEG_OFF_OTHER0, 1);
+    }
+    fix_crcs(d);
+    save_expect("frusta_bad_fseg.meso", d, n, MESO_OK, MESO_ERR_CORRUPT);
+    free(d);
+    free(frus);
+    free(fseg);
+    free(ball);
+    meso_frusta_object_free(&o);
+    meso_frustum_model_free(&m);
+    meso_skeleton_free(&sk);
+}
+
 int main(int argc, char** argv)
 {
     if (argc != 2) {
@@ -485,5 +547,6 @@ int main(int argc, char** argv)
     every_kind();
     meshes();
     hand_made();
+    frusta();
     return 0;
 }

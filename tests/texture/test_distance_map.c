@@ -365,7 +365,7 @@ static void empty_density(void)
 
 static void builtins_tile_and_repeat(void)
 {
-    const char* specs[] = {"bricks:64", "cobble:64", "weave:32", "cells:16", "bricks", "weave"};
+    const char* specs[] = {"bricks:64", "cobble:64", "ribs:64", "weave:32", "cells:16", "bricks", "weave"};
     for (size_t k = 0; k < sizeof(specs) / sizeof(specs[0]); ++k) {
         meso_texfn a, b;
         meso_error err;

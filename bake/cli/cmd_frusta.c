@@ -1,0 +1,351 @@
+/*
+ * cmd_frusta.c — `mesobake frusta`: a skeleton (SWC, the text format of
+ * skeleton_swc.h, or one extracted from a closed mesh) skinned with conical
+ * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
+ * optional relief map (§3), as one .meso frusta object: SKEL, FRUS, FSEG,
+ * BALL and RELF (FORMAT.md §7.2 kind 4).
+ */
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli_util.h"
+#include "frusta_chunks.h"
+#include "frustum_model.h"
+#include "skeleton_swc.h"
+#include "texture_function.h"
+#if MESO_HAVE_CGAL && MESO_HAVE_SKELETON_FROM_MESH
+#include "skeleton_from_mesh.h"
+#endif
+
+static const char* const usage_frusta =
+    "Usage: mesobake frusta -i INPUT -o OUT.meso [options]\n"
+    "\n"
+    "Skin a skeleton with conical frusta: one cone per segment, one cutting plane\n"
+    "per joint (fitted so neighbouring cuts are one ellipse), balls at branch points\n"
+    "and at joints too sharp for a plane. Optionally relief mapped.\n"
+    "\n"
+    "Input / output:\n"
+    "  -i, --input FILE        .swc      SWC skeleton: id type x y z radius parent\n"
+    "                          .skel     text skeleton: x y z radius [parent] per line\n"
+    "                                    (parent: 1-based node number, 0 = root; omitted:\n"
+    "                                    the previous node)\n"
+    "                          a mesh    .obj .off .ply .stl .om: closed, one component;\n"
+    "                                    skeleton by mean-curvature flow (CGAL), radii\n"
+    "                                    fitted to the mesh, simplified to --tolerance\n"
+    "  -o, --output FILE       .meso file to write (atomically)\n"
+    "Shape:\n"
+    "      --tolerance T       mesh input: largest distance of the frusta from the mesh\n"
+    "                          after simplification (default: 1% of the bounding-box diagonal)\n"
+    "      --max-joint-angle D joints bending more than D degrees become ball joints\n"
+    "                          (default 150; 0 = no limit)\n"
+    "      --no-fit            keep the node radii at joints (skip the paper's minor-axis fit;\n"
+    "                          the cuts then leave a seam gap, the report says how large)\n"
+    "      --keep-cap-intersections\n"
+    "                          keep the paper's planes where caps intersect at sharp joints\n"
+    "                          (default: ball joints there); for reproducing the failure\n"
+    "Relief (a height field between the cone, w = 0, and the cone + depth, w = 1):\n"
+    "      --relief SPEC       height:FILE.png, bricks[:RES], cobble[:RES] or ribs[:RES]\n"
+    "      --relief-depth D    depth in skeleton units (default: a quarter of the mean radius)\n"
+    "      --relief-repeat N   tiles around the circumference (default 1; along the axis the\n"
+    "                          texture keeps texels square and runs on across joints)\n"
+    "Other:\n"
+    "      --report FILE       the bake report as JSON: segments, joints, branch_points,\n"
+    "                          cap_intersections_found, cap_intersections_unhandled,\n"
+    "                          fit_error_max, fit_error_mean, seconds_total, bytes, ...\n"
+    "  -v, --verbose           one line per stage on stderr\n"
+    "  -h, --help              this text\n"
+    "\n"
+    "fit_error: mesh input: distance between the frusta and the mesh (max, mean);\n"
+    "skeleton input: how far the fit moved the surface from the input radii.\n";
+
+typedef struct frusta_args {
+    const char *in, *out, *report, *relief;
+    double tolerance, max_joint_angle, relief_depth, relief_repeat;
+    int no_fit, keep_caps;
+} frusta_args;
+
+static int parse_args(int argc, char** argv, frusta_args* a)
+{
+    *a = (frusta_args){.max_joint_angle = 150, .relief_repeat = 1};
+    for (int i = 0; i < argc; ++i) {
+        const char* s = argv[i];
+        const char* v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
+            fputs(usage_frusta, stdout);
+            return -1;
+        } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
+            verbose = 1;
+            continue;
+        } else if (!strcmp(s, "--no-fit")) {
+            a->no_fit = 1;
+            continue;
+        } else if (!strcmp(s, "--keep-cap-intersections")) {
+            a->keep_caps = 1;
+            continue;
+        }
+        const int takes_value = !strcmp(s, "-i") || !strcmp(s, "--input") || !strcmp(s, "-o") ||
+                                !strcmp(s, "--output") || !strcmp(s, "--report") || !strcmp(s, "--tolerance") ||
+                                !strcmp(s, "--max-joint-angle") || !strcmp(s, "--relief") ||
+                                !strcmp(s, "--relief-depth") || !strcmp(s, "--relief-repeat");
+        if (!takes_value)
+            return s[0] == '-' ? usage_error("unrecognized option '%s'", s)
+                               : usage_error("unexpected argument '%s'", s);
+        if (!v)
+            return usage_error("option '%s' needs a value", s);
+        ++i;
+        if (!strcmp(s, "-i") || !strcmp(s, "--input"))
+            a->in = v;
+        else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
+            a->out = v;
+        else if (!strcmp(s, "--report"))
+            a->report = v;
+        else if (!strcmp(s, "--relief"))
+            a->relief = v;
+        else if (!strcmp(s, "--tolerance")) {
+            if (!parse_double(v, &a->tolerance))
+                return usage_error("--tolerance expects a positive length, got '%s'", v);
+        } else if (!strcmp(s, "--max-joint-angle")) {
+            if (!strcmp(v, "0"))
+                a->max_joint_angle = 0;
+            else if (!parse_double(v, &a->max_joint_angle) || a->max_joint_angle > 180)
+                return usage_error("--max-joint-angle expects degrees in [0, 180], got '%s'", v);
+        } else if (!strcmp(s, "--relief-depth")) {
+            if (!parse_double(v, &a->relief_depth))
+                return usage_error("--relief-depth expects a positive length, got '%s'", v);
+        } else if (!strcmp(s, "--relief-repeat")) {
+            if (!parse_double(v, &a->relief_repeat) || a->relief_repeat > 1e4)
+                return usage_error("--relief-repeat expects a number in (0, 10000], got '%s'", v);
+        }
+    }
+    if (!a->in || !a->out)
+        return usage_error("frusta needs -i INPUT and -o OUT.meso");
+    if (a->relief_depth > 0 && !a->relief)
+        return usage_error("--relief-depth needs --relief");
+    return 0;
+}
+
+static int is_mesh_path(const char* p)
+{
+    static const char* const ext[] = {".obj", ".off", ".ply", ".stl", ".om", ".drc"};
+    for (size_t i = 0; i < sizeof(ext) / sizeof(ext[0]); ++i)
+        if (has_suffix(p, ext[i]))
+            return 1;
+    return 0;
+}
+
+typedef struct skeleton_source {
+    const char* kind; /* "swc", "text", "mesh" */
+    double fit_error_max, fit_error_mean; /* mesh input: distances to the mesh */
+    double tolerance;
+    uint32_t mesh_triangles, skeleton_nodes_before;
+    double seconds_skeleton;
+} skeleton_source;
+
+static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skeleton_source* src, meso_error* err)
+{
+    if (has_suffix(a->in, ".swc")) {
+        src->kind = "swc";
+        return meso_skeleton_load(a->in, MESO_SKELETON_SWC, sk, err);
+    }
+    if (!is_mesh_path(a->in)) {
+        src->kind = "text";
+        return meso_skeleton_load(a->in, MESO_SKELETON_TEXT, sk, err);
+    }
+    src->kind = "mesh";
+#if MESO_HAVE_CGAL && MESO_HAVE_SKELETON_FROM_MESH
+    meso_mesh m;
+    meso_result r = load_mesh(a->in, &m, err);
+    if (r != MESO_OK)
+        return r;
+    double t0 = now_seconds();
+    meso_skeleton_fit_options o = {.tolerance = a->tolerance, .verbose = verbose};
+    meso_skeleton_fit_stats st;
+    r = meso_skeleton_from_mesh(&m, &o, sk, &st, err);
+    if (r == MESO_OK) {
+        src->fit_error_max = st.fit_error_max;
+        src->fit_error_mean = st.fit_error_mean;
+        src->tolerance = st.tolerance;
+        src->skeleton_nodes_before = st.cgal_nodes;
+        src->mesh_triangles = m.index_count / 3;
+        src->seconds_skeleton = now_seconds() - t0;
+    }
+    meso_mesh_free(&m);
+    return r;
+#else
+    return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0,
+        "%s: skeletons from meshes need CGAL, which this build does not have", a->in);
+#endif
+}
+
+/* fit_error for skeleton input: |cone radius at a node − the node's radius|
+ * over every segment end (what the §2.2 fit moved). */
+static void radius_moves(const meso_skeleton* sk, const meso_frustum_model* m, double* mx, double* mean)
+{
+    double sum = 0;
+    *mx = 0;
+    for (uint32_t s = 0; s < m->segment_count; ++s)
+        for (int e = 0; e < 2; ++e) {
+            const meso_frustum_segment* g = &m->segments[s];
+            double d = fabs((e ? g->r1 : g->r0) - sk->nodes[g->node[e]].radius);
+            *mx = fmax(*mx, d);
+            sum += d;
+        }
+    *mean = m->segment_count ? sum / (2.0 * m->segment_count) : 0;
+}
+
+static cJSON* report_json(const meso_frustum_model* m, const skeleton_source* src, double fit_max, double fit_mean,
+    const meso_frusta_object* o)
+{
+    const meso_frustum_stats* st = &m->stats;
+    cJSON* rep = cJSON_CreateObject();
+    cJSON_AddNumberToObject(rep, "segments", st->segments);
+    cJSON_AddNumberToObject(rep, "joints", st->joints);
+    cJSON_AddNumberToObject(rep, "branch_points", st->branch_points);
+    cJSON_AddNumberToObject(rep, "cap_intersections_found", st->cap_intersections_found);
+    cJSON_AddNumberToObject(rep, "cap_intersections_unhandled", st->cap_intersections_unhandled);
+    cJSON_AddNumberToObject(rep, "fit_error_max", fit_max);
+    cJSON_AddNumberToObject(rep, "fit_error_mean", fit_mean);
+    cJSON_AddStringToObject(rep, "input", src->kind);
+    cJSON_AddNumberToObject(rep, "tips", st->tips);
+    cJSON_AddNumberToObject(rep, "balls", o->ball_count);
+    cJSON_AddNumberToObject(rep, "ball_joints", st->ball_joints);
+    cJSON_AddNumberToObject(rep, "sharp_joints", st->sharp_joints);
+    cJSON_AddNumberToObject(rep, "unfitted_joints", st->unfitted_joints);
+    cJSON_AddNumberToObject(rep, "degenerate_segments", st->degenerate_segments);
+    cJSON_AddNumberToObject(rep, "seam_gap_max", st->seam_gap_max);
+    cJSON_AddNumberToObject(rep, "seam_gap_mean", st->seam_gap_mean);
+    cJSON_AddNumberToObject(rep, "radius_change_max", st->radius_change_max);
+    if (!strcmp(src->kind, "mesh")) {
+        cJSON_AddNumberToObject(rep, "tolerance", src->tolerance);
+        cJSON_AddNumberToObject(rep, "mesh_triangles", src->mesh_triangles);
+        cJSON_AddNumberToObject(rep, "skeleton_nodes_extracted", src->skeleton_nodes_before);
+    }
+    return rep;
+}
+
+int cmd_frusta(int argc, char** argv)
+{
+    frusta_args a;
+    int pr = parse_args(argc, argv, &a);
+    if (pr != 0)
+        return pr < 0 ? MESO_EXIT_OK : pr;
+    const double t0 = now_seconds();
+    meso_error err = {0};
+    meso_skeleton sk = {0};
+    meso_frustum_model m = {0};
+    meso_frusta_object obj = {0};
+    meso_texfn relief = {0};
+    skeleton_source src = {0};
+    uint8_t *frus = NULL, *fseg = NULL, *ball = NULL;
+    cJSON *meta = NULL, *rep = NULL;
+    size_t file_size = 0;
+
+    meso_result r = load_skeleton(&a, &sk, &src, &err);
+    if (r == MESO_OK && verbose)
+        fprintf(stderr, "mesobake: %s: %u nodes, %u roots (%s input)\n", a.in, sk.node_count, sk.root_count, src.kind);
+    if (r == MESO_OK && a.relief) {
+        r = meso_texfn_from_spec(a.relief, &relief, &err);
+        if (r == MESO_OK && relief.kind != MESO_TEXFN_HEIGHT)
+            r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
+                "--relief '%s' is a volume; frusta take height fields (height:FILE.png, bricks, cobble, ribs)", a.relief);
+    }
+    if (r == MESO_OK) {
+        meso_frustum_options fo = {.keep_cap_intersections = a.keep_caps, .no_minor_axis_fit = a.no_fit,
+                                   .max_joint_angle_deg = a.max_joint_angle};
+        r = meso_frustum_model_build(&sk, &fo, &m, &err);
+    }
+    if (r == MESO_OK && verbose)
+        fprintf(stderr,
+            "mesobake: %u frusta, %u joints (%u ball joints: %u sharp, %u unfitted, cap intersections %u found, %u "
+            "unhandled), %u branch points, seam gap max %.3g\n",
+            m.stats.segments, m.stats.joints, m.stats.ball_joints, m.stats.sharp_joints, m.stats.unfitted_joints,
+            m.stats.cap_intersections_found, m.stats.cap_intersections_unhandled, m.stats.branch_points,
+            m.stats.seam_gap_max);
+    double depth = 0;
+    if (r == MESO_OK && a.relief) {
+        depth = a.relief_depth;
+        if (depth <= 0) {
+            double sum = 0;
+            for (uint32_t s = 0; s < m.segment_count; ++s)
+                sum += 0.5 * (m.segments[s].r0 + m.segments[s].r1);
+            depth = 0.25 * sum / m.segment_count;
+        }
+        if (!(depth > 0))
+            r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, 0,
+                "--relief needs --relief-depth: every radius is 0, so no default depth");
+    }
+    if (r == MESO_OK) {
+        meso_frusta_relief_params rp = {.depth = depth, .u_repeat = a.relief_repeat};
+        r = meso_frusta_object_build(&sk, &m, &rp, &obj, &err);
+    }
+    if (r == MESO_OK)
+        r = meso_frusta_object_encode(&obj, &frus, &fseg, &ball, &err);
+    if (r == MESO_OK) {
+        meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_FRUSTA};
+        memcpy(rec.bbox_min, obj.bbox_min, sizeof(rec.bbox_min));
+        memcpy(rec.bbox_max, obj.bbox_max, sizeof(rec.bbox_max));
+        snprintf(rec.name, sizeof(rec.name), "%s", base_name(a.in));
+        meta = cJSON_CreateObject();
+        cJSON_AddStringToObject(meta, "generator", "mesobake " MESO_VERSION_STRING);
+        cJSON_AddStringToObject(meta, "command", "frusta");
+        cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
+        cJSON_AddStringToObject(params, "input", src.kind);
+        if (!strcmp(src.kind, "mesh"))
+            cJSON_AddNumberToObject(params, "tolerance", src.tolerance);
+        cJSON_AddNumberToObject(params, "max_joint_angle", a.max_joint_angle);
+        cJSON_AddBoolToObject(params, "minor_axis_fit", !a.no_fit);
+        cJSON_AddBoolToObject(params, "keep_cap_intersections", a.keep_caps);
+        if (a.relief) {
+            cJSON* rl = cJSON_AddObjectToObject(params, "relief");
+            cJSON_AddStringToObject(rl, "spec", a.relief);
+            cJSON_AddNumberToObject(rl, "depth", depth);
+            cJSON_AddNumberToObject(rl, "repeat", a.relief_repeat);
+        }
+        r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
+        double fmax_ = src.fit_error_max, fmean = src.fit_error_mean;
+        if (strcmp(src.kind, "mesh") != 0)
+            radius_moves(&sk, &m, &fmax_, &fmean);
+        rep = report_json(&m, &src, fmax_, fmean, &obj);
+        bake_chunk chunks[5];
+        int count = 0;
+        chunks[count++] = (bake_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj.node_count, 1, 1}},
+            .data = obj.skel, .size = (size_t)obj.node_count * MESO_SKEL_RECORD_SIZE};
+        chunks[count++] = (bake_chunk){
+            .desc = {.type = MESO_CHUNK_FRUS, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1, .dims = {obj.count, 1, 1}},
+            .data = frus, .size = (size_t)obj.count * MESO_FRUS_RECORD_SIZE};
+        chunks[count++] = (bake_chunk){
+            .desc = {.type = MESO_CHUNK_FSEG, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1, .dims = {obj.count, 1, 1}},
+            .data = fseg, .size = (size_t)obj.count * MESO_FSEG_RECORD_SIZE};
+        if (obj.ball_count)
+            chunks[count++] = (bake_chunk){.desc = {.type = MESO_CHUNK_BALL, .flags = MESO_CHUNK_FLAG_REQUIRED,
+                                               .object = 1, .dims = {obj.ball_count, 1, 1}},
+                .data = ball, .size = (size_t)obj.ball_count * MESO_BALL_RECORD_SIZE};
+        if (a.relief)
+            chunks[count++] = (bake_chunk){.desc = {.type = MESO_CHUNK_RELF, .object = 1, .dtype = relief.dtype,
+                                               .components = 1, .dims = {relief.dims[0], relief.dims[1], 1}},
+                .data = relief.encoded, .size = relief.encoded_size};
+        if (r == MESO_OK)
+            r = write_meso(a.out, meta, rep, &rec, chunks, count, &file_size, &err);
+    }
+    const double t_end = now_seconds();
+    if (r == MESO_OK && verbose)
+        fprintf(stderr, "mesobake: wrote %s: %zu bytes (%.0f ms total)\n", a.out, file_size, 1e3 * (t_end - t0));
+    int code = r == MESO_OK ? MESO_EXIT_OK : meso_exit_for(r);
+    if (r != MESO_OK)
+        err_print(&err);
+    else if (a.report)
+        code = write_report_file(a.report, rep, file_size, t_end - t0);
+    cJSON_Delete(meta);
+    cJSON_Delete(rep);
+    free(frus);
+    free(fseg);
+    free(ball);
+    meso_texfn_free(&relief);
+    meso_frusta_object_free(&obj);
+    meso_frustum_model_free(&m);
+    meso_skeleton_free(&sk);
+    return code;
+}

@@ -1,0 +1,108 @@
+#!/bin/sh
+# mesobake frusta from the command line (FORMAT.md §7.2 kind 4): SWC and
+# text skeletons, the chunks a frusta object is made of, the report keys
+# the issue names, relief, determinism, and bad input (a coded error that
+# names the line, a non-zero exit, and no output file).
+# usage: frusta_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR
+set -u
+bake=$1 inspect=$2 data=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # DESCRIPTION COMMAND...
+  d=$1; shift
+  if "$@"; then echo "ok   $d"; else echo "FAIL $d"; fail=1; fi
+}
+# row FILE TYPE: the chunk's row of 'mesoinspect info'
+row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t'; }
+key() { grep -q "\"$2\":" "$1"; }
+num() { sed -n "s/.*\"$2\":[[:space:]]*\([-0-9.e+]*\).*/\1/p" "$1"; }
+
+# 1. A branching SWC tree with zero-radius tips.
+"$bake" frusta -i "$data/neurom_simple.swc" -o "$tmp/simple.meso" --report "$tmp/simple.json" >/dev/null 2>&1
+check "simple: bake succeeds" test -s "$tmp/simple.meso"
+check "simple: validates fully" sh -c "'$inspect' validate --full '$tmp/simple.meso' >/dev/null"
+for t in SKEL FRUS FSEG BALL; do
+  check "simple: has $t on object 1" sh -c "'$inspect' info '$tmp/simple.meso' | awk '\$2 == \"$t\" && \$4 == 1' | grep -q ."
+done
+check "simple: object kind is frusta" sh -c "'$inspect' info '$tmp/simple.meso' | grep -q ' frusta '"
+for k in segments joints branch_points cap_intersections_found cap_intersections_unhandled fit_error_max \
+    fit_error_mean seconds_total bytes; do
+  check "simple: report has $k" key "$tmp/simple.json" "$k"
+done
+# neurom_simple.swc: 9 nodes, 8 parent links, two of them zero-length
+# (a repeated point), so 6 frusta; 2 branch points; nodes 2 and 7 join
+# two segments each, but one of them is a merged zero-length pair.
+check "simple: 6 segments" test "$(num "$tmp/simple.json" segments)" = 6
+check "simple: 2 branch points" test "$(num "$tmp/simple.json" branch_points)" = 2
+check "simple: FRUS has 6 records" test "$(row "$tmp/simple.meso" FRUS | awk '{print $9}')" = 6x1x1
+check "simple: FSEG is 6 x 80 bytes" test "$(row "$tmp/simple.meso" FSEG | awk '{print $12}')" = 480
+check "simple: info summarises FSEG (6 frusta, 2 balls)" sh -c "'$inspect' info '$tmp/simple.meso' | grep -q 'FSEG: 6 frusta' && '$inspect' info '$tmp/simple.meso' | grep -q 'BALL: 2 balls'"
+
+# 2. The text skeleton format, with relief; determinism.
+cat >"$tmp/arm.skel" <<'SKEL'
+# a bent arm with a branch (x y z radius [parent])
+0 0 0 0.3
+0 2 0 0.3
+1.5 3.5 0 0.2
+1.5 5 0.5 0.1
+-1 3 0 0.15 2   # from node 2
+SKEL
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/arm1.meso" --relief bricks:64 --relief-depth 0.05 --report "$tmp/arm.json" \
+  >/dev/null 2>&1
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/arm2.meso" --relief bricks:64 --relief-depth 0.05 >/dev/null 2>&1
+check "arm: bake succeeds" test -s "$tmp/arm1.meso"
+check "arm: validates fully" sh -c "'$inspect' validate --full '$tmp/arm1.meso' >/dev/null"
+check "arm: two bakes are byte-identical" cmp -s "$tmp/arm1.meso" "$tmp/arm2.meso"
+check "arm: RELF u16 64x64" test "$(row "$tmp/arm1.meso" RELF | awk '{print $7, $9}')" = "u16 64x64x1"
+check "arm: 4 segments, 1 branch point" test "$(num "$tmp/arm.json" segments) $(num "$tmp/arm.json" branch_points)" = "4 1"
+check "arm: report says text input" grep -q '"input":[[:space:]]*"text"' "$tmp/arm.json"
+check "arm: META records the relief" sh -c "'$inspect' info '$tmp/arm1.meso' | grep -q '\"spec\":[[:space:]]*\"bricks:64\"'"
+# Without the §2.2 fit the tapered joint leaves a seam gap; with it, none.
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/nofit.meso" --no-fit --report "$tmp/nofit.json" >/dev/null 2>&1
+check "arm --no-fit: seam gap > 1e-4" awk -v g="$(num "$tmp/nofit.json" seam_gap_max)" 'BEGIN { exit !(g > 1e-4) }'
+check "arm: fitted seam gap < 1e-9" awk -v g="$(num "$tmp/arm.json" seam_gap_max)" 'BEGIN { exit !(g < 1e-9) }'
+check "arm --no-fit: fit_error_max 0" awk -v g="$(num "$tmp/nofit.json" fit_error_max)" 'BEGIN { exit !(g == 0) }'
+
+# 3. A larger tree: cap intersections found and all handled.
+"$bake" frusta -i "$data/neurom_Neuron.swc" -o "$tmp/neuron.meso" --report "$tmp/neuron.json" >/dev/null 2>&1
+check "neuron: validates fully" sh -c "'$inspect' validate --full '$tmp/neuron.meso' >/dev/null"
+check "neuron: cap intersections found" awk -v g="$(num "$tmp/neuron.json" cap_intersections_found)" 'BEGIN { exit !(g > 0) }'
+check "neuron: none unhandled" test "$(num "$tmp/neuron.json" cap_intersections_unhandled)" = 0
+"$bake" frusta -i "$data/neurom_Neuron.swc" -o "$tmp/keep.meso" --keep-cap-intersections --report "$tmp/keep.json" \
+  >/dev/null 2>&1
+check "neuron --keep-cap-intersections: some unhandled" \
+  awk -v g="$(num "$tmp/keep.json" cap_intersections_unhandled)" 'BEGIN { exit !(g > 0) }'
+
+# 4. Bad input: a coded error naming the line, exit 3, no output.
+bad() { # NAME CONTENT EXT CODE
+  printf "$2" >"$tmp/$1.$3"
+  "$bake" frusta -i "$tmp/$1.$3" -o "$tmp/$1.meso" >/dev/null 2>"$tmp/$1.err"
+  rc=$?
+  check "bad $1: exit 3" test "$rc" = 3
+  check "bad $1: error E$4" grep -q "E$4" "$tmp/$1.err"
+  check "bad $1: names the line" grep -q "line" "$tmp/$1.err"
+  check "bad $1: no output file" test ! -e "$tmp/$1.meso"
+}
+bad fields "0 0 0\n" skel 3141
+bad number "0 0 0 1\n0 x 0 1\n" skel 3142
+bad radius "0 0 0 1\n0 1 0 -2\n" skel 3144
+bad parent "0 0 0 1\n0 1 0 1 7\n" skel 3146
+bad swc_cycle "1 1 0 0 0 1 2\n2 1 0 1 0 1 1\n" swc 3147
+bad swc_nan "1 1 0 0 nan 1 -1\n" swc 3143
+printf "# only comments\n" >"$tmp/empty.skel"
+"$bake" frusta -i "$tmp/empty.skel" -o "$tmp/empty.meso" >/dev/null 2>"$tmp/empty.err"
+check "bad empty: exit 3 with E3140" sh -c "test $? = 3 && grep -q E3140 '$tmp/empty.err'"
+check "bad empty: no output file" test ! -e "$tmp/empty.meso"
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/vol.meso" --relief weave >/dev/null 2>"$tmp/vol.err"
+check "relief volume: refused (exit 1)" test $? = 1
+check "relief volume: says height fields" grep -q "height" "$tmp/vol.err"
+"$bake" frusta -i "$tmp/missing.swc" -o "$tmp/missing.meso" >/dev/null 2>&1
+check "missing input: exit 2" test $? = 2
+# A failed bake leaves an existing output untouched.
+cp "$tmp/arm1.meso" "$tmp/keep_me.meso"
+"$bake" frusta -i "$tmp/fields.skel" -o "$tmp/keep_me.meso" >/dev/null 2>&1
+check "failed bake: existing output untouched" cmp -s "$tmp/arm1.meso" "$tmp/keep_me.meso"
+"$bake" frusta --help | grep -q -- "--relief-depth"
+check "--help documents --relief-depth" test $? = 0
+exit $fail
