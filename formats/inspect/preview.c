@@ -7,10 +7,11 @@
  * at --yaw/--pitch, framed so the bounding sphere fills the view. The image
  * is rendered at twice the size and box-filtered down (4 samples a pixel).
  *
- * --reference renders the shell objects with the exact CPU ray caster
- * (runtime/reference/shell_reference.h) instead: no EGL, the same camera,
- * light, clear colour and 2x2 box filter, so the two PNGs compare pixel by
- * pixel.
+ * --reference renders the shell and frusta objects with the exact CPU ray
+ * casters (runtime/reference/shell_reference.h, frustum_reference.h)
+ * instead: no EGL, the same camera, light, clear colour and 2x2 box filter,
+ * so the two PNGs compare pixel by pixel. Several objects are composited by
+ * depth (the nearest sample wins, as GL_LESS).
  */
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +23,7 @@
 #include "meso_file.h"
 #include "meso_rt.h"
 #include "png_io.h"
+#include "frustum_reference.h"
 #include "shell_reference.h"
 
 int mesoinspect_preview(int argc, char** argv);
@@ -37,10 +39,10 @@ static const char* const usage_preview =
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --technique T   shell technique: smooth (default), curved or tetra\n"
-    "      --reference     render the shell objects with the exact CPU reference\n"
-    "                      (runtime/reference; no EGL needed, slow). --technique\n"
-    "                      curved selects the curved mapping, smooth and tetra the\n"
-    "                      smooth one; mesh objects are skipped\n"
+    "      --reference     render the shell and frusta objects with the exact CPU\n"
+    "                      reference (runtime/reference; no EGL needed, slow).\n"
+    "                      --technique curved selects the curved shell mapping,\n"
+    "                      smooth and tetra the smooth one; mesh objects are skipped\n"
     "      --samples N     reference: samples per prism along each ray (default 1024)\n"
     "  -h, --help          this help\n";
 
@@ -122,25 +124,39 @@ static uint8_t unorm8(float c)
     return (uint8_t)lrintf(fminf(fmaxf(c, 0.0f), 1.0f) * 255.0f);
 }
 
+#define PREVIEW_MAX_REF 64 /* shell and frusta objects the reference renders */
+
+/* One object the reference renders. */
+typedef struct ref_object {
+    uint32_t kind;
+    meso_ref_shell shell;
+    meso_ref_frusta frusta;
+} ref_object;
+
 static int render_reference(const char* path, const char* out, int width, int height, uint32_t only, double yaw,
                             double pitch, int curved, int samples)
 {
     int code = MESO_EXIT_OK;
     meso_file* f = NULL;
-    meso_ref_shell shells[64];
-    int nshell = 0;
+    ref_object* objs = calloc(PREVIEW_MAX_REF, sizeof(*objs));
+    int nobj = 0;
     uint8_t *px = NULL, *img = NULL;
     float* zbuf = NULL;
     meso_decoder dec = meso_bake_draco_decoder();
     meso_error err;
+    if (!objs) {
+        fprintf(stderr, "mesoinspect error: out of memory\n");
+        return MESO_EXIT_INTERNAL;
+    }
     meso_result r = meso_file_open_path(path, &(meso_open_desc){.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0},
                                         &f, &err);
     if (r != MESO_OK) {
         fprintf(stderr, "mesoinspect error: %s\n", err.message);
+        free(objs);
         return meso_exit_for(r);
     }
-    /* The framing covers what the GL preview would draw (meshes and shells),
-     * so the two images share a camera. */
+    /* The framing covers what the GL preview would draw (meshes, shells and
+     * frusta), so the two images share a camera. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     meso_object_record recs[256];
     uint32_t count = 0;
@@ -151,31 +167,37 @@ static int render_reference(const char* path, const char* out, int width, int he
     }
     for (uint32_t i = 0; i < count && i < 256; ++i) {
         const meso_object_record* rec = &recs[i];
-        if ((only && rec->id != only) || (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL))
+        if ((only && rec->id != only) ||
+            (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL && rec->kind != MESO_OBJECT_FRUSTA))
             continue;
         for (int k = 0; k < 3; ++k) {
             lo[k] = fmin(lo[k], rec->bbox_min[k]);
             hi[k] = fmax(hi[k], rec->bbox_max[k]);
         }
-        if (rec->kind != MESO_OBJECT_SHELL) {
-            fprintf(stderr, "mesoinspect warning: object %u (%s) is not a shell; --reference renders shells only\n",
+        if (rec->kind == MESO_OBJECT_MESH) {
+            fprintf(stderr,
+                    "mesoinspect warning: object %u (%s) is a mesh; --reference renders shells and frusta only\n",
                     rec->id, rec->name);
             continue;
         }
-        if (nshell == 64) {
-            fprintf(stderr, "mesoinspect warning: more than 64 shells; object %u (%s) is skipped\n", rec->id,
-                    rec->name);
+        if (nobj == PREVIEW_MAX_REF) {
+            fprintf(stderr, "mesoinspect warning: more than %d objects; object %u (%s) is skipped\n", PREVIEW_MAX_REF,
+                    rec->id, rec->name);
             continue;
         }
-        if ((r = meso_ref_shell_load(f, rec->id, &shells[nshell], &err)) != MESO_OK) {
+        ref_object* o = &objs[nobj];
+        o->kind = rec->kind;
+        r = rec->kind == MESO_OBJECT_SHELL ? meso_ref_shell_load(f, rec->id, &o->shell, &err)
+                                           : meso_ref_frusta_load(f, rec->id, &o->frusta, &err);
+        if (r != MESO_OK) {
             fprintf(stderr, "mesoinspect error: %s\n", err.message);
             code = meso_exit_for(r);
             goto done;
         }
-        ++nshell;
+        ++nobj;
     }
-    if (nshell == 0) {
-        fprintf(stderr, "mesoinspect error: %s: no shell object%s\n", path, only ? " with that id" : "");
+    if (nobj == 0) {
+        fprintf(stderr, "mesoinspect error: %s: no shell or frusta object%s\n", path, only ? " with that id" : "");
         code = only ? MESO_EXIT_USAGE : MESO_EXIT_UNSUPPORTED;
         goto done;
     }
@@ -204,10 +226,12 @@ static int render_reference(const char* path, const char* out, int width, int he
         px[4 * i + 3] = 255;
         zbuf[i] = 1.0f;
     }
-    /* Several shells: the nearest hit per sample (GL_LESS). */
-    for (int s = 0; s < nshell; ++s) {
+    /* Several objects: the nearest hit per sample (GL_LESS). */
+    for (int s = 0; s < nobj; ++s) {
         meso_ref_image ri;
-        if ((r = meso_ref_render(&shells[s], &v, &ri)) != MESO_OK) {
+        r = objs[s].kind == MESO_OBJECT_SHELL ? meso_ref_render(&objs[s].shell, &v, &ri)
+                                              : meso_ref_frusta_render(&objs[s].frusta, &v, &ri);
+        if (r != MESO_OK) {
             fprintf(stderr, "mesoinspect error: reference render failed: %s\n", meso_result_string(r));
             code = MESO_EXIT_INTERNAL;
             goto done;
@@ -228,8 +252,11 @@ static int render_reference(const char* path, const char* out, int width, int he
         code = MESO_EXIT_IO;
     }
 done:
-    for (int s = 0; s < nshell; ++s)
-        meso_ref_shell_free(&shells[s]);
+    for (int s = 0; s < nobj; ++s) {
+        meso_ref_shell_free(&objs[s].shell);
+        meso_ref_frusta_free(&objs[s].frusta);
+    }
+    free(objs);
     free(px);
     free(img);
     free(zbuf);

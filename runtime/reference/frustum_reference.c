@@ -1,20 +1,29 @@
 /*
- * frustum_reference.c — exact ray casting of conical frusta
- * (frustum_reference.h; relief-mapped-conical-frusta.md §2.5).
+ * frustum_reference.c — exact ray casting of conical frusta and their
+ * relief (frustum_reference.h; relief-mapped-conical-frusta.md §2.5, §3).
  *
  * The ray is not moved into the segment's local frame as the paper does;
  * the same quadratic is formed from the axial/radial split of o − c0 and d,
  * which is the paper's eq. 10 with r(y) = r0 + k y in place of
  * r0 (h' − y)/h'. Roots come from the numerically stable form
  * q = −(b + sign(b)√disc)/2, t = q/a, c/q.
+ *
+ * Sections: >>relief (the search the header derives: step control,
+ * crossing exclusion, bisection, normals), >>model (nearest over segments
+ * and balls), >>records, >>files (meso_ref_frusta_load), >>render (a BVH over
+ * bounding spheres, rows on pthreads).
  */
 #include "frustum_reference.h"
 
+#include "ref_common.h"
 #include "vec3d.h"
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define TAU 6.283185307179586
 
@@ -45,24 +54,24 @@ static double split(const meso_ref_frustum* f, const seg_geom* g, const double p
     return y;
 }
 
-/* y where the cone generator with unit radial direction w meets plane i:
- * n·(c0 + y a + r(y) w) = d, linear in y. Returns 0 when the generator is
- * parallel to the plane. */
-static int generator_plane(const meso_ref_frustum* f, const seg_geom* g, int i, const double w[3], double* y)
+/* y where the generator with unit radial direction w of the cone
+ * r(y) + delta meets plane i: n·(c0 + y a + (r(y) + delta) w) = d, linear
+ * in y. Returns 0 when the generator is parallel to the plane. */
+static int generator_plane(const meso_ref_frustum* f, const seg_geom* g, int i, const double w[3], double delta,
+    double* y)
 {
     const double* n = f->plane_n[i];
     double nw = dot3(n, w);
     double den = dot3(n, g->a) + g->k * nw;
-    double num = f->plane_d[i] - dot3(n, f->c0) - f->r0 * nw;
+    double num = f->plane_d[i] - dot3(n, f->c0) - (f->r0 + delta) * nw;
     if (fabs(den) < 1e-300)
         return 0;
     *y = num / den;
     return 1;
 }
 
-static int inside_planes(const meso_ref_frustum* f, const seg_geom* g, const double p[3], double eps)
+static int inside_planes(const meso_ref_frustum* f, const double p[3], double eps)
 {
-    (void)g;
     return dot3(f->plane_n[0], p) <= f->plane_d[0] + eps && dot3(f->plane_n[1], p) <= f->plane_d[1] + eps;
 }
 
@@ -73,53 +82,78 @@ int meso_ref_frustum_contains(const meso_ref_frustum* f, const double p[3])
     double q[3];
     double y = split(f, &g, p, q);
     double r = f->r0 + g.k * y;
-    return r >= 0 && dot3(q, q) <= r * r && inside_planes(f, &g, p, 0.0);
+    return r >= 0 && dot3(q, q) <= r * r && inside_planes(f, p, 0.0);
+}
+
+/* A point in the segment's cylindrical terms, on the cone through it. */
+typedef struct cone_pt {
+    double y;      /* axial coordinate */
+    double rho;    /* |q| */
+    double delta;  /* |q| − r(y): the offset of the cone through p */
+    double w[3];   /* unit radial direction (frame_x on the axis) */
+    double y0, y1; /* where that cone's generator through p meets plane 0 / 1 */
+    double u, v;   /* §2.3 */
+} cone_pt;
+
+static void cone_param(const meso_ref_frustum* f, const seg_geom* g, const double p[3], cone_pt* c)
+{
+    double q[3];
+    c->y = split(f, g, p, q);
+    memcpy(c->w, q, sizeof(q));
+    c->rho = normalize3(c->w);
+    if (c->rho <= 1e-15 * g->scale) {
+        if (dot3(f->frame_x, f->frame_x) > 0.5)
+            memcpy(c->w, f->frame_x, sizeof(c->w));
+        else
+            any_perp3(g->a, c->w);
+    }
+    c->delta = c->rho - (f->r0 + g->k * c->y);
+    c->y0 = 0;
+    c->y1 = g->h;
+    if (!generator_plane(f, g, 0, c->w, c->delta, &c->y0))
+        c->y0 = 0;
+    if (!generator_plane(f, g, 1, c->w, c->delta, &c->y1))
+        c->y1 = g->h;
+    c->v = (c->y1 != c->y0) ? (c->y - c->y0) / (c->y1 - c->y0) : 0.0;
+    double z[3];
+    cross3(f->frame_x, g->a, z);
+    double uu = atan2(dot3(q, f->frame_x), dot3(q, z)) / TAU - f->u_offset + c->v * f->twist / TAU;
+    uu -= floor(uu);
+    c->u = uu >= 1.0 ? 0.0 : uu;
+}
+
+/* Eq. 8 on the cone through the point: N_l = unit(P0 − c0), N_u = unit(P1 − c1).
+ * P_e lies on plane e through c_e, so P_e − c_e = ρ_e (w − (n_e·w / n_e·a) a)
+ * with ρ_e ≥ 0 the radius there: the direction is taken from that form,
+ * which stays exact where ρ_e → 0 (a pointed tip, where P1 − c1 itself is
+ * rounding noise) and is eq. 8's limit there. */
+static void eq8_normal(const meso_ref_frustum* f, const seg_geom* g, const cone_pt* c, double sn[3])
+{
+    double nl[3], nu[3];
+    const double s0 = dot3(f->plane_n[0], c->w) / dot3(f->plane_n[0], g->a);
+    const double s1 = dot3(f->plane_n[1], c->w) / dot3(f->plane_n[1], g->a);
+    for (int i = 0; i < 3; ++i) {
+        nl[i] = c->w[i] - s0 * g->a[i];
+        nu[i] = c->w[i] - s1 * g->a[i];
+    }
+    normalize3(nl);
+    normalize3(nu);
+    for (int i = 0; i < 3; ++i)
+        sn[i] = (1 - c->v) * nl[i] + c->v * nu[i];
+    if (normalize3(sn) == 0)
+        memcpy(sn, c->w, sizeof(c->w));
 }
 
 static void uv_impl(const meso_ref_frustum* f, const seg_geom* g, const double p[3], double* u, double* v, double sn[3])
 {
-    double q[3];
-    double y = split(f, g, p, q);
-    double w[3] = {q[0], q[1], q[2]};
-    if (normalize3(w) <= 1e-15 * g->scale) {
-        if (dot3(f->frame_x, f->frame_x) > 0.5)
-            memcpy(w, f->frame_x, sizeof(w));
-        else
-            any_perp3(g->a, w);
-    }
-    double y0 = 0, y1 = g->h;
-    int ok0 = generator_plane(f, g, 0, w, &y0);
-    int ok1 = generator_plane(f, g, 1, w, &y1);
-    if (!ok0)
-        y0 = 0;
-    if (!ok1)
-        y1 = g->h;
-    double vv = (y1 != y0) ? (y - y0) / (y1 - y0) : 0.0;
-    double z[3];
-    cross3(f->frame_x, g->a, z);
-    double ang = atan2(dot3(q, f->frame_x), dot3(q, z)) / TAU;
-    double uu = ang - f->u_offset + vv * f->twist / TAU;
-    uu -= floor(uu);
-    if (uu >= 1.0)
-        uu = 0.0;
+    cone_pt c;
+    cone_param(f, g, p, &c);
     if (u)
-        *u = uu;
+        *u = c.u;
     if (v)
-        *v = vv;
-    if (sn) {
-        double nl[3], nu[3];
-        for (int i = 0; i < 3; ++i) {
-            /* P0 − c0 and P1 − c1 (the generator points on the two planes). */
-            nl[i] = y0 * g->a[i] + (f->r0 + g->k * y0) * w[i];
-            nu[i] = (y1 - g->h) * g->a[i] + (f->r0 + g->k * y1) * w[i];
-        }
-        normalize3(nl);
-        normalize3(nu);
-        for (int i = 0; i < 3; ++i)
-            sn[i] = (1 - vv) * nl[i] + vv * nu[i];
-        if (normalize3(sn) == 0)
-            memcpy(sn, w, sizeof(w));
-    }
+        *v = c.v;
+    if (sn)
+        eq8_normal(f, g, &c, sn);
 }
 
 void meso_ref_frustum_uv(const meso_ref_frustum* f, const double p[3], double* u, double* v, double shading_normal[3])
@@ -187,7 +221,7 @@ static int intersect_impl(const meso_ref_frustum* f, const seg_geom* g, const do
         double y = yo + t * yd;
         if (f->r0 + g->k * y < -eps)
             continue; /* mirror nappe */
-        if (!inside_planes(f, g, p, eps))
+        if (!inside_planes(f, p, eps))
             continue;
         best = t;
         found = 1;
@@ -293,49 +327,894 @@ static int ray_sphere(const double c[3], double rad, const double o[3], const do
     return solve_quadratic(dot3(d, d), 2 * dot3(w, d), dot3(w, w) - rad * rad, t);
 }
 
-int meso_ref_frusta_intersect(const meso_ref_frustum* segs, uint32_t seg_count, const meso_ref_ball* balls,
-    uint32_t ball_count, const double o[3], const double d[3], double tmin, double tmax, meso_ref_frustum_hit* hit)
+/* >>relief ----------------------------------------------------------------- */
+
+#define RELIEF_STEP_DEFAULT 0.125    /* texels and w per sample (frustum_reference.h) */
+#define RELIEF_STEP_MAX 0.5          /* keeps a step inside local_lipschitz's neighbourhood */
+#define RELIEF_STEP_FLOOR 1e-7       /* world step floor, × (segment size + D) */
+#define RELIEF_BISECT_TOL 1e-9       /* bisection width, × (segment size + D) */
+#define RELIEF_MAX_SAMPLES (1u << 20) /* per segment and ray */
+
+static int relief_on(const meso_ref_frustum* f, const meso_ref_relief* rl)
 {
-    int found = 0;
-    double best = tmax;
-    meso_ref_frustum_hit h;
-    for (uint32_t s = 0; s < seg_count; ++s) {
-        seg_geom g;
-        seg_setup(&segs[s], &g);
-        double c[3], rad, ts[2];
-        if (seg_bound(&segs[s], &g, c, &rad)) {
-            int n = ray_sphere(c, rad, o, d, ts);
-            if (n < 2 || ts[1] < tmin || ts[0] > best)
-                continue;
+    return rl && rl->height.kind == 1 && rl->height.values && rl->height.w > 0 && rl->height.h > 0 &&
+           f->relief_depth > 0;
+}
+
+double meso_ref_relief_height(const meso_ref_texfn* height, double s, double t, double* dhds, double* dhdt)
+{
+    const double h = meso_ref_texfn_value(height, s, t, 0);
+    /* Inside one cell the interpolant is linear in s (and in t), so a
+     * difference of a quarter texel that stays in the cell is its exact
+     * derivative; the cell's fraction decides the side (axis_wrap's). */
+    const double ax[2] = {s, t};
+    double* out[2] = {dhds, dhdt};
+    for (int k = 0; k < 2; ++k) {
+        if (!out[k])
+            continue;
+        const uint32_t n = height && height->kind == 1 ? (k ? height->h : height->w) : 0;
+        if (n == 0 || !isfinite(ax[k])) {
+            *out[k] = 0;
+            continue;
         }
-        if (intersect_impl(&segs[s], &g, o, d, tmin, best, &h)) {
-            best = h.t;
-            *hit = h;
-            hit->index = (int32_t)s;
-            found = 1;
+        const double x = (ax[k] - floor(ax[k])) * n - 0.5, fx = x - floor(x), dl = 0.25 / n;
+        const double sgn = fx <= 0.5 ? 1.0 : -1.0;
+        const double h2 = k ? meso_ref_texfn_value(height, s, t + sgn * dl, 0)
+                            : meso_ref_texfn_value(height, s + sgn * dl, t, 0);
+        *out[k] = sgn * (h2 - h) / dl;
+    }
+    return h;
+}
+
+void meso_ref_frustum_relief_coords(const meso_ref_frustum* f, const double p[3], double* s, double* t, double* w)
+{
+    seg_geom g;
+    seg_setup(f, &g);
+    cone_pt c;
+    cone_param(f, &g, p, &c);
+    if (s)
+        *s = c.u * f->u_scale;
+    if (t)
+        *t = f->v_offset + c.v * f->v_scale;
+    if (w)
+        *w = f->relief_depth > 0 ? c.delta / f->relief_depth : 0.0;
+}
+
+/* Interval of the ray o + t d, t in [tmin, tmax], inside the convex solid
+ * |q| ≤ r(y) + dr, r(y) + dr ≥ 0, both planes. face[e]: what bounds end e
+ * of the interval: 0 the cone, 1 + i plane i, −1 anything else (tmin, tmax,
+ * the nappe). Returns 0 when empty. */
+static int solid_interval(const meso_ref_frustum* f, const seg_geom* g, double dr, const double o[3], const double d[3],
+    double tmin, double tmax, double iv[2], int face[2])
+{
+    double lo = tmin, hi = tmax;
+    face[0] = face[1] = -1;
+    for (int e = 0; e < 2; ++e) {
+        const double nd = dot3(f->plane_n[e], d), no = dot3(f->plane_n[e], o) - f->plane_d[e];
+        if (fabs(nd) < 1e-300) {
+            if (no > 0)
+                return 0;
+            continue;
+        }
+        const double tc = -no / nd;
+        if (nd > 0 && tc < hi) {
+            hi = tc;
+            face[1] = 1 + e;
+        } else if (nd < 0 && tc > lo) {
+            lo = tc;
+            face[0] = 1 + e;
         }
     }
-    for (uint32_t b = 0; b < ball_count; ++b) {
-        double ts[2];
-        int n = ray_sphere(balls[b].center, balls[b].radius, o, d, ts);
-        for (int j = 0; j < n; ++j) {
-            if (ts[j] < tmin || ts[j] > best)
-                continue;
-            memset(&h, 0, sizeof(h));
-            h.t = ts[j];
-            for (int i = 0; i < 3; ++i) {
-                h.p[i] = o[i] + ts[j] * d[i];
-                h.normal[i] = h.p[i] - balls[b].center[i];
+    double qo[3], qd[3];
+    const double yo = split(f, g, o, qo), yd = dot3(d, g->a);
+    for (int i = 0; i < 3; ++i)
+        qd[i] = d[i] - yd * g->a[i];
+    const double ro = f->r0 + dr + g->k * yo, kd = g->k * yd;
+    /* nappe: ro + kd t ≥ 0 */
+    if (kd == 0) {
+        if (ro < 0)
+            return 0;
+    } else if (kd > 0) {
+        if (-ro / kd > lo) {
+            lo = -ro / kd;
+            face[0] = -1;
+        }
+    } else if (-ro / kd < hi) {
+        hi = -ro / kd;
+        face[1] = -1;
+    }
+    /* cone: A t² + B t + C ≤ 0 */
+    const double A = dot3(qd, qd) - kd * kd, B = 2 * (dot3(qo, qd) - kd * ro), C = dot3(qo, qo) - ro * ro;
+    double ts[2];
+    const int nr = solve_quadratic(A, B, C, ts);
+    if (nr == 0) {
+        if (C > 0)
+            return 0;
+    } else if (nr == 1) {
+        if (B > 0 && ts[0] < hi) {
+            hi = ts[0];
+            face[1] = 0;
+        } else if (B < 0 && ts[0] > lo) {
+            lo = ts[0];
+            face[0] = 0;
+        }
+    } else if (A > 0) {
+        if (ts[0] > lo) {
+            lo = ts[0];
+            face[0] = 0;
+        }
+        if (ts[1] < hi) {
+            hi = ts[1];
+            face[1] = 0;
+        }
+    } else {
+        /* Outside the roots: (−∞, t0] or [t1, ∞). The nappe already keeps
+         * one of the two; the other piece is empty up to rounding. */
+        const double len0 = fmin(hi, ts[0]) - lo, len1 = hi - fmax(lo, ts[1]);
+        if (len0 >= len1) {
+            if (ts[0] < hi) {
+                hi = ts[0];
+                face[1] = 0;
             }
-            normalize3(h.normal);
-            memcpy(h.shading_normal, h.normal, sizeof(h.normal));
-            h.index = (int32_t)b;
-            h.part = MESO_REF_PART_BALL;
-            best = h.t;
-            *hit = h;
+        } else if (ts[1] > lo) {
+            lo = ts[1];
+            face[0] = 0;
+        }
+    }
+    if (!(lo <= hi))
+        return 0;
+    iv[0] = lo;
+    iv[1] = hi;
+    return 1;
+}
+
+/* One sample of the march: relief coordinates, the height there and
+ * g = w − h (solid: g ≤ 0). */
+typedef struct rsample {
+    double t, u, s, tt, w, h, g;
+} rsample;
+
+typedef struct relief_ray {
+    const meso_ref_frustum* f;
+    const seg_geom* geo;
+    const meso_ref_texfn* hf;
+    const double *o, *d;
+    double qa, qb, qc; /* |q(t)|² = qa t² + 2 qb t + qc */
+    double ro, kd;     /* r(y(t)) = ro + kd t */
+    double tol;        /* bisection width (ray parameter) */
+    uint32_t samples;
+} relief_ray;
+
+static void relief_ray_init(relief_ray* rr, const meso_ref_frustum* f, const seg_geom* g, const meso_ref_texfn* hf,
+    const double o[3], const double d[3], double tol)
+{
+    double qo[3], qd[3];
+    const double yo = split(f, g, o, qo), yd = dot3(d, g->a);
+    for (int i = 0; i < 3; ++i)
+        qd[i] = d[i] - yd * g->a[i];
+    *rr = (relief_ray){f, g, hf, o, d, dot3(qd, qd), dot3(qo, qd), dot3(qo, qo), f->r0 + g->k * yo, g->k * yd, tol, 0};
+}
+
+static void relief_eval(relief_ray* rr, double t, rsample* s)
+{
+    const meso_ref_frustum* f = rr->f;
+    const double p[3] = {rr->o[0] + t * rr->d[0], rr->o[1] + t * rr->d[1], rr->o[2] + t * rr->d[2]};
+    cone_pt c;
+    cone_param(f, rr->geo, p, &c);
+    s->t = t;
+    s->u = c.u;
+    s->s = c.u * f->u_scale;
+    s->tt = f->v_offset + c.v * f->v_scale;
+    s->w = c.delta / f->relief_depth;
+    s->h = meso_ref_texfn_value(rr->hf, s->s, s->tt, 0);
+    s->g = s->w - s->h;
+    rr->samples++;
+}
+
+/* Texel-space (L1) distance between two samples: s (the u difference taken
+ * the short way round, times u_scale) and t, in texels. */
+static double texel_dist(const relief_ray* rr, const rsample* a, const rsample* b)
+{
+    double du = b->u - a->u;
+    du -= floor(du + 0.5);
+    return fabs(du * rr->f->u_scale) * rr->hf->w + fabs(b->tt - a->tt) * rr->hf->h;
+}
+
+/* Largest move between two samples in the step bound's units (texels of s,
+ * texels of t, w). */
+static double sample_move(const relief_ray* rr, const rsample* a, const rsample* b)
+{
+    double du = b->u - a->u;
+    du -= floor(du + 0.5);
+    const double ms = fabs(du * rr->f->u_scale) * rr->hf->w, mt = fabs(b->tt - a->tt) * rr->hf->h;
+    return fmax(fmax(ms, mt), fabs(b->w - a->w));
+}
+
+/* The bilinear interpolant's Lipschitz constant (per texel, L1) around a
+ * sample: the largest difference of adjacent texels in the 4 × 4 texels
+ * whose cells hold every point within one texel of it. */
+static double local_lipschitz(const meso_ref_texfn* hf, const rsample* a)
+{
+    const double x = (a->s - floor(a->s)) * hf->w - 0.5, y = (a->tt - floor(a->tt)) * hf->h - 0.5;
+    const long W = (long)hf->w, H = (long)hf->h, i0 = (long)floor(x) - 1, j0 = (long)floor(y) - 1;
+    double g = 0;
+    for (long j = j0; j < j0 + 4; ++j)
+        for (long i = i0; i < i0 + 4; ++i) {
+            const long ii = ((i % W) + W) % W, jj = ((j % H) + H) % H;
+            const long i1 = (ii + 1) % W, j1 = (jj + 1) % H;
+            const double v = hf->values[jj * W + ii];
+            if (i < i0 + 3)
+                g = fmax(g, fabs(hf->values[jj * W + i1] - v));
+            if (j < j0 + 3)
+                g = fmax(g, fabs(hf->values[j1 * W + ii] - v));
+        }
+    return g;
+}
+
+static double w_at(const relief_ray* rr, double t)
+{
+    return (sqrt(fmax(0.0, (rr->qa * t + 2 * rr->qb) * t + rr->qc)) - (rr->ro + rr->kd * t)) / rr->f->relief_depth;
+}
+
+/* 1 when g cannot change sign between samples a and b (same sign): g ≥
+ * min w − max h for non-solid ends, ≤ max w − min h for solid ones. w is
+ * convex along the ray (|q(t)| is a norm of an affine map, r(y(t)) affine),
+ * so its maximum is at an end and its minimum at the clamped stationary
+ * point of |q(t)| − kd t: with τ = t + qb/qa, m² = qc − qb²/qa,
+ * τ* = kd m / √(qa (qa − kd²)) when qa > kd² (else monotone). h on the path
+ * (≤ 2× the chord in texels, the step keeping it short) is within
+ * G · chord of the ends' mean, G = local_lipschitz. */
+static int no_crossing(const relief_ray* rr, const rsample* a, const rsample* b)
+{
+    const double G = local_lipschitz(rr->hf, a), ell = texel_dist(rr, a, b);
+    const double hmid = 0.5 * (a->h + b->h);
+    if (a->g > 0) {
+        double wmin = fmin(a->w, b->w);
+        if (rr->qa > rr->kd * rr->kd) {
+            const double m = sqrt(fmax(0.0, rr->qc - rr->qb * rr->qb / rr->qa));
+            const double ts = rr->kd * m / sqrt(rr->qa * (rr->qa - rr->kd * rr->kd)) - rr->qb / rr->qa;
+            if (ts > a->t && ts < b->t)
+                wmin = fmin(wmin, w_at(rr, ts));
+        }
+        return wmin - (hmid + G * ell) > 0;
+    }
+    return fmax(a->w, b->w) - (hmid - G * ell) <= 0;
+}
+
+/* The first sign change of g in (a, b], a evaluated: 1 and its bracket
+ * [lo, hi] of width ≤ tol, or 0. Halves are searched left first, each
+ * skipped when no_crossing proves it free. */
+static int first_crossing(relief_ray* rr, const rsample* a, const rsample* b, double* lo, double* hi)
+{
+    const int sa = a->g <= 0, sb = b->g <= 0;
+    if (b->t - a->t <= rr->tol || rr->samples >= RELIEF_MAX_SAMPLES) {
+        if (sa == sb)
+            return 0;
+        *lo = a->t;
+        *hi = b->t;
+        return 1;
+    }
+    if (sa == sb && no_crossing(rr, a, b))
+        return 0;
+    rsample m;
+    relief_eval(rr, 0.5 * (a->t + b->t), &m);
+    return first_crossing(rr, a, &m, lo, hi) || first_crossing(rr, &m, b, lo, hi);
+}
+
+/* Fills a relief hit at t: lateral (the relief surface w = h) or a cap. */
+static void relief_hit(const relief_ray* rr, double t, meso_ref_frustum_part part, meso_ref_frustum_hit* hit)
+{
+    const meso_ref_frustum* f = rr->f;
+    const seg_geom* g = rr->geo;
+    const double D = f->relief_depth;
+    memset(hit, 0, sizeof(*hit));
+    hit->t = t;
+    for (int i = 0; i < 3; ++i)
+        hit->p[i] = rr->o[i] + t * rr->d[i];
+    hit->part = part;
+    hit->relief = 1;
+    cone_pt c;
+    cone_param(f, g, hit->p, &c);
+    hit->u = c.u;
+    hit->v = c.v;
+    hit->w = c.delta / D;
+    hit->tex[0] = c.u * f->u_scale;
+    hit->tex[1] = f->v_offset + c.v * f->v_scale;
+    if (part != MESO_REF_PART_LATERAL) {
+        const int e = part == MESO_REF_PART_CAP0 ? 0 : 1;
+        memcpy(hit->normal, f->plane_n[e], sizeof(hit->normal));
+        memcpy(hit->shading_normal, f->plane_n[e], sizeof(hit->normal));
+        hit->v = (double)e;
+        return;
+    }
+    double hs, ht;
+    meso_ref_relief_height(rr->hf, hit->tex[0], hit->tex[1], &hs, &ht);
+    /* ∇v by central differences (v is smooth off the axis). */
+    double gv[3];
+    const double del = 1e-6 * (g->scale + D);
+    for (int i = 0; i < 3; ++i) {
+        double pa[3], pb[3];
+        memcpy(pa, hit->p, sizeof(pa));
+        memcpy(pb, hit->p, sizeof(pb));
+        pa[i] += del;
+        pb[i] -= del;
+        cone_pt ca, cb;
+        cone_param(f, g, pa, &ca);
+        cone_param(f, g, pb, &cb);
+        gv[i] = (ca.v - cb.v) / (2 * del);
+    }
+    double tu[3];
+    cross3(g->a, c.w, tu); /* direction of increasing u */
+    const double rho = c.rho > 1e-300 ? c.rho : 1e-300;
+    for (int i = 0; i < 3; ++i) {
+        const double gw = (c.w[i] - g->k * g->a[i]) / D;
+        const double gu = tu[i] / (TAU * rho) + f->twist / TAU * gv[i];
+        hit->normal[i] = gw - f->u_scale * hs * gu - f->v_scale * ht * gv[i];
+    }
+    if (normalize3(hit->normal) == 0)
+        memcpy(hit->normal, c.w, sizeof(c.w));
+    /* FORMAT.md's relief shading normal. */
+    double n8[3];
+    eq8_normal(f, g, &c, n8);
+    const double sk = sqrt(1 + g->k * g->k), dy = c.y1 - c.y0;
+    const double lu = TAU * rho, lv = fabs(dy) * sk;
+    for (int i = 0; i < 3; ++i) {
+        const double tv = (dy >= 0 ? 1.0 : -1.0) * (g->a[i] + g->k * c.w[i]) / sk;
+        hit->shading_normal[i] = n8[i] - D * (hs * f->u_scale * tu[i] / lu + (lv > 0 ? ht * f->v_scale * tv / lv : 0));
+    }
+    if (normalize3(hit->shading_normal) == 0)
+        memcpy(hit->shading_normal, hit->normal, sizeof(hit->normal));
+}
+
+/* The relief search of frustum_reference.h for one segment. */
+static int relief_intersect(const meso_ref_frustum* f, const seg_geom* g, const meso_ref_relief* rl, const double o[3],
+    const double d[3], double tmin, double tmax, meso_ref_frustum_hit* hit, uint32_t* samples)
+{
+    const double D = f->relief_depth, dl = sqrt(dot3(d, d));
+    double iv[2], in[2];
+    int face[2], inface[2];
+    if (!(dl > 0) || !solid_interval(f, g, D, o, d, tmin, tmax, iv, face))
+        return 0;
+    const int has_in = solid_interval(f, g, 0.0, o, d, iv[0], iv[1], in, inface);
+    const double size = g->scale + D;
+    const double step = rl->step > 0 ? fmin(rl->step, RELIEF_STEP_MAX) : RELIEF_STEP_DEFAULT;
+    const double dt_min = RELIEF_STEP_FLOOR * size / dl;
+    relief_ray rr;
+    relief_ray_init(&rr, f, g, &rl->height, o, d, RELIEF_BISECT_TOL * size / dl);
+    rsample a, b;
+    relief_eval(&rr, iv[0], &a);
+    int found = 0;
+    double th = iv[0];
+    meso_ref_frustum_part part = MESO_REF_PART_LATERAL;
+    if (a.g <= 0 && face[0] == 0) {
+        found = 1; /* entering through the outer cone where h = 1 */
+    } else if (a.g <= 0 && face[0] >= 1) {
+        found = 1; /* an end face of the relief solid, capped or not (frustum_reference.h) */
+        part = face[0] == 1 ? MESO_REF_PART_CAP0 : MESO_REF_PART_CAP1;
+    }
+    double dt = iv[1] - iv[0];
+    while (!found && a.t < iv[1]) {
+        if (rr.samples >= RELIEF_MAX_SAMPLES)
+            break;
+        double tn = fmin(a.t + fmax(dt, dt_min), iv[1]);
+        int jump = 0;
+        if (has_in && a.t < in[0] && tn > in[0])
+            tn = in[0]; /* the core's entry is always a sample */
+        else if (has_in && a.t >= in[0] && a.t < in[1]) {
+            tn = in[1]; /* solid throughout the core: no crossing inside */
+            jump = 1;
+        }
+        relief_eval(&rr, tn, &b);
+        if (has_in && (tn == in[0] || tn == in[1]))
+            b.g = fmin(b.g, 0.0); /* on the core: solid, whatever w's rounding says */
+        const double mv = sample_move(&rr, &a, &b);
+        if (!jump && mv > step && tn - a.t > dt_min) {
+            dt = 0.5 * (tn - a.t);
+            continue;
+        }
+        double lo, hi;
+        if (!jump && first_crossing(&rr, &a, &b, &lo, &hi)) {
+            th = 0.5 * (lo + hi);
             found = 1;
             break;
         }
+        if (!jump)
+            dt = mv < 0.5 * step ? 2 * (tn - a.t) : tn - a.t;
+        a = b;
+    }
+    if (rr.samples >= RELIEF_MAX_SAMPLES) {
+        *samples = UINT32_MAX;
+        return 0;
+    }
+    if (!found && a.g <= 0) {
+        /* Solid up to the exit: the top cone where h = 1, or a cap. */
+        th = iv[1];
+        if (face[1] == 0)
+            found = 1;
+        else if (face[1] >= 1) {
+            found = 1;
+            part = face[1] == 1 ? MESO_REF_PART_CAP0 : MESO_REF_PART_CAP1;
+        }
+    }
+    if (*samples != UINT32_MAX)
+        *samples += rr.samples;
+    if (!found)
+        return 0;
+    relief_hit(&rr, th, part, hit);
+    return 1;
+}
+
+int meso_ref_frustum_intersect_relief(const meso_ref_frustum* f, const meso_ref_relief* relief, const double o[3],
+    const double d[3], double tmin, double tmax, meso_ref_frustum_hit* hit)
+{
+    seg_geom g;
+    seg_setup(f, &g);
+    if (!relief_on(f, relief))
+        return intersect_impl(f, &g, o, d, tmin, tmax, hit);
+    uint32_t samples = 0;
+    meso_ref_frustum_hit h;
+    const int got = relief_intersect(f, &g, relief, o, d, tmin, tmax, &h, &samples);
+    if (got)
+        *hit = h;
+    hit->steps = samples;
+    return got;
+}
+
+/* >>model ------------------------------------------------------------------ */
+
+/* A model's items: segments 0 .. seg_count − 1, then the balls. */
+typedef struct model_ref {
+    const meso_ref_frustum* segs;
+    uint32_t seg_count;
+    const meso_ref_ball* balls;
+    uint32_t ball_count;
+    const meso_ref_relief* relief;
+} model_ref;
+
+/* A sphere holding item i (a segment's outer cone when it has relief);
+ * 0 when a segment has no bound (always tested). */
+static int item_bound(const model_ref* m, uint32_t i, double c[3], double* rad)
+{
+    if (i >= m->seg_count) {
+        const meso_ref_ball* b = &m->balls[i - m->seg_count];
+        memcpy(c, b->center, sizeof(b->center));
+        *rad = b->radius;
+        return 1;
+    }
+    meso_ref_frustum outer = m->segs[i];
+    if (relief_on(&outer, m->relief)) {
+        outer.r0 += outer.relief_depth;
+        outer.r1 += outer.relief_depth;
+    }
+    seg_geom go;
+    seg_setup(&outer, &go);
+    return seg_bound(&outer, &go, c, rad);
+}
+
+/* Nearest hit of item i in [tmin, best]; `bounded`: its sphere was tested. */
+static int item_intersect(const model_ref* m, uint32_t i, int bounded, const double o[3], const double d[3],
+    double tmin, double best, meso_ref_frustum_hit* h, uint32_t* samples)
+{
+    double c[3], rad, ts[2];
+    if (!bounded && item_bound(m, i, c, &rad)) {
+        const int n = ray_sphere(c, rad, o, d, ts);
+        if (n < 2 || ts[1] < tmin || ts[0] > best)
+            return 0;
+    }
+    if (i < m->seg_count) {
+        const meso_ref_frustum* f = &m->segs[i];
+        seg_geom g;
+        seg_setup(f, &g);
+        const int got = relief_on(f, m->relief) ? relief_intersect(f, &g, m->relief, o, d, tmin, best, h, samples)
+                                                 : intersect_impl(f, &g, o, d, tmin, best, h);
+        h->index = (int32_t)i;
+        return got;
+    }
+    const meso_ref_ball* b = &m->balls[i - m->seg_count];
+    const int n = ray_sphere(b->center, b->radius, o, d, ts);
+    for (int j = 0; j < n; ++j) {
+        if (ts[j] < tmin || ts[j] > best)
+            continue;
+        memset(h, 0, sizeof(*h));
+        h->t = ts[j];
+        for (int k = 0; k < 3; ++k) {
+            h->p[k] = o[k] + ts[j] * d[k];
+            h->normal[k] = h->p[k] - b->center[k];
+        }
+        normalize3(h->normal);
+        memcpy(h->shading_normal, h->normal, sizeof(h->normal));
+        h->index = (int32_t)(i - m->seg_count);
+        h->part = MESO_REF_PART_BALL;
+        return 1;
+    }
+    return 0;
+}
+
+static int model_intersect(const model_ref* m, const double o[3], const double d[3], double tmin, double tmax,
+    meso_ref_frustum_hit* hit)
+{
+    int found = 0;
+    double best = tmax;
+    uint32_t samples = 0;
+    meso_ref_frustum_hit h;
+    for (uint32_t i = 0; i < m->seg_count + m->ball_count; ++i)
+        if (item_intersect(m, i, 0, o, d, tmin, best, &h, &samples)) {
+            best = h.t;
+            *hit = h;
+            found = 1;
+        }
+    if (found || m->relief)
+        hit->steps = samples;
+    return found;
+}
+
+int meso_ref_frusta_intersect(const meso_ref_frustum* segs, uint32_t seg_count, const meso_ref_ball* balls,
+    uint32_t ball_count, const double o[3], const double d[3], double tmin, double tmax, meso_ref_frustum_hit* hit)
+{
+    const model_ref m = {segs, seg_count, balls, ball_count, NULL};
+    return model_intersect(&m, o, d, tmin, tmax, hit);
+}
+
+int meso_ref_frusta_intersect_relief(const meso_ref_frustum* segs, uint32_t seg_count, const meso_ref_ball* balls,
+    uint32_t ball_count, const meso_ref_relief* relief, const double o[3], const double d[3], double tmin,
+    double tmax, meso_ref_frustum_hit* hit)
+{
+    const model_ref m = {segs, seg_count, balls, ball_count, relief};
+    return model_intersect(&m, o, d, tmin, tmax, hit);
+}
+
+/* >>records ---------------------------------------------------------------- */
+
+void meso_ref_frustum_from_rec(const meso_frustum_rec* rec, meso_ref_frustum* out)
+{
+    memset(out, 0, sizeof(*out));
+    for (int i = 0; i < 3; ++i) {
+        out->c0[i] = rec->center[0][i];
+        out->c1[i] = rec->center[1][i];
+        out->frame_x[i] = rec->frame_x[i];
+    }
+    out->r0 = rec->radius[0];
+    out->r1 = rec->radius[1];
+    for (int e = 0; e < 2; ++e) {
+        for (int i = 0; i < 3; ++i)
+            out->plane_n[e][i] = rec->plane[e][i];
+        out->plane_d[e] = dot3(out->plane_n[e], e ? out->c1 : out->c0);
+    }
+    out->cap[0] = (rec->flags & MESO_FSEG_CAP0) != 0;
+    out->cap[1] = (rec->flags & MESO_FSEG_CAP1) != 0;
+    out->u_offset = rec->u_offset;
+    out->twist = rec->twist;
+    out->u_scale = rec->u_scale;
+    out->v_offset = rec->v_offset;
+    out->v_scale = rec->v_scale;
+    out->relief_depth = rec->relief_depth;
+}
+
+void meso_ref_ball_from_rec(const meso_frustum_ball_rec* rec, meso_ref_ball* out)
+{
+    for (int i = 0; i < 3; ++i)
+        out->center[i] = rec->center[i];
+    out->radius = rec->radius;
+}
+
+/* >>files ------------------------------------------------------------------ */
+
+meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frusta* out, meso_error* err)
+{
+    if (!f || !out)
+        return mesoi_ref_fail(err, MESO_ERR_INVALID_ARG, "frusta", object_id, "NULL file or output");
+    memset(out, 0, sizeof(*out));
+    meso_object_record rec;
+    meso_result r = mesoi_ref_object(f, object_id, MESO_OBJECT_FRUSTA, "frusta", &rec, err);
+    if (r != MESO_OK)
+        return r;
+    memcpy(out->bbox_min, rec.bbox_min, sizeof(out->bbox_min));
+    memcpy(out->bbox_max, rec.bbox_max, sizeof(out->bbox_max));
+    const int32_t fi = mesoi_ref_find_chunk(f, MESO_CHUNK_FRUS, object_id);
+    const int32_t si = mesoi_ref_find_chunk(f, MESO_CHUNK_FSEG, object_id);
+    const int32_t bi = mesoi_ref_find_chunk(f, MESO_CHUNK_BALL, object_id);
+    const int32_t ri = meso_file_find(f, MESO_CHUNK_RELF, object_id, 0);
+    if (fi < 0 || si < 0)
+        return mesoi_ref_fail(err, MESO_ERR_NOT_FOUND, "frusta", object_id, fi < 0 ? "no FRUS chunk" : "no FSEG chunk");
+    void *frus = NULL, *fseg = NULL, *ball = NULL;
+    size_t nf = 0, ns = 0, nb = 0;
+    if ((r = mesoi_ref_read_whole(f, fi, &frus, &nf, err)) != MESO_OK ||
+        (r = mesoi_ref_read_whole(f, si, &fseg, &ns, err)) != MESO_OK ||
+        (bi >= 0 && (r = mesoi_ref_read_whole(f, bi, &ball, &nb, err)) != MESO_OK))
+        goto done;
+    if (nf % MESO_FRUS_RECORD_SIZE || ns % MESO_FSEG_RECORD_SIZE || nb % MESO_BALL_RECORD_SIZE ||
+        nf / MESO_FRUS_RECORD_SIZE != ns / MESO_FSEG_RECORD_SIZE || nf == 0) {
+        r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "frusta", object_id,
+            "FRUS and FSEG must hold the same (non-zero) number of records");
+        goto done;
+    }
+    out->seg_count = (uint32_t)(nf / MESO_FRUS_RECORD_SIZE);
+    out->ball_count = (uint32_t)(nb / MESO_BALL_RECORD_SIZE);
+    out->segs = malloc(sizeof(*out->segs) * out->seg_count);
+    out->balls = out->ball_count ? malloc(sizeof(*out->balls) * out->ball_count) : NULL;
+    if (!out->segs || (out->ball_count && !out->balls)) {
+        r = mesoi_ref_fail(err, MESO_ERR_OUT_OF_MEMORY, "frusta", object_id, "out of memory");
+        goto done;
+    }
+    for (uint32_t i = 0; i < out->seg_count; ++i) {
+        meso_frustum_rec fr;
+        meso_frustum_rec_decode((const uint8_t*)frus + (size_t)i * MESO_FRUS_RECORD_SIZE,
+            (const uint8_t*)fseg + (size_t)i * MESO_FSEG_RECORD_SIZE, &fr);
+        meso_ref_frustum_from_rec(&fr, &out->segs[i]);
+    }
+    for (uint32_t i = 0; i < out->ball_count; ++i) {
+        meso_frustum_ball_rec br;
+        meso_frustum_ball_decode((const uint8_t*)ball + (size_t)i * MESO_BALL_RECORD_SIZE, &br);
+        meso_ref_ball_from_rec(&br, &out->balls[i]);
+    }
+    if (ri >= 0) {
+        const meso_chunk_info* rc = meso_file_chunk(f, (uint32_t)ri);
+        r = rc->dims[2] != 1 ? MESO_ERR_UNSUPPORTED : mesoi_ref_read_unorm(f, ri, &out->relief_values, err);
+        if (r == MESO_ERR_UNSUPPORTED)
+            r = mesoi_ref_fail(err, r, "frusta", object_id, "RELF is not U8 or U16 x 1, W x H x 1 (FORMAT.md 7.2)");
+        if (r != MESO_OK)
+            goto done;
+        out->relief.height.kind = 1;
+        out->relief.height.w = rc->dims[0];
+        out->relief.height.h = rc->dims[1];
+        out->relief.height.d = 1;
+        out->relief.height.values = out->relief_values;
+    }
+    r = MESO_OK;
+done:
+    free(frus);
+    free(fseg);
+    free(ball);
+    if (r != MESO_OK)
+        meso_ref_frusta_free(out);
+    return r;
+}
+
+void meso_ref_frusta_free(meso_ref_frusta* m)
+{
+    if (!m)
+        return;
+    free(m->segs);
+    free(m->balls);
+    free(m->relief_values);
+    memset(m, 0, sizeof(*m));
+}
+
+/* >>render ----------------------------------------------------------------- */
+
+/* A bounding-volume hierarchy over the items' bounding spheres (as boxes);
+ * items without a bound are tested for every ray. */
+typedef struct bvh_node {
+    double lo[3], hi[3];
+    uint32_t first, count; /* leaf: order[first .. first + count); inner: count 0, children first, first + 1 */
+} bvh_node;
+
+typedef struct sort_key {
+    double key;
+    uint32_t item;
+} sort_key;
+
+static int cmp_key(const void* a, const void* b)
+{
+    const sort_key *x = a, *y = b;
+    return x->key < y->key ? -1 : x->key > y->key ? 1 : (x->item > y->item) - (x->item < y->item);
+}
+
+typedef struct frusta_scene {
+    model_ref m;
+    mesoi_ref_camera cam;
+    double (*box)[6];      /* per item: lo, hi */
+    uint32_t* order;       /* bounded items, grouped by leaf */
+    uint32_t bounded;
+    uint32_t* unbounded;
+    uint32_t unbounded_count;
+    bvh_node* nodes;
+    uint32_t node_count;
+    sort_key* tmp;         /* build scratch */
+} frusta_scene;
+
+static void bvh_build(frusta_scene* sc, uint32_t node, uint32_t first, uint32_t count)
+{
+    bvh_node* nd = &sc->nodes[node];
+    for (int k = 0; k < 3; ++k) {
+        nd->lo[k] = INFINITY;
+        nd->hi[k] = -INFINITY;
+    }
+    for (uint32_t i = first; i < first + count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            nd->lo[k] = fmin(nd->lo[k], sc->box[sc->order[i]][k]);
+            nd->hi[k] = fmax(nd->hi[k], sc->box[sc->order[i]][3 + k]);
+        }
+    if (count <= 4) {
+        nd->first = first;
+        nd->count = count;
+        return;
+    }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+        if (nd->hi[k] - nd->lo[k] > nd->hi[axis] - nd->lo[axis])
+            axis = k;
+    /* Split at the median centre along the longest axis. */
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t it = sc->order[first + i];
+        sc->tmp[i].key = sc->box[it][axis] + sc->box[it][3 + axis];
+        sc->tmp[i].item = it;
+    }
+    qsort(sc->tmp, count, sizeof(*sc->tmp), cmp_key);
+    for (uint32_t i = 0; i < count; ++i)
+        sc->order[first + i] = sc->tmp[i].item;
+    const uint32_t mid = first + count / 2;
+    const uint32_t c = sc->node_count;
+    sc->node_count += 2;
+    nd->first = c;
+    nd->count = 0;
+    bvh_build(sc, c, first, mid - first);
+    bvh_build(sc, c + 1, mid, first + count - mid);
+}
+
+static int box_hit(const double lo[3], const double hi[3], const double o[3], const double d[3], double best)
+{
+    double t0 = 0, t1 = best;
+    for (int k = 0; k < 3; ++k) {
+        if (d[k] == 0) {
+            if (o[k] < lo[k] || o[k] > hi[k])
+                return 0;
+            continue;
+        }
+        double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
+        if (a > b) {
+            const double t = a;
+            a = b;
+            b = t;
+        }
+        t0 = fmax(t0, a);
+        t1 = fmin(t1, b);
+    }
+    return t0 <= t1;
+}
+
+static int scene_trace(const frusta_scene* sc, const double o[3], const double d[3], meso_ref_frustum_hit* hit)
+{
+    double best = 1.0; /* the far plane */
+    int found = 0;
+    uint32_t samples = 0;
+    meso_ref_frustum_hit h;
+    for (uint32_t k = 0; k < sc->unbounded_count; ++k)
+        if (item_intersect(&sc->m, sc->unbounded[k], 1, o, d, 0, best, &h, &samples)) {
+            best = h.t;
+            *hit = h;
+            found = 1;
+        }
+    uint32_t stack[128];
+    int sp = 0;
+    if (sc->node_count)
+        stack[sp++] = 0;
+    while (sp > 0) {
+        const bvh_node* nd = &sc->nodes[stack[--sp]];
+        if (!box_hit(nd->lo, nd->hi, o, d, best))
+            continue;
+        if (nd->count == 0) {
+            if (sp + 2 <= 128) {
+                stack[sp++] = nd->first + 1;
+                stack[sp++] = nd->first;
+            }
+            continue;
+        }
+        for (uint32_t i = nd->first; i < nd->first + nd->count; ++i)
+            if (item_intersect(&sc->m, sc->order[i], 0, o, d, 0, best, &h, &samples)) {
+                best = h.t;
+                *hit = h;
+                found = 1;
+            }
     }
     return found;
+}
+
+static void frusta_row(const frusta_scene* sc, meso_ref_image* img, int y)
+{
+    const int W = img->width, H = img->height;
+    for (int x = 0; x < W; ++x) {
+        const size_t px = (size_t)y * (size_t)W + (size_t)x;
+        double o[3], d[3];
+        mesoi_ref_pixel_ray(&sc->cam, x, y, W, H, o, d);
+        meso_ref_frustum_hit h;
+        if (!scene_trace(sc, o, d, &h)) {
+            mesoi_ref_image_miss(img, px);
+            continue;
+        }
+        img->depth[px] = mesoi_ref_depth(&sc->cam, h.p);
+        img->coverage[px] = 1;
+        for (int c = 0; c < 3; ++c)
+            img->hit[3 * px + (size_t)c] = (float)h.p[c];
+        const double w = h.relief ? fmin(fmax(h.w, 0.0), 1.0) : 1.0;
+        mesoi_ref_shade(&sc->cam, d, h.shading_normal, w, &img->rgb[3 * px], &img->normal[3 * px]);
+    }
+}
+
+/* Rows y ≡ first (mod step) of the image: one worker's share. Pixels are
+ * independent and read only the shared scene, so the image does not depend
+ * on the partition. (pthreads rather than OpenMP: this file is linked into
+ * C++ executables, and a clang-built object needs clang's OpenMP runtime,
+ * which the g++ driver does not link.) */
+typedef struct row_job {
+    const frusta_scene* sc;
+    meso_ref_image* img;
+    int first, step;
+} row_job;
+
+static void* row_worker(void* arg)
+{
+    const row_job* j = arg;
+    for (int y = j->first; y < j->img->height; y += j->step)
+        frusta_row(j->sc, j->img, y);
+    return NULL;
+}
+
+#define RENDER_MAX_THREADS 64
+
+meso_result meso_ref_frusta_render(const meso_ref_frusta* m, const meso_ref_view* v, meso_ref_image* out)
+{
+    if (!m || !v || !out || v->width < 1 || v->height < 1 || v->width > 65536 || v->height > 65536 ||
+        (m->seg_count && !m->segs) || (m->ball_count && !m->balls))
+        return MESO_ERR_INVALID_ARG;
+    memset(out, 0, sizeof(*out));
+    frusta_scene sc;
+    memset(&sc, 0, sizeof(sc));
+    sc.m = (model_ref){m->segs, m->seg_count, m->balls, m->ball_count, &m->relief};
+    if (!mesoi_ref_camera_init(v, &sc.cam))
+        return MESO_ERR_INVALID_ARG;
+    const uint32_t n = m->seg_count + m->ball_count;
+    sc.box = malloc(sizeof(*sc.box) * (n ? n : 1));
+    sc.order = malloc(sizeof(*sc.order) * (n ? n : 1));
+    sc.unbounded = malloc(sizeof(*sc.unbounded) * (n ? n : 1));
+    sc.nodes = malloc(sizeof(*sc.nodes) * 2 * (n ? n : 1));
+    sc.tmp = malloc(sizeof(*sc.tmp) * (n ? n : 1));
+    meso_result r = mesoi_ref_image_alloc(out, v->width, v->height);
+    if (r == MESO_OK && (!sc.box || !sc.order || !sc.unbounded || !sc.nodes || !sc.tmp))
+        r = MESO_ERR_OUT_OF_MEMORY;
+    if (r != MESO_OK)
+        goto done;
+    for (uint32_t i = 0; i < n; ++i) {
+        double c[3], rad;
+        if (!item_bound(&sc.m, i, c, &rad)) {
+            sc.unbounded[sc.unbounded_count++] = i;
+            continue;
+        }
+        for (int k = 0; k < 3; ++k) {
+            sc.box[i][k] = c[k] - rad;
+            sc.box[i][3 + k] = c[k] + rad;
+        }
+        sc.order[sc.bounded++] = i;
+    }
+    if (sc.bounded) {
+        sc.node_count = 1;
+        bvh_build(&sc, 0, 0, sc.bounded);
+    }
+    long threads = v->threads > 0 ? v->threads : sysconf(_SC_NPROCESSORS_ONLN);
+    threads = threads < 1 ? 1 : threads > RENDER_MAX_THREADS ? RENDER_MAX_THREADS : threads;
+    if (threads > v->height)
+        threads = v->height;
+    pthread_t tid[RENDER_MAX_THREADS];
+    row_job jobs[RENDER_MAX_THREADS];
+    int started[RENDER_MAX_THREADS] = {0};
+    for (int k = 0; k < threads; ++k)
+        jobs[k] = (row_job){&sc, out, k, (int)threads};
+    for (int k = 1; k < threads; ++k)
+        started[k] = pthread_create(&tid[k], NULL, row_worker, &jobs[k]) == 0;
+    row_worker(&jobs[0]);
+    for (int k = 1; k < threads; ++k) {
+        if (started[k])
+            pthread_join(tid[k], NULL);
+        else
+            row_worker(&jobs[k]); /* could not start a thread: do its rows here */
+    }
+done:
+    free(sc.box);
+    free(sc.order);
+    free(sc.unbounded);
+    free(sc.nodes);
+    free(sc.tmp);
+    if (r != MESO_OK)
+        meso_ref_image_free(out);
+    return r;
 }

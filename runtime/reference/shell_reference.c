@@ -17,7 +17,7 @@
  */
 #include "shell_reference.h"
 
-#include "mat4_inverse.h"
+#include "ref_common.h"
 
 #include <float.h>
 #include <math.h>
@@ -31,84 +31,26 @@
 
 /* >>loading ---------------------------------------------------------------- */
 
-static meso_result fail(meso_error* err, meso_result r, const char* msg, uint32_t id)
-{
-    if (err) {
-        memset(err, 0, sizeof(*err));
-        err->result = r;
-        err->offset = UINT64_MAX;
-        err->chunk = -1;
-        snprintf(err->message, sizeof(err->message), "shell %u: %s", id, msg);
-    }
-    return r;
-}
-
-/* Reads chunk `ci` whole into a new malloc'd buffer. */
-static meso_result read_whole(meso_file* f, int32_t ci, void** out, size_t* size, meso_error* err)
-{
-    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
-    if (!c)
-        return MESO_ERR_NOT_FOUND;
-    if (c->decoded_size == 0 || c->decoded_size > (uint64_t)(SIZE_MAX / 2))
-        return MESO_ERR_UNSUPPORTED;
-    void* data = malloc((size_t)c->decoded_size);
-    if (!data)
-        return MESO_ERR_OUT_OF_MEMORY;
-    const meso_result r = meso_file_read_chunk(f, (uint32_t)ci, data, (size_t)c->decoded_size, err);
-    if (r != MESO_OK) {
-        free(data);
-        return r;
-    }
-    *out = data;
-    *size = (size_t)c->decoded_size;
-    return MESO_OK;
-}
-
-static int32_t find_chunk(const meso_file* f, uint32_t type, uint32_t id)
-{
-    const int32_t i = meso_file_find(f, type, id, 0);
-    return i >= 0 ? i : meso_file_find(f, type, id, UINT16_MAX);
-}
-
 meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err)
 {
     if (!f || !out)
-        return fail(err, MESO_ERR_INVALID_ARG, "NULL file or output", object_id);
+        return mesoi_ref_fail(err, MESO_ERR_INVALID_ARG, "shell", object_id, "NULL file or output");
     memset(out, 0, sizeof(*out));
-    uint32_t count = 0;
-    meso_result r = meso_file_objects(f, NULL, 0, &count, err);
+    meso_object_record rec;
+    meso_result r = mesoi_ref_object(f, object_id, MESO_OBJECT_SHELL, "shell", &rec, err);
     if (r != MESO_OK)
         return r;
-    meso_object_record* recs = count ? malloc(sizeof(*recs) * count) : NULL;
-    if (count && !recs)
-        return fail(err, MESO_ERR_OUT_OF_MEMORY, "out of memory", object_id);
-    if ((r = meso_file_objects(f, recs, count, &count, err)) != MESO_OK) {
-        free(recs);
-        return r;
-    }
-    const meso_object_record* rec = NULL;
-    for (uint32_t i = 0; i < count; ++i)
-        if (recs[i].id == object_id)
-            rec = &recs[i];
-    if (!rec) {
-        free(recs);
-        return fail(err, MESO_ERR_NOT_FOUND, "no such object in the OBJT table", object_id);
-    }
-    if (rec->kind != MESO_OBJECT_SHELL) {
-        free(recs);
-        return fail(err, MESO_ERR_INVALID_ARG, "not a shell object (kind 2)", object_id);
-    }
-    memcpy(out->bbox_min, rec->bbox_min, sizeof(out->bbox_min));
-    memcpy(out->bbox_max, rec->bbox_max, sizeof(out->bbox_max));
-    free(recs);
+    memcpy(out->bbox_min, rec.bbox_min, sizeof(out->bbox_min));
+    memcpy(out->bbox_max, rec.bbox_max, sizeof(out->bbox_max));
 
-    const int32_t mi = find_chunk(f, MESO_CHUNK_MESH, object_id), di = find_chunk(f, MESO_CHUNK_SDIR, object_id);
+    const int32_t mi = mesoi_ref_find_chunk(f, MESO_CHUNK_MESH, object_id),
+                  di = mesoi_ref_find_chunk(f, MESO_CHUNK_SDIR, object_id);
     if (mi < 0 || di < 0)
-        return fail(err, MESO_ERR_NOT_FOUND, mi < 0 ? "no MESH chunk" : "no SDIR chunk", object_id);
-    void *mesh = NULL, *dirs = NULL, *tex = NULL;
-    size_t mesh_size = 0, dirs_size = 0, tex_size = 0;
+        return mesoi_ref_fail(err, MESO_ERR_NOT_FOUND, "shell", object_id, mi < 0 ? "no MESH chunk" : "no SDIR chunk");
+    void *mesh = NULL, *dirs = NULL;
+    size_t mesh_size = 0, dirs_size = 0;
     meso_mesh_view mv;
-    if ((r = read_whole(f, mi, &mesh, &mesh_size, err)) != MESO_OK)
+    if ((r = mesoi_ref_read_whole(f, mi, &mesh, &mesh_size, err)) != MESO_OK)
         goto done;
     if ((r = meso_mesh_parse(mesh, mesh_size, &mv, err)) != MESO_OK)
         goto done;
@@ -117,11 +59,12 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
     if (nt == 0 || dc->dtype != MESO_DTYPE_F32 || dc->components != 3 || dc->dims[0] != nv ||
         (dc->dims[1] != 1 && dc->dims[1] != 2) || dc->dims[2] != 1 ||
         dc->decoded_size != (uint64_t)nv * dc->dims[1] * 12) {
-        r = fail(err, MESO_ERR_CORRUPT, "SDIR must be F32 x 3, N x (1|2) x 1 with N the MESH vertex count, and the "
-                                        "MESH must have triangles", object_id);
+        r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "shell", object_id,
+                           "SDIR must be F32 x 3, N x (1|2) x 1 with N the MESH vertex count, and the MESH must have "
+                           "triangles");
         goto done;
     }
-    if ((r = read_whole(f, di, &dirs, &dirs_size, err)) != MESO_OK)
+    if ((r = mesoi_ref_read_whole(f, di, &dirs, &dirs_size, err)) != MESO_OK)
         goto done;
     out->vertex_count = nv;
     out->triangle_count = nt;
@@ -132,7 +75,7 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
     out->indices = malloc(sizeof(uint32_t) * 3 * (size_t)nt);
     out->uvs = mv.uvs ? malloc(sizeof(float) * 2 * (size_t)nv) : NULL;
     if (!out->positions || !out->indices || (mv.uvs && !out->uvs)) {
-        r = fail(err, MESO_ERR_OUT_OF_MEMORY, "out of memory", object_id);
+        r = mesoi_ref_fail(err, MESO_ERR_OUT_OF_MEMORY, "shell", object_id, "out of memory");
         goto done;
     }
     memcpy(out->positions, mv.positions, sizeof(float) * 3 * (size_t)nv);
@@ -146,29 +89,13 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
     if (hi >= 0 || vi >= 0) {
         const int32_t ti = hi >= 0 ? hi : vi;
         const meso_chunk_info* tc = meso_file_chunk(f, (uint32_t)ti);
-        const uint32_t es = tc->dtype == MESO_DTYPE_U8 ? 1 : tc->dtype == MESO_DTYPE_U16 ? 2 : 0;
-        const uint64_t texels = (uint64_t)tc->dims[0] * tc->dims[1] * tc->dims[2];
-        if (es == 0 || tc->components != 1 || (hi >= 0 && tc->dims[2] != 1) || tc->decoded_size != texels * es ||
-            texels == 0 || texels > (uint64_t)(SIZE_MAX / sizeof(float))) {
-            r = fail(err, MESO_ERR_UNSUPPORTED, "texture function is not U8 or U16 x 1 (FORMAT.md 7.2)", object_id);
+        r = hi >= 0 && tc->dims[2] != 1 ? MESO_ERR_UNSUPPORTED : mesoi_ref_read_unorm(f, ti, &out->tex_values, err);
+        if (r == MESO_ERR_UNSUPPORTED) {
+            r = mesoi_ref_fail(err, r, "shell", object_id, "texture function is not U8 or U16 x 1 (FORMAT.md 7.2)");
             goto done;
         }
-        if ((r = read_whole(f, ti, &tex, &tex_size, err)) != MESO_OK)
+        if (r != MESO_OK)
             goto done;
-        out->tex_values = malloc(sizeof(float) * (size_t)texels);
-        if (!out->tex_values) {
-            r = fail(err, MESO_ERR_OUT_OF_MEMORY, "out of memory", object_id);
-            goto done;
-        }
-        for (size_t i = 0; i < (size_t)texels; ++i) {
-            if (es == 1) {
-                out->tex_values[i] = (float)(((const uint8_t*)tex)[i] / 255.0);
-            } else {
-                uint16_t x;
-                memcpy(&x, (const uint8_t*)tex + 2 * i, 2);
-                out->tex_values[i] = (float)(x / 65535.0);
-            }
-        }
         out->tex.kind = hi >= 0 ? 1 : 2;
         out->tex.w = tc->dims[0];
         out->tex.h = tc->dims[1];
@@ -179,7 +106,6 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
 done:
     free(mesh);
     free(dirs);
-    free(tex);
     if (r != MESO_OK)
         meso_ref_shell_free(out);
     return r;
@@ -223,26 +149,6 @@ void meso_ref_shell_prism(const meso_ref_shell* s, uint32_t f, double uv_scale, 
     }
 }
 
-/* >>matrices --------------------------------------------------------------- */
-
-/* Column-major 4×4: c = a · b. */
-static void mat_mul(const double a[16], const double b[16], double c[16])
-{
-    for (int col = 0; col < 4; ++col)
-        for (int row = 0; row < 4; ++row) {
-            double s = 0;
-            for (int k = 0; k < 4; ++k)
-                s += a[4 * k + row] * b[4 * col + k];
-            c[4 * col + row] = s;
-        }
-}
-
-static void mat_apply(const double m[16], const double x[4], double y[4])
-{
-    for (int r = 0; r < 4; ++r)
-        y[r] = m[r] * x[0] + m[4 + r] * x[1] + m[8 + r] * x[2] + m[12 + r] * x[3];
-}
-
 /* >>scene ------------------------------------------------------------------ */
 
 #define MAX_PLANES 20
@@ -268,7 +174,7 @@ typedef struct scene {
     bvh_node* nodes;
     uint32_t node_count;
     int curved, samples;
-    double mvp[16], inv[16], light[3], albedo[3];
+    mesoi_ref_camera cam;
 } scene;
 
 /* The supporting planes of the convex hull of six points: every plane
@@ -610,19 +516,7 @@ static void shade(const scene* sc, const ray* r, const hit* h, float rgb[3], flo
     double n[3];
     for (int i = 0; i < 3; ++i)
         n[i] = (g[0] * c12[i] + g[1] * c20[i] + g[2] * c01[i]) / (det != 0 ? det : 1);
-    double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (nl > 0)
-        for (int i = 0; i < 3; ++i)
-            n[i] /= nl;
-    if (n[0] * r->d[0] + n[1] * r->d[1] + n[2] * r->d[2] > 0)
-        for (int i = 0; i < 3; ++i)
-            n[i] = -n[i];
-    const double ndl = n[0] * sc->light[0] + n[1] * sc->light[1] + n[2] * sc->light[2];
-    const double k = (0.25 + 0.75 * w) * (0.15 + 0.85 * fmax(0.0, ndl));
-    for (int i = 0; i < 3; ++i) {
-        rgb[i] = (float)(sc->albedo[i] * k);
-        nrm[i] = (float)n[i];
-    }
+    mesoi_ref_shade(&sc->cam, r->d, n, w, rgb, nrm);
 }
 
 static void render_row(const scene* sc, meso_ref_image* img, int y)
@@ -630,48 +524,23 @@ static void render_row(const scene* sc, meso_ref_image* img, int y)
     const int W = img->width, H = img->height;
     for (int x = 0; x < W; ++x) {
         const size_t px = (size_t)y * (size_t)W + (size_t)x;
-        const double ndc_x = (2.0 * x + 1) / W - 1, ndc_y = (2.0 * y + 1) / H - 1;
-        const double cn[4] = {ndc_x, ndc_y, -1, 1}, cf[4] = {ndc_x, ndc_y, 1, 1};
-        double on[4], of[4];
-        mat_apply(sc->inv, cn, on);
-        mat_apply(sc->inv, cf, of);
         ray r;
-        for (int c = 0; c < 3; ++c) {
-            r.o[c] = on[c] / on[3];
-            r.d[c] = of[c] / of[3] - r.o[c];
+        mesoi_ref_pixel_ray(&sc->cam, x, y, W, H, r.o, r.d);
+        for (int c = 0; c < 3; ++c)
             r.inv[c] = r.d[c] != 0 ? 1.0 / r.d[c] : INFINITY;
-        }
         hit h = {.t = INFINITY};
         trace(sc, &r, &h);
         if (!(h.t <= 1.0)) {
-            img->rgb[3 * px] = img->rgb[3 * px + 1] = img->rgb[3 * px + 2] = 0.0f;
-            img->depth[px] = 1.0f;
-            img->coverage[px] = 0;
-            img->hit[3 * px] = img->hit[3 * px + 1] = img->hit[3 * px + 2] = NAN;
-            img->normal[3 * px] = img->normal[3 * px + 1] = img->normal[3 * px + 2] = 0.0f;
+            mesoi_ref_image_miss(img, px);
             continue;
         }
-        const double p[4] = {r.o[0] + h.t * r.d[0], r.o[1] + h.t * r.d[1], r.o[2] + h.t * r.d[2], 1};
-        double clip[4];
-        mat_apply(sc->mvp, p, clip);
-        img->depth[px] = (float)(0.5 * clip[2] / clip[3] + 0.5);
+        const double p[3] = {r.o[0] + h.t * r.d[0], r.o[1] + h.t * r.d[1], r.o[2] + h.t * r.d[2]};
+        img->depth[px] = mesoi_ref_depth(&sc->cam, p);
         img->coverage[px] = 1;
         for (int c = 0; c < 3; ++c)
             img->hit[3 * px + (size_t)c] = (float)p[c];
         shade(sc, &r, &h, &img->rgb[3 * px], &img->normal[3 * px]);
     }
-}
-
-void meso_ref_image_free(meso_ref_image* img)
-{
-    if (!img)
-        return;
-    free(img->rgb);
-    free(img->depth);
-    free(img->coverage);
-    free(img->hit);
-    free(img->normal);
-    memset(img, 0, sizeof(*img));
 }
 
 meso_result meso_ref_render(const meso_ref_shell* s, const meso_ref_view* v, meso_ref_image* out)
@@ -686,52 +555,20 @@ meso_result meso_ref_render(const meso_ref_shell* s, const meso_ref_view* v, mes
     sc.view = v;
     sc.curved = v->curved != 0;
     sc.samples = v->samples_per_prism > 0 ? v->samples_per_prism : 1024;
-    double model[16], pv[16];
-    int model_zero = 1;
-    for (int i = 0; i < 16; ++i)
-        model_zero &= v->model[i] == 0;
-    for (int i = 0; i < 16; ++i)
-        model[i] = model_zero ? (i % 5 == 0) : v->model[i];
-    mat_mul(v->proj, v->view, pv);
-    mat_mul(pv, model, sc.mvp);
-    if (!meso_mat4_inverse(sc.mvp, sc.inv))
+    if (!mesoi_ref_camera_init(v, &sc.cam))
         return MESO_ERR_INVALID_ARG;
-    double l[3] = {v->light_dir[0], v->light_dir[1], v->light_dir[2]};
-    if (l[0] == 0 && l[1] == 0 && l[2] == 0) {
-        l[0] = 0.3;
-        l[1] = 0.8;
-        l[2] = 0.5;
-    }
-    for (int i = 0; i < 3; ++i) /* transpose(mat3(model)) · l */
-        sc.light[i] = model[4 * i] * l[0] + model[4 * i + 1] * l[1] + model[4 * i + 2] * l[2];
-    const double ll = sqrt(sc.light[0] * sc.light[0] + sc.light[1] * sc.light[1] + sc.light[2] * sc.light[2]);
-    for (int i = 0; i < 3; ++i)
-        sc.light[i] = ll > 0 ? sc.light[i] / ll : 0;
-    const int no_albedo = v->albedo[0] == 0 && v->albedo[1] == 0 && v->albedo[2] == 0;
-    const double def_albedo[3] = {0.80, 0.74, 0.66};
-    for (int i = 0; i < 3; ++i)
-        sc.albedo[i] = no_albedo ? def_albedo[i] : v->albedo[i];
     const double uv_scale = v->uv_scale != 0 ? v->uv_scale : 1.0;
 
     const uint32_t nt = s->triangle_count;
-    const size_t npx = (size_t)v->width * (size_t)v->height;
     sc.prisms = malloc(sizeof(*sc.prisms) * nt);
     sc.items = malloc(sizeof(*sc.items) * nt);
     sc.nodes = malloc(sizeof(*sc.nodes) * 2 * (size_t)nt);
     sort_item* tmp = malloc(sizeof(*tmp) * nt);
-    out->rgb = malloc(sizeof(float) * 3 * npx);
-    out->depth = malloc(sizeof(float) * npx);
-    out->coverage = malloc(npx);
-    out->hit = malloc(sizeof(float) * 3 * npx);
-    out->normal = malloc(sizeof(float) * 3 * npx);
-    meso_result r = MESO_OK;
-    if (!sc.prisms || !sc.items || !sc.nodes || !tmp || !out->rgb || !out->depth || !out->coverage || !out->hit ||
-        !out->normal) {
+    meso_result r = mesoi_ref_image_alloc(out, v->width, v->height);
+    if (r == MESO_OK && (!sc.prisms || !sc.items || !sc.nodes || !tmp))
         r = MESO_ERR_OUT_OF_MEMORY;
+    if (r != MESO_OK)
         goto done;
-    }
-    out->width = v->width;
-    out->height = v->height;
     for (uint32_t f = 0; f < nt; ++f) {
         prepare_prism(&sc.prisms[f], s, f, uv_scale, sc.curved);
         sc.items[f] = f;
