@@ -8,9 +8,12 @@
  * Mouse: drag to orbit, scroll to zoom. Keys: Esc quits, S saves a
  * screenshot (mesoview.png); 1-4 pick the shell technique, [ ] halve/double
  * the error bound, - = halve/double the step limit, B cycles the bisection
- * steps, D toggles the distance map, A toggles the animation (a twist of the
- * base mesh and its directors, uploaded every frame with
- * meso_rt_shell_update: no re-bake). The title shows ms/frame and, on
+ * steps, D toggles the distance map, A toggles the animation (shells: a
+ * twist of the base mesh and its directors, uploaded every frame with
+ * meso_rt_shell_update; frusta: the skeleton sways, every node turning a
+ * little about its parent, rebuilt every frame with meso_rt_frusta_set_pose;
+ * no re-bake either way). Frusta use the step limit keys for their relief
+ * march (relief_steps). The title shows ms/frame and, on
  * OpenGL 4.3+, ray steps per ray-cast fragment counted by the shaders. GLFW lives only in examples/: libmeso itself
  * never sees a window. Draco-encoded chunks are decoded with the baker's
  * decoder, passed in through meso_open_desc as any host would pass its own.
@@ -35,7 +38,7 @@ static const char* const usage =
     "  --screenshot FILE   save the last frame as PNG when quitting\n"
     "  --technique T       shells: smooth (default), curved, tetra or segment\n"
     "  --error-px E        shells: image-space error bound in pixels (default 1)\n"
-    "  --animate           start with the twist animation on\n"
+    "  --animate           start with the animation on (shells twist, frusta sway)\n"
     "  -h, --help          this help;  --version  the version\n"
     "\n"
     "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png,\n"
@@ -65,10 +68,13 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
         d->error_px = fmaxf(d->error_px * 0.5f, 0.0625f);
     else if (key == GLFW_KEY_RIGHT_BRACKET)
         d->error_px = fminf(d->error_px * 2.0f, 64.0f);
-    else if (key == GLFW_KEY_MINUS)
+    else if (key == GLFW_KEY_MINUS) {
         d->max_steps = d->max_steps > 4 ? d->max_steps / 2 : 4;
-    else if (key == GLFW_KEY_EQUAL)
+        d->relief_steps = d->relief_steps > 2 ? d->relief_steps / 2 : 2;
+    } else if (key == GLFW_KEY_EQUAL) {
         d->max_steps = d->max_steps < 4096 ? d->max_steps * 2 : 4096;
+        d->relief_steps = d->relief_steps < 1024 ? d->relief_steps * 2 : 1024;
+    }
     else if (key == GLFW_KEY_B)
         d->bisection_steps = d->bisection_steps >= 8 ? 1 : d->bisection_steps + 1;
     else if (key == GLFW_KEY_D)
@@ -149,6 +155,86 @@ static void anim_step(meso_rt* rt, shell_anim* a, double time, const double c[3]
         }
     }
     meso_rt_shell_update(rt, a->obj, a->pos, a->dir, a->n);
+}
+
+/* Host-side skeleton of a frusta object, for the sway animation. */
+typedef struct frusta_anim {
+    meso_rt_object obj;
+    uint32_t n;
+    float *rest, *pos;
+    int32_t* parent;
+    double* rot; /* 9 per node: the node's accumulated rotation (row-major) */
+} frusta_anim;
+
+/* The rest pose and hierarchy through the runtime. 0 when not frusta. */
+static int frusta_anim_load(const meso_rt* rt, meso_rt_object obj, frusta_anim* a)
+{
+    memset(a, 0, sizeof(*a));
+    a->obj = obj;
+    uint32_t segments = 0;
+    if (meso_rt_frusta_info(rt, obj, &segments, &a->n) != MESO_OK || segments == 0 || a->n == 0)
+        return 0;
+    a->rest = malloc(sizeof(float) * 3 * a->n);
+    a->pos = malloc(sizeof(float) * 3 * a->n);
+    a->parent = malloc(sizeof(int32_t) * a->n);
+    a->rot = malloc(sizeof(double) * 9 * a->n);
+    if (!a->rest || !a->pos || !a->parent || !a->rot ||
+        meso_rt_frusta_rest_pose(rt, obj, a->rest, a->parent, a->n) != MESO_OK) {
+        free(a->rest);
+        free(a->pos);
+        free(a->parent);
+        free(a->rot);
+        memset(a, 0, sizeof(*a));
+        return 0;
+    }
+    return 1;
+}
+
+static void frusta_anim_free(frusta_anim* a)
+{
+    free(a->rest);
+    free(a->pos);
+    free(a->parent);
+    free(a->rot);
+}
+
+/* Sway: node i turns about its parent by a small angle that oscillates in
+ * time (a different phase per node, about an axis ⟂ to its bone and the
+ * vertical), on top of its parent's own turn: a plant in the wind. Parents
+ * come before children in SKEL, so one pass suffices. */
+static void frusta_anim_step(meso_rt* rt, frusta_anim* a, double time)
+{
+    for (uint32_t i = 0; i < a->n; ++i) {
+        double* R = a->rot + 9 * (size_t)i;
+        const int32_t p = a->parent[i];
+        if (p < 0 || (uint32_t)p >= i) {
+            static const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+            memcpy(R, id, sizeof(id));
+            memcpy(a->pos + 3 * (size_t)i, a->rest + 3 * (size_t)i, sizeof(float) * 3);
+            continue;
+        }
+        double b[3], ax[3];
+        for (int k = 0; k < 3; ++k)
+            b[k] = a->rest[3 * (size_t)i + k] - a->rest[3 * (size_t)p + k];
+        ax[0] = b[2], ax[1] = 0.0, ax[2] = -b[0]; /* b × up */
+        double l = sqrt(ax[0] * ax[0] + ax[2] * ax[2]);
+        if (l < 1e-12)
+            ax[0] = 1.0, ax[2] = 0.0, l = 1.0;
+        ax[0] /= l, ax[2] /= l;
+        const double ang = 0.12 * sin(1.3 * time + 0.9 * (double)(i % 17)), c = cos(ang), sn = sin(ang);
+        /* Rodrigues: L = I cos + sin [ax]x + (1 − cos) ax axᵀ, then R = R_parent · L. */
+        const double L[9] = {c + (1 - c) * ax[0] * ax[0], -sn * ax[2], sn * ax[1] + (1 - c) * ax[0] * ax[2],
+                             sn * ax[2], c, -sn * ax[0],
+                             -sn * ax[1] + (1 - c) * ax[2] * ax[0], sn * ax[0], c + (1 - c) * ax[2] * ax[2]};
+        const double* P = a->rot + 9 * (size_t)p;
+        for (int r = 0; r < 3; ++r)
+            for (int cc = 0; cc < 3; ++cc)
+                R[3 * r + cc] = P[3 * r] * L[cc] + P[3 * r + 1] * L[3 + cc] + P[3 * r + 2] * L[6 + cc];
+        for (int k = 0; k < 3; ++k)
+            a->pos[3 * (size_t)i + k] =
+                (float)(a->pos[3 * (size_t)p + k] + R[3 * k] * b[0] + R[3 * k + 1] * b[1] + R[3 * k + 2] * b[2]);
+    }
+    meso_rt_frusta_set_pose(rt, a->obj, a->pos, a->n);
 }
 
 typedef struct orbit {
@@ -238,7 +324,7 @@ static void load(void* dst, const char* name, int* missing)
 int main(int argc, char** argv)
 {
     int width = 800, height = 600, frames = 0;
-    knobs kn = {.d = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4}};
+    knobs kn = {.d = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4, .relief_steps = 64}};
     const char *file = NULL, *shot = NULL;
     for (int i = 1; i < argc; ++i) {
         const char* a = argv[i];
@@ -326,7 +412,8 @@ int main(int argc, char** argv)
     }
     meso_rt_object objs[64];
     shell_anim anims[64];
-    int nobj = 0, nanim = 0;
+    frusta_anim fanims[64];
+    int nobj = 0, nanim = 0, nfanim = 0;
     double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
     if (file) {
         meso_decoder dec = meso_bake_draco_decoder();
@@ -350,6 +437,8 @@ int main(int argc, char** argv)
                 continue;
             if (anim_load(f, rt, objs[nobj], recs[i].id, &anims[nanim]))
                 ++nanim;
+            else if (frusta_anim_load(rt, objs[nobj], &fanims[nfanim]))
+                ++nfanim;
             float l[3], h[3];
             meso_rt_object_bounds(rt, objs[nobj], l, h);
             for (int k = 0; k < 3; ++k) {
@@ -390,6 +479,8 @@ int main(int argc, char** argv)
                 anim_time += 1.0 / 30.0;
                 for (int i = 0; i < nanim; ++i)
                     anim_step(rt, &anims[i], anim_time, centre, radius);
+                for (int i = 0; i < nfanim; ++i)
+                    frusta_anim_step(rt, &fanims[i], anim_time);
             }
             meso_rt_draw_stats total = {0};
             for (int i = 0; i < nobj; ++i) {
@@ -440,6 +531,8 @@ int main(int argc, char** argv)
         if (last)
             break;
     }
+    for (int i = 0; i < nfanim; ++i)
+        frusta_anim_free(&fanims[i]);
     for (int i = 0; i < nanim; ++i) {
         free(anims[i].pos0);
         free(anims[i].pos);

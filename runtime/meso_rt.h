@@ -102,8 +102,10 @@ typedef struct meso_rt_object {
 /* Stream one object from an open file and upload it: only that object's
  * chunks are read (through whatever reader the file was opened with: path,
  * mmap, memory or the host's meso_io callbacks). Supported kinds:
- * MESO_OBJECT_MESH (drawn as the shaded mesh) and MESO_OBJECT_SHELL (ray cast
- * through its texture function, FORMAT.md §7.2). Other kinds give
+ * MESO_OBJECT_MESH (drawn as the shaded mesh), MESO_OBJECT_SHELL (ray cast
+ * through its texture function, FORMAT.md §7.2) and MESO_OBJECT_FRUSTA
+ * (relief-mapped conical frusta and balls, ray cast analytically; FRUS, FSEG
+ * and SKEL are required, BALL and RELF optional). Other kinds give
  * MESO_ERR_UNSUPPORTED. Encoded chunks (Draco) need a decoder in the
  * meso_open_desc the file was opened with. On failure nothing is uploaded
  * and out->id is 0. `file` may be closed after this returns. */
@@ -137,7 +139,10 @@ typedef struct meso_rt_draw_desc {
     float model[16];    /* object -> world, rigid + uniform scale; all zero means identity */
     float light_dir[3]; /* towards the light, world space; zero means (0.3, 0.8, 0.5) normalised */
     float albedo[3];    /* linear RGB; zero means (0.80, 0.74, 0.66) */
-    /* Shell knobs (ignored for meshes); zero means the default in brackets. */
+    /* Ray-casting knobs (ignored for meshes); zero means the default in brackets.
+     * Shells use all but relief_steps; frusta use relief_steps and
+     * bisection_steps (their relief march is the paper's uniform sampling plus
+     * bisection, §3). */
     meso_shell_technique technique; /* [MESO_SHELL_SMOOTH] */
     float error_px;            /* image-space error bound of the corrected ray path, pixels; a quarter
                                   of it is the smallest step near surfaces [1] */
@@ -148,15 +153,21 @@ typedef struct meso_rt_draw_desc {
     float uv_scale;            /* multiplies the baked texture coordinates (tiling) [1] */
     int no_distance_map;       /* 1: march at the fixed step below instead of sphere tracing */
     float fixed_step;          /* texture-space step without a distance map [1/256] */
+    int relief_steps;          /* frusta: uniform samples per relief march, over the ray's part inside
+                                  the relief layer before (and, leaving it, after) the solid core; more
+                                  catches thinner bumps at grazing angles [64] */
     meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) */
 } meso_rt_draw_desc;
 
 /* Draw an object into the host's currently bound framebuffer and viewport,
  * with depth testing (GL_LESS) and depth writes, so it sorts against the
- * host's own geometry. Shells write the exact depth of the ray's hit, and
- * render correctly with the camera inside the shell. The GL state the call
- * changes (program, vertex array, textures on units 0-4, depth test/func/
- * mask, culling) is restored before it returns. GL errors are logged
+ * host's own geometry. Shells and frusta write the exact depth of the ray's
+ * hit, and render correctly with the camera inside the shell or a frustum
+ * (they rasterise back faces of their bounding geometry and see the inner
+ * wall). The GL state the call changes (program, vertex array, active
+ * texture, textures on units 0-4, depth test/func/mask, culling, and on
+ * OpenGL 4.3 with `stats` the shader storage buffer binding) is restored
+ * before it returns. GL errors are logged
  * (GL_ERROR) and returned as MESO_ERR_GL, never fatal. */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
 
@@ -173,6 +184,35 @@ MESO_API meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object obj, const
 /* Vertex count and SDIR layer count of a shell (0 for other kinds). */
 MESO_API meso_result meso_rt_shell_info(const meso_rt* rt, meso_rt_object obj, uint32_t* vertex_count,
                                         uint32_t* layers);
+
+/* >>frusta animation ------------------------------------------------------ */
+
+/* Animation without re-baking (papers/relief-mapped-conical-frusta.md §4:
+ * "the splitting planes between segments have to be recomputed in each time
+ * step"): move the skeleton's nodes and rebuild every frustum of a FRUSTA
+ * object from them — cutting planes, end centres and radii, u frames and
+ * offsets (FORMAT.md §7.2 "Animation", runtime/frusta_pose.h), ball centres
+ * — then its bounding pyramids, and upload. `node_positions` holds 3 floats
+ * per SKEL node, in SKEL order, in object space; node_count must equal the
+ * object's (meso_rt_frusta_info). Radii and relief parametrisation stay as
+ * baked. Fails with MESO_ERR_INVALID_ARG (logged, nothing changed) for a
+ * handle that is not a live frusta object, a wrong count, or a pose that
+ * collapses a frustum to zero length. The object's bounds
+ * (meso_rt_object_bounds) become those of the new bounding geometry. Cost
+ * per 1000 frusta: tests/bench/bench_frusta.c (bench_frusta.csv). */
+MESO_API meso_result meso_rt_frusta_set_pose(meso_rt* rt, meso_rt_object obj, const float* node_positions,
+                                             uint32_t node_count);
+/* Frustum and skeleton node counts of a FRUSTA object (0 for other kinds).
+ * Either output may be NULL. */
+MESO_API meso_result meso_rt_frusta_info(const meso_rt* rt, meso_rt_object obj, uint32_t* frustum_count,
+                                         uint32_t* node_count);
+/* The rest pose: the SKEL node positions the file was baked with (3 floats
+ * per node) into `positions`, and optionally (`parents` not NULL) each
+ * node's parent index (−1 for a root; parents come before their children).
+ * Both hold node_count entries, which must equal the object's count. Hosts
+ * animate by moving these and calling meso_rt_frusta_set_pose. */
+MESO_API meso_result meso_rt_frusta_rest_pose(const meso_rt* rt, meso_rt_object obj, float* positions,
+                                              int32_t* parents, uint32_t node_count);
 
 #ifdef __cplusplus
 }

@@ -52,6 +52,7 @@
     X(PFNGLDRAWARRAYSPROC, DrawArrays)                                       \
     X(PFNGLUNIFORM1IPROC, Uniform1i)                                         \
     X(PFNGLUNIFORM4FVPROC, Uniform4fv)                                       \
+    X(PFNGLUNIFORM2IVPROC, Uniform2iv)                                       \
     X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                                 \
     X(PFNGLBINDTEXTUREPROC, BindTexture)                                     \
     X(PFNGLGENTEXTURESPROC, GenTextures)                                     \

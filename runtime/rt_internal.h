@@ -13,6 +13,7 @@ typedef struct mesoi_object {
     uint32_t kind;       /* meso_object_kind */
     GLuint vao, buffer;
     struct mesoi_shell* shell; /* MESO_OBJECT_SHELL only */
+    struct mesoi_frusta* frusta; /* MESO_OBJECT_FRUSTA only */
     GLsizei index_count;
     uint64_t indices_offset;
     float bbox_min[3], bbox_max[3];
@@ -27,7 +28,8 @@ struct meso_rt {
     GLuint mesh_program;
     GLint u_view, u_proj, u_model, u_light_dir, u_albedo;
     GLuint shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], compiled on first use */
-    GLuint empty_vao;   /* shells draw from gl_VertexID alone */
+    GLuint frusta_programs[2];                            /* [stats], compiled on first use */
+    GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
     GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
     mesoi_object* objects;
     uint32_t object_capacity;
@@ -38,8 +40,60 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t object_id, meso
 void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
 void mesoi_shell_programs_destroy(meso_rt* rt);
+
+/* rt_frusta.c */
+meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
+void mesoi_frusta_release(meso_rt* rt, mesoi_object* o);
+meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+void mesoi_frusta_programs_destroy(meso_rt* rt);
+/* meso_rt_frusta_set_pose without the upload: the pose rebuild and the
+ * bounding geometry on the host copy (tests/bench time the two parts). */
+meso_result mesoi_frusta_pose_host(meso_rt* rt, meso_rt_object obj, const float* node_positions, uint32_t node_count);
+
+/* rt_common.c: chunks and uploads */
 /* Index of the finest-level chunk of `type` for `object`, or -1. */
 int32_t mesoi_find_chunk(meso_file* f, uint32_t type, uint32_t object);
+/* Reads a whole chunk (validated by meso_file_read_chunk) into a fresh
+ * allocation; logs and fails cleanly. */
+meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, size_t* size);
+/* Uploads a TX2D / TX3D / DIST / RELF chunk of one component as a 2D or 3D
+ * texture, linear (or `nearest`) and repeating in s and t. */
+meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out);
+/* A texture buffer over a new buffer object holding `size` bytes of `data`. */
+GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf);
+/* Around a sequence of uploads: begin saves the texture buffer binding and
+ * clears stale GL errors (returns the binding); end restores it and turns a
+ * GL error raised meanwhile into MESO_ERR_GL (logged as "WHAT: GL error"),
+ * else returns r. */
+GLint mesoi_upload_begin(meso_rt* rt);
+meso_result mesoi_upload_end(meso_rt* rt, GLint prev, meso_result r, const char* what);
+/* Overwrites the first `size` bytes of buffer `buf` (animation updates). */
+meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_t size, const char* what);
+
+/* rt_common.c: one ray-casting draw. prepare (no GL state touched) →
+ * begin (saves the state meso_rt_draw promises to restore, binds the
+ * textures, the counters and `program` with its common uniforms u_mvp,
+ * u_inv_mvp, u_viewport, u_light_obj, u_albedo, and sets depth test GL_LESS
+ * with writes, front-face culling and the empty vertex array) → the kind's
+ * own uniforms and draw call → end (reads the counters, restores). */
+#define MESOI_DRAW_MAX_UNITS 8
+typedef struct mesoi_draw {
+    float mvp[16], inv_mvp[16]; /* object -> clip and back */
+    double proj11;              /* |proj[1][1]| */
+    double model_scale;         /* length of the model matrix's first column */
+    GLint viewport[4];
+    float light_obj[3], albedo[3];
+    int stats; /* the shaders count work (OpenGL 4.3 and desc->stats) */
+    int units;
+    GLenum target[MESOI_DRAW_MAX_UNITS];
+    GLint prev_bind[MESOI_DRAW_MAX_UNITS];
+    GLint prev_program, prev_vao, prev_func, prev_mask, prev_active, prev_cull_mode, prev_front, prev_ssbo;
+    GLboolean prev_test, prev_cull;
+} mesoi_draw;
+meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, mesoi_draw* out);
+void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, const GLenum* targets,
+                      const GLuint* textures);
+meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
 
 /* rt_mesh.c */
 GLuint mesoi_compile(meso_rt* rt, GLenum type, const char* const* src, int count, const char* name);

@@ -166,12 +166,13 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
     meso_result r = find_record(rt, f, object_id, &rec);
     if (r != MESO_OK)
         return r;
-    if (rec.kind == MESO_OBJECT_SHELL) {
+    if (rec.kind == MESO_OBJECT_SHELL || rec.kind == MESO_OBJECT_FRUSTA) {
         uint32_t slot;
         mesoi_object* o = alloc_slot(rt, &slot);
         if (!o)
             return MESO_ERR_OUT_OF_MEMORY;
-        r = mesoi_shell_load(rt, f, object_id, o);
+        r = rec.kind == MESO_OBJECT_SHELL ? mesoi_shell_load(rt, f, object_id, o)
+                                          : mesoi_frusta_load(rt, f, object_id, o);
         if (r != MESO_OK)
             return r;
         o->generation = next_generation(o->generation);
@@ -184,7 +185,7 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
     }
     if (rec.kind != MESO_OBJECT_MESH) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND,
-                  "object %u has kind %u; this runtime draws MESH and SHELL objects", object_id, rec.kind);
+                  "object %u has kind %u; this runtime draws MESH, SHELL and FRUSTA objects", object_id, rec.kind);
         return MESO_ERR_UNSUPPORTED;
     }
     const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_MESH, object_id);
@@ -266,6 +267,7 @@ void meso_rt_release_object(meso_rt* rt, meso_rt_object h)
     if (!o)
         return;
     mesoi_shell_release(rt, o);
+    mesoi_frusta_release(rt, o);
     rt->gl.DeleteVertexArrays(1, &o->vao);
     rt->gl.DeleteBuffers(1, &o->buffer);
     const uint32_t gen = o->generation; /* kept: the next occupant gets a new one */
@@ -289,6 +291,7 @@ void mesoi_objects_destroy(meso_rt* rt)
         mesoi_object* o = &rt->objects[i];
         if (o->live) {
             mesoi_shell_release(rt, o);
+            mesoi_frusta_release(rt, o);
             rt->gl.DeleteVertexArrays(1, &o->vao);
             rt->gl.DeleteBuffers(1, &o->buffer);
         }
@@ -316,6 +319,8 @@ meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc*
     }
     if (o->kind == MESO_OBJECT_SHELL)
         return mesoi_shell_draw(rt, o, d);
+    if (o->kind == MESO_OBJECT_FRUSTA)
+        return mesoi_frusta_draw(rt, o, d);
     static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     float light[3] = {0.3f, 0.8f, 0.5f}, albedo[3] = {0.80f, 0.74f, 0.66f};
     if (!all_zero(d->light_dir, 3))

@@ -25,7 +25,6 @@ flat in int v_prism;
 flat in int v_tet;
 out vec4 o_color;
 
-uniform vec4 u_viewport;
 uniform int u_tex_kind; // 0 none (all solid), 1 height field, 2 density volume
 uniform sampler2D u_height;
 uniform sampler3D u_volume;
@@ -40,16 +39,6 @@ uniform int u_bisect_steps;
 uniform int u_segment_steps;
 uniform float u_fixed_step;
 uniform float u_min_step;
-
-#ifdef MESO_STATS
-layout(std430, binding = 0) buffer MesoStats {
-    uint s_fragments;
-    uint s_steps;
-    uint s_hits;
-};
-#endif
-
-int g_steps = 0;
 
 // --- texture function (FORMAT.md sec. 7.2) -------------------------------------
 
@@ -285,16 +274,7 @@ vec3 mapped_normal(Prism P, vec3 q, vec3 g, bool curved)
     return transpose(inverse(J)) * g;
 }
 
-// --- rays ------------------------------------------------------------------
-
-void fragment_ray(out vec3 ro, out vec3 rd)
-{
-    vec2 ndc = (gl_FragCoord.xy - u_viewport.xy) / u_viewport.zw * 2.0 - 1.0;
-    vec4 a = u_inv_mvp * vec4(ndc, -1.0, 1.0);
-    vec4 b = u_inv_mvp * vec4(ndc, 1.0, 1.0);
-    ro = a.xyz / a.w;
-    rd = normalize(b.xyz / b.w - ro);
-}
+// --- rays (fragment_ray, write_depth, finish: raycast_common.glsl) --------
 
 // Ray/triangle (Moller-Trumbore) with a small tolerance; -1 on a miss.
 float ray_triangle(vec3 ro, vec3 rd, vec3 p0, vec3 p1, vec3 p2)
@@ -328,25 +308,6 @@ bool onto_ray(Prism P, vec3 q, vec3 ro, vec3 rd, out vec3 r)
     vec3 x = ro + (dot(nn, a0 - ro) / den) * rd;
     r = vec3(barycentric(a0, a1, a2, x), q.z);
     return true;
-}
-
-void write_depth(vec3 p)
-{
-    vec4 clip = u_mvp * vec4(p, 1.0);
-    float ndc_z = clip.z / clip.w;
-    gl_FragDepth = 0.5 * (gl_DepthRange.diff * ndc_z + gl_DepthRange.near + gl_DepthRange.far);
-}
-
-void finish(bool hit)
-{
-#ifdef MESO_STATS
-    atomicAdd(s_fragments, 1u);
-    atomicAdd(s_steps, uint(g_steps));
-    if (hit)
-        atomicAdd(s_hits, 1u);
-#endif
-    if (!hit)
-        discard;
 }
 
 #if MESO_TECHNIQUE == 2

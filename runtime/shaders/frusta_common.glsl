@@ -1,0 +1,9 @@
+// frusta_common.glsl - shared by the frusta vertex and fragment shaders.
+// The runtime prepends "#version", MESO_FRUSTA_TEXELS (texels per
+// primitive), MESO_FRUSTA_CORNER0 (its first corner texel) and, on OpenGL
+// 4.3+ with counters, MESO_STATS. runtime/rt_frusta.c documents the
+// texel layout.
+
+uniform samplerBuffer u_prims; // MESO_FRUSTA_TEXELS RGBA32F texels per primitive
+uniform mat4 u_mvp;            // object -> clip
+uniform mat4 u_inv_mvp;        // clip -> object
