@@ -74,6 +74,39 @@ meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, const double
                                                const uint32_t* indices, uint32_t triangle_count, uint8_t* flags_a,
                                                uint8_t* flags_b, meso_cgal_intersection_count* out, meso_error* err);
 
+/* Curve skeleton of a closed triangle mesh by mean curvature flow
+ * (CGAL::Mean_curvature_flow_skeletonization: medially centred, 500
+ * iterations at most, min edge length 0.002 x bbox diagonal, and the two
+ * weights below). The graph may have cycles (one per handle of the
+ * surface). Every array is malloc'd (free each with free()); on failure all
+ * are NULL and counts 0. */
+typedef struct meso_cgal_skeleton {
+    uint32_t vertex_count;
+    uint32_t edge_count;
+    double* xyz;           /* 3 * vertex_count skeleton vertex positions */
+    uint32_t* edges;       /* 2 * edge_count skeleton vertex pairs */
+    uint32_t* corr_offset; /* vertex_count + 1: mesh vertices of skeleton vertex i are corr[corr_offset[i] .. [i+1]) */
+    uint32_t* corr;        /* mesh vertex indices (CGAL's correspondence), corr_offset[vertex_count] of them */
+} meso_cgal_skeleton;
+
+/* CGAL's weights (Tagliasacchi et al. 2012); <= 0 keeps CGAL's default. */
+typedef struct meso_cgal_skeleton_params {
+    double quality_speed_tradeoff;           /* w_H, CGAL default 0.1 */
+    double medially_centered_speed_tradeoff; /* w_M, CGAL default 0.2 */
+} meso_cgal_skeleton_params;
+
+/* Skeletonize the mesh (xyz[3*vertex_count], indices[3*triangle_count], CCW
+ * from outside; params may be NULL). CGAL requires a closed, manifold,
+ * one-component surface and does not check it (open or multi-component
+ * input crashes it): the caller checks that first, and passes no unused
+ * vertex and no degenerate face (bake/skeleton_from_mesh.c). The adapter
+ * itself refuses faces Surface_mesh cannot add and open meshes
+ * (MESO_ERR_CORRUPT). Deterministic: the flow runs on an arena (see the
+ * adapter). */
+meso_result meso_cgal_skeletonize(const double* xyz, uint32_t vertex_count, const uint32_t* indices,
+                                  uint32_t triangle_count, const meso_cgal_skeleton_params* params,
+                                  meso_cgal_skeleton* out, meso_error* err);
+
 /* >>openvdb ------------------------------------------------------------- */
 
 typedef struct meso_vdb_grid meso_vdb_grid;

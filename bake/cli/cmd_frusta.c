@@ -16,7 +16,7 @@
 #include "frustum_model.h"
 #include "skeleton_swc.h"
 #include "texture_function.h"
-#if MESO_HAVE_CGAL && MESO_HAVE_SKELETON_FROM_MESH
+#if MESO_HAVE_CGAL
 #include "skeleton_from_mesh.h"
 #endif
 
@@ -58,7 +58,8 @@ static const char* const usage_frusta =
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this text\n"
     "\n"
-    "fit_error: mesh input: distance between the frusta and the mesh (max, mean);\n"
+    "fit_error: mesh input: two-sided distance between the frusta (as round-ended cones)\n"
+    "and the mesh (max), mean distance of the mesh's vertices to them;\n"
     "skeleton input: how far the fit moved the surface from the input radii.\n";
 
 typedef struct frusta_args {
@@ -139,6 +140,7 @@ static int is_mesh_path(const char* p)
 typedef struct skeleton_source {
     const char* kind; /* "swc", "text", "mesh" */
     double fit_error_max, fit_error_mean; /* mesh input: distances to the mesh */
+    double mesh_to_model_max, model_to_mesh_max, bbox_diagonal;
     double tolerance;
     uint32_t mesh_triangles, skeleton_nodes_before;
     double seconds_skeleton;
@@ -155,22 +157,33 @@ static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skelet
         return meso_skeleton_load(a->in, MESO_SKELETON_TEXT, sk, err);
     }
     src->kind = "mesh";
-#if MESO_HAVE_CGAL && MESO_HAVE_SKELETON_FROM_MESH
+#if MESO_HAVE_CGAL
     meso_mesh m;
     meso_result r = load_mesh(a->in, &m, err);
     if (r != MESO_OK)
         return r;
     double t0 = now_seconds();
-    meso_skeleton_fit_options o = {.tolerance = a->tolerance, .verbose = verbose};
+    meso_skeleton_fit_options o = {.tolerance = a->tolerance};
     meso_skeleton_fit_stats st;
     r = meso_skeleton_from_mesh(&m, &o, sk, &st, err);
     if (r == MESO_OK) {
-        src->fit_error_max = st.fit_error_max;
+        /* Two-sided: the mesh's vertices to the frusta and sampled frusta
+         * surface back to the mesh. */
+        src->fit_error_max = st.hausdorff;
         src->fit_error_mean = st.fit_error_mean;
+        src->mesh_to_model_max = st.fit_error_max;
+        src->model_to_mesh_max = st.model_to_mesh_max;
+        src->bbox_diagonal = st.bbox_diagonal;
         src->tolerance = st.tolerance;
         src->skeleton_nodes_before = st.cgal_nodes;
-        src->mesh_triangles = m.index_count / 3;
+        src->mesh_triangles = st.mesh_triangles;
         src->seconds_skeleton = now_seconds() - t0;
+        if (verbose)
+            fprintf(stderr,
+                "mesobake: skeleton: CGAL %u nodes (%.2f s), %u cycles cut, fitted %u nodes / %u segments; fit "
+                "error max %.4g (%.2f %% of the diagonal), mean %.4g\n",
+                st.cgal_nodes, st.seconds_cgal, st.cycles_broken, st.nodes, st.segments, st.hausdorff,
+                100 * st.hausdorff / st.bbox_diagonal, st.fit_error_mean);
     }
     meso_mesh_free(&m);
     return r;
@@ -220,6 +233,9 @@ static cJSON* report_json(const meso_frustum_model* m, const skeleton_source* sr
     cJSON_AddNumberToObject(rep, "radius_change_max", st->radius_change_max);
     if (!strcmp(src->kind, "mesh")) {
         cJSON_AddNumberToObject(rep, "tolerance", src->tolerance);
+        cJSON_AddNumberToObject(rep, "bbox_diagonal", src->bbox_diagonal);
+        cJSON_AddNumberToObject(rep, "mesh_to_frusta_max", src->mesh_to_model_max);
+        cJSON_AddNumberToObject(rep, "frusta_to_mesh_max", src->model_to_mesh_max);
         cJSON_AddNumberToObject(rep, "mesh_triangles", src->mesh_triangles);
         cJSON_AddNumberToObject(rep, "skeleton_nodes_extracted", src->skeleton_nodes_before);
     }

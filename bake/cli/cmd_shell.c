@@ -59,7 +59,7 @@ static const char* const usage_shell =
     "                          volume:FILE.vdb[:GRID] OpenVDB float grid (default: the first) over its\n"
     "                                                 active box; fog volume: density = value; level\n"
     "                                                 set: density = 1/2 - phi / (2 voxel)\n"
-    "                          bricks|cobble|ribs[:RES] built-in height fields (RES^2, default 256)\n"
+    "                          bricks[:RES] cobble[:RES] ribs[:RES]  built-in heights (RES^2, default 256)\n"
     "                          weave[:RES]            built-in interlaced threads (RES x RES x RES/2,\n"
     "                                                 default 128)\n"
     "                          cells[:RES]            built-in 3D Voronoi cell walls (RES^3, default 64)\n"

@@ -74,6 +74,29 @@ check "neuron: none unhandled" test "$(num "$tmp/neuron.json" cap_intersections_
 check "neuron --keep-cap-intersections: some unhandled" \
   awk -v g="$(num "$tmp/keep.json" cap_intersections_unhandled)" 'BEGIN { exit !(g > 0) }'
 
+# 3b. A closed mesh: CGAL's skeleton, fitted and simplified (a torus: its
+# cycle is cut, the ring stays closed); open meshes are refused before CGAL.
+if "$bake" frusta --help | grep -q "a mesh"; then
+  "$bake" frusta -i "$data/torus.obj" -o "$tmp/torus.meso" --report "$tmp/torus.json" >/dev/null 2>"$tmp/torus.err"
+  rc=$?
+  if grep -q "need CGAL" "$tmp/torus.err"; then
+    echo "skip mesh input: this build has no CGAL"
+  else
+    check "torus: bake succeeds" test "$rc" = 0
+    check "torus: validates fully" sh -c "'$inspect' validate --full '$tmp/torus.meso' >/dev/null"
+    check "torus: report says mesh input" grep -q '"input":[[:space:]]*"mesh"' "$tmp/torus.json"
+    # the torus (R = 1, r = 0.25) is a ring of round cones: within 2 % of its diagonal
+    check "torus: fit error within 2 % of the diagonal" \
+      awk -v e="$(num "$tmp/torus.json" fit_error_max)" -v d="$(num "$tmp/torus.json" bbox_diagonal)" \
+      'BEGIN { exit !(e > 0 && e < 0.02 * d) }'
+    check "torus: at least 8 segments around the ring" awk -v n="$(num "$tmp/torus.json" segments)" 'BEGIN { exit !(n >= 8) }'
+    "$bake" frusta -i "$data/cube_no_bottom.obj" -o "$tmp/open.meso" >/dev/null 2>"$tmp/open.err"
+    check "open mesh: exit 3" test $? = 3
+    check "open mesh: E3172 names a boundary edge" grep -q "E3172.*boundary edge" "$tmp/open.err"
+    check "open mesh: no output file" test ! -e "$tmp/open.meso"
+  fi
+fi
+
 # 4. Bad input: a coded error naming the line, exit 3, no output.
 bad() { # NAME CONTENT EXT CODE
   printf "$2" >"$tmp/$1.$3"
