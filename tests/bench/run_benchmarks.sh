@@ -48,3 +48,20 @@ if [ "${MESO_BENCH_SKIP_RENDER:-0}" != 1 ]; then
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_shell_render.gp"
     echo "render results in $results"
 fi
+
+# Frusta (issue #7): set_pose per 1000 frusta and draw times (bench_frusta),
+# frusta against polygon tessellations at equal error, relief steps, and
+# segments against fit error on ../shared/data/meshes/armadillo.obj
+# (bench_frusta_render). ~1 min. Results: bench_frusta.csv,
+# frusta_vs_tess.csv, frusta_relief_steps.csv, frusta_fit.csv,
+# frusta_vs_tess.png. Skip with MESO_BENCH_SKIP_FRUSTA=1.
+if [ "${MESO_BENCH_SKIP_FRUSTA:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_frusta tests/bench/bench_frusta_render bake/mesobake
+    echo "== bench_frusta"
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta" "$results"
+    echo "== bench_frusta_render"
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta_render" "$results" "$build/bake/mesobake" \
+        "$src/tests/data" "$src/../shared/data/meshes/armadillo.obj"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_frusta.gp"
+    echo "frusta results in $results"
+fi
