@@ -3,9 +3,9 @@
 # text skeletons, the chunks a frusta object is made of, the report keys
 # the issue names, relief, determinism, and bad input (a coded error that
 # names the line, a non-zero exit, and no output file).
-# usage: frusta_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR
+# usage: frusta_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE]
 set -u
-bake=$1 inspect=$2 data=$3
+bake=$1 inspect=$2 data=$3 probe=${4:-}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -94,6 +94,29 @@ if "$bake" frusta --help | grep -q "a mesh"; then
     check "open mesh: exit 3" test $? = 3
     check "open mesh: E3172 names a boundary edge" grep -q "E3172.*boundary edge" "$tmp/open.err"
     check "open mesh: no output file" test ! -e "$tmp/open.meso"
+  fi
+fi
+
+# 3c. mesoinspect preview of a frusta object: libmeso (EGL) and the exact
+# reference agree at the centre pixel (on the object) and leave the corners
+# to the background.
+if [ -n "$probe" ]; then
+  printf '0 -1 0 0.6\n0 1 0 0.6\n' >"$tmp/rod.skel"
+  "$bake" frusta -i "$tmp/rod.skel" -o "$tmp/rod.meso" >/dev/null 2>&1
+  "$inspect" preview "$tmp/rod.meso" -o "$tmp/rod_ref.png" --size 64x64 --reference >/dev/null 2>&1
+  check "preview --reference: writes a PNG" test -s "$tmp/rod_ref.png"
+  ref_px=$("$probe" "$tmp/rod_ref.png")
+  check "preview --reference: centre on the rod, corner background" \
+    sh -c "test \"$(echo "$ref_px" | sed -n 6p)\" != \"$(echo "$ref_px" | sed -n 2p)\""
+  if "$inspect" preview "$tmp/rod.meso" -o "$tmp/rod_gl.png" --size 64x64 >/dev/null 2>&1; then
+    gl_px=$("$probe" "$tmp/rod_gl.png")
+    check "preview (libmeso): same corner as the reference" \
+      test "$(echo "$gl_px" | sed -n 2p)" = "$(echo "$ref_px" | sed -n 2p)"
+    check "preview (libmeso): centre within 8/255 of the reference" awk -v a="$(echo "$gl_px" | sed -n 6p)" \
+      -v b="$(echo "$ref_px" | sed -n 6p)" 'BEGIN { split(a, x, " "); split(b, y, " ");
+        for (i = 1; i <= 3; ++i) { d = x[i] - y[i]; if (d < -8 || d > 8) exit 1 } }'
+  else
+    echo "skip preview (libmeso): no EGL in this build"
   fi
 fi
 
