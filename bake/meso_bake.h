@@ -61,7 +61,8 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  * Winding numbers (bake/winding_number.h): 3160..3169, listed there.
  * Skeletons from meshes (bake/skeleton_from_mesh.h): 3170..3179, listed there.
  * Voxelization and membership maps (bake/voxelize.h, bake/membership.h):
- *   3180..3189, listed there. */
+ *   3180..3189, listed there.
+ * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there. */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */

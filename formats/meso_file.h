@@ -98,6 +98,7 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_RELF MESO_FOURCC('R', 'E', 'L', 'F') /* relief map (2D height + normal) */
 #define MESO_CHUNK_FSEG MESO_FOURCC('F', 'S', 'E', 'G') /* per-frustum topology and parametrisation */
 #define MESO_CHUNK_BALL MESO_FOURCC('B', 'A', 'L', 'L') /* balls closing branch points */
+#define MESO_CHUNK_CELL MESO_FOURCC('C', 'E', 'L', 'L') /* cells object grid: tiles, resolution, origin (one record) */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -265,6 +266,14 @@ typedef int (*meso_issue_fn)(void* user, const meso_error* issue);
  * an encoded MESH it also decodes and checks it. */
 MESO_API meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn, void* user);
 
+/* Check the chunks of cells object `object` against its CELL record
+ * (FORMAT.md §7.8): TILE, SPLT, MEMB, NRMM and COLR present at lod 0 with
+ * the element types and dims CELL implies (issue 4803), TILE values <= S
+ * (4804), the SPLT table (4805) and the MEMB structure (4806). Reads CELL,
+ * TILE, SPLT and MEMB with meso_file_read_chunk (so their CRCs and contents
+ * are checked too). MESO_CHECK_FULL runs it for every CELL chunk. */
+MESO_API meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err);
+
 /* >>writer ---------------------------------------------------------------- */
 
 typedef struct meso_writer meso_writer;
@@ -373,6 +382,12 @@ MESO_API meso_result meso_writer_write_file(meso_writer* w, const char* path, me
 #define MESO_ISSUE_FSEG_VALUE 4602u
 #define MESO_ISSUE_BALL_SIZE 4701u
 #define MESO_ISSUE_BALL_VALUE 4702u
+#define MESO_ISSUE_CELL_SIZE 4801u
+#define MESO_ISSUE_CELL_VALUE 4802u
+#define MESO_ISSUE_CELL_CHUNKS 4803u
+#define MESO_ISSUE_CELL_TILE 4804u
+#define MESO_ISSUE_CELL_SPLT 4805u
+#define MESO_ISSUE_CELL_MEMB 4806u
 #define MESO_ISSUE_API_ARG 5001u
 #define MESO_ISSUE_API_BUFFER 5002u
 #define MESO_ISSUE_API_MEMORY 5003u

@@ -139,4 +139,24 @@
 #define MESO_BALL_OFF_RESERVED 20
 #define MESO_BALL_SIZE_RESERVED 12
 
+/* CELL chunk: one 64-byte record, the grid of a cells object (FORMAT.md §7.8). */
+#define MESO_CELL_RECORD_SIZE 64
+#define MESO_CELL_OFF_TILES 0          /* u32 x 3: T0, T1, T2 */
+#define MESO_CELL_OFF_TILE_RES 12      /* u32: R, tile-map voxels per tile edge */
+#define MESO_CELL_OFF_SPLIT_COUNT 16   /* u32: S */
+#define MESO_CELL_OFF_CELL_COUNT 20    /* u32: C */
+#define MESO_CELL_OFF_ORIGIN 24        /* f32 x 3: min corner of tile (0, 0, 0) */
+#define MESO_CELL_OFF_VOXEL_SIZE 36    /* f32: h; a tile edge is R h */
+#define MESO_CELL_OFF_MIXED_TILES 40   /* u64: M, MIXED tiles = MEMB records */
+#define MESO_CELL_OFF_RESERVED 48
+#define MESO_CELL_SIZE_RESERVED 16
+#define MESO_CELL_MAX_TILES 16384     /* per axis */
+#define MESO_CELL_MAX_TILE_RES 1024
+/* SPLT of a cells object: U32 x 6 per split cell. */
+#define MESO_SPLT_COMPONENTS 6
+#define MESO_SPLT_CELL 0
+#define MESO_SPLT_FACE_CODE 1
+#define MESO_SPLT_TILE_INDEX 2
+#define MESO_SPLT_OFFSET 3             /* i32 x 3 (two's complement) */
+
 #endif /* MESO_LAYOUT_H */

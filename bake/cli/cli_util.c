@@ -46,6 +46,19 @@ int usage_error(const char* fmt, ...)
     return MESO_EXIT_USAGE;
 }
 
+int option_value(const char* opt, const char* value, const char* const* valued, size_t count)
+{
+    int known = 0;
+    for (size_t k = 0; k < count && !known; ++k)
+        known = !strcmp(opt, valued[k]);
+    if (!known)
+        return opt[0] == '-' ? usage_error("unrecognized option '%s'", opt)
+                             : usage_error("unexpected argument '%s'", opt);
+    if (!value)
+        return usage_error("option '%s' needs a value", opt);
+    return 0;
+}
+
 double now_seconds(void)
 {
     struct timespec ts;
@@ -271,4 +284,17 @@ int parse_int(const char* s, long lo, long hi, long* out)
         return 0;
     *out = v;
     return 1;
+}
+
+int finish_bake(meso_result r, const meso_error* err, const char* out, const char* report, cJSON* rep,
+                size_t file_size, double t0)
+{
+    const double t_end = now_seconds();
+    if (r != MESO_OK) {
+        err_print(err);
+        return meso_exit_for(r);
+    }
+    if (verbose)
+        fprintf(stderr, "mesobake: wrote %s: %zu bytes (%.0f ms total)\n", out, file_size, 1e3 * (t_end - t0));
+    return report ? write_report_file(report, rep, file_size, t_end - t0) : MESO_EXIT_OK;
 }

@@ -55,6 +55,16 @@ meso_result write_meso(const char* out, const cJSON* meta, const cJSON* report, 
  * the .meso file, so bakes stay byte-identical). Returns an exit code. */
 int write_report_file(const char* path, cJSON* report, size_t file_size, double seconds);
 
+/* The end of a bake command: under -v the "wrote OUT" line, then the error
+ * (r != MESO_OK) or the --report file (report != NULL). Returns the exit code. */
+int finish_bake(meso_result r, const meso_error* err, const char* out, const char* report, cJSON* rep,
+                size_t file_size, double t0);
+
+/* An option that takes a value: 0 when `opt` is one of the `count` names in
+ * `valued` and `value` is not NULL, else the usage error's exit code
+ * (unrecognized option, unexpected argument, or a missing value). */
+int option_value(const char* opt, const char* value, const char* const* valued, size_t count);
+
 /* Parse a positive finite number; 0 on failure. */
 int parse_double(const char* s, double* out);
 int parse_int(const char* s, long lo, long hi, long* out);
@@ -62,5 +72,6 @@ int parse_int(const char* s, long lo, long hi, long* out);
 int cmd_mesh(int argc, char** argv);
 int cmd_shell(int argc, char** argv);
 int cmd_frusta(int argc, char** argv);
+int cmd_cells(int argc, char** argv);
 
 #endif

@@ -87,15 +87,11 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             a->keep_caps = 1;
             continue;
         }
-        const int takes_value = !strcmp(s, "-i") || !strcmp(s, "--input") || !strcmp(s, "-o") ||
-                                !strcmp(s, "--output") || !strcmp(s, "--report") || !strcmp(s, "--tolerance") ||
-                                !strcmp(s, "--max-joint-angle") || !strcmp(s, "--relief") ||
-                                !strcmp(s, "--relief-depth") || !strcmp(s, "--relief-repeat");
-        if (!takes_value)
-            return s[0] == '-' ? usage_error("unrecognized option '%s'", s)
-                               : usage_error("unexpected argument '%s'", s);
-        if (!v)
-            return usage_error("option '%s' needs a value", s);
+        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--tolerance",
+            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat"};
+        const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
+        if (bad)
+            return bad;
         ++i;
         if (!strcmp(s, "-i") || !strcmp(s, "--input"))
             a->in = v;
@@ -346,14 +342,7 @@ int cmd_frusta(int argc, char** argv)
         if (r == MESO_OK)
             r = write_meso(a.out, meta, rep, &rec, chunks, count, &file_size, &err);
     }
-    const double t_end = now_seconds();
-    if (r == MESO_OK && verbose)
-        fprintf(stderr, "mesobake: wrote %s: %zu bytes (%.0f ms total)\n", a.out, file_size, 1e3 * (t_end - t0));
-    int code = r == MESO_OK ? MESO_EXIT_OK : meso_exit_for(r);
-    if (r != MESO_OK)
-        err_print(&err);
-    else if (a.report)
-        code = write_report_file(a.report, rep, file_size, t_end - t0);
+    const int code = finish_bake(r, &err, a.out, a.report, rep, file_size, t0);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     free(frus);

@@ -18,6 +18,7 @@ static const char* const usage_short =
     "  mesh     import a mesh (OBJ, OFF, PLY, STL, OM or DRC) as a MESH object\n"
     "  shell    build a fold-free shell (base mesh + directors) over a mesh\n"
     "  frusta   skin a skeleton (SWC, text, or one extracted from a mesh) with conical frusta\n"
+    "  cells    fill a mesh with tiled cells: tile map, membership, normal and colour maps\n"
     "\n"
     "Run 'mesobake --help' or 'mesobake <command> --help' for all options.\n";
 
@@ -31,6 +32,7 @@ static const char* const usage_full =
     "  mesh     import a mesh (OBJ, OFF, PLY, STL, OM or DRC) as a MESH object\n"
     "  shell    build a fold-free shell (base mesh + directors) over a mesh\n"
     "  frusta   skin a skeleton (SWC, text, or one extracted from a mesh) with conical frusta\n"
+    "  cells    fill a mesh with tiled cells: tile map, membership, normal and colour maps\n"
     "\n"
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
     "            4 internal error, 5 not supported in this build.\n"
@@ -57,6 +59,8 @@ int main(int argc, char** argv)
         return cmd_shell(argc - 2, argv + 2);
     if (!strcmp(cmd, "frusta"))
         return cmd_frusta(argc - 2, argv + 2);
+    if (!strcmp(cmd, "cells"))
+        return cmd_cells(argc - 2, argv + 2);
     if (cmd[0] == '-')
         return usage_error("unrecognized option '%s'", cmd);
     return usage_error("unknown command '%s'", cmd);

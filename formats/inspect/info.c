@@ -160,7 +160,7 @@ static float ld_f32(const uint8_t* p)
 }
 
 /* One line about a frusta object's FSEG (end kinds, caps, relief) or BALL
- * chunk, for someone checking what a bake made of a skeleton. Nothing when
+ * chunk, or a cells object's CELL record, for someone checking what a bake made of a skeleton. Nothing when
  * the chunk is not raw, its CRC fails or its size is not whole records. */
 static void frusta_detail(const meso_file* f, uint32_t i)
 {
@@ -198,6 +198,18 @@ static void frusta_detail(const meso_file* f, uint32_t i)
             hi = r > hi ? r : hi;
         }
         printf("  chunk %u BALL: %llu balls, radius %g to %g\n", i, (unsigned long long)n, lo, hi);
+    } else if (c->type == MESO_CHUNK_CELL && c->stored_size == MESO_CELL_RECORD_SIZE) {
+        /* the cells object's grid (FORMAT.md §7.8) */
+        const uint32_t R = ld_u32(p + MESO_CELL_OFF_TILE_RES);
+        const uint64_t mixed = ld_u32(p + MESO_CELL_OFF_MIXED_TILES) |
+                               (uint64_t)ld_u32(p + MESO_CELL_OFF_MIXED_TILES + 4) << 32;
+        printf("  chunk %u CELL: %ux%ux%u tiles of %u^3 voxels (voxel %g, origin %g,%g,%g); %u split cells of %u "
+               "cells per tile; %llu mixed tiles\n",
+               i, ld_u32(p + MESO_CELL_OFF_TILES), ld_u32(p + MESO_CELL_OFF_TILES + 4),
+               ld_u32(p + MESO_CELL_OFF_TILES + 8), R, ld_f32(p + MESO_CELL_OFF_VOXEL_SIZE),
+               ld_f32(p + MESO_CELL_OFF_ORIGIN), ld_f32(p + MESO_CELL_OFF_ORIGIN + 4),
+               ld_f32(p + MESO_CELL_OFF_ORIGIN + 8), ld_u32(p + MESO_CELL_OFF_SPLIT_COUNT),
+               ld_u32(p + MESO_CELL_OFF_CELL_COUNT), (unsigned long long)mixed);
     }
 }
 

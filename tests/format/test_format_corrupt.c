@@ -683,6 +683,144 @@ typedef struct never_decoder {
     int calls;
 } never_decoder;
 
+
+/* >>cells objects (FORMAT.md §7.8): a hand-built object of 2 x 1 x 1 tiles of
+ * 2^3 voxels, 2 split cells of one cell; tile 0 MIXED (split 1 INSIDE, split
+ * 2 INTERSECTED), tile 1 INSIDE. */
+typedef struct cells_bytes {
+    uint8_t cell[MESO_CELL_RECORD_SIZE];
+    uint16_t tile[8];
+    uint32_t splt[2 * MESO_SPLT_COMPONENTS];
+    uint32_t memb[3];
+    uint32_t tile_dims[3], memb_words;
+    int skip_colr;
+} cells_bytes;
+
+static void cells_sample(cells_bytes* c)
+{
+    memset(c, 0, sizeof *c);
+    put32(c->cell + MESO_CELL_OFF_TILES, 2);
+    put32(c->cell + MESO_CELL_OFF_TILES + 4, 1);
+    put32(c->cell + MESO_CELL_OFF_TILES + 8, 1);
+    put32(c->cell + MESO_CELL_OFF_TILE_RES, 2);
+    put32(c->cell + MESO_CELL_OFF_SPLIT_COUNT, 2);
+    put32(c->cell + MESO_CELL_OFF_CELL_COUNT, 1);
+    putf(c->cell + MESO_CELL_OFF_VOXEL_SIZE, 0.5f);
+    put32(c->cell + MESO_CELL_OFF_MIXED_TILES, 1);
+    static const uint16_t tile[8] = {0, 1, 1, 2, 0, 0, 2, 1};
+    memcpy(c->tile, tile, sizeof tile);
+    static const uint32_t splt[12] = {1, 1, 1, 0, 0, 0, 1, 2, 1, 0, 0, 0};
+    memcpy(c->splt, splt, sizeof splt);
+    c->memb[0] = 2u | (1u << 2); /* tile 0 MIXED, tile 1 INSIDE */
+    c->memb[1] = 0;               /* rank */
+    c->memb[2] = 1u | (2u << 2);  /* split 1 INSIDE, split 2 INTERSECTED */
+    c->tile_dims[0] = c->tile_dims[1] = c->tile_dims[2] = 2;
+    c->memb_words = 3;
+}
+
+static int first_issue(void* user, const meso_error* issue)
+{
+    meso_error* e = (meso_error*)user;
+    if (e->code == 0)
+        *e = *issue;
+    return 0;
+}
+
+/* Write the object, open it, return meso_file_check_cells' result; the full
+ * validator must report the same code. */
+static meso_result cells_check(const cells_bytes* c, meso_error* e)
+{
+    static uint16_t nrmm[16];
+    static uint8_t colr[32];
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED;
+    meso_chunk_desc d[6] = {
+        {.type = MESO_CHUNK_CELL, .flags = REQ, .object = 1},
+        {.type = MESO_CHUNK_TILE, .flags = REQ, .object = 1, .dtype = MESO_DTYPE_U16,
+         .dims = {c->tile_dims[0], c->tile_dims[1], c->tile_dims[2]}},
+        {.type = MESO_CHUNK_SPLT, .flags = REQ, .object = 1, .dtype = MESO_DTYPE_U32, .components = 6, .dims = {2, 1, 1}},
+        {.type = MESO_CHUNK_MEMB, .flags = REQ, .object = 1, .dtype = MESO_DTYPE_U32, .dims = {c->memb_words, 1, 1}},
+        {.type = MESO_CHUNK_NRMM, .object = 1, .dtype = MESO_DTYPE_U16, .components = 2, .dims = {2, 2, 2}},
+        {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8, .components = 4, .dims = {2, 2, 2}},
+    };
+    const void* data[6] = {c->cell, c->tile, c->splt, c->memb, nrmm, colr};
+    const size_t size[6] = {sizeof c->cell, 2u * c->tile_dims[0] * c->tile_dims[1] * c->tile_dims[2], sizeof c->splt,
+                            4u * c->memb_words, sizeof nrmm, sizeof colr};
+    for (int i = 0; i < 6 - c->skip_colr; i++)
+        assert(meso_writer_add(w, &d[i], data[i], size[i], e) == MESO_OK);
+    size_t n = 0;
+    assert(meso_writer_finish(w, NULL, 0, &n) == MESO_OK);
+    uint8_t* mem = (uint8_t*)malloc(n);
+    assert(mem && meso_writer_finish(w, mem, n, &n) == MESO_OK);
+    meso_writer_destroy(w);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(mem, n, NULL, &f, e) == MESO_OK);
+    memset(e, 0, sizeof *e);
+    meso_result r = meso_file_check_cells(f, 1, e);
+    meso_error first;
+    memset(&first, 0, sizeof first);
+    meso_result full = meso_file_validate(f, MESO_CHECK_FULL, first_issue, &first);
+    assert(full == r && first.code == e->code);
+    meso_file_close(f);
+    free(mem);
+    return r;
+}
+
+static void bad_cells_objects_are_rejected(void)
+{
+    cells_bytes c;
+    meso_error e;
+    cells_sample(&c);
+    assert(cells_check(&c, &e) == MESO_OK);
+    /* CELL itself (the writer refuses it) */
+    uint8_t rec[MESO_CELL_RECORD_SIZE];
+#define CELL_CASE(stmt, want)                                                                  \
+    do {                                                                                       \
+        memcpy(rec, c.cell, sizeof rec);                                                       \
+        stmt;                                                                                  \
+        memset(&e, 0, sizeof e);                                                               \
+        assert(add_records(MESO_CHUNK_CELL, rec, sizeof rec, &e) == MESO_ERR_INVALID_ARG);     \
+        assert(e.code == (want));                                                              \
+    } while (0)
+    const uint32_t V = MESO_ISSUE_CELL_VALUE;
+    assert(add_records(MESO_CHUNK_CELL, c.cell, sizeof c.cell, &e) == MESO_OK);
+    CELL_CASE(put32(rec + MESO_CELL_OFF_TILES + 4, 0), V);              /* no tiles */
+    CELL_CASE(put32(rec + MESO_CELL_OFF_TILES, 16385), V);              /* too many */
+    CELL_CASE(put32(rec + MESO_CELL_OFF_TILE_RES, 1025), V);            /* R too large */
+    CELL_CASE(put32(rec + MESO_CELL_OFF_SPLIT_COUNT, 0), V);            /* no split cells */
+    CELL_CASE(put32(rec + MESO_CELL_OFF_CELL_COUNT, 3), V);             /* more cells than split cells */
+    CELL_CASE(putf(rec + MESO_CELL_OFF_VOXEL_SIZE, 0.0f), V);           /* h = 0 */
+    CELL_CASE(put32(rec + MESO_CELL_OFF_ORIGIN + 4, 0x7FC00000u), V);   /* NaN */
+    CELL_CASE(put32(rec + MESO_CELL_OFF_MIXED_TILES, 3), V);            /* M > T */
+    CELL_CASE(rec[MESO_CELL_OFF_RESERVED + 15] = 1, V);                 /* reserved */
+#undef CELL_CASE
+    assert(add_records(MESO_CHUNK_CELL, c.cell, sizeof c.cell - 4, &e) == MESO_ERR_INVALID_ARG &&
+           e.code == MESO_ISSUE_CELL_SIZE);
+    /* the chunks against CELL */
+#define CELLS_CASE(stmt, want)                                                 \
+    do {                                                                       \
+        cells_sample(&c);                                                      \
+        stmt;                                                                  \
+        assert(cells_check(&c, &e) == MESO_ERR_CORRUPT && e.code == (want));   \
+    } while (0)
+    CELLS_CASE(c.skip_colr = 1, MESO_ISSUE_CELL_CHUNKS);                         /* COLR missing */
+    CELLS_CASE(c.tile_dims[2] = 1, MESO_ISSUE_CELL_CHUNKS);                      /* TILE 2 x 2 x 1 */
+    CELLS_CASE(put32(c.cell + MESO_CELL_OFF_MIXED_TILES, 0), MESO_ISSUE_CELL_CHUNKS); /* MEMB longer than CELL says */
+    CELLS_CASE(c.tile[5] = 3, MESO_ISSUE_CELL_TILE);                             /* split cell 3 of 2 */
+    CELLS_CASE(c.splt[MESO_SPLT_COMPONENTS] = 3, MESO_ISSUE_CELL_SPLT);          /* cell ids 1, 3 */
+    CELLS_CASE(c.splt[0] = 2, MESO_ISSUE_CELL_SPLT);                             /* not starting at 1 */
+    CELLS_CASE(c.splt[MESO_SPLT_FACE_CODE] = 64, MESO_ISSUE_CELL_SPLT);          /* face code */
+    CELLS_CASE(c.splt[MESO_SPLT_TILE_INDEX] = 0, MESO_ISSUE_CELL_SPLT);          /* tile-map index 0 */
+    CELLS_CASE(c.memb[0] = 2u | (3u << 2), MESO_ISSUE_CELL_MEMB);                /* class 3 */
+    CELLS_CASE(c.memb[0] |= 1u << 4, MESO_ISSUE_CELL_MEMB);                      /* bits past tile 1 */
+    CELLS_CASE(c.memb[1] = 1, MESO_ISSUE_CELL_MEMB);                             /* rank */
+    CELLS_CASE(c.memb[0] = 1u | (1u << 2), MESO_ISSUE_CELL_MEMB);                /* no MIXED tile, CELL says 1 */
+    CELLS_CASE(c.memb[2] = 3u, MESO_ISSUE_CELL_MEMB);                            /* tag 3 */
+    CELLS_CASE(c.memb[2] |= 1u << 4, MESO_ISSUE_CELL_MEMB);                      /* bits past split cell 2 */
+#undef CELLS_CASE
+}
+
 static meso_result must_not_decode(void* user, const meso_chunk_info* chunk, const void* src, size_t src_size,
                                    void* dst, size_t dst_size, meso_error* err)
 {
@@ -912,6 +1050,7 @@ int main(void)
     bad_mesh_contents_are_rejected();
     bad_records_are_rejected();
     bad_frusta_records_are_rejected();
+    bad_cells_objects_are_rejected();
     draco_expansion_is_bounded_on_open();
     max_decoded_size_limits_encoded_chunks_only();
     tiny_draco_mesh_claiming_a_billion_vertices_allocates_nothing();

@@ -1,0 +1,99 @@
+#!/bin/sh
+# mesobake cells from the command line (FORMAT.md §7.2 kind 3, §7.8): the
+# bundled sphere, spot and torus baked into cells objects that validate
+# fully, the chunks and report keys the issue names, -j 1 = -j 2 byte for
+# byte, the tile-map and colour variants, and bad input (a coded error, a
+# non-zero exit, no output file).
+# usage: cells_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR
+set -u
+bake=$1 inspect=$2 data=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { # DESCRIPTION COMMAND...
+  d=$1; shift
+  if "$@"; then echo "ok   $d"; else echo "FAIL $d"; fail=1; fi
+}
+row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t'; }
+key() { grep -q "\"$2\":" "$1"; }
+num() { sed -n "s/.*\"$2\":[[:space:]]*\([-0-9.e+]*\).*/\1/p" "$1"; }
+
+# 1. The bundled closed meshes, default tile map (Voronoi, 8 seeds, R = 32).
+for m in sphere spot_low_resolution torus; do
+  "$bake" cells -i "$data/$m.obj" -o "$tmp/$m.meso" --tiles 6 --tile-res 16 --report "$tmp/$m.json" -j 2 \
+    >/dev/null 2>"$tmp/$m.err"
+  check "$m: bake succeeds" test $? = 0 -a -s "$tmp/$m.meso"
+  check "$m: validates fully" sh -c "'$inspect' validate --full '$tmp/$m.meso' >/dev/null"
+  check "$m: object kind is cells" sh -c "'$inspect' info '$tmp/$m.meso' | grep -q ' cells '"
+  for t in MESH CELL TILE SPLT MEMB NRMM COLR; do
+    check "$m: has $t on object 1" sh -c "'$inspect' info '$tmp/$m.meso' | awk '\$2 == \"$t\" && \$4 == 1' | grep -q ."
+  done
+  for k in tiles split_cells cells_inside cells_outside cells_intersected bytes seconds_total voxelizer; do
+    check "$m: report has $k" key "$tmp/$m.json" "$k"
+  done
+  check "$m: 216 tiles" test "$(num "$tmp/$m.json" tiles)" = 216
+  check "$m: voxelizer parity (closed mesh)" grep -q '"voxelizer":[[:space:]]*"parity"' "$tmp/$m.json"
+  check "$m: some cells inside" awk -v n="$(num "$tmp/$m.json" cells_inside)" 'BEGIN { exit !(n > 0) }'
+  check "$m: bytes = file size" test "$(num "$tmp/$m.json" bytes)" = "$(wc -c <"$tmp/$m.meso" | tr -d ' ')"
+  check "$m: TILE is 16x16x16" test "$(row "$tmp/$m.meso" TILE | awk '{print $9}')" = 16x16x16
+  check "$m: info summarises CELL" sh -c "'$inspect' info '$tmp/$m.meso' | grep -q 'CELL: 6x6x6 tiles of 16^3 voxels'"
+done
+
+# 2. Determinism: -j 1 and -j 2 give the same bytes.
+"$bake" cells -i "$data/spot_low_resolution.obj" -o "$tmp/j1.meso" --tiles 6 --tile-res 16 -j 1 >/dev/null 2>&1
+check "-j 1 = -j 2 byte for byte" cmp -s "$tmp/j1.meso" "$tmp/spot_low_resolution.meso"
+
+# 3. Variants: spheres, --cell-size, a raw tile map and a raw colour file,
+# the winding path on an open mesh, -v progress.
+"$bake" cells -i "$data/sphere.obj" -o "$tmp/sph.meso" --tile-map spheres:6:0.3 --tile-res 16 --cell-size 0.5 \
+  --colour hash:5 --report "$tmp/sph.json" -v >/dev/null 2>"$tmp/sph.err"
+check "spheres + --cell-size: validates" sh -c "'$inspect' validate --full '$tmp/sph.meso' >/dev/null"
+check "--cell-size 0.5 on the unit sphere: 5 tiles per axis" test "$(num "$tmp/sph.json" tiles)" = 125
+check "-v: one line per stage" test "$(grep -c '^mesobake: ' "$tmp/sph.err")" -ge 4
+# a raw 8^3 map: two slabs (indices 1, 2) along z, and an RGBA file
+awk 'BEGIN { for (z = 0; z < 8; z++) for (i = 0; i < 64; i++) printf "%c%c", (z < 4 ? 1 : 2), 0 }' >"$tmp/slabs.raw"
+awk 'BEGIN { for (i = 0; i < 512; i++) printf "%c%c%c%c", 200, 100, 50, 255 }' >"$tmp/rgba.raw"
+"$bake" cells -i "$data/sphere.obj" -o "$tmp/raw.meso" --tile-map "$tmp/slabs.raw:8" --colour "$tmp/rgba.raw:8" \
+  --tiles 4 --report "$tmp/raw.json" >/dev/null 2>&1
+check "raw tile map + raw colours: validates" sh -c "'$inspect' validate --full '$tmp/raw.meso' >/dev/null"
+check "raw slabs: 2 split cells" test "$(num "$tmp/raw.json" split_cells)" = 2
+"$bake" cells -i "$data/cube_no_bottom.obj" -o "$tmp/open.meso" --tiles 4 --tile-res 8 --report "$tmp/open.json" \
+  >/dev/null 2>&1
+check "open mesh, auto: winding, validates" sh -c "grep -q '\"winding\"' '$tmp/open.json' && '$inspect' validate --full '$tmp/open.meso' >/dev/null"
+"$bake" cells -i "$data/sphere.obj" -o "$tmp/vdb.meso" --tiles 4 --tile-res 8 --voxelizer vdb --report "$tmp/vdb.json" \
+  >/dev/null 2>&1
+check "--voxelizer vdb: the exact parity path" grep -q '"parity"' "$tmp/vdb.json"
+
+# 4. Refusals: coded error, exit code, no output file.
+refuse() { # NAME EXIT CODE ARGS...
+  n=$1 want=$2 code=$3; shift 3
+  "$bake" cells -o "$tmp/$n.meso" "$@" >/dev/null 2>"$tmp/$n.err"
+  rc=$?
+  check "refuse $n: exit $want" test "$rc" = "$want"
+  [ -n "$code" ] && check "refuse $n: error E$code" grep -q "E$code" "$tmp/$n.err"
+  check "refuse $n: no output file" test ! -e "$tmp/$n.meso"
+}
+refuse open_parity 3 3181 -i "$data/cube_no_bottom.obj" --voxelizer parity --tiles 2 --tile-res 8
+refuse missing_mesh 2 "" -i "$tmp/nope.obj"
+refuse bad_tile_map 1 3150 -i "$data/sphere.obj" --tile-map hexagons
+refuse bad_seeds 1 3150 -i "$data/sphere.obj" --tile-map voronoi:0
+refuse bad_radius 1 3150 -i "$data/sphere.obj" --tile-map spheres:4:2
+refuse raw_wrong_size 3 3152 -i "$data/sphere.obj" --tile-map "$tmp/slabs.raw:9"
+refuse raw_res_mismatch 1 3150 -i "$data/sphere.obj" --tile-map "$tmp/slabs.raw:8" --tile-res 16
+refuse raw_missing 2 3151 -i "$data/sphere.obj" --tile-map "$tmp/nope.raw:8"
+refuse bad_colour 1 3190 -i "$data/sphere.obj" --tiles 2 --tile-res 8 --colour plaid
+refuse colour_size 3 3191 -i "$data/sphere.obj" --tiles 2 --tile-res 8 --colour "$tmp/slabs.raw:8"
+refuse too_many_voxels 1 3180 -i "$data/sphere.obj" --tiles 1024 --tile-res 32
+refuse both_sizes 1 "" -i "$data/sphere.obj" --tiles 4 --cell-size 0.5
+refuse bad_voxelizer 1 "" -i "$data/sphere.obj" --voxelizer magic
+refuse unknown_flag 1 "" -i "$data/sphere.obj" --frobnicate
+refuse no_input 1 ""
+# A failed bake leaves an existing output untouched.
+cp "$tmp/sphere.meso" "$tmp/keep_me.meso"
+"$bake" cells -i "$data/cube_no_bottom.obj" -o "$tmp/keep_me.meso" --voxelizer parity >/dev/null 2>&1
+check "failed bake: existing output untouched" cmp -s "$tmp/sphere.meso" "$tmp/keep_me.meso"
+"$bake" --help | grep -q "cells"
+check "mesobake --help lists cells" test $? = 0
+"$bake" cells --help | grep -q -- "--tile-map"
+check "cells --help documents --tile-map" test $? = 0
+exit $fail
