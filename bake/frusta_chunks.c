@@ -84,39 +84,16 @@ static void grow(float lo[3], float hi[3], const double p[3], double pad)
 /* Both cut curves of the outer cone of record r (frusta_chunks.h). */
 static void bbox_frustum(const meso_frustum_rec* r, float lo[3], float hi[3])
 {
-    double c0[3], a[3], x[3], z[3];
-    double h2 = 0;
-    for (int i = 0; i < 3; ++i) {
-        c0[i] = r->center[0][i];
-        a[i] = (double)r->center[1][i] - r->center[0][i];
-        h2 += a[i] * a[i];
-        x[i] = r->frame_x[i];
-    }
-    double h = sqrt(h2);
-    for (int i = 0; i < 3; ++i)
-        a[i] /= h;
-    z[0] = x[1] * a[2] - x[2] * a[1];
-    z[1] = x[2] * a[0] - x[0] * a[2];
-    z[2] = x[0] * a[1] - x[1] * a[0];
-    double depth = r->relief_depth, k = ((double)r->radius[1] - r->radius[0]) / h;
+    meso_frustum_frame f;
+    meso_frustum_rec_frame(r, &f);
+    const double depth = r->relief_depth, h = f.h;
     double rmax = fmax(r->radius[0], r->radius[1]) + depth;
     double pad = 0;
     for (int j = 0; j < BBOX_SAMPLES; ++j) {
-        double phi = TAU * j / BBOX_SAMPLES, w[3];
-        for (int i = 0; i < 3; ++i)
-            w[i] = sin(phi) * x[i] + cos(phi) * z[i];
+        double w[3], p[3];
+        meso_frustum_frame_radial(&f, TAU * j / BBOX_SAMPLES, w);
         for (int e = 0; e < 2; ++e) {
-            double n[3] = {r->plane[e][0], r->plane[e][1], r->plane[e][2]};
-            double nw = n[0] * w[0] + n[1] * w[1] + n[2] * w[2], na = n[0] * a[0] + n[1] * a[1] + n[2] * a[2];
-            double den = na + k * nw;
-            double rel = 0; /* plane through center[e]: n·(p − c_e) = 0 */
-            for (int i = 0; i < 3; ++i)
-                rel += n[i] * ((double)r->center[e][i] - c0[i]);
-            double r0 = r->radius[0] + depth;
-            double y = fabs(den) > 1e-300 ? (rel - r0 * nw) / den : (e ? h : 0.0);
-            double rr = r0 + k * y, p[3];
-            for (int i = 0; i < 3; ++i)
-                p[i] = c0[i] + y * a[i] + rr * w[i];
+            double y = meso_frustum_rec_cut(r, &f, depth, w, e, p);
             pad = fmax(pad, fabs(y) * 1e-6);
             grow(lo, hi, p, 0);
         }

@@ -98,6 +98,44 @@ void meso_frustum_ball_encode(const meso_frustum_ball_rec* in, uint8_t rec[MESO_
     mesoi_st32(rec + MESO_BALL_OFF_NODE, in->node);
 }
 
+/* >>frames ----------------------------------------------------------------- */
+
+void meso_frustum_rec_frame(const meso_frustum_rec* r, meso_frustum_frame* f)
+{
+    for (int i = 0; i < 3; ++i) {
+        f->c0[i] = r->center[0][i];
+        f->a[i] = (double)r->center[1][i] - r->center[0][i];
+        f->x[i] = r->frame_x[i];
+    }
+    f->h = normalize3(f->a);
+    f->k = f->h > 0 ? ((double)r->radius[1] - r->radius[0]) / f->h : 0.0;
+    cross3(f->x, f->a, f->z);
+}
+
+void meso_frustum_frame_radial(const meso_frustum_frame* f, double phi, double w[3])
+{
+    for (int i = 0; i < 3; ++i)
+        w[i] = sin(phi) * f->x[i] + cos(phi) * f->z[i];
+}
+
+double meso_frustum_rec_cut(const meso_frustum_rec* r, const meso_frustum_frame* f, double delta, const double w[3],
+    int e, double p[3])
+{
+    const double n[3] = {r->plane[e][0], r->plane[e][1], r->plane[e][2]};
+    const double ce[3] = {r->center[e][0], r->center[e][1], r->center[e][2]};
+    const double r0 = r->radius[0] + delta;
+    const double den = dot3(n, f->a) + f->k * dot3(n, w);
+    /* plane e passes through center[e]: n·(p − c_e) = 0 */
+    double rel = 0;
+    for (int i = 0; i < 3; ++i)
+        rel += n[i] * (ce[i] - f->c0[i]);
+    const double y = fabs(den) > 1e-300 ? (rel - r0 * dot3(n, w)) / den : (e ? f->h : 0.0);
+    if (p)
+        for (int i = 0; i < 3; ++i)
+            p[i] = f->c0[i] + y * f->a[i] + (r0 + f->k * y) * w[i];
+    return y;
+}
+
 /* >>joint plane ------------------------------------------------------------ */
 
 /* Intersection of the lines p + α u and q + β v lying in one plane (2-D

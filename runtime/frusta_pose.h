@@ -72,6 +72,27 @@ static inline uint32_t meso_frustum_rec_end_kind(const meso_frustum_rec* r, int 
     return (r->flags >> (end ? MESO_FSEG_KIND1_SHIFT : MESO_FSEG_KIND0_SHIFT)) & 3u;
 }
 
+/* The geometry of a record's current pose in double precision: c0 =
+ * center[0], unit axis a towards center[1], length h, radius slope k, the
+ * u frame x = frame_x and z = x × a. */
+typedef struct meso_frustum_frame {
+    double c0[3], a[3], x[3], z[3];
+    double h, k;
+} meso_frustum_frame;
+
+void meso_frustum_rec_frame(const meso_frustum_rec* r, meso_frustum_frame* f);
+
+/* Unit radial direction at angle phi: sin(phi) x + cos(phi) z (§2.3: u = 0
+ * at phi = 0 before offsets). */
+void meso_frustum_frame_radial(const meso_frustum_frame* f, double phi, double w[3]);
+
+/* Where the generator with radial direction w of the parallel cone
+ * r(y) + delta meets plane e: fills p (may be NULL) and returns the axial
+ * coordinate y from c0 (0 or h when the generator is parallel to the
+ * plane). */
+double meso_frustum_rec_cut(const meso_frustum_rec* r, const meso_frustum_frame* f, double delta, const double w[3],
+    int e, double p[3]);
+
 /* Little-endian record codecs (no validation: read chunks with
  * meso_file_read_chunk, which validates them). */
 void meso_frustum_rec_decode(const uint8_t frus[MESO_FRUS_RECORD_SIZE], const uint8_t fseg[MESO_FSEG_RECORD_SIZE],

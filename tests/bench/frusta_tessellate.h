@@ -55,42 +55,17 @@ static double tess_height(const tess_relief* r, double s, double t)
 /* Surface point of frustum f at (u, v). */
 static void tess_point(const meso_frustum_rec* f, const tess_relief* rel, double u, double v, double p[3])
 {
-    double c0[3], a[3], x[3], z[3];
-    double h2 = 0;
-    for (int i = 0; i < 3; ++i) {
-        c0[i] = f->center[0][i];
-        a[i] = (double)f->center[1][i] - f->center[0][i];
-        h2 += a[i] * a[i];
-        x[i] = f->frame_x[i];
-    }
-    double h = sqrt(h2);
-    for (int i = 0; i < 3; ++i)
-        a[i] /= h;
-    z[0] = x[1] * a[2] - x[2] * a[1];
-    z[1] = x[2] * a[0] - x[0] * a[2];
-    z[2] = x[0] * a[1] - x[1] * a[0];
+    meso_frustum_frame fr;
+    meso_frustum_rec_frame(f, &fr);
     double depth = rel && rel->values ? f->relief_depth : 0;
     double hh = depth > 0 ? tess_height(rel, u * f->u_scale, f->v_offset + v * f->v_scale) : 0;
-    double delta = hh * depth;
-    double k = ((double)f->radius[1] - f->radius[0]) / h;
-    double phi = 2 * M_PI * (u + f->u_offset) - v * f->twist;
-    double w[3];
+    double delta = hh * depth, w[3];
+    meso_frustum_frame_radial(&fr, 2 * M_PI * (u + f->u_offset) - v * f->twist, w);
+    double y0 = meso_frustum_rec_cut(f, &fr, delta, w, 0, NULL), y1 = meso_frustum_rec_cut(f, &fr, delta, w, 1, NULL);
+    double yy = y0 + v * (y1 - y0);
+    double rr = f->radius[0] + delta + fr.k * yy;
     for (int i = 0; i < 3; ++i)
-        w[i] = sin(phi) * x[i] + cos(phi) * z[i];
-    double r0 = f->radius[0] + delta, y[2];
-    for (int e = 0; e < 2; ++e) {
-        double n[3] = {f->plane[e][0], f->plane[e][1], f->plane[e][2]};
-        double nw = n[0] * w[0] + n[1] * w[1] + n[2] * w[2], na = n[0] * a[0] + n[1] * a[1] + n[2] * a[2];
-        double rel_c = 0;
-        for (int i = 0; i < 3; ++i)
-            rel_c += n[i] * ((double)f->center[e][i] - c0[i]);
-        double den = na + k * nw;
-        y[e] = fabs(den) > 1e-300 ? (rel_c - r0 * nw) / den : (e ? h : 0.0);
-    }
-    double yy = y[0] + v * (y[1] - y[0]);
-    double rr = r0 + k * yy;
-    for (int i = 0; i < 3; ++i)
-        p[i] = c0[i] + yy * a[i] + rr * w[i];
+        p[i] = fr.c0[i] + yy * fr.a[i] + rr * w[i];
 }
 
 static int tess_grow(tess_mesh* m, uint32_t add_v, uint32_t add_i, uint32_t* cap_v, uint32_t* cap_i)
