@@ -544,12 +544,15 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         if (moved <= 1e-12 * diag)
             break;
     }
+    double dr_sum = 0;
     for (uint32_t s = 0; s < m.segment_count; ++s)
         for (int e = 0; e < 2; ++e) {
             const meso_skeleton_node* nd = &sk->nodes[m.segments[s].node[e]];
             double dr = fabs((e ? m.segments[s].r1 : m.segments[s].r0) - nd->radius);
             m.stats.radius_change_max = fmax(m.stats.radius_change_max, dr);
+            dr_sum += dr;
         }
+    m.stats.radius_change_mean = dr_sum / (2.0 * m.segment_count);
     /* Cap intersections: find, then turn joints at failing segments into
      * ball joints until nothing changes. */
     for (uint32_t s = 0; s < m.segment_count; ++s) {

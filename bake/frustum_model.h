@@ -151,6 +151,7 @@ typedef struct meso_frustum_stats {
     double seam_gap_max;                  /* over §2.2 joints (not ball joints), world units */
     double seam_gap_mean;
     double radius_change_max;             /* largest radius the §2.2 fit moved away from its node's */
+    double radius_change_mean;            /* mean over segment ends */
     uint32_t unfitted_joints;             /* joints the §2.2 fit could not close: made ball joints */
     uint32_t sharp_joints;                /* joints over max_joint_angle_deg: made ball joints */
 } meso_frustum_stats;

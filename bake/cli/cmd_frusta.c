@@ -189,22 +189,6 @@ static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skelet
 #endif
 }
 
-/* fit_error for skeleton input: |cone radius at a node − the node's radius|
- * over every segment end (what the §2.2 fit moved). */
-static void radius_moves(const meso_skeleton* sk, const meso_frustum_model* m, double* mx, double* mean)
-{
-    double sum = 0;
-    *mx = 0;
-    for (uint32_t s = 0; s < m->segment_count; ++s)
-        for (int e = 0; e < 2; ++e) {
-            const meso_frustum_segment* g = &m->segments[s];
-            double d = fabs((e ? g->r1 : g->r0) - sk->nodes[g->node[e]].radius);
-            *mx = fmax(*mx, d);
-            sum += d;
-        }
-    *mean = m->segment_count ? sum / (2.0 * m->segment_count) : 0;
-}
-
 static cJSON* report_json(const meso_frustum_model* m, const skeleton_source* src, double fit_max, double fit_mean,
     const meso_frusta_object* o)
 {
@@ -317,10 +301,11 @@ int cmd_frusta(int argc, char** argv)
             cJSON_AddNumberToObject(rl, "repeat", a.relief_repeat);
         }
         r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
-        double fmax_ = src.fit_error_max, fmean = src.fit_error_mean;
-        if (strcmp(src.kind, "mesh") != 0)
-            radius_moves(&sk, &m, &fmax_, &fmean);
-        rep = report_json(&m, &src, fmax_, fmean, &obj);
+        /* fit_error for skeleton input: how far the §2.2 fit moved the cone
+         * radii at the nodes from the input's. */
+        const int mesh_in = !strcmp(src.kind, "mesh");
+        rep = report_json(&m, &src, mesh_in ? src.fit_error_max : m.stats.radius_change_max,
+            mesh_in ? src.fit_error_mean : m.stats.radius_change_mean, &obj);
         bake_chunk chunks[5];
         int count = 0;
         chunks[count++] = (bake_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj.node_count, 1, 1}},
