@@ -21,20 +21,9 @@
 #include "frustum_model.h"
 #include "skeleton_swc.h"
 #include "test_util.h"
+#include "vec3d.h"
 
 #define TAU 6.283185307179586
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 static void f2d(const float f[3], double d[3])
 {
