@@ -24,6 +24,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench_gl.h"
 #include "egl_context.h"
 #include "frusta_tessellate.h"
 #include "frustum_reference.h"
@@ -32,60 +33,13 @@
 #include "meso_rt.h"
 #include "shell_scene.h"
 
-static double now_ms(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
-
-static int cmp_double(const void* a, const void* b)
-{
-    const double x = *(const double*)a, y = *(const double*)b;
-    return (x > y) - (x < y);
-}
-
-typedef struct bench {
-    meso_rt* rt;
-    test_fbo fbo;
-    camera cam;
-    float view[16], proj[16];
-} bench;
-
-static void set_size(bench* b, int w, int h)
-{
-    if (b->fbo.fbo)
-        test_fbo_destroy(&b->fbo);
-    scene_w = w, scene_h = h;
-    if (!test_fbo_create(&b->fbo, w, h)) {
-        fprintf(stderr, "bench_frusta_render: cannot create a %dx%d framebuffer\n", w, h);
-        exit(1);
-    }
-    camera_matrices(&b->cam, b->view, b->proj);
-}
-
 /* Median ms of 3 draws after a warm-up; the last image is read back. */
 static double time_draw(bench* b, meso_rt_object obj, meso_rt_draw_desc d, uint8_t* rgba, float* depth)
 {
-    memcpy(d.view, b->view, sizeof(d.view));
-    memcpy(d.proj, b->proj, sizeof(d.proj));
-    double ms[3];
-    for (int r = 0; r <= 3; ++r) {
-        test_fbo_clear(&b->fbo, 0, 0, 0);
-        b->fbo.Finish();
-        const double t0 = now_ms();
-        if (meso_rt_draw(b->rt, obj, &d) != MESO_OK) {
-            fprintf(stderr, "bench_frusta_render: draw failed\n");
-            exit(1);
-        }
-        b->fbo.Finish();
-        if (r > 0)
-            ms[r - 1] = now_ms() - t0;
-    }
-    qsort(ms, 3, sizeof(double), cmp_double);
+    const double ms = bench_median_ms(b, obj, d, 3);
     if (rgba)
         test_fbo_read(&b->fbo, rgba, depth);
-    return ms[1];
+    return ms;
 }
 
 static meso_rt_object load_memory(bench* b, const uint8_t* data, size_t size)
@@ -277,7 +231,7 @@ int main(int argc, char** argv)
                      .at = {ctr[0], ctr[1], ctr[2]}, .fovy = 0.7, .zn = 0.2 * rad, .zf = 10 * rad};
 
     /* --- the exact reference at 400x300 ---------------------------------- */
-    set_size(&b, 400, 300);
+    bench_set_size(&b, 400, 300);
     const size_t npx = (size_t)scene_w * scene_h;
     uint8_t* rgba = malloc(npx * 4);
     float* depth = malloc(sizeof(float) * npx);
@@ -315,9 +269,9 @@ int main(int argc, char** argv)
      * payloads) plus the relief texture: report the object's payload bytes. */
     double ms_small = time_draw(&b, obj, (meso_rt_draw_desc){0}, rgba, depth);
     metrics mf = compare(rgba, depth, &refimg, b.view, b.proj, b.cam.fovy, NULL);
-    set_size(&b, 800, 600);
+    bench_set_size(&b, 800, 600);
     double ms_big = time_draw(&b, obj, (meso_rt_draw_desc){0}, NULL, NULL);
-    set_size(&b, 400, 300);
+    bench_set_size(&b, 400, 300);
     fprintf(vt, "frusta,0,0,%llu,%llu,%.2f,%.2f,%.5f,%.4f,%.5f\n", (unsigned long long)object_bytes,
             (unsigned long long)object_bytes, ms_small, ms_big, mf.coverage_mismatch, mf.hit_err_px, mf.hit_gt1);
     fprintf(stderr, "frusta: %llu bytes, %.1f / %.1f ms, cov %.4f, hit %.3f px\n", (unsigned long long)object_bytes,
@@ -333,9 +287,9 @@ int main(int argc, char** argv)
         const uint64_t gpu = (uint64_t)tm.vertex_count * 24u + (uint64_t)tm.index_count * 4u;
         double ms1 = time_draw(&b, mo, (meso_rt_draw_desc){0}, rgba, depth);
         metrics mt = compare(rgba, depth, &refimg, b.view, b.proj, b.cam.fovy, NULL);
-        set_size(&b, 800, 600);
+        bench_set_size(&b, 800, 600);
         double ms2 = time_draw(&b, mo, (meso_rt_draw_desc){0}, NULL, NULL);
-        set_size(&b, 400, 300);
+        bench_set_size(&b, 400, 300);
         fprintf(vt, "tessellation,%u,%u,%zu,%llu,%.2f,%.2f,%.5f,%.4f,%.5f\n", grids[g], tm.index_count / 3, fsize,
                 (unsigned long long)gpu, ms1, ms2, mt.coverage_mismatch, mt.hit_err_px, mt.hit_gt1);
         fprintf(stderr, "tessellation %3u: %8u triangles, %9zu bytes, %.1f / %.1f ms, cov %.4f, hit %.3f px\n",

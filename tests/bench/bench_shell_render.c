@@ -24,6 +24,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench_gl.h"
 #include "egl_context.h"
 #include "gl_fbo.h"
 #include "meso_rt.h"
@@ -36,59 +37,17 @@ static const char* const tech_names[MESO_SHELL_TECHNIQUE_COUNT] = {
 static const meso_shell_technique tech_order[4] = {MESO_SHELL_SEGMENT_ONLY, MESO_SHELL_SMOOTH, MESO_SHELL_CURVED,
                                                    MESO_SHELL_TETRA};
 
-static double now_ms(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
-
-static int cmp_double(const void* a, const void* b)
-{
-    const double x = *(const double*)a, y = *(const double*)b;
-    return (x > y) - (x < y);
-}
-
-typedef struct bench {
-    meso_rt* rt;
-    test_fbo fbo;
-    camera cam;
-    float view[16], proj[16];
-} bench;
-
 typedef struct timing {
     double ms, steps_per_px, frags_per_px;
     long covered;
 } timing;
 
-static void set_size(bench* b, int w, int h)
-{
-    if (b->fbo.fbo)
-        test_fbo_destroy(&b->fbo);
-    scene_w = w, scene_h = h;
-    if (!test_fbo_create(&b->fbo, w, h)) {
-        fprintf(stderr, "bench_shell_render: cannot create a %dx%d framebuffer\n", w, h);
-        exit(1);
-    }
-    camera_matrices(&b->cam, b->view, b->proj);
-}
-
 /* Draw 1 + reps times; median ms; steps/covered pixel from a stats draw. */
 static timing time_draw(bench* b, meso_rt_object obj, meso_rt_draw_desc d, int reps, uint8_t* rgba, float* depth)
 {
+    const double median = bench_median_ms(b, obj, d, reps);
     memcpy(d.view, b->view, sizeof(d.view));
     memcpy(d.proj, b->proj, sizeof(d.proj));
-    double ms[9];
-    for (int r = 0; r <= reps; ++r) {
-        test_fbo_clear(&b->fbo, 0, 0, 0);
-        b->fbo.Finish();
-        const double t0 = now_ms();
-        meso_rt_draw(b->rt, obj, &d);
-        b->fbo.Finish();
-        if (r > 0)
-            ms[r - 1] = now_ms() - t0;
-    }
-    qsort(ms, (size_t)reps, sizeof(double), cmp_double);
     meso_rt_draw_stats st;
     d.stats = &st;
     test_fbo_clear(&b->fbo, 0, 0, 0);
@@ -101,7 +60,7 @@ static timing time_draw(bench* b, meso_rt_object obj, meso_rt_draw_desc d, int r
         covered += dep[i] < 1.0f;
     if (!depth)
         free(dep);
-    timing t = {.ms = ms[reps / 2], .covered = covered,
+    timing t = {.ms = median, .covered = covered,
                 .steps_per_px = covered ? (double)st.steps / (double)covered : 0.0,
                 .frags_per_px = covered ? (double)st.fragments / (double)covered : 0.0};
     return t;
@@ -191,7 +150,7 @@ int main(int argc, char** argv)
                 {"double thickness", 800, 600, 2, 1}, {"8x tiling", 800, 600, 1, 8},
                 {"1/8 tiling", 800, 600, 1, 0.125}};
     for (size_t r = 0; r < sizeof(rows) / sizeof(rows[0]); ++r) {
-        set_size(&b, rows[r].w, rows[r].h);
+        bench_set_size(&b, rows[r].w, rows[r].h);
         for (size_t i = 0; i < 3 * (size_t)nv * layers; ++i)
             scaled[i] = (float)(dirs[i] * rows[r].thick);
         meso_rt_shell_update(b.rt, obj, NULL, scaled, nv);
@@ -215,7 +174,7 @@ int main(int argc, char** argv)
         goto finish;
 
     /* --- error against the reference and the sweeps, at 400x300 ---------- */
-    set_size(&b, quick ? 200 : 400, quick ? 150 : 300);
+    bench_set_size(&b, quick ? 200 : 400, quick ? 150 : 300);
     const size_t npx = (size_t)scene_w * scene_h;
     rgba = malloc(npx * 4);
     depth = malloc(sizeof(float) * npx);
