@@ -20,10 +20,8 @@
 
 #include <float.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #define TAU 6.283185307179586
 
@@ -1131,26 +1129,21 @@ static void frusta_row(const frusta_scene* sc, meso_ref_image* img, int y)
     }
 }
 
-/* Rows y ≡ first (mod step) of the image: one worker's share. Pixels are
- * independent and read only the shared scene, so the image does not depend
- * on the partition. (pthreads rather than OpenMP: this file is linked into
- * C++ executables, and a clang-built object needs clang's OpenMP runtime,
- * which the g++ driver does not link.) */
-typedef struct row_job {
+/* mesoi_ref_rows' callback: pixels are independent and read only the
+ * shared scene, so the image does not depend on the partition. (pthreads
+ * rather than OpenMP: this file is linked into C++ executables, and a
+ * clang-built object needs clang's OpenMP runtime, which the g++ driver
+ * does not link.) */
+typedef struct row_ctx {
     const frusta_scene* sc;
     meso_ref_image* img;
-    int first, step;
-} row_job;
+} row_ctx;
 
-static void* row_worker(void* arg)
+static void row_cb(const void* user, int y)
 {
-    const row_job* j = arg;
-    for (int y = j->first; y < j->img->height; y += j->step)
-        frusta_row(j->sc, j->img, y);
-    return NULL;
+    const row_ctx* r = user;
+    frusta_row(r->sc, r->img, y);
 }
-
-#define RENDER_MAX_THREADS 64
 
 meso_result meso_ref_frusta_render(const meso_ref_frusta* m, const meso_ref_view* v, meso_ref_image* out)
 {
@@ -1190,24 +1183,8 @@ meso_result meso_ref_frusta_render(const meso_ref_frusta* m, const meso_ref_view
         sc.node_count = 1;
         bvh_build(&sc, 0, 0, sc.bounded);
     }
-    long threads = v->threads > 0 ? v->threads : sysconf(_SC_NPROCESSORS_ONLN);
-    threads = threads < 1 ? 1 : threads > RENDER_MAX_THREADS ? RENDER_MAX_THREADS : threads;
-    if (threads > v->height)
-        threads = v->height;
-    pthread_t tid[RENDER_MAX_THREADS];
-    row_job jobs[RENDER_MAX_THREADS];
-    int started[RENDER_MAX_THREADS] = {0};
-    for (int k = 0; k < threads; ++k)
-        jobs[k] = (row_job){&sc, out, k, (int)threads};
-    for (int k = 1; k < threads; ++k)
-        started[k] = pthread_create(&tid[k], NULL, row_worker, &jobs[k]) == 0;
-    row_worker(&jobs[0]);
-    for (int k = 1; k < threads; ++k) {
-        if (started[k])
-            pthread_join(tid[k], NULL);
-        else
-            row_worker(&jobs[k]); /* could not start a thread: do its rows here */
-    }
+    const row_ctx rc = {&sc, out};
+    mesoi_ref_rows(v->height, v->threads, row_cb, &rc);
 done:
     free(sc.box);
     free(sc.order);

@@ -4,6 +4,9 @@
  */
 #include "ref_common.h"
 
+#include <pthread.h>
+#include <unistd.h>
+
 #include "mat4_inverse.h"
 
 #include <math.h>
@@ -243,4 +246,44 @@ void mesoi_ref_image_miss(meso_ref_image* img, size_t px)
     img->coverage[px] = 0;
     img->hit[3 * px] = img->hit[3 * px + 1] = img->hit[3 * px + 2] = NAN;
     img->normal[3 * px] = img->normal[3 * px + 1] = img->normal[3 * px + 2] = 0.0f;
+}
+
+/* >>threads ---------------------------------------------------------------- */
+
+typedef struct row_job {
+    void (*row)(const void* user, int y);
+    const void* user;
+    int first, step, height;
+} row_job;
+
+static void* row_worker(void* arg)
+{
+    const row_job* j = arg;
+    for (int y = j->first; y < j->height; y += j->step)
+        j->row(j->user, y);
+    return NULL;
+}
+
+#define ROWS_MAX_THREADS 64
+
+void mesoi_ref_rows(int height, int threads_wanted, void (*row)(const void* user, int y), const void* user)
+{
+    long threads = threads_wanted > 0 ? threads_wanted : sysconf(_SC_NPROCESSORS_ONLN);
+    threads = threads < 1 ? 1 : threads > ROWS_MAX_THREADS ? ROWS_MAX_THREADS : threads;
+    if (threads > height)
+        threads = height > 0 ? height : 1;
+    pthread_t tid[ROWS_MAX_THREADS];
+    row_job jobs[ROWS_MAX_THREADS];
+    int started[ROWS_MAX_THREADS] = {0};
+    for (int k = 0; k < threads; ++k)
+        jobs[k] = (row_job){row, user, k, (int)threads, height};
+    for (int k = 1; k < threads; ++k)
+        started[k] = pthread_create(&tid[k], NULL, row_worker, &jobs[k]) == 0;
+    row_worker(&jobs[0]);
+    for (int k = 1; k < threads; ++k) {
+        if (started[k])
+            pthread_join(tid[k], NULL);
+        else
+            row_worker(&jobs[k]); /* could not start a thread: do its rows here */
+    }
 }

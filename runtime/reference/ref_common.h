@@ -65,6 +65,12 @@ void mesoi_ref_shade(const mesoi_ref_camera* c, const double d[3], const double 
 /* Allocates out's buffers for W × H (MESO_ERR_OUT_OF_MEMORY, out zeroed). */
 meso_result mesoi_ref_image_alloc(meso_ref_image* out, int W, int H);
 
+/* Calls row(user, y) for every y in 0..height - 1 on `threads` threads (0:
+ * all cores, at most 64), thread k taking rows k, k + threads, ...; rows
+ * must be independent, so the result never depends on the thread count. A
+ * thread that cannot be started has its rows done by the caller. */
+void mesoi_ref_rows(int height, int threads, void (*row)(const void* user, int y), const void* user);
+
 /* Pixel px as background (coverage 0, depth 1, hit NaN, normal 0). */
 void mesoi_ref_image_miss(meso_ref_image* img, size_t px);
 
