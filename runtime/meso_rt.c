@@ -154,6 +154,7 @@ void meso_rt_destroy(meso_rt* rt)
         return;
     mesoi_objects_destroy(rt);
     mesoi_frusta_programs_destroy(rt);
+    mesoi_cells_programs_destroy(rt);
     mesoi_shell_programs_destroy(rt);
     if (rt->mesh_program)
         rt->gl.DeleteProgram(rt->mesh_program);

@@ -103,9 +103,12 @@ typedef struct meso_rt_object {
  * chunks are read (through whatever reader the file was opened with: path,
  * mmap, memory or the host's meso_io callbacks). Supported kinds:
  * MESO_OBJECT_MESH (drawn as the shaded mesh), MESO_OBJECT_SHELL (ray cast
- * through its texture function, FORMAT.md §7.2) and MESO_OBJECT_FRUSTA
+ * through its texture function, FORMAT.md §7.2), MESO_OBJECT_FRUSTA
  * (relief-mapped conical frusta and balls, ray cast analytically; FRUS, FSEG
- * and SKEL are required, BALL and RELF optional). Other kinds give
+ * and SKEL are required, BALL and RELF optional) and MESO_OBJECT_CELLS
+ * (tiled voxel cells ray traced from the base mesh; its chunks are checked
+ * with meso_file_check_cells first, a bad file is refused with the check's
+ * message logged). Other kinds give
  * MESO_ERR_UNSUPPORTED. Encoded chunks (Draco) need a decoder in the
  * meso_open_desc the file was opened with. On failure nothing is uploaded
  * and out->id is 0. `file` may be closed after this returns. */
@@ -126,6 +129,13 @@ typedef enum meso_shell_technique {
 
 /* Work counted by the shaders during one draw (needs OpenGL 4.3 for the
  * counters; on older contexts `supported` is 0 and the counts are 0). */
+/* How cells objects are ray traced (papers/cell-based-object-representation.md §3.2). */
+typedef enum meso_cells_mode {
+    MESO_CELLS_FIRST_HIT = 0, /* §3.2.2: the first inside cell's boundary, shaded */
+    MESO_CELLS_REFLECT,       /* §3.2.3: plus specular self-reflection, then the environment */
+    MESO_CELLS_REFRACT        /* §3.2.4: refraction through the cells, then the environment */
+} meso_cells_mode;
+
 typedef struct meso_rt_draw_stats {
     int supported;
     uint64_t fragments; /* ray-casting fragment invocations */
@@ -156,6 +166,20 @@ typedef struct meso_rt_draw_desc {
     int relief_steps;          /* frusta: uniform samples per relief march, over the ray's part inside
                                   the relief layer before (and, leaving it, after) the solid core; more
                                   catches thinner bumps at grazing angles [64] */
+    /* Cells (kind 3; runtime/reference/cell_reference.h states the rules exactly). */
+    meso_cells_mode cell_mode; /* [MESO_CELLS_FIRST_HIT] */
+    int cell_bounces;          /* reflection: rays traced after the first hit (0 = environment mapping at the
+                                  first hit); refraction: exits and re-entries traced after it; 0..8 [0] */
+    float cell_step;           /* 0: exact voxel traversal, never misses a voxel; > 0: the thesis's linear
+                                  search (Algorithm 3.1) at this step in tile-map voxels, then bisection
+                                  (bisection_steps, default: down to 1/64 voxel) [0] */
+    int cell_fixed_step;       /* with cell_step: 1 keeps the step at grazing angles (the thesis's missed
+                                  cells); 0 scales the first hit's step by max(|cos|, 1/8) of the angle to
+                                  the base mesh's normal (§3.2.2) [0] */
+    float cell_reflectivity;   /* k of the reflection rule [0.5] */
+    float cell_ior;            /* refractive index of the cells [1.5] */
+    float cell_transparency;   /* tau of the refraction rule [0.7] */
+    int cell_max_steps;        /* voxel and tile steps per search; a search out of steps misses [4096] */
     meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) */
 } meso_rt_draw_desc;
 
@@ -164,7 +188,10 @@ typedef struct meso_rt_draw_desc {
  * host's own geometry. Shells and frusta write the exact depth of the ray's
  * hit, and render correctly with the camera inside the shell or a frustum
  * (they rasterise back faces of their bounding geometry and see the inner
- * wall). The GL state the call changes (program, vertex array, active
+ * wall). Cells write the exact depth of the first hit; their rays start on
+ * the base mesh's front faces, and when the camera is inside the tile grid
+ * also at the near plane behind its back faces, so the camera may be inside
+ * the object. The GL state the call changes (program, vertex array, active
  * texture, textures on units 0-4, depth test/func/mask, culling, and on
  * OpenGL 4.3 with `stats` the shader storage buffer binding) is restored
  * before it returns. GL errors are logged

@@ -324,7 +324,9 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
     gl->FrontFace((GLenum)s->prev_front);
     if (!s->prev_test)
         gl->Disable(GL_DEPTH_TEST);
-    if (!s->prev_cull)
+    if (s->prev_cull) /* the kind may have changed it after begin */
+        gl->Enable(GL_CULL_FACE);
+    else
         gl->Disable(GL_CULL_FACE);
     if (e != GL_NO_ERROR) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "meso_rt_draw (%s): GL error 0x%04x", what, e);

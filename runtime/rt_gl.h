@@ -53,6 +53,7 @@
     X(PFNGLUNIFORM1IPROC, Uniform1i)                                         \
     X(PFNGLUNIFORM4FVPROC, Uniform4fv)                                       \
     X(PFNGLUNIFORM2IVPROC, Uniform2iv)                                       \
+    X(PFNGLUNIFORM3IPROC, Uniform3i)                                         \
     X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                                 \
     X(PFNGLBINDTEXTUREPROC, BindTexture)                                     \
     X(PFNGLGENTEXTURESPROC, GenTextures)                                     \

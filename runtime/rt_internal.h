@@ -14,6 +14,7 @@ typedef struct mesoi_object {
     GLuint vao, buffer;
     struct mesoi_shell* shell; /* MESO_OBJECT_SHELL only */
     struct mesoi_frusta* frusta; /* MESO_OBJECT_FRUSTA only */
+    struct mesoi_cells* cells;   /* MESO_OBJECT_CELLS only (vao/buffer: its base mesh) */
     GLsizei index_count;
     uint64_t indices_offset;
     float bbox_min[3], bbox_max[3];
@@ -29,6 +30,7 @@ struct meso_rt {
     GLint u_view, u_proj, u_model, u_light_dir, u_albedo;
     GLuint shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], compiled on first use */
     GLuint frusta_programs[2];                            /* [stats], compiled on first use */
+    GLuint cells_programs[2];                             /* [stats], compiled on first use */
     GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
     GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
     mesoi_object* objects;
@@ -49,6 +51,12 @@ void mesoi_frusta_programs_destroy(meso_rt* rt);
 /* meso_rt_frusta_set_pose without the upload: the pose rebuild and the
  * bounding geometry on the host copy (tests/bench time the two parts). */
 meso_result mesoi_frusta_pose_host(meso_rt* rt, meso_rt_object obj, const float* node_positions, uint32_t node_count);
+
+/* rt_cells.c */
+meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
+void mesoi_cells_release(meso_rt* rt, mesoi_object* o);
+meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+void mesoi_cells_programs_destroy(meso_rt* rt);
 
 /* rt_common.c: chunks and uploads */
 /* Index of the finest-level chunk of `type` for `object`, or -1. */
@@ -96,6 +104,9 @@ void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, con
 meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
 
 /* rt_mesh.c */
+/* The object's MESH chunk into o->vao / o->buffer / index_count (positions
+ * at attribute 0, normals at 1, the chunk's own layout). */
+meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 GLuint mesoi_compile(meso_rt* rt, GLenum type, const char* const* src, int count, const char* name);
 GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name);
 mesoi_object* mesoi_lookup(const meso_rt* rt, meso_rt_object h);

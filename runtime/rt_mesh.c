@@ -152,42 +152,8 @@ static meso_result find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_obje
     return MESO_ERR_NOT_FOUND;
 }
 
-meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, meso_rt_object* out)
+meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
 {
-    if (!out)
-        return MESO_ERR_INVALID_ARG;
-    out->id = 0;
-    if (!rt || !f || object_id == 0) {
-        if (rt)
-            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_load_object: NULL file or object 0");
-        return MESO_ERR_INVALID_ARG;
-    }
-    meso_object_record rec;
-    meso_result r = find_record(rt, f, object_id, &rec);
-    if (r != MESO_OK)
-        return r;
-    if (rec.kind == MESO_OBJECT_SHELL || rec.kind == MESO_OBJECT_FRUSTA) {
-        uint32_t slot;
-        mesoi_object* o = alloc_slot(rt, &slot);
-        if (!o)
-            return MESO_ERR_OUT_OF_MEMORY;
-        r = rec.kind == MESO_OBJECT_SHELL ? mesoi_shell_load(rt, f, object_id, o)
-                                          : mesoi_frusta_load(rt, f, object_id, o);
-        if (r != MESO_OK)
-            return r;
-        o->generation = next_generation(o->generation);
-        o->live = 1;
-        o->kind = rec.kind;
-        memcpy(o->bbox_min, rec.bbox_min, sizeof(o->bbox_min));
-        memcpy(o->bbox_max, rec.bbox_max, sizeof(o->bbox_max));
-        out->id = slot | (o->generation << 16);
-        return MESO_OK;
-    }
-    if (rec.kind != MESO_OBJECT_MESH) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND,
-                  "object %u has kind %u; this runtime draws MESH, SHELL and FRUSTA objects", object_id, rec.kind);
-        return MESO_ERR_UNSUPPORTED;
-    }
     const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_MESH, object_id);
     if (ci < 0) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "object %u has no MESH chunk", object_id);
@@ -203,7 +169,7 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
         return MESO_ERR_OUT_OF_MEMORY;
     meso_error err;
     meso_mesh_view mv;
-    r = meso_file_read_chunk(f, (uint32_t)ci, data, (size_t)c->decoded_size, &err);
+    meso_result r = meso_file_read_chunk(f, (uint32_t)ci, data, (size_t)c->decoded_size, &err);
     if (r == MESO_OK)
         r = meso_mesh_parse(data, (size_t)c->decoded_size, &mv, &err);
     if (r != MESO_OK) {
@@ -216,12 +182,6 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
                   "object %u: MESH without normals or with too many indices", object_id);
         mesoi_rt_free(rt, data);
         return MESO_ERR_UNSUPPORTED;
-    }
-    uint32_t slot;
-    mesoi_object* o = alloc_slot(rt, &slot);
-    if (!o) {
-        mesoi_rt_free(rt, data);
-        return MESO_ERR_OUT_OF_MEMORY;
     }
     mesoi_gl* gl = &rt->gl;
     GLint prev_vao = 0, prev_array = 0;
@@ -250,11 +210,44 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
         o->vao = o->buffer = 0;
         return MESO_ERR_GL;
     }
+    o->index_count = (GLsizei)mv.layout.index_count;
+    o->indices_offset = mv.layout.indices_offset;
+    return MESO_OK;
+}
+
+meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, meso_rt_object* out)
+{
+    if (!out)
+        return MESO_ERR_INVALID_ARG;
+    out->id = 0;
+    if (!rt || !f || object_id == 0) {
+        if (rt)
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_load_object: NULL file or object 0");
+        return MESO_ERR_INVALID_ARG;
+    }
+    meso_object_record rec;
+    meso_result r = find_record(rt, f, object_id, &rec);
+    if (r != MESO_OK)
+        return r;
+    if (rec.kind != MESO_OBJECT_MESH && rec.kind != MESO_OBJECT_SHELL && rec.kind != MESO_OBJECT_FRUSTA &&
+        rec.kind != MESO_OBJECT_CELLS) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND,
+                  "object %u has kind %u; this runtime draws MESH, SHELL, CELLS and FRUSTA objects", object_id, rec.kind);
+        return MESO_ERR_UNSUPPORTED;
+    }
+    uint32_t slot;
+    mesoi_object* o = alloc_slot(rt, &slot);
+    if (!o)
+        return MESO_ERR_OUT_OF_MEMORY;
+    r = rec.kind == MESO_OBJECT_MESH     ? mesoi_mesh_upload(rt, f, object_id, o)
+        : rec.kind == MESO_OBJECT_SHELL  ? mesoi_shell_load(rt, f, object_id, o)
+        : rec.kind == MESO_OBJECT_FRUSTA ? mesoi_frusta_load(rt, f, object_id, o)
+                                         : mesoi_cells_load(rt, f, object_id, o);
+    if (r != MESO_OK)
+        return r;
     o->generation = next_generation(o->generation);
     o->live = 1;
     o->kind = rec.kind;
-    o->index_count = (GLsizei)mv.layout.index_count;
-    o->indices_offset = mv.layout.indices_offset;
     memcpy(o->bbox_min, rec.bbox_min, sizeof(o->bbox_min));
     memcpy(o->bbox_max, rec.bbox_max, sizeof(o->bbox_max));
     out->id = slot | (o->generation << 16);
@@ -268,6 +261,7 @@ void meso_rt_release_object(meso_rt* rt, meso_rt_object h)
         return;
     mesoi_shell_release(rt, o);
     mesoi_frusta_release(rt, o);
+    mesoi_cells_release(rt, o);
     rt->gl.DeleteVertexArrays(1, &o->vao);
     rt->gl.DeleteBuffers(1, &o->buffer);
     const uint32_t gen = o->generation; /* kept: the next occupant gets a new one */
@@ -292,6 +286,7 @@ void mesoi_objects_destroy(meso_rt* rt)
         if (o->live) {
             mesoi_shell_release(rt, o);
             mesoi_frusta_release(rt, o);
+            mesoi_cells_release(rt, o);
             rt->gl.DeleteVertexArrays(1, &o->vao);
             rt->gl.DeleteBuffers(1, &o->buffer);
         }
@@ -321,6 +316,8 @@ meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc*
         return mesoi_shell_draw(rt, o, d);
     if (o->kind == MESO_OBJECT_FRUSTA)
         return mesoi_frusta_draw(rt, o, d);
+    if (o->kind == MESO_OBJECT_CELLS)
+        return mesoi_cells_draw(rt, o, d);
     static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     float light[3] = {0.3f, 0.8f, 0.5f}, albedo[3] = {0.80f, 0.74f, 0.66f};
     if (!all_zero(d->light_dir, 3))

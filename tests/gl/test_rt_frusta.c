@@ -39,6 +39,7 @@
 #include "frusta_scene.h"
 #include "frustum_reference.h"
 #include "gl_fbo.h"
+#include "gl_log.h"
 #include "meso_rt.h"
 #include "shell_scene.h"
 
@@ -56,22 +57,6 @@ typedef struct test_gl {
 } test_gl;
 
 /* A capturing logger: the last error item. */
-typedef struct log_capture {
-    int errors;
-    meso_log_item last;
-    char message[512];
-} log_capture;
-
-static void on_log(void* user, meso_log_level level, meso_log_item item, const char* message)
-{
-    log_capture* c = user;
-    if (level != MESO_LOG_ERROR)
-        return;
-    ++c->errors;
-    c->last = item;
-    snprintf(c->message, sizeof(c->message), "%s", message ? message : "");
-}
-
 typedef struct ctx {
     meso_rt* rt;
     test_fbo fbo;
@@ -547,7 +532,7 @@ int main(void)
     }
     TEST_GLF(TEST_L)
 #undef TEST_L
-    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log, .log_user = &c.log},
+    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log},
                          &c.rt) == MESO_OK);
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);

@@ -1,0 +1,296 @@
+/*
+ * rt_cells.c — CELLS objects (FORMAT.md §7.2 kind 3, §7.8): streaming one
+ * object's MESH, CELL, TILE, MEMB, NRMM and COLR chunks into GL and ray
+ * tracing its cells (papers/cell-based-object-representation.md §3.2; the
+ * shaders are runtime/shaders/cells_*.glsl, the rules and the reference
+ * they are measured against runtime/reference/cell_reference.h).
+ *
+ * GL layout, everything as stored (no re-encoding):
+ *   unit 0  TILE  3D texture R16UI / R32UI, R^3 (nearest)
+ *   unit 1  MEMB  texture buffer R32UI over the sparse words (classes, rank,
+ *                 records: the shader finds a MIXED tile's record with the
+ *                 rank word plus a popcount, as FORMAT.md describes)
+ *   unit 2  NRMM  3D texture RG16 (unorm), decoded in the shader
+ *   unit 3  COLR  3D texture SRGB8_ALPHA8 (fetches are linear)
+ * plus the base mesh's vertex array (the MESH chunk buffer, as rt_mesh.c
+ * uploads it). SPLT is not needed to draw: MEMB's tags are final.
+ *
+ * Decisions:
+ *  - Rays start where the pixel ray meets a front face of the base mesh
+ *    (§3.2.1). When the camera's near plane reaches into the tile grid,
+ *    back faces are drawn too and start at the near plane (or the grid's
+ *    entry), so the camera may be inside the object.
+ *  - The thesis discards a ray that meets an OUTSIDE cell (§3.2.2, Figure
+ *    3.13) because a later base-mesh entry takes over. That is not exact: an
+ *    OUTSIDE cell's voxel cubes reach up to half a voxel diagonal into the
+ *    mesh, and a ray there may still reach INSIDE cells with no further
+ *    entry. meso walks on instead; OUTSIDE tiles are crossed in one step,
+ *    so what it costs is the walk through the intersected band.
+ *  - The file is checked with meso_file_check_cells before anything is
+ *    uploaded, so the shaders never index past their data.
+ */
+#include "file_internal.h"
+#include "mat4_inverse.h"
+#include "rt_internal.h"
+#include "shaders_embedded.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+typedef struct mesoi_cells {
+    uint32_t tiles[3], res, split_count;
+    uint32_t class_words, record_words; /* ceil(T / 16), W */
+    float origin[3], voxel;
+    int map_full;
+    GLuint tile_tex, memb_buf, memb_tex, nrmm_tex, colr_tex;
+} mesoi_cells;
+
+enum { UNIT_TILE = 0, UNIT_MEMB, UNIT_NRMM, UNIT_COLR, UNIT_COUNT };
+
+void mesoi_cells_release(meso_rt* rt, mesoi_object* o)
+{
+    mesoi_cells* c = o->cells;
+    if (!c)
+        return;
+    mesoi_gl* gl = &rt->gl;
+    const GLuint tex[4] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex};
+    gl->DeleteTextures(4, tex);
+    gl->DeleteBuffers(1, &c->memb_buf);
+    mesoi_rt_free(rt, c);
+    o->cells = NULL;
+}
+
+/* A 3D texture from a whole chunk, nearest, clamped. */
+static meso_result upload_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint internal, GLenum format, GLenum type,
+                             GLuint* out, int* all_nonzero)
+{
+    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
+    void* data = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
+    if (r != MESO_OK)
+        return r;
+    if (all_nonzero) { /* TILE: is there empty space in the map? */
+        *all_nonzero = 1;
+        const size_t n = (size_t)c->dims[0] * c->dims[1] * c->dims[2];
+        for (size_t i = 0; i < n && *all_nonzero; ++i)
+            if (c->dtype == MESO_DTYPE_U16 ? ((const uint16_t*)data)[i] == 0 : ((const uint32_t*)data)[i] == 0)
+                *all_nonzero = 0;
+    }
+    mesoi_gl* gl = &rt->gl;
+    GLint prev_unpack = 4;
+    gl->GetIntegerv(GL_UNPACK_ALIGNMENT, &prev_unpack);
+    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl->GenTextures(1, out);
+    gl->BindTexture(GL_TEXTURE_3D, *out);
+    gl->TexImage3D(GL_TEXTURE_3D, 0, internal, (GLsizei)c->dims[0], (GLsizei)c->dims[1], (GLsizei)c->dims[2], 0,
+                   format, type, data);
+    gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAX_LEVEL, 0);
+    gl->BindTexture(GL_TEXTURE_3D, 0);
+    gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+    mesoi_rt_free(rt, data);
+    return MESO_OK;
+}
+
+static meso_result read_grid(meso_rt* rt, meso_file* f, uint32_t id, int32_t ci, mesoi_cells* c)
+{
+    uint8_t rec[MESO_CELL_RECORD_SIZE];
+    meso_error err;
+    meso_result r = meso_file_read_chunk(f, (uint32_t)ci, rec, sizeof(rec), &err);
+    if (r != MESO_OK) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
+        return r;
+    }
+    uint64_t T = 1;
+    for (int a = 0; a < 3; ++a) {
+        c->tiles[a] = mesoi_ld32(rec + MESO_CELL_OFF_TILES + 4 * a);
+        c->origin[a] = mesoi_ldf32(rec + MESO_CELL_OFF_ORIGIN + 4 * a);
+        T *= c->tiles[a];
+    }
+    c->res = mesoi_ld32(rec + MESO_CELL_OFF_TILE_RES);
+    c->split_count = mesoi_ld32(rec + MESO_CELL_OFF_SPLIT_COUNT);
+    c->voxel = mesoi_ldf32(rec + MESO_CELL_OFF_VOXEL_SIZE);
+    c->class_words = (uint32_t)((T + 15) / 16);
+    c->record_words = (uint32_t)((2ull * c->split_count + 31) / 32);
+    /* The shader indexes with 32-bit ints: voxels per axis, tiles and words. */
+    const uint64_t words = 2ull * c->class_words + mesoi_ld64(rec + MESO_CELL_OFF_MIXED_TILES) * c->record_words;
+    GLint max_buf = 0, max_3d = 0;
+    rt->gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_buf);
+    rt->gl.GetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+    for (int a = 0; a < 3; ++a)
+        if ((uint64_t)c->tiles[a] * c->res > (uint64_t)INT32_MAX)
+            T = UINT64_MAX;
+    if (T > (uint64_t)INT32_MAX || words > (uint64_t)max_buf || c->res > (uint32_t)max_3d) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "cells %u: %u x %u x %u tiles of %u^3 voxels with %llu MEMB words exceed this context (texture "
+                  "buffer %d texels, 3D textures %d)",
+                  id, c->tiles[0], c->tiles[1], c->tiles[2], c->res, (unsigned long long)words, max_buf, max_3d);
+        return MESO_ERR_UNSUPPORTED;
+    }
+    return MESO_OK;
+}
+
+meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_object* o)
+{
+    meso_error err;
+    meso_result r = meso_file_check_cells(f, id, &err);
+    if (r != MESO_OK) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
+        return r;
+    }
+    static const uint32_t types[5] = {MESO_CHUNK_CELL, MESO_CHUNK_TILE, MESO_CHUNK_MEMB, MESO_CHUNK_NRMM,
+                                      MESO_CHUNK_COLR};
+    int32_t ci[5];
+    for (int k = 0; k < 5; ++k)
+        ci[k] = mesoi_find_chunk(f, types[k], id); /* present: checked above */
+    mesoi_cells* c = mesoi_rt_alloc(rt, sizeof(*c));
+    if (!c)
+        return MESO_ERR_OUT_OF_MEMORY;
+    memset(c, 0, sizeof(*c));
+    o->cells = c;
+    r = read_grid(rt, f, id, ci[0], c);
+    if (r == MESO_OK)
+        r = mesoi_mesh_upload(rt, f, id, o);
+    const GLint prev_tex_buffer = mesoi_upload_begin(rt);
+    if (r == MESO_OK) {
+        const int wide = meso_file_chunk(f, (uint32_t)ci[1])->dtype == MESO_DTYPE_U32;
+        r = upload_3d(rt, f, ci[1], wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER,
+                      wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT, &c->tile_tex, &c->map_full);
+    }
+    if (r == MESO_OK)
+        r = upload_3d(rt, f, ci[3], GL_RG16, GL_RG, GL_UNSIGNED_SHORT, &c->nrmm_tex, NULL);
+    if (r == MESO_OK)
+        r = upload_3d(rt, f, ci[4], GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->colr_tex, NULL);
+    if (r == MESO_OK) {
+        void* memb = NULL;
+        size_t size = 0;
+        r = mesoi_read_whole(rt, f, ci[2], &memb, &size);
+        if (r == MESO_OK)
+            c->memb_tex = mesoi_texture_buffer(rt, GL_R32UI, memb, size, &c->memb_buf);
+        mesoi_rt_free(rt, memb);
+    }
+    char what[48];
+    snprintf(what, sizeof(what), "uploading cells %u", id);
+    r = mesoi_upload_end(rt, prev_tex_buffer, r, what);
+    if (r != MESO_OK) {
+        mesoi_cells_release(rt, o);
+        rt->gl.DeleteVertexArrays(1, &o->vao);
+        rt->gl.DeleteBuffers(1, &o->buffer);
+        o->vao = o->buffer = 0;
+    }
+    return r;
+}
+
+/* >>drawing ---------------------------------------------------------------- */
+
+static GLuint cells_program(meso_rt* rt, int stats)
+{
+    if (rt->cells_programs[stats])
+        return rt->cells_programs[stats];
+    char head[160];
+    snprintf(head, sizeof(head), "#version %s core\n%suniform mat4 u_mvp;\nuniform mat4 u_inv_mvp;\n",
+             stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "");
+    const char* vs[2] = {head, mesoi_glsl_cells_vert};
+    const char* fs[3] = {head, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
+    const GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 2, "cells_vert.glsl"),
+                                mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 3, "cells_frag.glsl"), "cells");
+    rt->cells_programs[stats] = p;
+    return p;
+}
+
+void mesoi_cells_programs_destroy(meso_rt* rt)
+{
+    for (int st = 0; st < 2; ++st)
+        if (rt->cells_programs[st])
+            rt->gl.DeleteProgram(rt->cells_programs[st]);
+    memset(rt->cells_programs, 0, sizeof(rt->cells_programs));
+}
+
+/* 1 when the near plane's rectangle (its bounding box in object space)
+ * reaches into the grid box: then rays must also start at the near plane. */
+static int near_plane_in_grid(const mesoi_draw* ds, const mesoi_cells* c)
+{
+    double inv[16], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < 16; ++i)
+        inv[i] = ds->inv_mvp[i];
+    for (int k = 0; k < 4; ++k) {
+        const double ndc[4] = {k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, -1.0, 1.0};
+        double p[4] = {0, 0, 0, 0};
+        for (int row = 0; row < 4; ++row)
+            for (int col = 0; col < 4; ++col)
+                p[row] += inv[4 * col + row] * ndc[col];
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = fmin(lo[a], p[a] / p[3]);
+            hi[a] = fmax(hi[a], p[a] / p[3]);
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        const double g0 = c->origin[a], g1 = c->origin[a] + (double)c->tiles[a] * c->res * c->voxel;
+        if (hi[a] < g0 || lo[a] > g1)
+            return 0;
+    }
+    return 1;
+}
+
+meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
+{
+    const mesoi_cells* c = o->cells;
+    if (d->cell_mode < MESO_CELLS_FIRST_HIT || d->cell_mode > MESO_CELLS_REFRACT || d->cell_bounces < 0 ||
+        d->cell_bounces > 8 || !(d->cell_step >= 0.0f) || d->cell_ior < 0.0f || d->cell_reflectivity < 0.0f ||
+        d->cell_reflectivity > 1.0f || d->cell_transparency < 0.0f || d->cell_transparency > 1.0f) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw: cells knobs out of range (mode %d, bounces %d of 0..8, step %g, ior %g, "
+                  "reflectivity %g and transparency %g of 0..1)",
+                  (int)d->cell_mode, d->cell_bounces, (double)d->cell_step, (double)d->cell_ior,
+                  (double)d->cell_reflectivity, (double)d->cell_transparency);
+        return MESO_ERR_INVALID_ARG;
+    }
+    mesoi_draw ds;
+    meso_result r = mesoi_draw_prepare(rt, d, &ds);
+    if (r != MESO_OK)
+        return r;
+    const GLuint prog = cells_program(rt, ds.stats);
+    if (!prog)
+        return MESO_ERR_GL;
+    mesoi_gl* gl = &rt->gl;
+    static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D};
+    const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex};
+    mesoi_draw_begin(rt, &ds, prog, UNIT_COUNT, targets, bind);
+    const int from_near = near_plane_in_grid(&ds, c);
+    if (from_near)
+        gl->Disable(GL_CULL_FACE);
+    else
+        gl->CullFace(GL_BACK);
+    gl->BindVertexArray(o->vao);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_tile"), UNIT_TILE);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_memb"), UNIT_MEMB);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_nrmm"), UNIT_NRMM);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_colr"), UNIT_COLR);
+    gl->Uniform3fv(gl->GetUniformLocation(prog, "u_origin"), 1, c->origin);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_h"), c->voxel);
+    gl->Uniform3i(gl->GetUniformLocation(prog, "u_tiles"), (GLint)c->tiles[0], (GLint)c->tiles[1],
+                  (GLint)c->tiles[2]);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_res"), (GLint)c->res);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_class_words"), (GLint)c->class_words);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_words"), (GLint)c->record_words);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_map_full"), c->map_full);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_from_near"), from_near);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_mode"), (GLint)d->cell_mode);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bounces"), d->cell_bounces);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_refl"), d->cell_reflectivity > 0.0f ? d->cell_reflectivity : 0.5f);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_ior"), d->cell_ior > 0.0f ? d->cell_ior : 1.5f);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_tau"),
+                  d->cell_transparency > 0.0f ? d->cell_transparency : 0.7f);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_step"), d->cell_step);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_fixed_step"), d->cell_fixed_step != 0);
+    int bisect = d->bisection_steps;
+    if (bisect <= 0) /* down to 1/64 voxel */
+        bisect = d->cell_step > 0.0f ? (int)ceil(log2((double)d->cell_step * 64.0)) : 0;
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect"), bisect > 0 ? bisect : 1);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), d->cell_max_steps > 0 ? d->cell_max_steps : 4096);
+    gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
+    return mesoi_draw_end(rt, &ds, d->stats, "cells");
+}

@@ -1,0 +1,459 @@
+/* libmeso cells objects (FORMAT.md §7.2 kind 3) on llvmpipe against the
+ * exact CPU reference (runtime/reference/cell_reference.h:
+ * meso_ref_cells_render, an exact voxel traversal in double precision):
+ * Voronoi cells (a full map: whole-tile skipping both ways) and sphere
+ * cells (empty space in the map) in the bundled sphere and torus, first hit
+ * from several directions, specular self-reflection with 0..3 bounces,
+ * refraction, the camera inside the object, the thesis's linear search
+ * against the exact traversal on thin plates at grazing angles (its known
+ * failure, reproduced and measured), the GL state contract and malformed
+ * files.
+ *
+ * Files are baked by the real `mesobake cells` (argv[1]) into a temporary
+ * directory. Metrics: tests/common/shell_scene.h's compare() (coverage
+ * mismatch, hits off by more than 1 px, mean hit error in pixel footprints,
+ * colour MAE), plus `colour bad`: the fraction of pixels covered by both
+ * whose colours differ by more than 0.1 in some channel.
+ *
+ * `missed`: the share of the reference's covered pixels that GL leaves
+ * empty or hits more than a pixel footprint away.
+ * What could differ by design: libmeso's rays start on the base mesh
+ * (§3.2.1), the reference's at the grid; an INSIDE cell's voxel cubes may
+ * reach up to half a voxel diagonal out of the mesh, and GL cannot see such
+ * slivers in front of the mesh. In these scenes they cost no pixel (the
+ * covered counts agree to a few pixels); the tolerances below bound them.
+ * MESO_TEST_PNG=DIR writes each case's GL, reference and difference images. */
+#include "test_util.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cell_reference.h"
+#include "gl_fbo.h"
+#include "gl_log.h"
+#include "meso_rt.h"
+#include "shell_scene.h"
+
+enum { W = 160, H = 120 };
+
+#define TEST_GLF(X) X(PFNGLISENABLEDPROC, IsEnabled) X(PFNGLENABLEPROC, Enable) X(PFNGLDISABLEPROC, Disable)
+
+typedef struct test_gl {
+#define TEST_M(t, n) t n;
+    TEST_GLF(TEST_M)
+#undef TEST_M
+} test_gl;
+
+typedef struct ctx {
+    meso_rt* rt;
+    test_fbo fbo;
+    test_gl gl;
+    uint8_t* rgba;
+    float* depth;
+    log_capture log;
+    const char* mesobake;
+    char dir[64];
+} ctx;
+
+/* >>baking ----------------------------------------------------------------- */
+
+/* `mesobake cells -i MESH -o DIR/NAME.meso ARGS`; returns the path. */
+static const char* bake(ctx* c, const char* name, const char* mesh, const char* args)
+{
+    static char path[256];
+    snprintf(path, sizeof(path), "%s/%s.meso", c->dir, name);
+    char cmd[1024];
+    snprintf(cmd, sizeof(cmd), "'%s' cells -i '%s/%s' -o '%s' -j 2 %s >/dev/null 2>&1", c->mesobake, MESO_TEST_DATA,
+             mesh, path, args);
+    CHECK_MSG(system(cmd) == 0, "bake failed: %s", cmd);
+    return path;
+}
+
+typedef struct loaded {
+    meso_rt_object obj;
+    meso_ref_cells ref;
+    double lo[3], hi[3];
+} loaded;
+
+static loaded load(ctx* c, const char* path)
+{
+    loaded l;
+    memset(&l, 0, sizeof(l));
+    meso_file* f = NULL;
+    meso_error err;
+    CHECK_MSG(meso_file_open_path(path, NULL, &f, &err) == MESO_OK, "%s", err.message);
+    meso_object_record rec;
+    uint32_t n = 0;
+    CHECK(meso_file_objects(f, &rec, 1, &n, &err) == MESO_OK && n == 1 && rec.kind == MESO_OBJECT_CELLS);
+    CHECK_MSG(meso_rt_load_object(c->rt, f, rec.id, &l.obj) == MESO_OK, "%s", c->log.message);
+    CHECK_MSG(meso_ref_cells_load(f, rec.id, &l.ref, &err) == MESO_OK, "%s", err.message);
+    for (int k = 0; k < 3; ++k) {
+        l.lo[k] = rec.bbox_min[k];
+        l.hi[k] = rec.bbox_max[k];
+    }
+    meso_file_close(f);
+    return l;
+}
+
+static void unload(ctx* c, loaded* l)
+{
+    meso_rt_release_object(c->rt, l->obj);
+    meso_ref_cells_free(&l->ref);
+}
+
+/* >>rendering and comparing ------------------------------------------------ */
+
+/* Looking at the box's centre from direction `dir`, `dist_scale` times the
+ * distance at which its bounding sphere fills the view. */
+static camera view_box(const loaded* l, const double dir[3], double dist_scale)
+{
+    double c[3], r = 0, dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (int k = 0; k < 3; ++k) {
+        c[k] = 0.5 * (l->lo[k] + l->hi[k]);
+        r += 0.25 * (l->hi[k] - l->lo[k]) * (l->hi[k] - l->lo[k]);
+    }
+    r = sqrt(r);
+    const double fovy = 0.7, dist = dist_scale * r / sin(fovy / 2);
+    camera cam = {.fovy = fovy, .zn = fmax(dist - 2 * r, 0.01 * dist), .zf = dist + 2 * r};
+    for (int k = 0; k < 3; ++k) {
+        cam.eye[k] = c[k] + dist * dir[k] / dl;
+        cam.at[k] = c[k];
+    }
+    return cam;
+}
+
+typedef struct result {
+    metrics m;
+    double colour_bad;
+    double missed; /* missed() */
+    meso_rt_draw_stats stats;
+} result;
+
+/* The share of the reference's covered pixels that GL leaves empty or hits
+ * more than one pixel footprint away from the reference's hit: cells the
+ * search stepped over (c holds the GL images). */
+static double missed(const ctx* c, const meso_ref_image* ref, const camera* cam)
+{
+    float view[16], proj[16];
+    camera_matrices(cam, view, proj);
+    double mvp[16] = {0}, inv[16];
+    for (int col = 0; col < 4; ++col)
+        for (int row = 0; row < 4; ++row)
+            for (int k = 0; k < 4; ++k)
+                mvp[4 * col + row] += (double)proj[4 * k + row] * (double)view[4 * col + k];
+    CHECK(invert4(mvp, inv));
+    const double px_angle = 2.0 * tan(cam->fovy / 2) / H;
+    long covered = 0, miss = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + x;
+            if (!ref->coverage[i])
+                continue;
+            ++covered;
+            if (!(c->depth[i] < 1.0f)) {
+                ++miss;
+                continue;
+            }
+            double pg[3], dd = 0, de = 0;
+            unproject(inv, x, y, c->depth[i], pg);
+            for (int k = 0; k < 3; ++k) {
+                dd += (pg[k] - ref->hit[3 * i + (size_t)k]) * (pg[k] - ref->hit[3 * i + (size_t)k]);
+                de += (cam->eye[k] - ref->hit[3 * i + (size_t)k]) * (cam->eye[k] - ref->hit[3 * i + (size_t)k]);
+            }
+            miss += sqrt(dd) > px_angle * sqrt(de);
+        }
+    return covered ? (double)miss / covered : 0.0;
+}
+
+static meso_ref_cells_opts ref_opts(const meso_rt_draw_desc* d)
+{
+    return (meso_ref_cells_opts){.mode = (int)d->cell_mode,
+                                 .bounces = d->cell_bounces,
+                                 .reflectivity = d->cell_reflectivity,
+                                 .ior = d->cell_ior,
+                                 .transparency = d->cell_transparency};
+}
+
+static result render_compare(ctx* c, const char* name, const loaded* l, const camera* cam,
+                             const meso_rt_draw_desc* knobs)
+{
+    meso_rt_draw_desc d = knobs ? *knobs : (meso_rt_draw_desc){0};
+    camera_matrices(cam, d.view, d.proj);
+    result res;
+    memset(&res, 0, sizeof(res));
+    d.stats = &res.stats;
+    test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
+    CHECK_MSG(meso_rt_draw(c->rt, l->obj, &d) == MESO_OK, "%s", c->log.message);
+    test_fbo_read(&c->fbo, c->rgba, c->depth);
+
+    meso_ref_view v = {.width = W, .height = H};
+    for (int i = 0; i < 16; ++i)
+        v.view[i] = d.view[i], v.proj[i] = d.proj[i];
+    meso_ref_image img;
+    const meso_ref_cells_opts o = ref_opts(&d);
+    CHECK(meso_ref_cells_render(&l->ref, &v, &o, &img) == MESO_OK);
+    res.m = compare(c->rgba, c->depth, &img, d.view, d.proj, cam->fovy, name);
+    long both = 0, bad = 0;
+    for (size_t i = 0; i < (size_t)W * H; ++i)
+        if (img.coverage[i] && c->depth[i] < 1.0f) {
+            ++both;
+            int b = 0;
+            for (int k = 0; k < 3; ++k)
+                b |= fabs(c->rgba[4 * i + (size_t)k] / 255.0 - img.rgb[3 * i + (size_t)k]) > 0.1;
+            bad += b;
+        }
+    res.colour_bad = both ? (double)bad / both : 0.0;
+    res.missed = missed(c, &img, cam);
+    printf("%-28s covered gl %5ld ref %5ld  coverage mismatch %.4f  off >1px %.4f  hit error %.3f px (>1 px: %.4f)  "
+           "colour MAE %.4f bad %.4f  missed %.4f  steps/fragment %.1f\n",
+           name, res.m.covered_gl, res.m.covered_ref, res.m.coverage_mismatch, res.m.off_pixel, res.m.hit_err_px,
+           res.m.hit_gt1, res.m.colour_mae, res.colour_bad, res.missed,
+           res.stats.fragments ? (double)res.stats.steps / (double)res.stats.fragments : 0.0);
+    meso_ref_image_free(&img);
+    return res;
+}
+
+/* Tolerances (margins in the log): silhouette slivers and ties at voxel
+ * edges only. */
+static void check_close(const char* what, result r, double colour_bad_tol)
+{
+    CHECK_MSG(r.m.covered_ref > 500, "%s: the reference covers only %ld pixels", what, r.m.covered_ref);
+    CHECK_MSG(r.m.coverage_mismatch <= 0.01 && r.m.off_pixel <= 0.01 && r.m.hit_err_px <= 0.1 && r.missed <= 0.005 &&
+                  r.colour_bad <= colour_bad_tol,
+              "%s vs reference: coverage %.4f, off > 1 px %.4f, hit error %.3f px, missed %.4f, colour bad %.4f", what,
+              r.m.coverage_mismatch, r.m.off_pixel, r.m.hit_err_px, r.missed, r.colour_bad);
+}
+
+/* >>cases ------------------------------------------------------------------ */
+
+static const double dirs[3][3] = {{0.3, 0.4, 1.0}, {-1.0, 0.2, 0.1}, {0.2, -1.0, -0.5}};
+
+static void test_first_hit(ctx* c)
+{
+    const char* p = bake(c, "voronoi", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map voronoi:8");
+    loaded l = load(c, p);
+    char name[64];
+    for (int i = 0; i < 3; ++i) {
+        const camera cam = view_box(&l, dirs[i], 1.0);
+        snprintf(name, sizeof(name), "voronoi_first_%d", i);
+        check_close(name, render_compare(c, name, &l, &cam, NULL), 0.01);
+    }
+    /* Close up: cells a few pixels wide become tens. */
+    const camera near = view_box(&l, dirs[0], 0.35);
+    check_close("voronoi_close", render_compare(c, "voronoi_close", &l, &near, NULL), 0.01);
+    unload(c, &l);
+
+    p = bake(c, "spheres", "torus.obj", "--tiles 8 --tile-res 16 --tile-map spheres:6:0.3");
+    l = load(c, p);
+    for (int i = 0; i < 2; ++i) {
+        const camera cam = view_box(&l, dirs[i], 1.0);
+        snprintf(name, sizeof(name), "spheres_first_%d", i);
+        check_close(name, render_compare(c, name, &l, &cam, NULL), 0.01);
+    }
+    unload(c, &l);
+}
+
+static void test_reflection_refraction(ctx* c)
+{
+    const char* p = bake(c, "voronoi_rr", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map voronoi:8");
+    loaded l = load(c, p);
+    const camera cam = view_box(&l, dirs[0], 0.6);
+    char name[64];
+    for (int b = 0; b <= 3; ++b) {
+        meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = b};
+        snprintf(name, sizeof(name), "reflect_%d", b);
+        check_close(name, render_compare(c, name, &l, &cam, &d), 0.03);
+    }
+    for (int b = 0; b <= 4; b += 2) {
+        meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFRACT, .cell_bounces = b, .cell_ior = 1.33f};
+        snprintf(name, sizeof(name), "refract_%d", b);
+        check_close(name, render_compare(c, name, &l, &cam, &d), 0.03);
+    }
+    unload(c, &l);
+    p = bake(c, "spheres_rr", "torus.obj", "--tiles 8 --tile-res 16 --tile-map spheres:6:0.3");
+    l = load(c, p);
+    const camera cam2 = view_box(&l, dirs[1], 0.7);
+    meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFRACT, .cell_bounces = 3};
+    check_close("spheres_refract_3", render_compare(c, "spheres_refract_3", &l, &cam2, &d), 0.03);
+    d = (meso_rt_draw_desc){.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = 2, .cell_reflectivity = 0.8f};
+    check_close("spheres_reflect_2", render_compare(c, "spheres_reflect_2", &l, &cam2, &d), 0.03);
+    unload(c, &l);
+}
+
+/* The near plane inside the grid: back faces start the rays there. The eye
+ * is put in empty space between the sphere cells (checked on the reference's
+ * voxels), so rays travel before they hit. */
+static void test_camera_inside(ctx* c)
+{
+    const char* p = bake(c, "inside", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map spheres:4:0.25");
+    loaded l = load(c, p);
+    camera cam = {.fovy = 1.0, .zn = 0.01, .zf = 10.0, .at = {0.6, -0.2, -0.9}};
+    int found = 0;
+    for (int t = 0; t < 200 && !found; ++t) {
+        const double e[3] = {0.3 * sin(0.7 * t), 0.3 * cos(1.3 * t), 0.2 * sin(2.1 * t)};
+        int64_t v[3];
+        for (int k = 0; k < 3; ++k)
+            v[k] = (int64_t)floor((e[k] - l.ref.origin[k]) / l.ref.voxel);
+        found = 1;
+        for (int dz = -2; dz <= 2; ++dz)
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx)
+                    found &= !meso_ref_cells_solid(&l.ref, v[0] + dx, v[1] + dy, v[2] + dz);
+        if (found)
+            memcpy(cam.eye, e, sizeof(e));
+    }
+    CHECK_MSG(found, "no empty space for the eye");
+    result r = render_compare(c, "camera_inside", &l, &cam, NULL);
+    check_close("camera_inside", r, 0.01);
+    CHECK_MSG(r.stats.supported == 0 || r.stats.steps > 2 * r.stats.fragments,
+              "camera inside: %llu steps for %llu fragments; the rays should travel", (unsigned long long)r.stats.steps,
+              (unsigned long long)r.stats.fragments);
+    unload(c, &l);
+}
+
+/* Small sphere cells under the flat top of a cube, seen steeply and at a
+ * grazing angle. The thesis's linear search (Algorithm 3.1) at a fixed step
+ * longer than a cell steps over cells (§3.2.2: "at grazing angles ... the
+ * step size is too high and therefore missing an inside cell"); its remedy,
+ * the step shrunk with the angle to the base mesh's normal, helps at grazing
+ * angles (measured: 44 % of the covered pixels wrong -> 27 %) and costs
+ * steps; meso's default, the exact traversal, never misses, at about the
+ * steps of a 1-voxel linear search (which still misses 9 %). */
+static void test_grazing(ctx* c)
+{
+    const char* p = bake(c, "grazing", "cube_no_bottom.obj", "--tiles 4 --tile-res 16 --tile-map spheres:4:0.2");
+    loaded l = load(c, p);
+    /* Steep: 66 degrees above the top. Grazing: the eye 0.2 above the top
+     * (the cube is [-1, 1]^3), looking along it: the top is seen at 3 to 20
+     * degrees, and nothing else. */
+    const double dir[3] = {0.3, 1.0, 0.4};
+    const camera views[2] = {view_box(&l, dir, 0.5),
+                             {.fovy = 0.7, .zn = 0.01, .zf = 10.0, .eye = {-0.95, 1.2, 0.05}, .at = {1.0, 0.85, 0.0}}};
+    const char* names[2] = {"steep", "grazing"};
+    for (int k = 0; k < 2; ++k) {
+        const camera cam = views[k];
+        char name[64];
+        snprintf(name, sizeof(name), "%s_exact", names[k]);
+        const double exact = render_compare(c, name, &l, &cam, NULL).missed;
+        meso_rt_draw_desc d = {.cell_step = 8.0f, .cell_fixed_step = 1};
+        snprintf(name, sizeof(name), "%s_linear_8", names[k]);
+        const double fixed = render_compare(c, name, &l, &cam, &d).missed;
+        d.cell_fixed_step = 0;
+        snprintf(name, sizeof(name), "%s_linear_8_angle", names[k]);
+        const double angle = render_compare(c, name, &l, &cam, &d).missed;
+        d = (meso_rt_draw_desc){.cell_step = 1.0f, .cell_fixed_step = 1};
+        snprintf(name, sizeof(name), "%s_linear_1", names[k]);
+        const double fine = render_compare(c, name, &l, &cam, &d).missed;
+        CHECK_MSG(exact <= 0.002, "%s: the exact traversal missed %.4f", names[k], exact);
+        CHECK_MSG(fixed >= 0.05, "%s: 8-voxel steps over cells 6 voxels wide should miss some: %.4f", names[k], fixed);
+        CHECK_MSG(fine < fixed, "%s: 1-voxel steps must miss less than 8: %.4f vs %.4f", names[k], fine, fixed);
+        if (k == 1)
+            CHECK_MSG(angle < 0.75 * fixed, "grazing: the angle rule should cut the misses by a quarter: %.4f vs %.4f",
+                      angle, fixed);
+    }
+    unload(c, &l);
+}
+
+/* meso_rt_draw's promise: the state it changes comes back. */
+static void test_state_contract(ctx* c)
+{
+    const char* p = bake(c, "state", "sphere.obj", "--tiles 3 --tile-res 8");
+    loaded l = load(c, p);
+    c->gl.Enable(GL_CULL_FACE);
+    const camera cam = view_box(&l, dirs[0], 1.0);
+    meso_rt_draw_desc d = {0};
+    camera_matrices(&cam, d.view, d.proj);
+    CHECK(meso_rt_draw(c->rt, l.obj, &d) == MESO_OK);
+    CHECK(c->gl.IsEnabled(GL_CULL_FACE));
+    c->gl.Disable(GL_CULL_FACE);
+    const camera in = {.fovy = 1.0, .zn = 0.01, .zf = 10.0, .eye = {0, 0, 0}, .at = {0, 0, -1}};
+    camera_matrices(&in, d.view, d.proj);
+    CHECK(meso_rt_draw(c->rt, l.obj, &d) == MESO_OK);
+    CHECK(!c->gl.IsEnabled(GL_CULL_FACE));
+    /* Knobs out of range are refused, nothing drawn. */
+    d.cell_bounces = 9;
+    c->log.errors = 0;
+    CHECK(meso_rt_draw(c->rt, l.obj, &d) == MESO_ERR_INVALID_ARG && c->log.errors == 1);
+    unload(c, &l);
+}
+
+/* A corrupted MEMB is refused at load with the validator's message. */
+static void test_malformed(ctx* c)
+{
+    const char* p = bake(c, "bad", "sphere.obj", "--tiles 3 --tile-res 8");
+    meso_file* f = NULL;
+    meso_error err;
+    CHECK(meso_file_open_path(p, NULL, &f, &err) == MESO_OK);
+    uint64_t off = 0, size = 0;
+    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
+        const meso_chunk_info* ci = meso_file_chunk(f, i);
+        if (ci->type == MESO_CHUNK_MEMB) {
+            off = ci->offset;
+            size = ci->stored_size;
+        }
+    }
+    meso_file_close(f);
+    CHECK(size >= 4);
+    FILE* fp = fopen(p, "r+b");
+    CHECK(fp != NULL);
+    fseek(fp, (long)off, SEEK_SET);
+    const uint32_t all3 = 0xFFFFFFFFu; /* every tile class 3: invalid */
+    fwrite(&all3, 4, 1, fp);
+    fclose(fp);
+    CHECK(meso_file_open_path(p, NULL, &f, &err) == MESO_OK);
+    meso_rt_object obj;
+    c->log.errors = 0;
+    const meso_result r = meso_rt_load_object(c->rt, f, 1, &obj);
+    CHECK_MSG(r != MESO_OK && obj.id == 0 && c->log.errors >= 1, "corrupt MEMB loaded: %s", meso_result_string(r));
+    printf("corrupt MEMB refused: %s\n", c->log.message);
+    meso_file_close(f);
+}
+
+int main(int argc, char** argv)
+{
+    setvbuf(stdout, NULL, _IONBF, 0);
+    CHECK_MSG(argc == 2, "usage: test_rt_cells MESOBAKE");
+    scene_w = W;
+    scene_h = H;
+    char why[256];
+    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    CHECK_MSG(egl != NULL, "%s", why);
+    ctx c;
+    memset(&c, 0, sizeof(c));
+    c.mesobake = argv[1];
+    snprintf(c.dir, sizeof(c.dir), "/tmp/meso_rt_cells_XXXXXX");
+    CHECK(mkdtemp(c.dir) != NULL);
+    CHECK(test_fbo_create(&c.fbo, W, H));
+#define TEST_L(t, n)                                  \
+    {                                                 \
+        void (*fn)(void) = meso_egl_proc("gl" #n);    \
+        CHECK(fn != NULL);                            \
+        memcpy(&c.gl.n, &fn, sizeof(fn));             \
+    }
+    TEST_GLF(TEST_L)
+#undef TEST_L
+    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log},
+                         &c.rt) == MESO_OK);
+    c.rgba = malloc((size_t)W * H * 4);
+    c.depth = malloc(sizeof(float) * W * H);
+
+    test_first_hit(&c);
+    test_reflection_refraction(&c);
+    test_camera_inside(&c);
+    test_grazing(&c);
+    test_state_contract(&c);
+    test_malformed(&c);
+
+    char cmd[128];
+    snprintf(cmd, sizeof(cmd), "rm -rf '%s'", c.dir);
+    CHECK(system(cmd) == 0);
+    free(c.rgba);
+    free(c.depth);
+    meso_rt_destroy(c.rt);
+    test_fbo_destroy(&c.fbo);
+    meso_egl_destroy(egl);
+    printf("ok\n");
+    return 0;
+}
