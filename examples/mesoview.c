@@ -13,7 +13,9 @@
  * meso_rt_shell_update; frusta: the skeleton sways, every node turning a
  * little about its parent, rebuilt every frame with meso_rt_frusta_set_pose;
  * no re-bake either way). Frusta use the step limit keys for their relief
- * march (relief_steps). The title shows ms/frame and, on
+ * march (relief_steps). Cells: M cycles first hit / reflection / refraction,
+ * N the bounces (0..3), L toggles the thesis's linear search (8 voxels a
+ * step) against the exact traversal. The title shows ms/frame and, on
  * OpenGL 4.3+, ray steps per ray-cast fragment counted by the shaders. GLFW lives only in examples/: libmeso itself
  * never sees a window. Draco-encoded chunks are decoded with the baker's
  * decoder, passed in through meso_open_desc as any host would pass its own.
@@ -39,11 +41,15 @@ static const char* const usage =
     "  --technique T       shells: smooth (default), curved, tetra or segment\n"
     "  --error-px E        shells: image-space error bound in pixels (default 1)\n"
     "  --animate           start with the animation on (shells twist, frusta sway)\n"
+    "  --cells MODE        cells: first (default), reflect or refract\n"
     "  -h, --help          this help;  --version  the version\n"
     "\n"
     "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png,\n"
     "1-4 technique (smooth curved tetra segment), [ ] error bound, - = step limit,\n"
-    "B bisection steps, D distance map on/off, A animation on/off\n";
+    "B bisection steps, D distance map on/off, A animation on/off,\n"
+    "M cells mode, N cells bounces, L cells linear search on/off\n";
+
+static const char* const cell_mode_names[3] = {"first", "reflect", "refract"};
 
 static const char* const technique_names[MESO_SHELL_TECHNIQUE_COUNT] = {"smooth", "curved", "tetra", "segment"};
 
@@ -81,6 +87,12 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
         d->no_distance_map = !d->no_distance_map;
     else if (key == GLFW_KEY_A)
         k->animate = !k->animate;
+    else if (key == GLFW_KEY_M)
+        d->cell_mode = (meso_cells_mode)((d->cell_mode + 1) % 3);
+    else if (key == GLFW_KEY_N)
+        d->cell_bounces = (d->cell_bounces + 1) % 4;
+    else if (key == GLFW_KEY_L)
+        d->cell_step = d->cell_step > 0.0f ? 0.0f : 8.0f;
     else
         return;
     k->changed = 1;
@@ -324,7 +336,7 @@ static void load(void* dst, const char* name, int* missing)
 int main(int argc, char** argv)
 {
     int width = 800, height = 600, frames = 0;
-    knobs kn = {.d = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4, .relief_steps = 64}};
+    knobs kn = {.d = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4, .relief_steps = 64, .cell_bounces = 1}};
     const char *file = NULL, *shot = NULL;
     for (int i = 1; i < argc; ++i) {
         const char* a = argv[i];
@@ -340,6 +352,17 @@ int main(int argc, char** argv)
                 fprintf(stderr, "mesoview error: --size expects WxH, got '%s'\nSee 'mesoview --help'.\n", argv[i]);
                 return 1;
             }
+        } else if (!strcmp(a, "--cells") && i + 1 < argc) {
+            const char* m = argv[++i];
+            int found = -1;
+            for (int k = 0; k < 3; ++k)
+                if (!strcmp(m, cell_mode_names[k]))
+                    found = k;
+            if (found < 0) {
+                fprintf(stderr, "mesoview error: --cells expects first, reflect or refract, got '%s'\n", m);
+                return 1;
+            }
+            kn.d.cell_mode = (meso_cells_mode)found;
         } else if (!strcmp(a, "--frames") && i + 1 < argc) {
             frames = atoi(argv[++i]);
         } else if (!strcmp(a, "--screenshot") && i + 1 < argc) {
@@ -497,9 +520,11 @@ int main(int argc, char** argv)
         t_last = t_now;
         if (frame % 10 == 0 || kn.changed) {
             char title[256];
-            snprintf(title, sizeof(title), "mesoview  %s  err %.3g px  steps %d  bisect %d%s%s  %.1f ms/frame",
+            snprintf(title, sizeof(title),
+                     "mesoview  %s  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
                      technique_names[kn.d.technique], kn.d.error_px, kn.d.max_steps, kn.d.bisection_steps,
-                     kn.d.no_distance_map ? "  no-dist" : "", kn.animate ? "  animated" : "", ms_avg);
+                     kn.d.no_distance_map ? "  no-dist" : "", kn.animate ? "  animated" : "",
+                     cell_mode_names[kn.d.cell_mode], kn.d.cell_bounces, kn.d.cell_step > 0 ? " linear" : "", ms_avg);
             if (stats.supported && stats.fragments)
                 snprintf(title + strlen(title), sizeof(title) - strlen(title), "  %.1f steps/fragment",
                          (double)stats.steps / (double)stats.fragments);

@@ -7,8 +7,9 @@
  * at --yaw/--pitch, framed so the bounding sphere fills the view. The image
  * is rendered at twice the size and box-filtered down (4 samples a pixel).
  *
- * --reference renders the shell and frusta objects with the exact CPU ray
- * casters (runtime/reference/shell_reference.h, frustum_reference.h)
+ * --reference renders the shell, frusta and cells objects with the exact CPU
+ * ray casters (runtime/reference/shell_reference.h, frustum_reference.h,
+ * cell_reference.h)
  * instead: no EGL, the same camera, light, clear colour and 2x2 box filter,
  * so the two PNGs compare pixel by pixel. Several objects are composited by
  * depth (the nearest sample wins, as GL_LESS).
@@ -23,6 +24,7 @@
 #include "meso_file.h"
 #include "meso_rt.h"
 #include "png_io.h"
+#include "cell_reference.h"
 #include "frustum_reference.h"
 #include "shell_reference.h"
 
@@ -38,13 +40,28 @@ static const char* const usage_preview =
     "      --object ID     draw only this object\n"
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
+    "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
     "      --technique T   shell technique: smooth (default), curved or tetra\n"
-    "      --reference     render the shell and frusta objects with the exact CPU\n"
+    "      --reference     render the shell, frusta and cells objects with the exact CPU\n"
     "                      reference (runtime/reference; no EGL needed, slow).\n"
     "                      --technique curved selects the curved shell mapping,\n"
     "                      smooth and tetra the smooth one; mesh objects are skipped\n"
     "      --samples N     reference: samples per prism along each ray (default 1024)\n"
+    "      --cells MODE    cells objects: first (first hit, default), reflect or refract\n"
+    "      --bounces N     cells: reflected rays traced after the first hit, or refraction\n"
+    "                      events after it (0..8, default 2)\n"
+    "      --cell-step S   cells: the thesis's linear search at S tile-map voxels a step\n"
+    "                      (default 0: exact voxel traversal; the reference is always exact)\n"
     "  -h, --help          this help\n";
+
+/* The options that change the drawing. */
+typedef struct preview_knobs {
+    meso_shell_technique technique;
+    meso_cells_mode cell_mode;
+    int cell_bounces;
+    float cell_step;
+    double zoom;
+} preview_knobs;
 
 /* Background: the GL preview's clear colour. */
 static const float clear_rgb[3] = {0.18f, 0.20f, 0.24f};
@@ -86,14 +103,14 @@ static void look_at(float m[16], const double eye[3], const double at[3])
 
 /* The preview camera and light for objects within [lo, hi] (both renderers). */
 static void preview_camera(const double lo[3], const double hi[3], int width, int height, double yaw, double pitch,
-                           meso_rt_draw_desc* d)
+                           double zoom, meso_rt_draw_desc* d)
 {
     const double centre[3] = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     const double radius = 0.5 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                      (hi[2] - lo[2]) * (hi[2] - lo[2]));
     const double fovy = 35.0 * M_PI / 180.0, aspect = (double)width / height;
     const double fit = fmin(fovy, 2 * atan(tan(fovy / 2) * aspect));
-    const double dist = (radius > 0 ? radius : 1.0) / sin(fit / 2) * 1.05;
+    const double dist = (radius > 0 ? radius : 1.0) / sin(fit / 2) * 1.05 / zoom;
     const double y = yaw * M_PI / 180.0, p = pitch * M_PI / 180.0;
     const double eye[3] = {centre[0] + dist * cos(p) * sin(y), centre[1] + dist * sin(p),
                            centre[2] + dist * cos(p) * cos(y)};
@@ -124,17 +141,18 @@ static uint8_t unorm8(float c)
     return (uint8_t)lrintf(fminf(fmaxf(c, 0.0f), 1.0f) * 255.0f);
 }
 
-#define PREVIEW_MAX_REF 64 /* shell and frusta objects the reference renders */
+#define PREVIEW_MAX_REF 64 /* shell, frusta and cells objects the reference renders */
 
 /* One object the reference renders. */
 typedef struct ref_object {
     uint32_t kind;
     meso_ref_shell shell;
     meso_ref_frusta frusta;
+    meso_ref_cells cells;
 } ref_object;
 
 static int render_reference(const char* path, const char* out, int width, int height, uint32_t only, double yaw,
-                            double pitch, int curved, int samples)
+                            double pitch, int curved, int samples, const preview_knobs* knobs)
 {
     int code = MESO_EXIT_OK;
     meso_file* f = NULL;
@@ -155,8 +173,8 @@ static int render_reference(const char* path, const char* out, int width, int he
         free(objs);
         return meso_exit_for(r);
     }
-    /* The framing covers what the GL preview would draw (meshes, shells and
-     * frusta), so the two images share a camera. */
+    /* The framing covers what the GL preview would draw (meshes, shells,
+     * frusta and cells), so the two images share a camera. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     meso_object_record recs[256];
     uint32_t count = 0;
@@ -168,7 +186,8 @@ static int render_reference(const char* path, const char* out, int width, int he
     for (uint32_t i = 0; i < count && i < 256; ++i) {
         const meso_object_record* rec = &recs[i];
         if ((only && rec->id != only) ||
-            (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL && rec->kind != MESO_OBJECT_FRUSTA))
+            (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL && rec->kind != MESO_OBJECT_FRUSTA &&
+             rec->kind != MESO_OBJECT_CELLS))
             continue;
         for (int k = 0; k < 3; ++k) {
             lo[k] = fmin(lo[k], rec->bbox_min[k]);
@@ -176,7 +195,8 @@ static int render_reference(const char* path, const char* out, int width, int he
         }
         if (rec->kind == MESO_OBJECT_MESH) {
             fprintf(stderr,
-                    "mesoinspect warning: object %u (%s) is a mesh; --reference renders shells and frusta only\n",
+                    "mesoinspect warning: object %u (%s) is a mesh; --reference renders shells, frusta and cells "
+                    "only\n",
                     rec->id, rec->name);
             continue;
         }
@@ -187,8 +207,9 @@ static int render_reference(const char* path, const char* out, int width, int he
         }
         ref_object* o = &objs[nobj];
         o->kind = rec->kind;
-        r = rec->kind == MESO_OBJECT_SHELL ? meso_ref_shell_load(f, rec->id, &o->shell, &err)
-                                           : meso_ref_frusta_load(f, rec->id, &o->frusta, &err);
+        r = rec->kind == MESO_OBJECT_SHELL    ? meso_ref_shell_load(f, rec->id, &o->shell, &err)
+            : rec->kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_load(f, rec->id, &o->frusta, &err)
+                                              : meso_ref_cells_load(f, rec->id, &o->cells, &err);
         if (r != MESO_OK) {
             fprintf(stderr, "mesoinspect error: %s\n", err.message);
             code = meso_exit_for(r);
@@ -197,12 +218,13 @@ static int render_reference(const char* path, const char* out, int width, int he
         ++nobj;
     }
     if (nobj == 0) {
-        fprintf(stderr, "mesoinspect error: %s: no shell or frusta object%s\n", path, only ? " with that id" : "");
+        fprintf(stderr, "mesoinspect error: %s: no shell, frusta or cells object%s\n", path,
+                only ? " with that id" : "");
         code = only ? MESO_EXIT_USAGE : MESO_EXIT_UNSUPPORTED;
         goto done;
     }
     meso_rt_draw_desc d = {0};
-    preview_camera(lo, hi, width, height, yaw, pitch, &d);
+    preview_camera(lo, hi, width, height, yaw, pitch, knobs->zoom, &d);
     const int W = 2 * width, H = 2 * height;
     meso_ref_view v = {.width = W, .height = H, .curved = curved, .samples_per_prism = samples};
     for (int k = 0; k < 16; ++k) {
@@ -229,8 +251,10 @@ static int render_reference(const char* path, const char* out, int width, int he
     /* Several objects: the nearest hit per sample (GL_LESS). */
     for (int s = 0; s < nobj; ++s) {
         meso_ref_image ri;
-        r = objs[s].kind == MESO_OBJECT_SHELL ? meso_ref_render(&objs[s].shell, &v, &ri)
-                                              : meso_ref_frusta_render(&objs[s].frusta, &v, &ri);
+        const meso_ref_cells_opts co = {.mode = (int)knobs->cell_mode, .bounces = knobs->cell_bounces};
+        r = objs[s].kind == MESO_OBJECT_SHELL    ? meso_ref_render(&objs[s].shell, &v, &ri)
+            : objs[s].kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_render(&objs[s].frusta, &v, &ri)
+                                                 : meso_ref_cells_render(&objs[s].cells, &v, &co, &ri);
         if (r != MESO_OK) {
             fprintf(stderr, "mesoinspect error: reference render failed: %s\n", meso_result_string(r));
             code = MESO_EXIT_INTERNAL;
@@ -255,6 +279,7 @@ done:
     for (int s = 0; s < nobj; ++s) {
         meso_ref_shell_free(&objs[s].shell);
         meso_ref_frusta_free(&objs[s].frusta);
+        meso_ref_cells_free(&objs[s].cells);
     }
     free(objs);
     free(px);
@@ -293,7 +318,7 @@ static void on_log(void* user, meso_log_level level, meso_log_item item, const c
 }
 
 static int render(const char* path, const char* out, int width, int height, uint32_t only, double yaw, double pitch,
-                  meso_shell_technique technique)
+                  const preview_knobs* knobs)
 {
     char why[256];
     meso_egl* egl = meso_egl_create(why, sizeof(why));
@@ -391,8 +416,11 @@ static int render(const char* path, const char* out, int width, int height, uint
     gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
 
     meso_rt_draw_desc d = {0};
-    preview_camera(lo, hi, width, height, yaw, pitch, &d);
-    d.technique = technique;
+    preview_camera(lo, hi, width, height, yaw, pitch, knobs->zoom, &d);
+    d.technique = knobs->technique;
+    d.cell_mode = knobs->cell_mode;
+    d.cell_bounces = knobs->cell_bounces;
+    d.cell_step = knobs->cell_step;
     for (int i = 0; i < nobj; ++i)
         if (meso_rt_draw(rt, objs[i], &d) != MESO_OK) {
             code = MESO_EXIT_INTERNAL;
@@ -431,6 +459,7 @@ int mesoinspect_preview(int argc, char** argv)
     unsigned long only = 0;
     double yaw = 30, pitch = 20;
     meso_shell_technique technique = MESO_SHELL_SMOOTH;
+    preview_knobs knobs = {.cell_bounces = 2, .zoom = 1.0};
     int reference = 0;
     long samples = 0;
     for (int i = 0; i < argc; ++i) {
@@ -486,11 +515,48 @@ int mesoinspect_preview(int argc, char** argv)
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--zoom") && val) {
+            knobs.zoom = strtod(argv[++i], &end);
+            if (!end || *end || !(knobs.zoom >= 0.01 && knobs.zoom <= 1000)) {
+                fprintf(stderr, "mesoinspect error: --zoom expects 0.01..1000, got '%s'\nSee 'mesoinspect --help'.\n",
+                        argv[i]);
+                return MESO_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--cells") && val) {
+            const char* m = argv[++i];
+            if (!strcmp(m, "first"))
+                knobs.cell_mode = MESO_CELLS_FIRST_HIT;
+            else if (!strcmp(m, "reflect"))
+                knobs.cell_mode = MESO_CELLS_REFLECT;
+            else if (!strcmp(m, "refract"))
+                knobs.cell_mode = MESO_CELLS_REFRACT;
+            else {
+                fprintf(stderr, "mesoinspect error: --cells expects first, reflect or refract, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", m);
+                return MESO_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--bounces") && val) {
+            const long b = strtol(argv[++i], &end, 10);
+            if (!end || *end || b < 0 || b > 8) {
+                fprintf(stderr, "mesoinspect error: --bounces expects 0..8, got '%s'\nSee 'mesoinspect --help'.\n",
+                        argv[i]);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.cell_bounces = (int)b;
+        } else if (!strcmp(a, "--cell-step") && val) {
+            const double st = strtod(argv[++i], &end);
+            if (!end || *end || !(st >= 0 && st <= 1e6)) {
+                fprintf(stderr, "mesoinspect error: --cell-step expects voxels >= 0, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", argv[i]);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.cell_step = (float)st;
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "mesoinspect error: %s '%s'\nSee 'mesoinspect --help'.\n",
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
-                     !strcmp(a, "--samples"))
+                     !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
+                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
@@ -506,13 +572,14 @@ int mesoinspect_preview(int argc, char** argv)
         fputs(usage_preview, stderr);
         return MESO_EXIT_USAGE;
     }
+    knobs.technique = technique;
     if (reference)
         return render_reference(file, out, width, height, (uint32_t)only, yaw, pitch,
-                                technique == MESO_SHELL_CURVED, (int)samples);
+                                technique == MESO_SHELL_CURVED, (int)samples, &knobs);
 #if MESO_HAVE_EGL
-    return render(file, out, width, height, (uint32_t)only, yaw, pitch, technique);
+    return render(file, out, width, height, (uint32_t)only, yaw, pitch, &knobs);
 #else
-    (void)technique;
+    (void)knobs;
     fprintf(stderr, "mesoinspect error: preview needs EGL, which this build does not have (try --reference)\n");
     return MESO_EXIT_UNSUPPORTED;
 #endif
