@@ -3,10 +3,11 @@
 # bundled sphere, spot and torus baked into cells objects that validate
 # fully, the chunks and report keys the issue names, -j 1 = -j 2 byte for
 # byte, the tile-map and colour variants, and bad input (a coded error, a
-# non-zero exit, no output file).
-# usage: cells_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR
+# non-zero exit, no output file); mesoinspect preview of a cells object
+# with libmeso and with the exact reference, in all three modes.
+# usage: cells_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE]
 set -u
-bake=$1 inspect=$2 data=$3
+bake=$1 inspect=$2 data=$3 probe=${4:-}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -88,6 +89,36 @@ refuse both_sizes 1 "" -i "$data/sphere.obj" --tiles 4 --cell-size 0.5
 refuse bad_voxelizer 1 "" -i "$data/sphere.obj" --voxelizer magic
 refuse unknown_flag 1 "" -i "$data/sphere.obj" --frobnicate
 refuse no_input 1 ""
+# mesoinspect preview of a cells object: libmeso (EGL) and the exact
+# reference agree at the centre pixel (on the object) and leave the corners
+# to the background, in each mode; bad preview options are usage errors.
+if [ -n "$probe" ]; then
+  for mode in first reflect refract; do
+    "$inspect" preview "$tmp/sphere.meso" -o "$tmp/p_ref.png" --size 64x64 --zoom 1.6 --cells $mode --reference \
+      >/dev/null 2>&1
+    check "preview --reference --cells $mode: writes a PNG" test -s "$tmp/p_ref.png"
+    ref_px=$("$probe" "$tmp/p_ref.png")
+    check "preview --reference --cells $mode: centre on the object, corner background" \
+      sh -c "test \"$(echo "$ref_px" | sed -n 6p)\" != \"$(echo "$ref_px" | sed -n 2p)\""
+    if "$inspect" preview "$tmp/sphere.meso" -o "$tmp/p_gl.png" --size 64x64 --zoom 1.6 --cells $mode \
+      >/dev/null 2>&1; then
+      gl_px=$("$probe" "$tmp/p_gl.png")
+      check "preview --cells $mode (libmeso): same corner as the reference" \
+        test "$(echo "$gl_px" | sed -n 2p)" = "$(echo "$ref_px" | sed -n 2p)"
+      check "preview --cells $mode (libmeso): centre within 8/255 of the reference" \
+        awk -v a="$(echo "$gl_px" | sed -n 6p)" -v b="$(echo "$ref_px" | sed -n 6p)" 'BEGIN { split(a, x, " ");
+          split(b, y, " "); for (i = 1; i <= 3; ++i) { d = x[i] - y[i]; if (d < -8 || d > 8) exit 1 } }'
+    else
+      echo "skip preview (libmeso): no EGL in this build"
+    fi
+  done
+fi
+for opt in "--cells magic" "--bounces 9" "--cell-step -1" "--zoom 0"; do
+  # shellcheck disable=SC2086
+  "$inspect" preview "$tmp/sphere.meso" -o "$tmp/never.png" $opt >/dev/null 2>&1
+  check "preview $opt: usage error (exit 1), no PNG" sh -c "test $? = 1 && ! test -e '$tmp/never.png'"
+done
+
 # A failed bake leaves an existing output untouched.
 cp "$tmp/sphere.meso" "$tmp/keep_me.meso"
 "$bake" cells -i "$data/cube_no_bottom.obj" -o "$tmp/keep_me.meso" --voxelizer parity >/dev/null 2>&1
