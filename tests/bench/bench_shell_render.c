@@ -109,14 +109,9 @@ int main(int argc, char** argv)
     snprintf(path, sizeof(path), "%s/spot_bricks.meso", tmp);
     bake(mesobake, data, path, "");
 
-    char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
-    if (!egl) {
-        fprintf(stderr, "bench_shell_render: %s\n", why);
-        return 1;
-    }
     bench b = {0};
-    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &b.rt) != MESO_OK)
+    meso_egl* egl = bench_gl_open(&b, "bench_shell_render");
+    if (!egl)
         return 1;
     meso_ref_shell ref;
     meso_rt_object obj = load_object(&b, path, &ref);

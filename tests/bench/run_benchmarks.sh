@@ -65,3 +65,34 @@ if [ "${MESO_BENCH_SKIP_FRUSTA:-0}" != 1 ]; then
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_frusta.gp"
     echo "frusta results in $results"
 fi
+
+# Cells objects: the thesis's Table 5.1 on ../shared/data/meshes/bunny.obj
+# (mesobake cells at 8192 voxels across: tile map 256^3 x 32^3 tiles ..
+# 32^3 x 256^3, Voronoi 8 seeds), wall time, peak RSS and bytes per map next
+# to the thesis's. ~1 min. Results: cells_table51.csv, cells_table51.png.
+# Skip with MESO_BENCH_SKIP_CELLS=1; a setup is killed after
+# MESO_BENCH_CELLS_TIMEOUT seconds (default 900).
+if [ "${MESO_BENCH_SKIP_CELLS:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_cells_bake bake/mesobake
+    echo "== bench_cells_bake"
+    nice "$build/tests/bench/bench_cells_bake" "$build/bake/mesobake" "$src/../shared/data/meshes/bunny.obj" "$results"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_bake.gp"
+    echo "cells results in $results"
+fi
+
+# Cells rendering: the Figure 5.1 (top) bunny (64^3 map x 128^3 tiles,
+# Voronoi 8) ray traced by libmeso against the exact reference at 400x300:
+# the thesis's linear search step (R/16 .. R/512 voxels, fixed and angle
+# rule) against the exact traversal, reflection / refraction orders 0..3,
+# and the README pictures. ~8 min on 2 cores. Results: cells_render_step.csv,
+# cells_render_order.csv, cells_render.png, cells_first.png,
+# cells_reflect.png, cells_refract.png. Skip with
+# MESO_BENCH_SKIP_CELLS_RENDER=1; `quick` as a 4th argument for a smoke run.
+if [ "${MESO_BENCH_SKIP_CELLS_RENDER:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_cells_render bake/mesobake
+    echo "== bench_cells_render"
+    MESA_SHADER_CACHE_DISABLE=true nice "$build/tests/bench/bench_cells_render" "$results" "$build/bake/mesobake" \
+        "$src/../shared/data/meshes/bunny.obj"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_render.gp"
+    echo "cells render results in $results"
+fi

@@ -33,6 +33,24 @@ typedef struct bench {
     float view[16], proj[16];
 } bench;
 
+/* The headless EGL context and a libmeso context on it; NULL (reason on
+ * stderr, prefixed with `who`) on failure. */
+static inline meso_egl* bench_gl_open(bench* b, const char* who)
+{
+    char why[256];
+    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    if (!egl) {
+        fprintf(stderr, "%s: %s\n", who, why);
+        return NULL;
+    }
+    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &b->rt) != MESO_OK) {
+        fprintf(stderr, "%s: cannot create a libmeso context\n", who);
+        meso_egl_destroy(egl);
+        return NULL;
+    }
+    return egl;
+}
+
 /* A w x h framebuffer (replacing the last) and the camera's matrices for it. */
 static inline void bench_set_size(bench* b, int w, int h)
 {
