@@ -180,6 +180,9 @@ typedef struct meso_rt_draw_desc {
     float cell_ior;            /* refractive index of the cells [1.5] */
     float cell_transparency;   /* tau of the refraction rule [0.7] */
     int cell_max_steps;        /* voxel and tile steps per search; a search out of steps misses [4096] */
+    uint32_t cell_environment; /* GL name of a GL_TEXTURE_CUBE_MAP the host owns (linear RGB), looked up
+                                  (level 0) with the world-space direction of rays that leave the object;
+                                  0: the built-in sky of runtime/reference/cell_reference.h [0] */
     meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) */
 } meso_rt_draw_desc;
 

@@ -12,6 +12,7 @@
  *                 rank word plus a popcount, as FORMAT.md describes)
  *   unit 2  NRMM  3D texture RG16 (unorm), decoded in the shader
  *   unit 3  COLR  3D texture SRGB8_ALPHA8 (fetches are linear)
+ *   unit 4  the host's environment cube map, if it passes one
  * plus the base mesh's vertex array (the MESH chunk buffer, as rt_mesh.c
  * uploads it). SPLT is not needed to draw: MEMB's tags are final.
  *
@@ -46,7 +47,7 @@ typedef struct mesoi_cells {
     GLuint tile_tex, memb_buf, memb_tex, nrmm_tex, colr_tex;
 } mesoi_cells;
 
-enum { UNIT_TILE = 0, UNIT_MEMB, UNIT_NRMM, UNIT_COLR, UNIT_COUNT };
+enum { UNIT_TILE = 0, UNIT_MEMB, UNIT_NRMM, UNIT_COLR, UNIT_ENV, UNIT_COUNT };
 
 void mesoi_cells_release(meso_rt* rt, mesoi_object* o)
 {
@@ -186,6 +187,14 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
 
 /* >>drawing ---------------------------------------------------------------- */
 
+static int zero16(const float* m)
+{
+    for (int i = 0; i < 16; ++i)
+        if (m[i] != 0.0f)
+            return 0;
+    return 1;
+}
+
 static GLuint cells_program(meso_rt* rt, int stats)
 {
     if (rt->cells_programs[stats])
@@ -256,8 +265,9 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
-    static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D};
-    const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex};
+    static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D,
+                                               GL_TEXTURE_CUBE_MAP};
+    const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, d->cell_environment};
     mesoi_draw_begin(rt, &ds, prog, UNIT_COUNT, targets, bind);
     const int from_near = near_plane_in_grid(&ds, c);
     if (from_near)
@@ -269,6 +279,14 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_memb"), UNIT_MEMB);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_nrmm"), UNIT_NRMM);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_colr"), UNIT_COLR);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_env"), UNIT_ENV);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_env"), d->cell_environment != 0);
+    float rot[9]; /* the model's rotation: object -> world directions */
+    for (int col = 0; col < 3; ++col)
+        for (int row = 0; row < 3; ++row)
+            rot[3 * col + row] = zero16(d->model) ? (float)(row == col)
+                                                   : (float)(d->model[4 * col + row] / ds.model_scale);
+    gl->UniformMatrix3fv(gl->GetUniformLocation(prog, "u_env_rot"), 1, GL_FALSE, rot);
     gl->Uniform3fv(gl->GetUniformLocation(prog, "u_origin"), 1, c->origin);
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_h"), c->voxel);
     gl->Uniform3i(gl->GetUniformLocation(prog, "u_tiles"), (GLint)c->tiles[0], (GLint)c->tiles[1],

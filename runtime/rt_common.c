@@ -230,6 +230,7 @@ static GLenum binding_of(GLenum target)
     switch (target) {
     case GL_TEXTURE_BUFFER: return GL_TEXTURE_BINDING_BUFFER;
     case GL_TEXTURE_2D: return GL_TEXTURE_BINDING_2D;
+    case GL_TEXTURE_CUBE_MAP: return GL_TEXTURE_BINDING_CUBE_MAP;
     default: return GL_TEXTURE_BINDING_3D;
     }
 }

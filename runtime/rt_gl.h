@@ -46,6 +46,7 @@
     X(PFNGLUSEPROGRAMPROC, UseProgram)                                       \
     X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)                       \
     X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                           \
+    X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)                           \
     X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                       \
     X(PFNGLUNIFORM1FPROC, Uniform1f)                                         \
     X(PFNGLDRAWELEMENTSPROC, DrawElements)                                   \

@@ -582,6 +582,14 @@ static int interface(const double d[3], const double ns[3], const double g[3], d
 
 /* >>paths ------------------------------------------------------------------ */
 
+static void environment(const meso_ref_cells_opts* op, const double u[3], double rgb[3])
+{
+    if (op->env)
+        op->env(u, rgb, op->env_user);
+    else
+        meso_ref_cells_env(u, rgb);
+}
+
 static void face(int axis, const double u[3], double sign, double f[3])
 {
     f[0] = f[1] = f[2] = 0;
@@ -613,7 +621,7 @@ void meso_ref_cells_trace(const meso_ref_cells* c, const double o[3], const doub
                           const double light[3], const meso_ref_cells_opts* opts, meso_ref_cells_path* out)
 {
     memset(out, 0, sizeof(*out));
-    const meso_ref_cells_opts def = {MESO_REF_CELLS_FIRST_HIT, 0, 0, 0, 0};
+    const meso_ref_cells_opts def = {.mode = MESO_REF_CELLS_FIRST_HIT};
     const meso_ref_cells_opts* op = opts ? opts : &def;
     const int B = op->bounces < 0 ? 0 : op->bounces > 8 ? 8 : op->bounces;
     const double kr = op->reflectivity != 0 ? op->reflectivity : 0.5;
@@ -680,7 +688,7 @@ void meso_ref_cells_trace(const meso_ref_cells* c, const double o[3], const doub
             memcpy(d, e, sizeof(d));
             record(out, b, p, n, v, d);
         }
-        meso_ref_cells_env(d, e);
+        environment(op, d, e);
         for (int k = 0; k < 3; ++k)
             out->rgb[k] = col[k] + w * e[k];
         return;
@@ -717,7 +725,7 @@ void meso_ref_cells_trace(const meso_ref_cells* c, const double o[3], const doub
             memcpy(d, e, sizeof(d));
             record(out, b, p, n, solid_v, d);
         }
-        meso_ref_cells_env(d, e);
+        environment(op, d, e);
         for (int k = 0; k < 3; ++k)
             out->rgb[k] = (1 - tau) * rgb[k] + tau * e[k];
         return;

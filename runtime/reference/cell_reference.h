@@ -63,7 +63,8 @@
  * sRGB curve (x <= 0.04045: x / 12.92, else ((x + 0.055) / 1.055)^2.4).
  * The albedo of the view is not used: cells carry their colour.
  *
- * >>environment (what reflected and refracted rays see when they leave)
+ * >>environment (what reflected and refracted rays see when they leave;
+ * the built-in one, used unless the options or libmeso's draw pass their own)
  * env(u), u unit, object space, y up; c = max(u.y, 0), g = max(-u.y, 0):
  *     sky(u)    = (0.95, 0.92, 0.85) (1 - c) + (0.30, 0.50, 0.90) c
  *     ground(u) = (0.42, 0.36, 0.30) + 0.12 sin(12 atan2(u.z, u.x)) sin(12 asin(g))
@@ -171,6 +172,12 @@ typedef struct meso_ref_cells_opts {
     double reflectivity; /* k; 0 means 0.5 */
     double ior;          /* 0 means 1.5 */
     double transparency; /* tau; 0 means 0.7 */
+    /* The environment: NULL means meso_ref_cells_env; else env(u, rgb,
+     * env_user) with u the object-space unit direction (libmeso's
+     * cell_environment cube map is looked up with world-space directions:
+     * the same when the model matrix is the identity). */
+    void (*env)(const double u[3], double rgb[3], const void* env_user);
+    const void* env_user;
 } meso_ref_cells_opts;
 
 /* One search (>>traversal). From voxel `start` (which must contain o or

@@ -14,6 +14,8 @@
 // looking for solid, INSIDE tiles of a full map when looking for empty),
 // or with u_step > 0 the thesis's linear search plus bisection
 // (Algorithm 3.1), which can step over thin cells at grazing angles.
+// The environment is the host's cube map when it passes one, else the
+// built-in sky.
 
 in vec3 v_pos;
 in vec3 v_nrm;
@@ -23,6 +25,9 @@ uniform usampler3D u_tile;
 uniform usamplerBuffer u_memb;
 uniform sampler3D u_nrmm;
 uniform sampler3D u_colr;
+uniform samplerCube u_env;  // the host's environment (u_has_env == 1)
+uniform int u_has_env;
+uniform mat3 u_env_rot;     // object -> world directions
 uniform vec3 u_light_obj;   // towards the light, object space, unit
 uniform vec3 u_origin;      // grid origin
 uniform float u_h;          // voxel size
@@ -287,6 +292,8 @@ vec3 shade(ivec3 v, vec3 n)
 
 vec3 env(vec3 u)
 {
+    if (u_has_env == 1)
+        return textureLod(u_env, u_env_rot * u, 0.0).rgb;
     float c = max(u.y, 0.0), g = max(-u.y, 0.0);
     vec3 sky = vec3(0.95, 0.92, 0.85) * (1.0 - c) + vec3(0.30, 0.50, 0.90) * c;
     if (u.y >= 0.0)

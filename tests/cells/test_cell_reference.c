@@ -115,7 +115,8 @@ static int solid_dense(const obj* b, int64_t i, int64_t j, int64_t k)
     if (i < 0 || j < 0 || k < 0 || i >= R * c->tiles[0] || j >= R * c->tiles[1] || k >= R * c->tiles[2])
         return 0;
     const uint32_t s = c->tile[vidx(c, i, j, k)];
-    const uint64_t t = (uint64_t)(i / R) + c->tiles[0] * ((uint64_t)(j / R) + (uint64_t)c->tiles[1] * (uint64_t)(k / R));
+    const uint64_t t =
+        (uint64_t)(i / R) + c->tiles[0] * ((uint64_t)(j / R) + (uint64_t)c->tiles[1] * (uint64_t)(k / R));
     return s != 0 && b->dense[t * c->split_count + s - 1] == 1;
 }
 
@@ -666,7 +667,7 @@ static void reflection_floor_to_wall(void)
     env(r2, e2);
     double worst_p = 0, worst_c = 0;
     for (int B = 0; B <= 2; ++B) {
-        meso_ref_cells_opts op = {MESO_REF_CELLS_REFLECT, B, k, 0, 0};
+        meso_ref_cells_opts op = {.mode = MESO_REF_CELLS_REFLECT, .bounces = B, .reflectivity = k};
         meso_ref_cells_path path;
         meso_ref_cells_trace(&b.c, o, u, 10, LIGHT, &op, &path);
         assert(path.hit && path.events == (B == 0 ? 0 : 1));
@@ -743,7 +744,8 @@ static void refraction_slab_and_tir(void)
         const double s0 = (0.25 - o[1]) / u[1];
         const double p0[3] = {o[0] + s0 * u[0], 0.25, o[2] + s0 * u[2]};
         /* lateral shift: inside the ray makes angle theta_t with -y, sin theta_t = sin theta_i / ior */
-        const double sin_i = sqrt(u[0] * u[0] + u[2] * u[2]), sin_t = sin_i / ior, tan_t = sin_t / sqrt(1 - sin_t * sin_t);
+        const double sin_i = sqrt(u[0] * u[0] + u[2] * u[2]), sin_t = sin_i / ior;
+        const double tan_t = sin_t / sqrt(1 - sin_t * sin_t);
         const double run = 0.5 * tan_t; /* horizontal distance covered inside */
         const double p1[3] = {p0[0] + run * u[0] / sin_i, -0.25, p0[2] + run * u[2] / sin_i};
         const double ny[3] = {0, 1, 0};
@@ -753,7 +755,7 @@ static void refraction_slab_and_tir(void)
         env(u, ef);
         env(t_in, et);
         for (int B = 0; B <= 2; ++B) {
-            meso_ref_cells_opts op = {MESO_REF_CELLS_REFRACT, B, 0, ior, tau};
+            meso_ref_cells_opts op = {.mode = MESO_REF_CELLS_REFRACT, .bounces = B, .ior = ior, .transparency = tau};
             meso_ref_cells_path path;
             meso_ref_cells_trace(&b.c, o, u, 10, LIGHT, &op, &path);
             assert(path.hit && path.events == (B == 0 ? 0 : 1));
@@ -811,7 +813,7 @@ static void refraction_slab_and_tir(void)
         double sh0[3], e3[3];
         shade_expect(ny, LIGHT, sh0);
         env(t3, e3);
-        meso_ref_cells_opts op = {MESO_REF_CELLS_REFRACT, 3, 0, ior, tau};
+        meso_ref_cells_opts op = {.mode = MESO_REF_CELLS_REFRACT, .bounces = 3, .ior = ior, .transparency = tau};
         meso_ref_cells_path path;
         meso_ref_cells_trace(&b.c, o, u, 10, LIGHT, &op, &path);
         assert(path.hit && path.events == 2);
@@ -877,7 +879,7 @@ static void normal_and_direction_fallbacks(void)
         for (int k = 0; k < 3; ++k)
             u[k] /= ul;
         const double o[3] = {0.56 - 0.5 / u[1] * -u[0], 0.5, 0.06}; /* reaches y = 0 at x = 0.56 */
-        meso_ref_cells_opts op = {MESO_REF_CELLS_REFLECT, 0, 0.5, 0, 0};
+        meso_ref_cells_opts op = {.mode = MESO_REF_CELLS_REFLECT, .reflectivity = 0.5};
         meso_ref_cells_trace(&b.c, o, u, 10, LIGHT, &op, &path);
         const float* m = &b.c.normal[3 * vidx(&b.c, 12, 7, 8)];
         assert(path.hit && path.n[0][0] == m[0] && path.n[0][1] == m[1] && path.n[0][2] == m[2]);
@@ -895,7 +897,7 @@ static void normal_and_direction_fallbacks(void)
             assert(fabs(path.rgb[a] - rgb[a]) < 1e-12);
         /* refraction in with the same normal: GLSL refract(u, m, 1 / 1.5) goes in (entering never needs the
          * fallback: eta (n . u) + sqrt k >= 0), and differs from the face's */
-        meso_ref_cells_opts opr = {MESO_REF_CELLS_REFRACT, 0, 0, 1.5, 0.5};
+        meso_ref_cells_opts opr = {.mode = MESO_REF_CELLS_REFRACT, .ior = 1.5, .transparency = 0.5};
         meso_ref_cells_trace(&b.c, o, u, 10, LIGHT, &opr, &path);
         double t[3], tf[3];
         const double eta = 1 / 1.5, kk = 1 - eta * eta * (1 - um * um);
@@ -925,7 +927,7 @@ static void normal_and_direction_fallbacks(void)
         for (int k = 0; k < 3; ++k)
             u[k] /= ul;
         const double o[3] = {-0.6, 0.6, 0.06};
-        meso_ref_cells_opts opr = {MESO_REF_CELLS_REFRACT, 1, 0, 1.5, 0.5};
+        meso_ref_cells_opts opr = {.mode = MESO_REF_CELLS_REFRACT, .bounces = 1, .ior = 1.5, .transparency = 0.5};
         meso_ref_cells_trace(&b.c, o, u, 10, LIGHT, &opr, &path);
         double t[3], n[3], tmp[3];
         assert(snell(u, up, 1 / 1.5, t));
@@ -1089,7 +1091,7 @@ static void baked_file_loads_and_renders(void)
     meso_ref_view v = make_view(eye, ctr, W, H);
     long covered = 0;
     for (int mode = 0; mode < 3; ++mode) {
-        const meso_ref_cells_opts op = {mode, 2, 0, 0, 0};
+        const meso_ref_cells_opts op = {.mode = mode, .bounces = 2, .reflectivity = 0, .ior = 0, .transparency = 0};
         meso_ref_image i1, i2, i3;
         v.threads = 1;
         assert(meso_ref_cells_render(&c, &v, &op, &i1) == MESO_OK);

@@ -4,7 +4,8 @@
  * Voronoi cells (a full map: whole-tile skipping both ways) and sphere
  * cells (empty space in the map) in the bundled sphere and torus, first hit
  * from several directions, specular self-reflection with 0..3 bounces,
- * refraction, the camera inside the object, the thesis's linear search
+ * refraction, the host's own environment cube map (and its binding kept),
+ * the camera inside the object, the thesis's linear search
  * against the exact traversal on thin plates at grazing angles (its known
  * failure, reproduced and measured), the GL state contract and malformed
  * files.
@@ -38,7 +39,11 @@
 
 enum { W = 160, H = 120 };
 
-#define TEST_GLF(X) X(PFNGLISENABLEDPROC, IsEnabled) X(PFNGLENABLEPROC, Enable) X(PFNGLDISABLEPROC, Disable)
+#define TEST_GLF(X)                                                                                              \
+    X(PFNGLISENABLEDPROC, IsEnabled) X(PFNGLENABLEPROC, Enable) X(PFNGLDISABLEPROC, Disable)                      \
+    X(PFNGLGENTEXTURESPROC, GenTextures) X(PFNGLBINDTEXTUREPROC, BindTexture) X(PFNGLTEXIMAGE2DPROC, TexImage2D)  \
+    X(PFNGLTEXPARAMETERIPROC, TexParameteri) X(PFNGLDELETETEXTURESPROC, DeleteTextures)                          \
+    X(PFNGLGETINTEGERVPROC, GetIntegerv) X(PFNGLACTIVETEXTUREPROC, ActiveTexture)
 
 typedef struct test_gl {
 #define TEST_M(t, n) t n;
@@ -167,13 +172,33 @@ static double missed(const ctx* c, const meso_ref_image* ref, const camera* cam)
     return covered ? (double)miss / covered : 0.0;
 }
 
+/* The host's environment of test_environment: one colour per cube face. */
+static const uint8_t face_rgb[6][3] = {{230, 60, 40}, {40, 200, 60}, {250, 240, 90},
+                                       {30, 40, 180}, {200, 80, 220}, {60, 220, 230}};
+
+/* GL's face selection (the major axis; +x, -x, +y, -y, +z, -z), with the
+ * face's colour as a linear RGBA8 texel. */
+static void face_env(const double u[3], double rgb[3], const void* user)
+{
+    (void)user;
+    const double a[3] = {fabs(u[0]), fabs(u[1]), fabs(u[2])};
+    const int axis = a[0] >= a[1] && a[0] >= a[2] ? 0 : a[1] >= a[2] ? 1 : 2;
+    const int face = 2 * axis + (u[axis] < 0);
+    for (int k = 0; k < 3; ++k)
+        rgb[k] = face_rgb[face][k] / 255.0;
+}
+
+/* 1: the reference ignores the host's environment (to show it matters). */
+static int ref_sky_only = 0;
+
 static meso_ref_cells_opts ref_opts(const meso_rt_draw_desc* d)
 {
     return (meso_ref_cells_opts){.mode = (int)d->cell_mode,
                                  .bounces = d->cell_bounces,
                                  .reflectivity = d->cell_reflectivity,
                                  .ior = d->cell_ior,
-                                 .transparency = d->cell_transparency};
+                                 .transparency = d->cell_transparency,
+                                 .env = d->cell_environment && !ref_sky_only ? face_env : NULL};
 }
 
 static result render_compare(ctx* c, const char* name, const loaded* l, const camera* cam,
@@ -279,6 +304,57 @@ static void test_reflection_refraction(ctx* c)
     check_close("spheres_refract_3", render_compare(c, "spheres_refract_3", &l, &cam2, &d), 0.03);
     d = (meso_rt_draw_desc){.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = 2, .cell_reflectivity = 0.8f};
     check_close("spheres_reflect_2", render_compare(c, "spheres_reflect_2", &l, &cam2, &d), 0.03);
+    unload(c, &l);
+}
+
+/* The host's own environment: a cube map with one colour per face, seen
+ * by reflected and refracted rays; the reference looks the same faces up.
+ * The host's own cube map binding on unit 4 comes back after the draw. */
+static void test_environment(ctx* c)
+{
+    GLuint cube = 0, host_cube = 0;
+    c->gl.GenTextures(1, &cube);
+    c->gl.GenTextures(1, &host_cube);
+    c->gl.ActiveTexture(GL_TEXTURE4);
+    c->gl.BindTexture(GL_TEXTURE_CUBE_MAP, host_cube);
+    c->gl.ActiveTexture(GL_TEXTURE0);
+    c->gl.BindTexture(GL_TEXTURE_CUBE_MAP, cube);
+    for (int f = 0; f < 6; ++f) {
+        uint8_t texels[4 * 4 * 4];
+        for (int i = 0; i < 16; ++i) {
+            memcpy(texels + 4 * i, face_rgb[f], 3);
+            texels[4 * i + 3] = 255;
+        }
+        c->gl.TexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)f, 0, GL_RGBA8, 4, 4, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                         texels);
+    }
+    c->gl.TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    c->gl.TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    c->gl.TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAX_LEVEL, 0);
+    c->gl.BindTexture(GL_TEXTURE_CUBE_MAP, 0);
+    const char* p = bake(c, "env", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map voronoi:8");
+    loaded l = load(c, p);
+    const camera cam = view_box(&l, dirs[0], 0.6);
+    meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = 1, .cell_environment = cube};
+    const result r = render_compare(c, "environment_reflect_1", &l, &cam, &d);
+    check_close("environment_reflect_1", r, 0.01);
+    d = (meso_rt_draw_desc){.cell_mode = MESO_CELLS_REFRACT, .cell_bounces = 2, .cell_environment = cube};
+    check_close("environment_refract_2", render_compare(c, "environment_refract_2", &l, &cam, &d), 0.02);
+    /* The cube map is what the rays see: against the built-in sky the same
+     * image is far off. */
+    ref_sky_only = 1;
+    const result sky = render_compare(c, "environment_vs_sky", &l, &cam, &d);
+    ref_sky_only = 0;
+    CHECK_MSG(sky.colour_bad > 0.3, "the cube map changes only %.4f of the pixels", sky.colour_bad);
+    GLint bound = -1, active = -1;
+    c->gl.GetIntegerv(GL_ACTIVE_TEXTURE, &active);
+    c->gl.ActiveTexture(GL_TEXTURE4);
+    c->gl.GetIntegerv(GL_TEXTURE_BINDING_CUBE_MAP, &bound);
+    c->gl.ActiveTexture(GL_TEXTURE0);
+    CHECK_MSG(active == GL_TEXTURE0 && bound == (GLint)host_cube, "after the draw: active unit 0x%x, unit 4 cube map %d",
+              active, bound);
+    c->gl.DeleteTextures(1, &cube);
+    c->gl.DeleteTextures(1, &host_cube);
     unload(c, &l);
 }
 
@@ -434,13 +510,14 @@ int main(int argc, char** argv)
     }
     TEST_GLF(TEST_L)
 #undef TEST_L
-    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log},
-                         &c.rt) == MESO_OK);
+    const meso_rt_desc desc = {.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log};
+    CHECK(meso_rt_create(&desc, &c.rt) == MESO_OK);
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);
 
     test_first_hit(&c);
     test_reflection_refraction(&c);
+    test_environment(&c);
     test_camera_inside(&c);
     test_grazing(&c);
     test_state_contract(&c);

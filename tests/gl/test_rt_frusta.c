@@ -532,8 +532,8 @@ int main(void)
     }
     TEST_GLF(TEST_L)
 #undef TEST_L
-    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log},
-                         &c.rt) == MESO_OK);
+    const meso_rt_desc desc = {.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log};
+    CHECK(meso_rt_create(&desc, &c.rt) == MESO_OK);
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);
     texture height = make_height(64);
