@@ -118,36 +118,12 @@ meso_result meso_ref_cells_set_tags(meso_ref_cells* c, const uint8_t* tags)
 
 /* >>files ------------------------------------------------------------------ */
 
-/* The object's chunk of `type`, checked against the element the kind 3
- * table gives (dtype, components, dims) and read whole. */
-static meso_result read_checked(meso_file* f, uint32_t id, uint32_t type, const char* name, int dtype2,
-                                uint16_t dtype, uint16_t components, const uint32_t dims[3], void** out, meso_error* err)
+/* The object's chunk of `type`, read whole (meso_file_check_cells has
+ * checked that it exists with the element and dims CELL implies). */
+static meso_result read_chunk(meso_file* f, uint32_t id, uint32_t type, void** out, meso_error* err)
 {
-    char msg[160];
-    const int32_t ci = mesoi_ref_find_chunk(f, type, id);
-    if (ci < 0) {
-        snprintf(msg, sizeof(msg), "no %s chunk", name);
-        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", id, msg);
-    }
-    const meso_chunk_info* ch = meso_file_chunk(f, (uint32_t)ci);
-    const int dtype_ok = ch->dtype == dtype || (dtype2 >= 0 && ch->dtype == (uint16_t)dtype2);
-    const uint64_t count = (uint64_t)dims[0] * dims[1] * dims[2];
-    const uint64_t esz = (uint64_t)meso_dtype_size((meso_dtype)ch->dtype) * components;
-    if (!dtype_ok || ch->components != components || ch->dims[0] != dims[0] || ch->dims[1] != dims[1] ||
-        ch->dims[2] != dims[2] || ch->decoded_size != count * esz || count == 0) {
-        snprintf(msg, sizeof(msg),
-                 "%s: element type, components or dims (%u x %u x %u) do not match CELL (FORMAT.md 7.2 kind 3)",
-                 name, ch->dims[0], ch->dims[1], ch->dims[2]);
-        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", id, msg);
-    }
     size_t size = 0;
-    const meso_result r = mesoi_ref_read_whole(f, ci, out, &size, err);
-    if (r != MESO_OK) {
-        snprintf(msg, sizeof(msg), "%s: could not be read", name);
-        return r == MESO_ERR_OUT_OF_MEMORY || r == MESO_ERR_UNSUPPORTED ? mesoi_ref_fail(err, r, "cells", id, msg)
-                                                                         : r;
-    }
-    return MESO_OK;
+    return mesoi_ref_read_whole(f, mesoi_ref_find_chunk(f, type, id), out, &size, err);
 }
 
 /* FORMAT.md 7.2 "Normals": octahedral U16 x 2 to a unit vector. */
@@ -164,38 +140,6 @@ static void octa_decode(uint16_t u0, uint16_t u1, float out[3])
         out[k] = (float)n[k];
 }
 
-static meso_result check_memb(meso_ref_cells* c, uint64_t M, uint32_t id, meso_error* err)
-{
-    const uint64_t T = tile_count(c), cw = (T + 15) / 16, W = (2 * (uint64_t)c->split_count + 31) / 32;
-    const uint32_t* w = c->memb;
-    uint64_t mixed = 0;
-    for (uint64_t k = 0; k < cw; ++k) {
-        if (w[cw + k] != (uint32_t)mixed)
-            return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", id, "MEMB: wrong rank word");
-        for (unsigned b = 0; b < 16; ++b) {
-            const unsigned cls = (w[k] >> (2 * b)) & 3u;
-            if (k * 16 + b >= T ? cls != 0 : cls == 3)
-                return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", id,
-                                      "MEMB: tile class 3, or bits set past the last tile");
-            mixed += cls == 2;
-        }
-    }
-    if (mixed != M)
-        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", id,
-                              "MEMB: the number of MIXED tiles differs from CELL mixed_tiles");
-    for (uint64_t r = 0; r < M; ++r)
-        for (uint64_t k = 0; k < W; ++k) {
-            const uint32_t x = w[2 * cw + r * W + k];
-            for (unsigned b = 0; b < 16; ++b) {
-                const unsigned g = (x >> (2 * b)) & 3u;
-                if (k * 16 + b >= c->split_count ? g != 0 : g == 3)
-                    return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", id,
-                                          "MEMB: tag 3, or bits set past the last split cell");
-            }
-        }
-    return MESO_OK;
-}
-
 meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err)
 {
     if (!f || !out)
@@ -205,58 +149,30 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
     meso_result r = mesoi_ref_object(f, object_id, MESO_OBJECT_CELLS, "cells", &rec, err);
     if (r != MESO_OK)
         return r;
-    void *cell = NULL, *tile = NULL, *splt = NULL, *memb = NULL, *nrmm = NULL, *colr = NULL;
-    const int32_t ci = mesoi_ref_find_chunk(f, MESO_CHUNK_CELL, object_id);
-    size_t size = 0;
-    if (ci < 0) {
-        r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id, "no CELL chunk");
+    /* Every chunk against CELL (FORMAT.md 7.8: 4801-4806), as mesoinspect
+     * validate --full checks it: what follows may trust sizes and ids. */
+    if ((r = meso_file_check_cells(f, object_id, err)) != MESO_OK)
+        return r;
+    void *cell = NULL, *tile = NULL, *memb = NULL, *nrmm = NULL, *colr = NULL;
+    if ((r = read_chunk(f, object_id, MESO_CHUNK_CELL, &cell, err)) != MESO_OK)
         goto done;
-    }
-    if ((r = mesoi_ref_read_whole(f, ci, &cell, &size, err)) != MESO_OK)
-        goto done;
-    if (size != MESO_CELL_RECORD_SIZE) {
-        r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id, "CELL: the record is not 64 bytes");
-        goto done;
-    }
     const uint8_t* cr = cell;
-    int ok = 1;
     for (int a = 0; a < 3; ++a) {
         out->tiles[a] = ld32(cr + MESO_CELL_OFF_TILES + 4 * a);
         out->origin[a] = ldf32(cr + MESO_CELL_OFF_ORIGIN + 4 * a);
-        ok &= out->tiles[a] >= 1 && out->tiles[a] <= MESO_CELL_MAX_TILES && isfinite(out->origin[a]);
     }
     out->res = ld32(cr + MESO_CELL_OFF_TILE_RES);
     out->split_count = ld32(cr + MESO_CELL_OFF_SPLIT_COUNT);
     out->cell_count = ld32(cr + MESO_CELL_OFF_CELL_COUNT);
     out->voxel = ldf32(cr + MESO_CELL_OFF_VOXEL_SIZE);
-    const uint64_t M = (uint64_t)ld32(cr + MESO_CELL_OFF_MIXED_TILES) |
-                       (uint64_t)ld32(cr + MESO_CELL_OFF_MIXED_TILES + 4) << 32;
-    const uint64_t T = tile_count(out);
-    ok &= out->res >= 1 && out->res <= MESO_CELL_MAX_TILE_RES && out->split_count >= 1 && out->cell_count >= 1 &&
-          out->cell_count <= out->split_count && isfinite(out->voxel) && out->voxel > 0 && M <= T;
-    if (!ok) {
-        r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id, "CELL: a field is out of range (FORMAT.md 7.8)");
-        goto done;
-    }
-    const uint32_t R = out->res, S = out->split_count;
-    const uint64_t cw = (T + 15) / 16, W = (2 * (uint64_t)S + 31) / 32, L = 2 * cw + M * W;
-    if (L > UINT32_MAX) {
-        r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id, "CELL: MEMB would exceed 2^32 - 1 words");
-        goto done;
-    }
-    const uint32_t cube[3] = {R, R, R}, sdims[3] = {S, 1, 1}, mdims[3] = {(uint32_t)L, 1, 1};
-    if ((r = read_checked(f, object_id, MESO_CHUNK_TILE, "TILE", MESO_DTYPE_U32, MESO_DTYPE_U16, 1, cube, &tile,
-                          err)) != MESO_OK ||
-        (r = read_checked(f, object_id, MESO_CHUNK_SPLT, "SPLT", -1, MESO_DTYPE_U32, MESO_SPLT_COMPONENTS, sdims,
-                          &splt, err)) != MESO_OK ||
-        (r = read_checked(f, object_id, MESO_CHUNK_MEMB, "MEMB", -1, MESO_DTYPE_U32, 1, mdims, &memb, err)) !=
-            MESO_OK ||
-        (r = read_checked(f, object_id, MESO_CHUNK_NRMM, "NRMM", -1, MESO_DTYPE_U16, 2, cube, &nrmm, err)) !=
-            MESO_OK ||
-        (r = read_checked(f, object_id, MESO_CHUNK_COLR, "COLR", -1, MESO_DTYPE_U8, 4, cube, &colr, err)) !=
-            MESO_OK)
+    const uint32_t R = out->res;
+    if ((r = read_chunk(f, object_id, MESO_CHUNK_TILE, &tile, err)) != MESO_OK ||
+        (r = read_chunk(f, object_id, MESO_CHUNK_MEMB, &memb, err)) != MESO_OK ||
+        (r = read_chunk(f, object_id, MESO_CHUNK_NRMM, &nrmm, err)) != MESO_OK ||
+        (r = read_chunk(f, object_id, MESO_CHUNK_COLR, &colr, err)) != MESO_OK)
         goto done;
     const size_t n = (size_t)R * R * R;
+    const uint64_t L = meso_file_chunk(f, (uint32_t)mesoi_ref_find_chunk(f, MESO_CHUNK_MEMB, object_id))->dims[0];
     const int tile_u32 = meso_file_chunk(f, (uint32_t)mesoi_ref_find_chunk(f, MESO_CHUNK_TILE, object_id))->dtype ==
                          MESO_DTYPE_U32;
     out->tile = malloc(sizeof(*out->tile) * n);
@@ -272,10 +188,6 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
     for (size_t v = 0; v < n; ++v) {
         const uint8_t* b = (const uint8_t*)tile + (tile_u32 ? 4 : 2) * v;
         out->tile[v] = tile_u32 ? ld32(b) : (uint32_t)(b[0] | b[1] << 8);
-        if (out->tile[v] > S) {
-            r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id, "TILE: a split-cell id above split_count");
-            goto done;
-        }
         out->map_full &= out->tile[v] != 0;
         const uint8_t* q = (const uint8_t*)nrmm + 4 * v;
         octa_decode((uint16_t)(q[0] | q[1] << 8), (uint16_t)(q[2] | q[3] << 8), &out->normal[3 * v]);
@@ -283,20 +195,9 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
     for (uint64_t k = 0; k < L; ++k)
         out->memb[k] = ld32((const uint8_t*)memb + 4 * k);
     memcpy(out->colour, colr, 4 * n);
-    for (uint32_t s = 0; s < S; ++s) { /* SPLT: only what the reference relies on (FORMAT.md 7.2) */
-        const uint8_t* q = (const uint8_t*)splt + 24 * (size_t)s;
-        const uint32_t cellid = ld32(q + 4 * MESO_SPLT_CELL);
-        if (cellid < 1 || cellid > out->cell_count || ld32(q + 4 * MESO_SPLT_FACE_CODE) > 63) {
-            r = mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id,
-                               "SPLT: a cell id out of 1..cell_count or a face code above 63");
-            goto done;
-        }
-    }
-    r = check_memb(out, M, object_id, err);
 done:
     free(cell);
     free(tile);
-    free(splt);
     free(memb);
     free(nrmm);
     free(colr);

@@ -142,9 +142,9 @@ typedef struct meso_ref_cells {
     uint8_t* colour;    /* R^3 x 4, COLR */
 } meso_ref_cells;
 
-/* Read a cells object (kind 3) with its TILE, SPLT, MEMB, NRMM and COLR.
- * The file should have passed meso_file_check_cells; bad data is refused
- * with MESO_ERR_CORRUPT and a message naming the chunk, never a crash. */
+/* Read a cells object (kind 3): CELL, TILE, MEMB, NRMM and COLR, after
+ * meso_file_check_cells (whose MESO_ERR_CORRUPT and message, naming the
+ * chunk, a bad file gets; never a crash). */
 meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err);
 void meso_ref_cells_free(meso_ref_cells* c);
 
