@@ -1101,6 +1101,12 @@ static const char* check_memb(const uint8_t* d, uint64_t tiles, uint64_t mixed, 
 
 meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err)
 {
+    return mesoi_file_check_cells_keep(f, object, NULL, NULL, err);
+}
+
+meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t** tile_out, uint8_t** memb_out,
+                                        meso_error* err)
+{
     if (f == NULL)
         return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
                                 "meso_file_check_cells: NULL file");
@@ -1173,6 +1179,14 @@ meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err
         if (why)
             r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_MEMB, UINT64_MAX, mi,
                                  "chunk %d (MEMB): %s (byte %llu)", (int)mi, why, (unsigned long long)where);
+    }
+    if (r == MESO_OK && tile_out) {
+        *tile_out = tile;
+        tile = NULL;
+    }
+    if (r == MESO_OK && memb_out) {
+        *memb_out = memb;
+        memb = NULL;
     }
     mesoi_file_free(&f->alloc, tile);
     mesoi_file_free(&f->alloc, splt);

@@ -27,8 +27,9 @@
  *    mesh, and a ray there may still reach INSIDE cells with no further
  *    entry. meso walks on instead; OUTSIDE tiles are crossed in one step,
  *    so what it costs is the walk through the intersected band.
- *  - The file is checked with meso_file_check_cells before anything is
- *    uploaded, so the shaders never index past their data.
+ *  - The file is checked as meso_file_check_cells does before anything is
+ *    uploaded, so the shaders never index past their data; TILE and MEMB
+ *    are uploaded from the check's own copies (read once).
  */
 #include "file_internal.h"
 #include "mat4_inverse.h"
@@ -62,23 +63,10 @@ void mesoi_cells_release(meso_rt* rt, mesoi_object* o)
     o->cells = NULL;
 }
 
-/* A 3D texture from a whole chunk, nearest, clamped. */
-static meso_result upload_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint internal, GLenum format, GLenum type,
-                             GLuint* out, int* all_nonzero)
+/* A 3D texture from a chunk's payload, nearest, clamped. */
+static void upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* data, GLint internal, GLenum format,
+                      GLenum type, GLuint* out)
 {
-    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
-    void* data = NULL;
-    size_t size = 0;
-    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
-    if (r != MESO_OK)
-        return r;
-    if (all_nonzero) { /* TILE: is there empty space in the map? */
-        *all_nonzero = 1;
-        const size_t n = (size_t)c->dims[0] * c->dims[1] * c->dims[2];
-        for (size_t i = 0; i < n && *all_nonzero; ++i)
-            if (c->dtype == MESO_DTYPE_U16 ? ((const uint16_t*)data)[i] == 0 : ((const uint32_t*)data)[i] == 0)
-                *all_nonzero = 0;
-    }
     mesoi_gl* gl = &rt->gl;
     GLint prev_unpack = 4;
     gl->GetIntegerv(GL_UNPACK_ALIGNMENT, &prev_unpack);
@@ -92,8 +80,19 @@ static meso_result upload_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint intern
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAX_LEVEL, 0);
     gl->BindTexture(GL_TEXTURE_3D, 0);
     gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+}
+
+/* Reads a whole chunk and uploads it as a 3D texture. */
+static meso_result upload_chunk_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint internal, GLenum format, GLenum type,
+                                   GLuint* out)
+{
+    void* data = NULL;
+    size_t size = 0;
+    const meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
+    if (r == MESO_OK)
+        upload_3d(rt, meso_file_chunk(f, (uint32_t)ci), data, internal, format, type, out);
     mesoi_rt_free(rt, data);
-    return MESO_OK;
+    return r;
 }
 
 static meso_result read_grid(meso_rt* rt, meso_file* f, uint32_t id, int32_t ci, mesoi_cells* c)
@@ -136,8 +135,10 @@ static meso_result read_grid(meso_rt* rt, meso_file* f, uint32_t id, int32_t ci,
 
 meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_object* o)
 {
+    /* The check reads TILE and MEMB anyway; they are uploaded from its copies. */
+    uint8_t *tile = NULL, *memb = NULL;
     meso_error err;
-    meso_result r = meso_file_check_cells(f, id, &err);
+    meso_result r = mesoi_file_check_cells_keep(f, id, &tile, &memb, &err);
     if (r != MESO_OK) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
         return r;
@@ -148,8 +149,11 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     for (int k = 0; k < 5; ++k)
         ci[k] = mesoi_find_chunk(f, types[k], id); /* present: checked above */
     mesoi_cells* c = mesoi_rt_alloc(rt, sizeof(*c));
-    if (!c)
+    if (!c) {
+        mesoi_file_free(&f->alloc, tile);
+        mesoi_file_free(&f->alloc, memb);
         return MESO_ERR_OUT_OF_MEMORY;
+    }
     memset(c, 0, sizeof(*c));
     o->cells = c;
     r = read_grid(rt, f, id, ci[0], c);
@@ -157,22 +161,22 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         r = mesoi_mesh_upload(rt, f, id, o);
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
     if (r == MESO_OK) {
-        const int wide = meso_file_chunk(f, (uint32_t)ci[1])->dtype == MESO_DTYPE_U32;
-        r = upload_3d(rt, f, ci[1], wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER,
-                      wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT, &c->tile_tex, &c->map_full);
+        const meso_chunk_info* tc = meso_file_chunk(f, (uint32_t)ci[1]);
+        const int wide = tc->dtype == MESO_DTYPE_U32;
+        const size_t n = (size_t)tc->dims[0] * tc->dims[1] * tc->dims[2];
+        c->map_full = 1; /* is there empty space in the map? */
+        for (size_t v = 0; v < n && c->map_full; ++v)
+            c->map_full = wide ? mesoi_ld32(tile + 4 * v) != 0 : mesoi_ld16(tile + 2 * v) != 0;
+        upload_3d(rt, tc, tile, wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER, wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT,
+                  &c->tile_tex);
+        c->memb_tex = mesoi_texture_buffer(rt, GL_R32UI, memb, (size_t)meso_file_chunk(f, (uint32_t)ci[2])->decoded_size,
+                                           &c->memb_buf);
+        r = upload_chunk_3d(rt, f, ci[3], GL_RG16, GL_RG, GL_UNSIGNED_SHORT, &c->nrmm_tex);
     }
     if (r == MESO_OK)
-        r = upload_3d(rt, f, ci[3], GL_RG16, GL_RG, GL_UNSIGNED_SHORT, &c->nrmm_tex, NULL);
-    if (r == MESO_OK)
-        r = upload_3d(rt, f, ci[4], GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->colr_tex, NULL);
-    if (r == MESO_OK) {
-        void* memb = NULL;
-        size_t size = 0;
-        r = mesoi_read_whole(rt, f, ci[2], &memb, &size);
-        if (r == MESO_OK)
-            c->memb_tex = mesoi_texture_buffer(rt, GL_R32UI, memb, size, &c->memb_buf);
-        mesoi_rt_free(rt, memb);
-    }
+        r = upload_chunk_3d(rt, f, ci[4], GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->colr_tex);
+    mesoi_file_free(&f->alloc, tile);
+    mesoi_file_free(&f->alloc, memb);
     char what[48];
     snprintf(what, sizeof(what), "uploading cells %u", id);
     r = mesoi_upload_end(rt, prev_tex_buffer, r, what);

@@ -34,6 +34,7 @@
 #include "cell_reference.h"
 #include "gl_fbo.h"
 #include "gl_log.h"
+#include "meso_layout.h"
 #include "meso_rt.h"
 #include "shell_scene.h"
 
@@ -455,36 +456,62 @@ static void test_state_contract(ctx* c)
     unload(c, &l);
 }
 
-/* A corrupted MEMB is refused at load with the validator's message. */
-static void test_malformed(ctx* c)
+/* Loads `bytes` and expects a refusal, logged, with no object. */
+static void expect_refused(ctx* c, const char* what, const uint8_t* bytes, size_t size)
 {
-    const char* p = bake(c, "bad", "sphere.obj", "--tiles 3 --tile-res 8");
     meso_file* f = NULL;
     meso_error err;
-    CHECK(meso_file_open_path(p, NULL, &f, &err) == MESO_OK);
-    uint64_t off = 0, size = 0;
-    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
-        const meso_chunk_info* ci = meso_file_chunk(f, i);
-        if (ci->type == MESO_CHUNK_MEMB) {
-            off = ci->offset;
-            size = ci->stored_size;
-        }
-    }
-    meso_file_close(f);
-    CHECK(size >= 4);
-    FILE* fp = fopen(p, "r+b");
-    CHECK(fp != NULL);
-    fseek(fp, (long)off, SEEK_SET);
-    const uint32_t all3 = 0xFFFFFFFFu; /* every tile class 3: invalid */
-    fwrite(&all3, 4, 1, fp);
-    fclose(fp);
-    CHECK(meso_file_open_path(p, NULL, &f, &err) == MESO_OK);
+    CHECK(meso_file_open_memory(bytes, size, NULL, &f, &err) == MESO_OK);
     meso_rt_object obj;
     c->log.errors = 0;
     const meso_result r = meso_rt_load_object(c->rt, f, 1, &obj);
-    CHECK_MSG(r != MESO_OK && obj.id == 0 && c->log.errors >= 1, "corrupt MEMB loaded: %s", meso_result_string(r));
-    printf("corrupt MEMB refused: %s\n", c->log.message);
+    CHECK_MSG(r == MESO_ERR_CORRUPT && obj.id == 0 && c->log.errors >= 1, "%s loaded: %s", what,
+              meso_result_string(r));
+    printf("%s refused: %s\n", what, c->log.message);
     meso_file_close(f);
+}
+
+static void put32(uint8_t* p, uint32_t v)
+{
+    for (int k = 0; k < 4; ++k)
+        p[k] = (uint8_t)(v >> (8 * k));
+}
+
+/* A corrupted MEMB is refused at load with the validator's message: once
+ * as a bad checksum, once with the checksums made right again, so what
+ * refuses it is the structure check that guards the shaders' indexing. */
+static void test_malformed(ctx* c)
+{
+    const char* p = bake(c, "bad", "sphere.obj", "--tiles 3 --tile-res 8");
+    FILE* fp = fopen(p, "rb");
+    CHECK(fp != NULL);
+    fseek(fp, 0, SEEK_END);
+    const size_t size = (size_t)ftell(fp);
+    fseek(fp, 0, SEEK_SET);
+    uint8_t* bytes = malloc(size);
+    CHECK(bytes && fread(bytes, 1, size, fp) == size);
+    fclose(fp);
+    meso_file* f = NULL;
+    meso_error err;
+    CHECK(meso_file_open_memory(bytes, size, NULL, &f, &err) == MESO_OK);
+    int32_t mi = -1;
+    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i)
+        if (meso_file_chunk(f, i)->type == MESO_CHUNK_MEMB)
+            mi = (int32_t)i;
+    CHECK(mi >= 0);
+    const meso_chunk_info mc = *meso_file_chunk(f, (uint32_t)mi);
+    meso_file_close(f);
+    CHECK(mc.stored_size >= 4);
+    put32(bytes + mc.offset, 0xFFFFFFFFu); /* every tile of the first word class 3: invalid */
+    expect_refused(c, "MEMB with a bad checksum", bytes, size);
+    const uint32_t n = (uint32_t)bytes[MESO_HDR_OFF_CHUNK_COUNT] | (uint32_t)bytes[MESO_HDR_OFF_CHUNK_COUNT + 1] << 8;
+    uint8_t* entry = bytes + MESO_HDR_SIZE + (size_t)mi * MESO_TOC_ENTRY_SIZE;
+    put32(entry + MESO_TOC_OFF_CRC, meso_crc32c(0, bytes + mc.offset, (size_t)mc.stored_size));
+    put32(bytes + MESO_HDR_OFF_TOC_CRC, meso_crc32c(0, bytes + MESO_HDR_SIZE, (size_t)n * MESO_TOC_ENTRY_SIZE));
+    put32(bytes + MESO_HDR_OFF_HEADER_CRC, 0);
+    put32(bytes + MESO_HDR_OFF_HEADER_CRC, meso_crc32c(0, bytes, MESO_HDR_SIZE));
+    expect_refused(c, "MEMB with tile class 3", bytes, size);
+    free(bytes);
 }
 
 int main(int argc, char** argv)
