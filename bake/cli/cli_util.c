@@ -59,6 +59,17 @@ int option_value(const char* opt, const char* value, const char* const* valued, 
     return 0;
 }
 
+int path_option(const char* opt, const char* value, const char** in, const char** out, const char** report)
+{
+    const char** slot = !strcmp(opt, "-i") || !strcmp(opt, "--input")    ? in
+                        : !strcmp(opt, "-o") || !strcmp(opt, "--output") ? out
+                        : !strcmp(opt, "--report")                       ? report
+                                                                         : NULL;
+    if (slot)
+        *slot = value;
+    return slot != NULL;
+}
+
 double now_seconds(void)
 {
     struct timespec ts;

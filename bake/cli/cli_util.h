@@ -65,6 +65,10 @@ int finish_bake(meso_result r, const meso_error* err, const char* out, const cha
  * (unrecognized option, unexpected argument, or a missing value). */
 int option_value(const char* opt, const char* value, const char* const* valued, size_t count);
 
+/* The paths every bake command takes: 1 when `opt` is -i/--input,
+ * -o/--output or --report, with `value` stored in its place; else 0. */
+int path_option(const char* opt, const char* value, const char** in, const char** out, const char** report);
+
 /* Parse a positive finite number; 0 on failure. */
 int parse_double(const char* s, double* out);
 int parse_int(const char* s, long lo, long hi, long* out);

@@ -75,13 +75,9 @@ static int parse_args(int argc, char** argv, cells_args* a)
         if (bad)
             return bad;
         ++i;
-        if (!strcmp(s, "-i") || !strcmp(s, "--input"))
-            a->in = v;
-        else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
-            a->out = v;
-        else if (!strcmp(s, "--report"))
-            a->report = v;
-        else if (!strcmp(s, "--tile-map"))
+        if (path_option(s, v, &a->in, &a->out, &a->report))
+            continue;
+        if (!strcmp(s, "--tile-map"))
             a->tile_map = v;
         else if (!strcmp(s, "--colour"))
             a->colour = v;

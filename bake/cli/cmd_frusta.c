@@ -93,13 +93,9 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         if (bad)
             return bad;
         ++i;
-        if (!strcmp(s, "-i") || !strcmp(s, "--input"))
-            a->in = v;
-        else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
-            a->out = v;
-        else if (!strcmp(s, "--report"))
-            a->report = v;
-        else if (!strcmp(s, "--relief"))
+        if (path_option(s, v, &a->in, &a->out, &a->report))
+            continue;
+        if (!strcmp(s, "--relief"))
             a->relief = v;
         else if (!strcmp(s, "--tolerance")) {
             if (!parse_double(v, &a->tolerance))

@@ -163,13 +163,9 @@ static int parse_args(int argc, char** argv, shell_args* a)
         if (bad)
             return bad;
         ++i;
-        if (!strcmp(s, "-i") || !strcmp(s, "--input"))
-            a->in = v;
-        else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
-            a->out = v;
-        else if (!strcmp(s, "--report"))
-            a->report = v;
-        else if (!strcmp(s, "--texture"))
+        if (path_option(s, v, &a->in, &a->out, &a->report))
+            continue;
+        if (!strcmp(s, "--texture"))
             a->texture = v;
         else if (!strcmp(s, "--tiling")) {
             if (!parse_tiling(v, a->tiling))
