@@ -82,10 +82,9 @@ bool outside_grid(ivec3 v)
     return any(lessThan(v, ivec3(0))) || any(greaterThanEqual(v, u_tiles * u_res));
 }
 
-// SOLID (cell_reference.h) for a voxel inside the grid; sets g_tile.
-bool solid(ivec3 v)
+// SOLID (cell_reference.h) for a voxel inside the grid, in tile g_tile.
+bool solid_in_tile(ivec3 v)
 {
-    enter_tile(v / u_res);
     uint s = texelFetch(u_tile, v - g_tile * u_res, 0).r;
     if (s == 0u || g_cls == 0)
         return false;
@@ -94,6 +93,13 @@ bool solid(ivec3 v)
     int i = int(s) - 1;
     uint w = texelFetch(u_memb, 2 * u_class_words + g_rec * u_words + (i >> 4)).r;
     return ((w >> uint(2 * (i & 15))) & 3u) == 1u;
+}
+
+// The same for any voxel inside the grid; sets g_tile.
+bool solid(ivec3 v)
+{
+    enter_tile(v / u_res);
+    return solid_in_tile(v);
 }
 
 bool solid_or_out(ivec3 v)
@@ -166,7 +172,7 @@ bool search_exact(vec3 o, vec3 u, ivec3 start, float s_max, bool want_solid, out
             first = false;
             continue;
         }
-        if (!first && solid(v) == want_solid) {
+        if (!first && solid_in_tile(v) == want_solid) { // enter_tile above set g_tile
             h.s = h.s_lo = s;
             h.vox = v;
             return true;
@@ -227,7 +233,7 @@ bool search_linear(vec3 o, vec3 u, float dstep, float s_max, bool want_solid, ou
                 s = max(te, sn);
                 continue;
             }
-            state = solid(v);
+            state = solid_in_tile(v);
         }
         if (state == want_solid) {
             float lo = s, hi = sn;
