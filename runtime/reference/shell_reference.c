@@ -144,8 +144,13 @@ void meso_ref_shell_prism(const meso_ref_shell* s, uint32_t f, double uv_scale, 
     const double e1s = out->uv[1][0] - out->uv[0][0], e1t = out->uv[1][1] - out->uv[0][1];
     const double e2s = out->uv[2][0] - out->uv[0][0], e2t = out->uv[2][1] - out->uv[0][1];
     if (!(fabs(e1s * e2t - e2s * e1t) >= 1e-12)) {
+        /* Element-wise: gcc 12 -O3 misreads a memcpy of the whole
+         * array here as an overflow (-Wstringop-overflow). */
         static const double bary[3][2] = {{0, 0}, {1, 0}, {0, 1}};
-        memcpy(out->uv, bary, sizeof(bary));
+        for (int k = 0; k < 3; ++k) {
+            out->uv[k][0] = bary[k][0];
+            out->uv[k][1] = bary[k][1];
+        }
     }
 }
 
