@@ -410,10 +410,12 @@ static void open_cube_does_not_leak(void)
  * the grid's faces (far from the mesh with 25% padding) are outside. */
 static void defective_meshes_do_not_leak(void)
 {
-    char dir[] = "/tmp/meso_test_voxelize_XXXXXX";
+    const char* tmp = getenv("TMPDIR");
+    char dir[4096];
+    snprintf(dir, sizeof(dir), "%s/meso_test_voxelize_XXXXXX", tmp && *tmp ? tmp : "/tmp");
     assert(mkdtemp(dir));
     for (size_t c = 0; c < DM_CASE_COUNT; ++c) {
-        char path[256];
+        char path[4200];
         snprintf(path, sizeof(path), "%s/%s.obj", dir, dm_cases[c].name);
         dm_mesh gen = dm_cases[c].make();
         assert(dm_write_obj(path, &gen));
