@@ -4,12 +4,12 @@
  *   bench_draco [CSV]
  *
  * Meshes: tests/data/{sphere,torus,spot_low_resolution,
- * blub_fish_low_resolution,saddle,wingnut,spot_uv}.obj, all bundled (a
- * missing one is an error). The checked-in draco.csv also has rows for the
+ * blub_fish_low_resolution,saddle,wingnut}.obj, all bundled (a missing
+ * one is an error). The checked-in draco.csv also has rows for the
  * Stanford bunny and armadillo, measured when this benchmark read them from
  * outside the repository; they cannot be bundled (their terms forbid
- * commercial use), so wingnut (6090 triangles) and spot_uv (5856, with uvs)
- * now stand for the larger meshes. Each is read with the OpenMesh adapter
+ * commercial use), so wingnut (6090 triangles) now stands for the larger
+ * meshes. Each is read with the OpenMesh adapter
  * (area-weighted normals; uvs when the file has them) and stored as:
  *
  *   raw     the decoded MESH layout; "decode" = meso_file_read_chunk
@@ -147,8 +147,8 @@ static void position_error(const meso_mesh* m, const uint8_t* dec, size_t n, dou
 int main(int argc, char** argv)
 {
     const char* csv = argc > 1 ? argv[1] : "draco.csv";
-    static const char* bundled[] = {"sphere",  "torus",  "spot_low_resolution", "blub_fish_low_resolution",
-                                    "saddle", "wingnut", "spot_uv"};
+    static const char* bundled[] = {"sphere", "torus", "spot_low_resolution", "blub_fish_low_resolution", "saddle",
+                                    "wingnut"};
     static const int bits[] = {8, 10, 12, 14, 16};
     FILE* out = fopen(csv, "w");
     if (!out)
