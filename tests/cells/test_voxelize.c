@@ -14,7 +14,7 @@
  *    an unwelded self-intersecting union of two boxes, a folded cube, an open
  *    soup with a fin and flipped quads, intersecting open parts), written as
  *    OBJ and read back; they replace the unlicensed libigl and
- *    common-3d-test-models files of ../shared/data/defective, which this
+ *    common-3d-test-models files read from outside the repository, which this
  *    test read before. The expectation was and is the exact winding number
  *    of whatever mesh is read, so it did not need re-deriving;
  *  - 1 and 2 threads give identical results and statistics;

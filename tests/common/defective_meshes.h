@@ -1,5 +1,6 @@
 /* defective_meshes.h — bad meshes made by the tests themselves, so no test
- * needs the unlicensed files of ../shared/data/defective. Each one carries
+ * needs the unlicensed defective meshes it read before from outside
+ * the repository. Each one carries
  * the defect its namesake there was used for (none is a copy of one):
  *
  *   doubled_faces      an octahedron whose 8 faces are each stored twice, in

@@ -586,7 +586,7 @@ static void test_data_files(void)
     meso_skeleton_free(&s);
     /* Larger trees, stats only: the NeuroMorpho three-point soma and the
      * synthetic NeuroM neuron (bundled), and a generated stand-in for the
-     * hemibrain neuron of ../shared/data (real but of unclear license, so not
+     * hemibrain neuron read before from outside the repository (real but of unclear license, so not
      * bundled): a 4000-node tree with the same traits (radii about as large
      * as the segments, coordinates and radii quantised, hundreds of branch
      * points). The expectation does not depend on the tree: no cap

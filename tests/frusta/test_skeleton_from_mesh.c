@@ -534,7 +534,8 @@ static void refusals(void)
 static void real_mesh(void)
 {
     /* spot_low_resolution.obj (bundled, public domain). The armadillo of
-     * ../shared/data (Stanford's terms: not bundleable) was used instead when
+     * the wider data set outside the repository (Stanford's terms: not
+     * bundleable) was used instead when
      * present, with a bound of 3 %; spot was already the fallback, with the
      * bound below (measured 3.22 %), and it still is. */
     const char* path = test_data("spot_low_resolution.obj");

@@ -61,7 +61,8 @@ printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n' >"$tmp/degenerat
 refuse "degenerate face" 3 "$tmp/degenerate.obj"
 printf 'not a mesh at all\n' >"$tmp/garbage.off"
 refuse "garbage" 3 "$tmp/garbage.off"
-# Generated stand-ins for the unlicensed meshes of ../shared/data/defective
+# Generated stand-ins for the unlicensed defective meshes the tests read
+# from outside the repository before
 # (same defects: duplicated faces in both orientations, an unwelded
 # self-intersecting union of two boxes as OBJ and binary PLY, an open
 # multi-component soup, intersecting open parts). Missing files fail.

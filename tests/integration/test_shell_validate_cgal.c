@@ -507,7 +507,8 @@ static void brute_force_known_answers(void)
 }
 
 /* Was the issue #4 baseline on the Stanford bunny and armadillo of
- * ../shared/data, against the issue's published counts (OpenMesh normals
+ * the project's wider data set (outside the repository), against the
+ * issue's published counts (OpenMesh normals
  * within 20 %, area-weighted within 0.5 %). Those models' terms forbid
  * commercial use, so they cannot be in this MIT repository, and the issue's
  * numbers exist only for them. Now the bundled, permissively licensed spot

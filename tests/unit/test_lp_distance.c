@@ -630,7 +630,8 @@ static void test_threads_and_speed(void)
 {
     meso_mesh m = {0};
     /* wingnut.obj (bundled, CC BY 4.0, 6090 triangles with needles up to
-     * aspect 100) stands in for the armadillo of ../shared/data, which may
+     * aspect 100) stands in for the armadillo read before from outside the
+     * repository, which may
      * not be bundled (Stanford's terms). Only determinism is asserted here. */
     if (!load_mesh(test_data("wingnut.obj"), &m))
         return;
