@@ -30,7 +30,11 @@
  * searches run with the default cell_max_steps (4096): with the angle rule
  * at steps of 1/4 voxel and below, grazing rays run out of steps and miss
  * (holes; 65536 steps remove them).
- * usage: bench_cells_render RESULTS_DIR MESOBAKE BUNNY_OBJ [quick | pictures]
+ * usage: bench_cells_render RESULTS_DIR MESOBAKE MESH [quick | pictures]
+ * (MESH: meson's benchmark and run_benchmarks.sh pass the bundled
+ * tests/data/spot_low_resolution.obj, run_benchmarks.sh $MESO_BENCH_MESH if
+ * set; the checked-in results and pictures are of the thesis's Stanford
+ * bunny, which cannot be bundled: its terms forbid commercial use)
  * (quick: the full view only, 3 step sizes, orders 0 and 3; pictures: the
  * three pictures only). MESO_TEST_PNG=DIR also writes each measured
  * image's GL, reference and difference PNGs (tests/common/shell_scene.h). */
@@ -154,7 +158,7 @@ static void write_png(const char* dir, const char* name, const uint8_t* rgba)
 int main(int argc, char** argv)
 {
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_cells_render RESULTS_DIR MESOBAKE BUNNY_OBJ [quick | pictures]\n");
+        fprintf(stderr, "usage: bench_cells_render RESULTS_DIR MESOBAKE MESH [quick | pictures]\n");
         return 2;
     }
     const char *dir = argv[1], *mesobake = argv[2], *mesh = argv[3];

@@ -16,7 +16,12 @@
  * Scene: tests/data/saguaro.skel with the `ribs` relief, 14 ribs around,
  * depth 0.12, baked by mesobake. Timing: median of 3 draws after a warm-up,
  * glFinish included.
- * usage: bench_frusta_render RESULTS_DIR MESOBAKE DATA_DIR [FIT_MESH] */
+ * usage: bench_frusta_render RESULTS_DIR MESOBAKE DATA_DIR [FIT_MESH]
+ * (FIT_MESH: meson's benchmark and run_benchmarks.sh pass the bundled
+ * tests/data/spot_low_resolution.obj, run_benchmarks.sh
+ * $MESO_BENCH_FIT_MESH if set; the checked-in frusta_fit.csv is of the
+ * Stanford armadillo, which cannot be bundled: its terms forbid commercial
+ * use) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

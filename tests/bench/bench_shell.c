@@ -8,9 +8,10 @@
  *   bench_shell goals     OUTDIR MESOBAKE      -> OUTDIR/shell_goals.csv
  *   bench_shell all       OUTDIR MESOBAKE      (the four above)
  *
- * Meshes: tests/data/{spot_low_resolution,saddle}.obj; bunny and armadillo
- * from /work/shared/data/meshes (or $MESO_SHARED_MESHES) when present, read
- * at benchmark time only, never copied. Settings are those of `mesobake
+ * Meshes: tests/data/{saddle,spot_low_resolution,wingnut}.obj, all bundled.
+ * The checked-in results had the Stanford bunny where wingnut (6090
+ * triangles, about the bunny's size) now is, read from outside the
+ * repository; its terms forbid commercial use, so it is not bundled. Settings are those of `mesobake
  * shell` (bake/cli/cmd_shell.c) unless a sweep says otherwise: p = 3, θ = 0.5
  * (the CLI's --theta default, not the field's MESO_LP_DEFAULT_THETA), angle
  * tolerance 5°, smoothing 0 rounds ($MESO_BENCH_SMOOTH overrides), repair on
@@ -36,7 +37,8 @@
  *   near_radius = 0 as in cmd_shell.c's trace options.
  * thickness: normal, lp, hybrid, each without and with repair, thickness
  *   1..40 % of the diagonal, exterior and interior; full validation.
- * goals: every mesh file in the shared folder through the CLI at 10 %
+ * goals: every mesh file of tests/data (or of the folder named by
+ *   $MESO_BENCH_MESHES, to measure meshes of one's own) through the CLI at 10 %
  *   exterior and 5 % interior with its defaults (-j THREADS); the report's
  *   numbers, the exit code and the first stderr line (refusals). goal_met:
  *   no inverted prism, no offset self- and no offset/base intersection.
@@ -69,10 +71,10 @@
 #define REPAIR_ROUNDS 30
 #define LP_BUDGET 120.0
 
-static const char* shared_dir(void)
+static const char* goals_dir(void)
 {
-    const char* s = getenv("MESO_SHARED_MESHES");
-    return s && *s ? s : "/work/shared/data/meshes";
+    const char* s = getenv("MESO_BENCH_MESHES");
+    return s && *s ? s : MESO_TEST_DATA;
 }
 
 static int smooth_rounds(void)
@@ -409,7 +411,7 @@ typedef struct named_mesh {
     char path[4096];
 } named_mesh;
 
-static int mesh_list(named_mesh* out, int with_saddle, int with_armadillo)
+static int mesh_list(named_mesh* out, int with_saddle)
 {
     int n = 0;
     if (with_saddle) {
@@ -418,14 +420,11 @@ static int mesh_list(named_mesh* out, int with_saddle, int with_armadillo)
     }
     out[n].name = "spot";
     snprintf(out[n++].path, sizeof(out[0].path), "%s", test_data("spot_low_resolution.obj"));
-    out[n].name = "bunny";
-    snprintf(out[n].path, sizeof(out[0].path), "%s/bunny.obj", shared_dir());
-    n += file_exists(out[n].path);
-    if (with_armadillo) {
-        out[n].name = "armadillo";
-        snprintf(out[n].path, sizeof(out[0].path), "%s/armadillo.obj", shared_dir());
-        n += file_exists(out[n].path);
-    }
+    out[n].name = "wingnut";
+    snprintf(out[n++].path, sizeof(out[0].path), "%s", test_data("wingnut.obj"));
+    for (int i = 0; i < n; ++i)
+        if (!file_exists(out[i].path))
+            die(out[i].path, NULL);
     return n;
 }
 
@@ -439,7 +438,7 @@ static void bench_accuracy(const char* dir)
           "err_max_rel,err_mean_rel,angle_max_deg,angle_mean_deg,ref_seconds,ref_evaluations\n",
           f);
     named_mesh meshes[4];
-    const int nm = mesh_list(meshes, 0, 0);
+    const int nm = mesh_list(meshes, 0);
     for (int mi = 0; mi < nm; ++mi) {
         meso_mesh m;
         load(meshes[mi].path, &m);
@@ -517,7 +516,7 @@ static void bench_thickness(const char* dir)
           "vertices_lp,field_evaluations,vertices_shortened,bad_faces_left,seconds,valid,smooth\n",
           f);
     named_mesh meshes[4];
-    const int nm = mesh_list(meshes, 1, 0); /* armadillo: in the goal table (time) */
+    const int nm = mesh_list(meshes, 1);
     for (int mi = 0; mi < nm; ++mi) {
         meso_mesh m0;
         load(meshes[mi].path, &m0);
@@ -597,11 +596,10 @@ static void bench_goals(const char* dir, const char* mesobake)
     for (size_t k = 0; k < nk; ++k)
         fprintf(f, ",%s", keys[k]);
     fputs(",goal_met,note\n", f);
-    DIR* dd = opendir(shared_dir());
+    DIR* dd = opendir(goals_dir());
     if (!dd) {
-        fprintf(stderr, "bench_shell: %s: %s; goal table skipped\n", shared_dir(), strerror(errno));
-        fclose(f);
-        return;
+        fprintf(stderr, "bench_shell: %s: %s\n", goals_dir(), strerror(errno));
+        exit(1);
     }
     char* names[256];
     size_t n = 0;
@@ -626,7 +624,7 @@ static void bench_goals(const char* dir, const char* mesobake)
             remove(rep);
             snprintf(cmd, sizeof(cmd), "'%s' shell -i '%s/%s' -o '%s' --kind %s --thickness-rel %g -j %d "
                                        "--report '%s' 2>'%s'",
-                     mesobake, shared_dir(), names[i], out, kind, rel, THREADS, rep, errf);
+                     mesobake, goals_dir(), names[i], out, kind, rel, THREADS, rep, errf);
             const int st = system(cmd);
             const int code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
             char note[512] = "";

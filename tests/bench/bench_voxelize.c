@@ -1,20 +1,24 @@
 /*
  * bench_voxelize.c — sparse inside/outside voxelization (bake/voxelize.c)
- * on the bunny, against OpenVDB's narrow-band level set (the issue #6
+ * on a closed mesh, against OpenVDB's narrow-band level set (the issue #6
  * baseline: OpenVDB's filled SDF of the bunny Loop-subdivided to 1.69 M
  * triangles took 34 s at 512 voxels across, its narrow band 8.1 s).
  *
- *   bench_voxelize [CSV] [goal]
+ *   bench_voxelize [CSV] [goal] [MESH]
  *
- * Meshes: ../shared/data/meshes/bunny.obj (6598 triangles) and the same
- * split 4 times 1 -> 4 at edge midpoints (1.69 M triangles: the issue's
- * count; midpoints, not Loop's smoothing, so the shape is the same and only
- * the triangle count changes). Rows: meso (AUTO: parity on this closed mesh)
+ * Meshes: MESH (default: the bundled tests/data/spot_low_resolution.obj,
+ * 1654 triangles) and the same split 1 -> 4 at edge midpoints until it has
+ * at least 1.6 M triangles (spot: 5 times, 1.69 M, the issue's count;
+ * midpoints, not Loop's smoothing, so the shape is the same and only the
+ * triangle count changes). The checked-in voxelize.csv was measured on the
+ * Stanford bunny (6598 triangles, split 4 times), which cannot be bundled
+ * (its terms forbid commercial use): pass a copy of it as MESH to repeat
+ * those rows. Rows: meso (AUTO: parity on a closed mesh)
  * at 512 and 1024 voxels across, tiles of 8^3 and 32^3, 2 threads; OpenVDB
  * meshToLevelSet (half width 3 voxels) at the same voxel size. Every run is
  * in a child process, so its peak RSS (wait4) is its own. With `goal`, also
  * the issue's goal setup: 64^3 tile map x 128^3 tiles (N = 8192), the
- * membership map included (Voronoi, 8 seeds), on the plain bunny, instead
+ * membership map included (Voronoi, 8 seeds), on the plain mesh, instead
  * of the rows above.
  */
 #include <stdint.h>
@@ -176,12 +180,27 @@ static result run_child(int what, const meso_mesh* m, uint32_t tiles, uint32_t R
 int main(int argc, char** argv)
 {
     const char* csv = argc > 1 ? argv[1] : NULL;
-    const int goal = argc > 2 && strcmp(argv[2], "goal") == 0;
-    meso_mesh bunny;
+    int goal = 0;
+    char mesh_path[4096];
+    snprintf(mesh_path, sizeof(mesh_path), "%s", test_data("spot_low_resolution.obj"));
+    for (int i = 2; i < argc; ++i) {
+        if (strcmp(argv[i], "goal") == 0)
+            goal = 1;
+        else
+            snprintf(mesh_path, sizeof(mesh_path), "%s", argv[i]);
+    }
+    /* the file's stem names the rows */
+    char name[4096], name_fine[4200];
+    const char* base = strrchr(mesh_path, '/');
+    snprintf(name, sizeof(name), "%s", base ? base + 1 : mesh_path);
+    char* dot = strrchr(name, '.');
+    if (dot)
+        *dot = 0;
+    meso_mesh plain;
     meso_error err = {0};
-    if (meso_openmesh_read(test_data("../../../shared/data/meshes/bunny.obj"), &bunny, NULL, &err) != MESO_OK) {
-        fprintf(stderr, "bench_voxelize: ../shared/data/meshes/bunny.obj not readable (%s): skipped\n", err.message);
-        return 77;
+    if (meso_openmesh_read(mesh_path, &plain, NULL, &err) != MESO_OK) {
+        fprintf(stderr, "bench_voxelize: %s not readable (%s)\n", mesh_path, err.message);
+        return 1;
     }
     FILE* out = csv ? fopen(csv, "w") : stdout;
     if (!out)
@@ -189,16 +208,18 @@ int main(int argc, char** argv)
     fprintf(out, "mesh,triangles,tool,voxels_across,tile_res,seconds,peak_rss_mib,mixed_tiles,voxels_evaluated,"
                  "rays,exact_predicates\n");
     meso_mesh fine = {0};
-    fine.vertex_count = bunny.vertex_count;
-    fine.triangle_count = bunny.triangle_count;
-    fine.positions = malloc(sizeof(float) * 3 * bunny.vertex_count);
-    fine.indices = malloc(sizeof(uint32_t) * 3 * bunny.triangle_count);
-    memcpy(fine.positions, bunny.positions, sizeof(float) * 3 * bunny.vertex_count);
-    memcpy(fine.indices, bunny.indices, sizeof(uint32_t) * 3 * bunny.triangle_count);
-    for (int l = 0; l < 4 && !goal; ++l)
+    fine.vertex_count = plain.vertex_count;
+    fine.triangle_count = plain.triangle_count;
+    fine.positions = malloc(sizeof(float) * 3 * plain.vertex_count);
+    fine.indices = malloc(sizeof(uint32_t) * 3 * plain.triangle_count);
+    memcpy(fine.positions, plain.positions, sizeof(float) * 3 * plain.vertex_count);
+    memcpy(fine.indices, plain.indices, sizeof(uint32_t) * 3 * plain.triangle_count);
+    int levels = 0;
+    for (; fine.triangle_count < 1600000u && !goal; ++levels)
         subdivide(&fine);
-    const meso_mesh* meshes[2] = {&bunny, &fine};
-    const char* names[2] = {"bunny", "bunny_x256"};
+    snprintf(name_fine, sizeof(name_fine), "%s_x%u", name, 1u << (2 * levels));
+    const meso_mesh* meshes[2] = {&plain, &fine};
+    const char* names[2] = {name, name_fine};
     static const uint32_t across[2] = {512, 1024}, res[2] = {8, 32};
     for (int mi = 0; mi < 2 && !goal; ++mi)
         for (int a = 0; a < 2; ++a) {
@@ -223,15 +244,15 @@ int main(int argc, char** argv)
         }
     if (goal) { /* 64^3 tile map x 128^3 tiles */
         double rss;
-        const result x = run_child(2, &bunny, 128, 64, &rss);
+        const result x = run_child(2, &plain, 128, 64, &rss);
         if (x.ok)
-            fprintf(out, "bunny,%u,meso_membership_%s,8192,64,%.3f,%.1f,%llu,%llu,%llu,\n", bunny.triangle_count,
+            fprintf(out, "%s,%u,meso_membership_%s,8192,64,%.3f,%.1f,%llu,%llu,%llu,\n", name, plain.triangle_count,
                     meso_voxelizer_name((meso_voxelizer)x.method), x.seconds, rss, (unsigned long long)x.mixed,
                     (unsigned long long)x.evaluated, (unsigned long long)x.rays);
     }
     if (csv)
         fclose(out);
-    meso_mesh_free(&bunny);
+    meso_mesh_free(&plain);
     meso_mesh_free(&fine);
     return 0;
 }

@@ -4,8 +4,15 @@
 #   format_throughput.csv, draco.csv, draco.png
 # Usage (from anywhere): tests/bench/run_benchmarks.sh [BUILD_DIR]
 # bench_format writes (and deletes) a ~1.07 GB file in the build directory.
+# Everything reads only the repository. The thesis's setups used the Stanford
+# bunny and armadillo, which cannot be bundled (their terms forbid
+# commercial use); the bundled spot stands in for both. To measure on a copy
+# of your own, set MESO_BENCH_MESH (cells) and MESO_BENCH_FIT_MESH (frusta
+# fit) to its path; the checked-in results were measured that way.
 set -eu
 src=$(cd "$(dirname "$0")/../.." && pwd)
+bench_mesh=${MESO_BENCH_MESH:-$src/tests/data/spot_low_resolution.obj}
+fit_mesh=${MESO_BENCH_FIT_MESH:-$src/tests/data/spot_low_resolution.obj}
 build=${1:-$src/build-bench}
 results=$src/tests/bench/results
 mkdir -p "$results"
@@ -51,8 +58,7 @@ fi
 
 # Frusta (issue #7): set_pose per 1000 frusta and draw times (bench_frusta),
 # frusta against polygon tessellations at equal error, relief steps, and
-# segments against fit error on ../shared/data/meshes/armadillo.obj
-# (bench_frusta_render). ~1 min. Results: bench_frusta.csv,
+# segments against fit error on $fit_mesh (bench_frusta_render). ~1 min. Results: bench_frusta.csv,
 # frusta_vs_tess.csv, frusta_relief_steps.csv, frusta_fit.csv,
 # frusta_vs_tess.png. Skip with MESO_BENCH_SKIP_FRUSTA=1.
 if [ "${MESO_BENCH_SKIP_FRUSTA:-0}" != 1 ]; then
@@ -61,12 +67,12 @@ if [ "${MESO_BENCH_SKIP_FRUSTA:-0}" != 1 ]; then
     MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta" "$results"
     echo "== bench_frusta_render"
     MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta_render" "$results" "$build/bake/mesobake" \
-        "$src/tests/data" "$src/../shared/data/meshes/armadillo.obj"
+        "$src/tests/data" "$fit_mesh"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_frusta.gp"
     echo "frusta results in $results"
 fi
 
-# Cells objects: the thesis's Table 5.1 on ../shared/data/meshes/bunny.obj
+# Cells objects: the thesis's Table 5.1 setups on $bench_mesh
 # (mesobake cells at 8192 voxels across: tile map 256^3 x 32^3 tiles ..
 # 32^3 x 256^3, Voronoi 8 seeds), wall time, peak RSS and bytes per map next
 # to the thesis's. ~1 min. Results: cells_table51.csv, cells_table51.png.
@@ -75,12 +81,12 @@ fi
 if [ "${MESO_BENCH_SKIP_CELLS:-0}" != 1 ]; then
     ninja -C "$build" tests/bench/bench_cells_bake bake/mesobake
     echo "== bench_cells_bake"
-    nice "$build/tests/bench/bench_cells_bake" "$build/bake/mesobake" "$src/../shared/data/meshes/bunny.obj" "$results"
+    nice "$build/tests/bench/bench_cells_bake" "$build/bake/mesobake" "$bench_mesh" "$results"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_bake.gp"
     echo "cells results in $results"
 fi
 
-# Cells rendering: the Figure 5.1 (top) bunny (64^3 map x 128^3 tiles,
+# Cells rendering: the Figure 5.1 (top) setup on $bench_mesh (64^3 map x 128^3 tiles,
 # Voronoi 8) ray traced by libmeso against the exact reference at 400x300:
 # the thesis's linear search step (R/16 .. R/512 voxels, fixed and angle
 # rule) against the exact traversal, reflection / refraction orders 0..3,
@@ -92,7 +98,7 @@ if [ "${MESO_BENCH_SKIP_CELLS_RENDER:-0}" != 1 ]; then
     ninja -C "$build" tests/bench/bench_cells_render bake/mesobake
     echo "== bench_cells_render"
     MESA_SHADER_CACHE_DISABLE=true nice "$build/tests/bench/bench_cells_render" "$results" "$build/bake/mesobake" \
-        "$src/../shared/data/meshes/bunny.obj"
+        "$bench_mesh"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_render.gp"
     echo "cells render results in $results"
 fi

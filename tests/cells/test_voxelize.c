@@ -8,8 +8,15 @@
  *  - WINDING does not leak: the open cube (tests/data/cube_no_bottom.obj,
  *    turned so its hole faces the rays) equals the closed cube at every
  *    centre while PARITY leaks through the hole (counted); defective meshes
- *    of ../shared/data/defective against the exact generalized winding number
- *    on sampled centres; far-away tiles are outside;
+ *    against the exact generalized winding number on sampled centres;
+ *    far-away tiles are outside. The defective meshes are generated
+ *    (tests/common/defective_meshes.h: duplicated faces in both orientations,
+ *    an unwelded self-intersecting union of two boxes, a folded cube, an open
+ *    soup with a fin and flipped quads, intersecting open parts), written as
+ *    OBJ and read back; they replace the unlicensed libigl and
+ *    common-3d-test-models files read from outside the repository, which this
+ *    test read before. The expectation was and is the exact winding number
+ *    of whatever mesh is read, so it did not need re-deriving;
  *  - 1 and 2 threads give identical results and statistics;
  *  - N = 4096 on the sphere through the streaming call, with the peak RSS
  *    increase measured (a dense grid would need 8 GiB even at 1 bit per
@@ -19,9 +26,11 @@
 
 #include <string.h>
 #include <sys/resource.h>
+#include <unistd.h>
 #include <time.h>
 
 #include "adapters.h"
+#include "defective_meshes.h"
 #include "voxelize.h"
 #include "winding_number.h"
 
@@ -401,22 +410,26 @@ static void open_cube_does_not_leak(void)
  * the grid's faces (far from the mesh with 25% padding) are outside. */
 static void defective_meshes_do_not_leak(void)
 {
-    static const char* names[] = {"teapot.obj", "truck.obj", "cube_with_fold.obj", "degenerated.obj",
-                                  "two-boxes-bad-self-union.obj"};
-    for (size_t c = 0; c < sizeof(names) / sizeof(names[0]); ++c) {
-        char rel[256];
-        snprintf(rel, sizeof(rel), "../../../shared/data/defective/%s", names[c]);
+    const char* tmp = getenv("TMPDIR");
+    char dir[4096];
+    snprintf(dir, sizeof(dir), "%s/meso_test_voxelize_XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    assert(mkdtemp(dir));
+    for (size_t c = 0; c < DM_CASE_COUNT; ++c) {
+        char path[4200];
+        snprintf(path, sizeof(path), "%s/%s.obj", dir, dm_cases[c].name);
+        dm_mesh gen = dm_cases[c].make();
+        assert(dm_write_obj(path, &gen));
+        dm_free(&gen);
         meso_mesh m;
-        if (!load_path(test_data(rel), &m)) {
-            fprintf(stderr, "    %s: not present, skipped\n", rel);
-            continue;
-        }
+        assert(load_path(path, &m));
+        assert(remove(path) == 0);
+        const char* name = dm_cases[c].name;
         meso_voxel_grid g;
         meso_error err = {0};
         const uint32_t tiles = 8, R = 8, N = tiles * R;
         assert(meso_voxel_grid_fit(&m, tiles, R, 0.125 * N, &g, &err) == MESO_OK);
         meso_voxels v = voxelize(&m, &g, MESO_VOXELIZE_AUTO, 0);
-        print_stats(names[c], &v);
+        print_stats(name, &v);
         check_consistent(&v);
         for (uint32_t tz = 0; tz < tiles; ++tz)
             for (uint32_t ty = 0; ty < tiles; ++ty)
@@ -457,6 +470,7 @@ static void defective_meshes_do_not_leak(void)
         meso_voxels_free(&v);
         meso_mesh_free(&m);
     }
+    assert(rmdir(dir) == 0);
 }
 
 /* >>large N ------------------------------------------------------------------------ */

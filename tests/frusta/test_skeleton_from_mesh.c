@@ -7,9 +7,9 @@
  *  - the torus (a cycle, cut), the same result twice in one process, and
  *    refusals: open, two components, a non-manifold vertex, duplicated
  *    faces, a bad index, empty;
- *  - armadillo.obj from ../shared/data/meshes when present (the issue's
- *    goal: fit error within 2 % of the bounding-box diagonal), otherwise the
- *    bundled spot_low_resolution.obj; numbers are printed. */
+ *  - the bundled spot_low_resolution.obj (the issue's goal: fit error
+ *    within 2 % of the bounding-box diagonal; numbers are printed, a 4 %
+ *    guard asserted, and the outside vertices' distance recomputed). */
 #include "test_util.h"
 
 #include <string.h>
@@ -533,22 +533,30 @@ static void refusals(void)
 
 static void real_mesh(void)
 {
-    const char* path = test_data("../../../shared/data/meshes/armadillo.obj");
-    FILE* probe = fopen(path, "rb");
-    const char* what = "armadillo.obj";
-    double bound = 0.03; /* regression guard, in bbox diagonals: measured 2.47 % (gcc 12, CGAL 5.5.1) */
-    if (probe)
-        fclose(probe);
-    else {
-        fprintf(stderr, "    armadillo.obj not present: spot_low_resolution.obj instead\n");
-        path = test_data("spot_low_resolution.obj");
-        what = "spot_low_resolution.obj";
-        bound = 0.04; /* measured 3.22 % */
-    }
+    /* spot_low_resolution.obj (bundled, public domain). The armadillo of
+     * the wider data set outside the repository (Stanford's terms: not
+     * bundleable) was used instead when
+     * present, with a bound of 3 %; spot was already the fallback, with the
+     * bound below (measured 3.22 %), and it still is. */
+    const char* path = test_data("spot_low_resolution.obj");
+    const char* what = "spot_low_resolution.obj";
+    const double bound = 0.04;
     meso_mesh m = load(path);
     meso_skeleton_fit_stats st, sn;
     meso_skeleton s = fit(&m, NULL, &st);
     print_stats(what, &st);
+    /* Independently of the fit's own bookkeeping: the vertices outside the
+     * model, by the union distance checked above against the capsule (exact
+     * outside), are no farther than the reported maximum. */
+    double outside_max = 0;
+    for (uint32_t v = 0; v < m.vertex_count; ++v) {
+        const double p[3] = {m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]};
+        const double d = meso_skeleton_surface_distance(&s, p);
+        outside_max = d > outside_max ? d : outside_max;
+    }
+    fprintf(stderr, "    vertices outside the model: farthest %.4g (reported max %.4g)\n", outside_max, st.fit_error_max);
+    assert(outside_max <= st.fit_error_max + 1e-9 * st.bbox_diagonal);
+    assert(outside_max <= bound * st.bbox_diagonal);
     meso_skeleton_free(&s);
     meso_skeleton_fit_options o = {0};
     o.fit = MESO_SKELFIT_CGAL_NODES;

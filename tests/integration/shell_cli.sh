@@ -1,11 +1,11 @@
 #!/bin/sh
 # mesobake shell from the command line: byte-identical output for -j 1 and
-# -j 2, the report's keys, and bad input (every file of shared/data/defective
-# when present, plus generated ones): a coded error, a non-zero exit, and no
-# output file.
-# usage: shell_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR
+# -j 2, the report's keys, and bad input (the defective meshes MAKE_DEFECTIVE
+# generates, see tests/common/defective_meshes.h, plus small ones written
+# here): a coded error, a non-zero exit, and no output file.
+# usage: shell_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR MAKE_DEFECTIVE
 set -u
-bake=$1 inspect=$2 data=$3
+bake=$1 inspect=$2 data=$3 make_defective=$4
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -61,17 +61,22 @@ printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n' >"$tmp/degenerat
 refuse "degenerate face" 3 "$tmp/degenerate.obj"
 printf 'not a mesh at all\n' >"$tmp/garbage.off"
 refuse "garbage" 3 "$tmp/garbage.off"
-defective="$data/../../../shared/data/defective"
-for f in truck.obj degenerated.obj two-boxes-bad-self-union.obj two-boxes-bad-self-union.ply teapot.obj; do
-  [ -f "$defective/$f" ] && refuse "shared/data/defective/$f" 3 "$defective/$f"
+# Generated stand-ins for the unlicensed defective meshes the tests read
+# from outside the repository before
+# (same defects: duplicated faces in both orientations, an unwelded
+# self-intersecting union of two boxes as OBJ and binary PLY, an open
+# multi-component soup, intersecting open parts). Missing files fail.
+mkdir "$tmp/defective"
+check "make_defective writes the defective meshes" "$make_defective" "$tmp/defective"
+for f in doubled_faces.obj two_boxes.obj two_boxes.ply soup.obj open_parts.obj; do
+  refuse "defective/$f" 3 "$tmp/defective/$f"
 done
-# cube_with_fold is topologically clean: its fold is geometric. It must
+# folded_cube is topologically clean: its fold is geometric. It must
 # either bake a valid shell or be refused; never crash.
-if [ -f "$defective/cube_with_fold.obj" ]; then
-  "$bake" shell -i "$defective/cube_with_fold.obj" -o "$tmp/fold.meso" >/dev/null 2>&1
-  rc=$?
-  check "cube_with_fold: exit 0 or 3 (got $rc)" sh -c "[ $rc = 0 ] || [ $rc = 3 ]"
-fi
+check "folded_cube.obj exists" test -s "$tmp/defective/folded_cube.obj"
+"$bake" shell -i "$tmp/defective/folded_cube.obj" -o "$tmp/fold.meso" >/dev/null 2>&1
+rc=$?
+check "folded_cube: exit 0 or 3 (got $rc)" sh -c "[ $rc = 0 ] || [ $rc = 3 ]"
 check "usage: conflicting thickness flags exit 1" sh -c "'$bake' shell -i x -o y --thickness 1 --thickness-rel 0.1 2>/dev/null; [ \$? = 1 ]"
 check "usage: bad kind exits 1" sh -c "'$bake' shell -i x -o y --kind sideways 2>/dev/null; [ \$? = 1 ]"
 exit $fail
