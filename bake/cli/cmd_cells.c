@@ -103,7 +103,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
         return usage_error("cells needs -i MESH and -o OUT.meso");
     if (a->tiles && a->cell_size > 0)
         return usage_error("option --tiles can not be used together with --cell-size");
-    return 0;
+    return check_outputs(a->out, a->report);
 }
 
 /* "NAME[:A[:B]]": copies NAME, returns how many of A, B were given (-1: bad). */

@@ -117,7 +117,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         return usage_error("frusta needs -i INPUT and -o OUT.meso");
     if (a->relief_depth > 0 && !a->relief)
         return usage_error("--relief-depth needs --relief");
-    return 0;
+    return check_outputs(a->out, a->report);
 }
 
 static int is_mesh_path(const char* p)

@@ -44,6 +44,7 @@ int main(int argc, char** argv)
         fputs(usage_short, stderr);
         return MESO_EXIT_USAGE;
     }
+    cli_signals_install();
     const char* cmd = argv[1];
     if (!strcmp(cmd, "-h") || !strcmp(cmd, "--help")) {
         fputs(usage_full, stdout);
