@@ -4,6 +4,7 @@
 #include "cli_output.h"
 
 #include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,31 +12,64 @@
 
 static meso_output staged[CLI_MAX_OUTPUTS];
 static int staged_count;
-/* What the signal handler unlinks; changed only with the signals blocked. */
+/* What the signal handler unlinks: copies of the temporary paths. */
 static char* volatile staged_temp[CLI_MAX_OUTPUTS];
 
 static const int cleanup_signals[] = {SIGINT, SIGTERM, SIGHUP};
 
-/* Async-signal-safe: unlink and raise only. SA_RESETHAND has restored the
- * default action, so the re-raised signal ends the process (with the status
- * of that signal) as soon as the handler returns. */
-static void on_signal(int sig)
+/* The registry is changed only between enter() and leave(). A signal may be
+ * handled on any thread (the bake runs OpenMP and TBB workers), so a mask on
+ * the main thread is not enough; instead the handler and the main thread
+ * meet through two sequentially consistent atomics: the handler stores
+ * `signalled`, then reads `busy`; enter() stores `busy`, then reads
+ * `signalled`. At least one of them sees the other: either the handler
+ * defers to leave(), or enter() knows the process is going down before it
+ * creates a file the handler would not know about. */
+static atomic_int busy;
+static atomic_int signalled;
+
+static void unlink_staged(void)
 {
     for (int i = 0; i < CLI_MAX_OUTPUTS; ++i) {
         const char* t = staged_temp[i];
         if (t)
             unlink(t);
     }
-    raise(sig);
 }
 
-static void block_signals(sigset_t* old)
+/* Remove the temporary files and end the process with signal `sig`. */
+static void die_of(int sig)
 {
-    sigset_t set;
-    sigemptyset(&set);
-    for (size_t i = 0; i < sizeof cleanup_signals / sizeof cleanup_signals[0]; ++i)
-        sigaddset(&set, cleanup_signals[i]);
-    sigprocmask(SIG_BLOCK, &set, old);
+    unlink_staged();
+    signal(sig, SIG_DFL);
+    raise(sig);
+    /* `sig` is blocked while its handler runs: it ends the process on return. */
+}
+
+/* Async-signal-safe: atomics (lock-free), unlink, signal and raise only. */
+static void on_signal(int sig)
+{
+    atomic_store(&signalled, sig);
+    if (atomic_load(&busy))
+        return; /* leave() finishes the job */
+    die_of(sig);
+}
+
+static int enter(void)
+{
+    atomic_store(&busy, 1);
+    return atomic_load(&signalled);
+}
+
+static void leave(void)
+{
+    atomic_store(&busy, 0);
+    const int sig = atomic_load(&signalled);
+    if (sig) {
+        die_of(sig);
+        for (;;)
+            pause(); /* the signal is delivered (to this or another thread) */
+    }
 }
 
 void cli_signals_install(void)
@@ -50,7 +84,6 @@ void cli_signals_install(void)
         sigemptyset(&sa.sa_mask);
         for (size_t k = 0; k < sizeof cleanup_signals / sizeof cleanup_signals[0]; ++k)
             sigaddset(&sa.sa_mask, cleanup_signals[k]);
-        sa.sa_flags = SA_RESETHAND;
         sigaction(cleanup_signals[i], &sa, NULL);
     }
 }
@@ -69,8 +102,8 @@ meso_result cli_output_stage(const char* path, meso_output** out, meso_error* er
     *out = NULL;
     if (staged_count == CLI_MAX_OUTPUTS)
         return stage_error(err, MESO_ERR_INVALID_ARG, path, "too many outputs");
-    sigset_t old;
-    block_signals(&old);
+    if (enter())
+        leave(); /* does not return */
     meso_output* o = &staged[staged_count];
     meso_result r = meso_output_open(path, NULL, o, err);
     for (int i = 0; r == MESO_OK && i < staged_count; ++i)
@@ -88,15 +121,19 @@ meso_result cli_output_stage(const char* path, meso_output** out, meso_error* er
         staged_temp[staged_count++] = copy;
         *out = o;
     }
-    sigprocmask(SIG_SETMASK, &old, NULL);
+    leave();
     return r;
 }
 
 static meso_result finish_all(int publish, meso_error* err)
 {
-    sigset_t old;
-    block_signals(&old);
+    if (enter())
+        leave(); /* does not return: the handler may be unlinking right now */
     meso_result r = publish ? MESO_OK : MESO_ERR_IO;
+    /* Every destination is checked again before the first rename, so one
+     * that changed since it was staged stops the whole run, not half of it. */
+    for (int i = 0; i < staged_count && r == MESO_OK; ++i)
+        r = meso_output_check(staged[i].path, err);
     for (int i = 0; i < staged_count; ++i) {
         if (r == MESO_OK)
             r = meso_output_commit(&staged[i], err);
@@ -107,7 +144,7 @@ static meso_result finish_all(int publish, meso_error* err)
         free(copy);
     }
     staged_count = 0;
-    sigprocmask(SIG_SETMASK, &old, NULL);
+    leave();
     return publish ? r : MESO_OK;
 }
 

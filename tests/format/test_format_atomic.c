@@ -13,6 +13,8 @@
 #include "meso_file.h"
 #include "sample.h"
 
+#include "test_dir.h"
+
 #include <assert.h>
 #include <dirent.h>
 #include <errno.h>
@@ -28,24 +30,6 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
-
-static char dir[256];
-
-static void path_in(char* out, size_t n, const char* name) { snprintf(out, n, "%s/%s", dir, name); }
-
-/* Number of entries in dir whose name contains `needle`. */
-static int count_entries(const char* needle)
-{
-    DIR* d = opendir(dir);
-    assert(d);
-    int n = 0;
-    struct dirent* e;
-    while ((e = readdir(d)) != NULL)
-        if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..") && strstr(e->d_name, needle))
-            n++;
-    closedir(d);
-    return n;
-}
 
 static void remove_temps(void)
 {
@@ -474,9 +458,7 @@ static void output_abort_and_commit(void)
 
 int main(void)
 {
-    const char* base = getenv("TMPDIR");
-    snprintf(dir, sizeof dir, "%s/meso_atomic_XXXXXX", base ? base : "/tmp");
-    assert(mkdtemp(dir) != NULL);
+    make_test_dir("meso_atomic");
     missing_directory_fails_and_creates_nothing();
     successful_write_replaces_target_and_leaves_no_temp();
     failed_write_keeps_the_old_target_and_leaves_no_temp();
