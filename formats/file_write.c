@@ -366,7 +366,8 @@ static meso_result resolve_destination(const meso_allocator* a, const char* path
         if (!dir) {
             r = mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
         } else {
-            if (stat(dir, &st) != 0)
+            /* access: the real user may create the temporary file there */
+            if (stat(dir, &st) != 0 || (S_ISDIR(st.st_mode) && access(dir, W_OK | X_OK) != 0))
                 r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_DESTINATION, UINT64_MAX, -1,
                                      "cannot write '%s': directory '%s': %s", path, dir, strerror(errno));
             else if (!S_ISDIR(st.st_mode))
