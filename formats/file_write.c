@@ -260,9 +260,9 @@ static int write_all(int fd, const void* data, uint64_t size)
     return 0;
 }
 
-/* The temporary name is ".NAME.tmp.XXXXXX" in the target's directory, so the
- * rename stays within one file system. open(O_EXCL, 0666) instead of mkstemp
- * so the final file gets the usual umask permissions. */
+/* The temporary name is ".NAME.tmp.XXXXXX" in the destination's directory,
+ * so the rename stays within one file system. open(O_EXCL, 0666) instead of
+ * mkstemp so a new file gets the usual umask permissions. */
 static int create_temp(char* tmp, size_t cap, size_t dir_len, const char* base, int* fd)
 {
     static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz";
@@ -289,82 +289,252 @@ static int create_temp(char* tmp, size_t cap, size_t dir_len, const char* base, 
     return EEXIST;
 }
 
+static const char* file_kind(mode_t m)
+{
+    return S_ISDIR(m)    ? "a directory"
+           : S_ISCHR(m)  ? "a character device"
+           : S_ISBLK(m)  ? "a block device"
+           : S_ISFIFO(m) ? "a FIFO"
+           : S_ISSOCK(m) ? "a socket"
+           : S_ISLNK(m)  ? "a symbolic link"
+                         : "not a regular file";
+}
+
+static meso_result refuse(meso_error* err, const char* path, const char* what)
+{
+    return mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_DESTINATION, UINT64_MAX, -1,
+                            "refusing to replace '%s': it is %s (outputs replace regular files only)", path, what);
+}
+
+static char* copy_string(const meso_allocator* a, const char* s, size_t n)
+{
+    char* c = (char*)mesoi_file_alloc(a, n + 1);
+    if (c) {
+        memcpy(c, s, n);
+        c[n] = 0;
+    }
+    return c;
+}
+
+/* Where an atomic write of `path` goes: *dest (allocated) is `path`, or the
+ * final target of a symbolic link; *mode the permissions of the regular file
+ * there (0 when there is none). Refuses everything else without opening it. */
+static meso_result resolve_destination(const meso_allocator* a, const char* path, char** dest, uint32_t* mode,
+                                       meso_error* err)
+{
+    *dest = NULL;
+    *mode = 0;
+    if (path == NULL || path[0] == 0)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "NULL or empty path");
+    struct stat st;
+    char* target = NULL;
+    if (lstat(path, &st) == 0) {
+        if (S_ISLNK(st.st_mode)) {
+            target = realpath(path, NULL);
+            if (target == NULL) {
+                int e = errno;
+                return e == ENOENT   ? refuse(err, path, "a dangling symbolic link")
+                       : e == ELOOP  ? refuse(err, path, "a symbolic link loop")
+                                     : mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_DESTINATION, UINT64_MAX, -1,
+                                                        "cannot resolve the symbolic link '%s': %s", path, strerror(e));
+            }
+            const int gone = stat(target, &st) != 0;
+            if (gone || !S_ISREG(st.st_mode)) {
+                char what[64];
+                snprintf(what, sizeof what, "a symbolic link to %s", gone ? "nothing" : file_kind(st.st_mode));
+                meso_result r = refuse(err, path, what);
+                free(target);
+                return r;
+            }
+        } else if (!S_ISREG(st.st_mode)) {
+            return refuse(err, path, file_kind(st.st_mode));
+        }
+        *mode = (uint32_t)(st.st_mode & 07777);
+    } else if (errno != ENOENT) {
+        return mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_DESTINATION, UINT64_MAX, -1, "cannot write '%s': %s",
+                                path, strerror(errno));
+    }
+    const char* d = target ? target : path;
+    const char* slash = strrchr(d, '/');
+    meso_result r = MESO_OK;
+    if (slash && slash[1] == 0) {
+        r = refuse(err, path, "a directory name (it ends in '/')");
+    } else {
+        /* The directory must exist (and be one); checked even when the file
+         * exists, so the work (and the allocations) never depend on it. */
+        char* dir = slash ? copy_string(a, d, slash == d ? 1 : (size_t)(slash - d)) : copy_string(a, ".", 1);
+        if (!dir) {
+            r = mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
+        } else {
+            /* access: the real user may create the temporary file there */
+            if (stat(dir, &st) != 0 || (S_ISDIR(st.st_mode) && access(dir, W_OK | X_OK) != 0))
+                r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_DESTINATION, UINT64_MAX, -1,
+                                     "cannot write '%s': directory '%s': %s", path, dir, strerror(errno));
+            else if (!S_ISDIR(st.st_mode))
+                r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_DESTINATION, UINT64_MAX, -1,
+                                     "cannot write '%s': '%s' is not a directory", path, dir);
+            mesoi_file_free(a, dir);
+        }
+    }
+    if (r == MESO_OK && (*dest = copy_string(a, d, strlen(d))) == NULL)
+        r = mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
+    free(target);
+    return r;
+}
+
+meso_result meso_output_check(const char* path, meso_error* err)
+{
+    mesoi_file_error_clear(err);
+    meso_allocator a;
+    mesoi_file_allocator_init(NULL, &a);
+    char* dest = NULL;
+    uint32_t mode;
+    meso_result r = resolve_destination(&a, path, &dest, &mode, err);
+    mesoi_file_free(&a, dest);
+    return r;
+}
+
+static void output_close(meso_output* out)
+{
+    if (out->fd >= 0)
+        close(out->fd);
+    mesoi_file_free(&out->allocator, out->temp);
+    mesoi_file_free(&out->allocator, out->path);
+    out->fd = -1;
+    out->temp = NULL;
+    out->path = NULL;
+}
+
+meso_result meso_output_open(const char* path, const meso_allocator* allocator, meso_output* out, meso_error* err)
+{
+    mesoi_file_error_clear(err);
+    if (out == NULL)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "NULL output");
+    memset(out, 0, sizeof *out);
+    out->fd = -1;
+    if (mesoi_file_allocator_init(allocator, &out->allocator) != MESO_OK)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "bad allocator");
+    meso_result r = resolve_destination(&out->allocator, path, &out->path, &out->mode, err);
+    if (r != MESO_OK)
+        return r;
+    const char* slash = strrchr(out->path, '/');
+    const char* base = slash ? slash + 1 : out->path;
+    size_t dir_len = (size_t)(base - out->path), cap = strlen(out->path) + 16;
+    if ((out->temp = (char*)mesoi_file_alloc(&out->allocator, cap)) == NULL) {
+        output_close(out);
+        return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
+    }
+    memcpy(out->temp, out->path, dir_len);
+    int e = create_temp(out->temp, cap, dir_len, base, &out->fd);
+    if (e == 0 && out->mode != 0 && fchmod(out->fd, (mode_t)out->mode) != 0)
+        e = errno;
+    if (e != 0) {
+        if (out->fd >= 0)
+            unlink(out->temp);
+        r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_WRITE, UINT64_MAX, -1,
+                             "cannot create a temporary file for '%s' in '%.*s': %s", path, (int)(dir_len ? dir_len : 1),
+                             dir_len ? out->path : ".", strerror(e));
+        output_close(out);
+    }
+    return r;
+}
+
+static meso_result output_failed(meso_output* out, const char* step, int e, meso_error* err)
+{
+    unlink(out->temp);
+    meso_result r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_WRITE, UINT64_MAX, -1,
+                                     "cannot write '%s' (%s of '%s'): %s", out->path, step, out->temp, strerror(e));
+    output_close(out);
+    return r;
+}
+
+meso_result meso_output_write(meso_output* out, const void* data, size_t size, meso_error* err)
+{
+    if (out == NULL || out->fd < 0)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "output not open");
+    int e = write_all(out->fd, data, size);
+    return e ? output_failed(out, "write", e, err) : MESO_OK;
+}
+
+meso_result meso_output_commit(meso_output* out, meso_error* err)
+{
+    if (out == NULL || out->fd < 0)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "output not open");
+    if (fsync(out->fd) != 0)
+        return output_failed(out, "fsync", errno, err);
+    int fd = out->fd;
+    out->fd = -1;
+    if (close(fd) != 0)
+        return output_failed(out, "close", errno, err);
+    /* The destination may have changed since meso_output_open. */
+    struct stat st;
+    if (lstat(out->path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        unlink(out->temp);
+        meso_result r = refuse(err, out->path, file_kind(st.st_mode));
+        output_close(out);
+        return r;
+    }
+    if (rename(out->temp, out->path) != 0)
+        return output_failed(out, "rename", errno, err);
+    /* Make the rename durable; best effort (some file systems refuse). */
+    char* slash = strrchr(out->path, '/');
+    if (slash)
+        *slash = 0;
+    int dfd = open(slash == out->path ? "/" : slash ? out->path : ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd >= 0) {
+        (void)fsync(dfd);
+        close(dfd);
+    }
+    output_close(out);
+    return MESO_OK;
+}
+
+void meso_output_abort(meso_output* out)
+{
+    if (out == NULL || out->temp == NULL)
+        return;
+    if (out->fd >= 0)
+        close(out->fd);
+    out->fd = -1;
+    unlink(out->temp);
+    output_close(out);
+}
+
+meso_result meso_writer_write_output(meso_writer* w, meso_output* out, meso_error* err)
+{
+    if (w == NULL || out == NULL || out->fd < 0)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
+                                "NULL writer or output not open");
+    uint64_t ht = header_toc_size(w);
+    if (ht > SIZE_MAX)
+        return mesoi_file_error(err, MESO_ERR_UNSUPPORTED, MESO_ISSUE_API_TOO_LARGE, UINT64_MAX, -1, "TOC too large");
+    uint8_t* head = (uint8_t*)mesoi_file_alloc(&w->alloc, (size_t)ht);
+    if (!head)
+        return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
+    build_header_toc(w, head);
+    static const uint8_t zeros[MESO_ALIGN] = {0};
+    int e = write_all(out->fd, head, ht);
+    for (uint32_t i = 0; i < w->count && e == 0; i++) {
+        const meso_chunk_info* c = &w->chunks[i].info;
+        e = write_all(out->fd, w->chunks[i].data, c->stored_size);
+        if (e == 0)
+            e = write_all(out->fd, zeros, mesoi_align64(c->stored_size) - c->stored_size);
+    }
+    mesoi_file_free(&w->alloc, head);
+    return e ? output_failed(out, "write", e, err) : MESO_OK;
+}
+
 meso_result meso_writer_write_file(meso_writer* w, const char* path, meso_error* err)
 {
     mesoi_file_error_clear(err);
     if (w == NULL || path == NULL || path[0] == 0)
         return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "NULL or empty path");
-    uint64_t ht = header_toc_size(w);
-    if (ht > SIZE_MAX)
-        return mesoi_file_error(err, MESO_ERR_UNSUPPORTED, MESO_ISSUE_API_TOO_LARGE, UINT64_MAX, -1, "TOC too large");
-    const char* slash = strrchr(path, '/');
-    const char* base = slash ? slash + 1 : path;
-    size_t dir_len = (size_t)(base - path), path_len = strlen(path);
-    if (base[0] == 0)
-        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1, "'%s' names a directory",
-                                path);
-    char* tmp = (char*)mesoi_file_alloc(&w->alloc, path_len + 16);
-    char* dir = (char*)mesoi_file_alloc(&w->alloc, dir_len + 2);
-    uint8_t* head = (uint8_t*)mesoi_file_alloc(&w->alloc, (size_t)ht);
-    if (!tmp || !dir || !head) {
-        mesoi_file_free(&w->alloc, tmp);
-        mesoi_file_free(&w->alloc, dir);
-        mesoi_file_free(&w->alloc, head);
-        return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
-    }
-    memcpy(tmp, path, dir_len);
-    if (dir_len) {
-        memcpy(dir, path, dir_len);
-        dir[dir_len] = 0;
-    } else {
-        dir[0] = '.';
-        dir[1] = 0;
-    }
-    build_header_toc(w, head);
-
-    meso_result r = MESO_OK;
-    int fd = -1, e = create_temp(tmp, path_len + 16, dir_len, base, &fd);
-    if (e != 0) {
-        r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_WRITE, UINT64_MAX, -1,
-                             "cannot create a temporary file for '%s' in '%s': %s", path, dir, strerror(e));
-        goto done;
-    }
-    static const uint8_t zeros[MESO_ALIGN] = {0};
-    const char* step = "write";
-    e = write_all(fd, head, ht);
-    for (uint32_t i = 0; i < w->count && e == 0; i++) {
-        const meso_chunk_info* c = &w->chunks[i].info;
-        e = write_all(fd, w->chunks[i].data, c->stored_size);
-        if (e == 0)
-            e = write_all(fd, zeros, mesoi_align64(c->stored_size) - c->stored_size);
-    }
-    if (e == 0 && fsync(fd) != 0) {
-        e = errno;
-        step = "fsync";
-    }
-    if (close(fd) != 0 && e == 0) {
-        e = errno;
-        step = "close";
-    }
-    if (e == 0 && rename(tmp, path) != 0) {
-        e = errno;
-        step = "rename";
-    }
-    if (e != 0) {
-        unlink(tmp);
-        r = mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_WRITE, UINT64_MAX, -1,
-                             "cannot write '%s' (%s of '%s'): %s", path, step, tmp, strerror(e));
-        goto done;
-    }
-    /* Make the rename durable; best effort (some file systems refuse). */
-    int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-        (void)fsync(dfd);
-        close(dfd);
-    }
-done:
-    mesoi_file_free(&w->alloc, tmp);
-    mesoi_file_free(&w->alloc, dir);
-    mesoi_file_free(&w->alloc, head);
+    meso_output out;
+    meso_result r = meso_output_open(path, &w->alloc, &out, err);
+    if (r == MESO_OK)
+        r = meso_writer_write_output(w, &out, err);
+    if (r == MESO_OK)
+        r = meso_output_commit(&out, err);
+    meso_output_abort(&out);
     return r;
 }

@@ -299,10 +299,55 @@ MESO_API meso_result meso_writer_add(meso_writer* w, const meso_chunk_desc* desc
                                      meso_error* err);
 /* Serialise into dst. With dst == NULL only *needed is set. */
 MESO_API meso_result meso_writer_finish(meso_writer* w, void* dst, size_t dst_size, size_t* needed);
-/* Serialise to `path` atomically: a temporary file in the same directory,
- * fsync, then rename over the target. On failure the target is untouched and
- * no temporary file is left. */
+/* Serialise to `path` atomically (meso_output_open, meso_writer_write_output,
+ * meso_output_commit): a temporary file beside the destination, fsync, then
+ * rename over it. A symbolic link is written through to its final target; a
+ * destination that is not a regular file is refused (see meso_output_check).
+ * On failure the destination is untouched and no temporary file is left. */
 MESO_API meso_result meso_writer_write_file(meso_writer* w, const char* path, meso_error* err);
+
+/* >>atomic output (FORMAT.md §10) -----------------------------------------
+ * One file written atomically, in three steps, so that a program can publish
+ * several files together and clean up on a signal: meso_output_open creates
+ * the temporary file and returns its path (a program registers `temp` with
+ * its own signal handler; this library installs none), the program writes,
+ * then meso_output_commit publishes it or meso_output_abort removes it. */
+
+typedef struct meso_output {
+    char* path;  /* read-only: the destination, `path` or a symbolic link's final target */
+    char* temp;  /* read-only: ".NAME.tmp.XXXXXX" in the destination's directory; NULL when closed */
+    int fd;      /* read-only: open for writing on `temp`, -1 when closed */
+    uint32_t mode; /* permissions of the file being replaced (kept), 0 for a new file */
+    meso_allocator allocator;
+} meso_output;
+
+/* May `path` be replaced by an atomic write? Yes when it does not exist (and
+ * its directory does), when it is a regular file, or when it is a symbolic
+ * link whose final target is a regular file. A dangling or looping symbolic
+ * link, a directory, a character or block device, a FIFO, a socket or any
+ * other non-regular file is refused: MESO_ERR_IO with issue
+ * MESO_ISSUE_IO_DESTINATION and a message naming the path and what it is.
+ * Never opens `path`, so a FIFO cannot block. */
+MESO_API meso_result meso_output_check(const char* path, meso_error* err);
+/* Check `path` as meso_output_check does, then create the temporary file in
+ * the destination's directory (exclusive create; a replaced file's
+ * permissions are kept, a new file gets 0666 minus the umask). `allocator`
+ * may be NULL. On failure *out is closed (temp NULL, fd -1). */
+MESO_API meso_result meso_output_open(const char* path, const meso_allocator* allocator, meso_output* out,
+                                      meso_error* err);
+/* Append bytes to the temporary file. A program may also write `temp` by
+ * name (e.g. a PNG library) as long as it closes its own handle first. */
+MESO_API meso_result meso_output_write(meso_output* out, const void* data, size_t size, meso_error* err);
+/* Serialise a writer into an open output. */
+MESO_API meso_result meso_writer_write_output(meso_writer* w, meso_output* out, meso_error* err);
+/* fsync and close the temporary file, check the destination again, rename
+ * the temporary file over it and fsync the directory (best effort). On
+ * failure the temporary file is removed and the destination untouched.
+ * Either way *out is closed afterwards. */
+MESO_API meso_result meso_output_commit(meso_output* out, meso_error* err);
+/* Close and remove the temporary file; the destination is untouched. Does
+ * nothing on a closed output. */
+MESO_API void meso_output_abort(meso_output* out);
 
 /* >>chunk contents -------------------------------------------------------- */
 
@@ -398,6 +443,7 @@ MESO_API meso_result meso_writer_write_file(meso_writer* w, const char* path, me
 #define MESO_ISSUE_API_NO_VIEW 5008u
 #define MESO_ISSUE_API_TOO_LARGE 5009u
 #define MESO_ISSUE_API_WRITER_LIMIT 5010u
+#define MESO_ISSUE_IO_DESTINATION 5011u /* an output path that must not be replaced */
 
 /* MESH attribute bits (mesh header field `attributes`). */
 #define MESO_MESH_ATTR_POSITIONS 0x1u /* f32x3 per vertex; always present */

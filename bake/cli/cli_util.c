@@ -248,31 +248,58 @@ meso_result write_meso(const char* out, const cJSON* meta, const cJSON* report, 
         r = meso_writer_add(w, &chunks[i].desc, chunks[i].data, chunks[i].size, err);
     if (r == MESO_OK)
         r = meso_writer_finish(w, NULL, 0, file_size);
+    meso_output* o = NULL;
     if (r == MESO_OK)
-        r = meso_writer_write_file(w, out, err);
+        r = cli_output_stage(out, &o, err);
+    if (r == MESO_OK)
+        r = meso_writer_write_output(w, o, err);
+    if (r != MESO_OK)
+        cli_outputs_discard();
     meso_writer_destroy(w);
     cJSON_free(meta_s);
     cJSON_free(rep_s);
     return r;
 }
 
-int write_report_file(const char* path, cJSON* report, size_t file_size, double seconds)
+int publish_outputs(const char* report_path, cJSON* report, size_t file_size, double seconds)
 {
-    cJSON_AddNumberToObject(report, "bytes", (double)file_size);
-    cJSON_AddNumberToObject(report, "seconds_total", seconds);
-    char* s = cJSON_Print(report);
-    int code = MESO_EXIT_OK;
-    FILE* f = fopen(path, "w");
-    if (!s || !f || fputs(s, f) < 0 || fputc('\n', f) == EOF) {
-        err_msg("%s: cannot write report: %s", path, strerror(errno));
-        code = MESO_EXIT_IO;
+    meso_error err = {0};
+    meso_result r = MESO_OK;
+    if (report_path) {
+        cJSON_AddNumberToObject(report, "bytes", (double)file_size);
+        cJSON_AddNumberToObject(report, "seconds_total", seconds);
+        char* s = cJSON_Print(report);
+        size_t n = s ? strlen(s) : 0;
+        meso_output* o = NULL;
+        r = s ? cli_output_stage(report_path, &o, &err) : MESO_ERR_OUT_OF_MEMORY;
+        if (r == MESO_OK)
+            s[n] = '\n'; /* the terminator becomes the final newline */
+        if (r == MESO_OK)
+            r = meso_output_write(o, s, n + 1, &err);
+        cJSON_free(s);
     }
-    if (f && fclose(f) != 0 && code == MESO_EXIT_OK) {
-        err_msg("%s: cannot write report: %s", path, strerror(errno));
-        code = MESO_EXIT_IO;
-    }
-    cJSON_free(s);
-    return code;
+    if (r == MESO_OK)
+        r = cli_outputs_publish(&err);
+    if (r == MESO_OK)
+        return MESO_EXIT_OK;
+    cli_outputs_discard();
+    if (err.message[0])
+        err_print(&err);
+    else
+        err_msg("%s: cannot write report: out of memory", report_path);
+    return meso_exit_for(r);
+}
+
+int check_outputs(const char* out, const char* report)
+{
+    meso_error err = {0};
+    meso_result r = meso_output_check(out, &err);
+    if (r == MESO_OK && report)
+        r = meso_output_check(report, &err);
+    if (r == MESO_OK)
+        return MESO_EXIT_OK;
+    err_print(&err);
+    return meso_exit_for(r);
 }
 
 int parse_double(const char* s, double* out)
@@ -302,10 +329,12 @@ int finish_bake(meso_result r, const meso_error* err, const char* out, const cha
 {
     const double t_end = now_seconds();
     if (r != MESO_OK) {
+        cli_outputs_discard();
         err_print(err);
         return meso_exit_for(r);
     }
-    if (verbose)
+    const int code = publish_outputs(report, rep, file_size, t_end - t0);
+    if (verbose && code == MESO_EXIT_OK)
         fprintf(stderr, "mesobake: wrote %s: %zu bytes (%.0f ms total)\n", out, file_size, 1e3 * (t_end - t0));
-    return report ? write_report_file(report, rep, file_size, t_end - t0) : MESO_EXIT_OK;
+    return code;
 }

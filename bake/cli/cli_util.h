@@ -6,6 +6,7 @@
 #include <stdint.h>
 
 #include "cli_common.h"
+#include "cli_output.h"
 #include "meso_bake.h"
 
 #if defined(__GNUC__)
@@ -46,14 +47,21 @@ typedef struct bake_chunk {
     size_t size;
 } bake_chunk;
 
-/* Write META, RPRT, the one-object OBJT and `chunks` to `out` atomically
- * (deterministic: the JSON holds no timings). *file_size gets the size. */
+/* Write META, RPRT, the one-object OBJT and `chunks` into a staged output
+ * for `out` (cli_output.h; deterministic: the JSON holds no timings).
+ * *file_size gets the size. Nothing is published until publish_outputs. */
 meso_result write_meso(const char* out, const cJSON* meta, const cJSON* report, const meso_object_record* object,
                        const bake_chunk* chunks, int count, size_t* file_size, meso_error* err);
 
-/* --report FILE: the report plus "bytes" and "seconds_total" (not stored in
- * the .meso file, so bakes stay byte-identical). Returns an exit code. */
-int write_report_file(const char* path, cJSON* report, size_t file_size, double seconds);
+/* Stage the --report file (when `report_path` is not NULL: the report plus
+ * "bytes" and "seconds_total", not stored in the .meso file so bakes stay
+ * byte-identical), then publish every staged output; on any failure nothing
+ * is published. Returns an exit code. */
+int publish_outputs(const char* report_path, cJSON* report, size_t file_size, double seconds);
+
+/* Refuse, before any work, an -o or --report that cannot be replaced
+ * (meso_output_check). `report` may be NULL. Returns an exit code. */
+int check_outputs(const char* out, const char* report);
 
 /* The end of a bake command: under -v the "wrote OUT" line, then the error
  * (r != MESO_OK) or the --report file (report != NULL). Returns the exit code. */

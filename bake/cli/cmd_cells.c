@@ -27,7 +27,8 @@ static const char* const usage_cells =
     "\n"
     "Input / output:\n"
     "  -i, --input FILE        mesh: .obj .off .ply .stl .om .drc\n"
-    "  -o, --output FILE       .meso file to write (atomically)\n"
+    "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
+    "                          through, a device, FIFO or directory refused)\n"
     "Grid (a cube of tiles around the mesh, one voxel of padding):\n"
     "      --tiles N           tiles along the longest axis (default 8; N x R <= 16384)\n"
     "      --cell-size S       or: the edge of one tile in mesh units (the tile count follows)\n"
@@ -103,7 +104,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
         return usage_error("cells needs -i MESH and -o OUT.meso");
     if (a->tiles && a->cell_size > 0)
         return usage_error("option --tiles can not be used together with --cell-size");
-    return 0;
+    return check_outputs(a->out, a->report);
 }
 
 /* "NAME[:A[:B]]": copies NAME, returns how many of A, B were given (-1: bad). */

@@ -35,7 +35,8 @@ static const char* const usage_frusta =
     "                          a mesh    .obj .off .ply .stl .om: closed, one component;\n"
     "                                    skeleton by mean-curvature flow (CGAL), radii\n"
     "                                    fitted to the mesh, simplified to --tolerance\n"
-    "  -o, --output FILE       .meso file to write (atomically)\n"
+    "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
+    "                          through, a device, FIFO or directory refused)\n"
     "Shape:\n"
     "      --tolerance T       mesh input: largest distance of the frusta from the mesh\n"
     "                          after simplification (default: 1% of the bounding-box diagonal)\n"
@@ -117,7 +118,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         return usage_error("frusta needs -i INPUT and -o OUT.meso");
     if (a->relief_depth > 0 && !a->relief)
         return usage_error("--relief-depth needs --relief");
-    return 0;
+    return check_outputs(a->out, a->report);
 }
 
 static int is_mesh_path(const char* p)

@@ -15,7 +15,8 @@ static const char* const usage_mesh =
     "\n"
     "Input / output:\n"
     "  -i, --input FILE        mesh: .obj .off .ply .stl .om (OpenMesh) or .drc (Draco)\n"
-    "  -o, --output FILE       .meso file to write\n"
+    "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
+    "                          through, a device, FIFO or directory refused)\n"
     "      --name NAME         object name (default: the input's base name, 31 bytes max)\n"
     "Compression:\n"
     "      --draco             store the mesh Draco-compressed (quantised)\n"
@@ -78,6 +79,9 @@ int cmd_mesh(int argc, char** argv)
         fputs(usage_mesh, stderr);
         return MESO_EXIT_USAGE;
     }
+    const int checked = check_outputs(out, report);
+    if (checked != MESO_EXIT_OK)
+        return checked;
     const double t0 = now_seconds();
     meso_error err = {0};
     meso_mesh m;
@@ -144,10 +148,10 @@ int cmd_mesh(int argc, char** argv)
         return meso_exit_for(r);
     }
     const double t_end = now_seconds();
-    if (verbose)
+    const int code = publish_outputs(report, rep, file_size, t_end - t0);
+    if (verbose && code == MESO_EXIT_OK)
         fprintf(stderr, "mesobake: wrote %s: %zu bytes, mesh %s (%.0f ms total)\n", out, file_size,
                 use_draco ? "draco" : "raw", 1e3 * (t_end - t0));
-    const int code = report ? write_report_file(report, rep, file_size, t_end - t0) : MESO_EXIT_OK;
     cJSON_Delete(rep);
     return code;
 }

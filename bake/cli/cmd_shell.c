@@ -218,7 +218,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
     }
     if (!a->texture && (a->dist_res[0] || a->dist_type || a->tiling[0] != 1.0 || a->tiling[1] != 1.0))
         return usage_error("%s", "--tiling, --dist-res and --dist-type need --texture");
-    return 0;
+    return check_outputs(a->out, a->report);
 }
 
 /* A one-line progress bar on a terminal (-v): redrawn in place with \r. */

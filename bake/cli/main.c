@@ -36,7 +36,10 @@ static const char* const usage_full =
     "\n"
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
     "            4 internal error, 5 not supported in this build.\n"
-    "Outputs are written atomically: a failed bake never leaves a partial file.\n";
+    "Outputs (-o, --report) are written atomically and together: a failed or\n"
+    "interrupted bake (SIGINT, SIGTERM, SIGHUP) publishes nothing and leaves no\n"
+    "temporary file. An output that is a symbolic link is written through to its\n"
+    "target; a dangling link, directory, device, FIFO or socket is refused (exit 2).\n";
 
 int main(int argc, char** argv)
 {
@@ -44,6 +47,7 @@ int main(int argc, char** argv)
         fputs(usage_short, stderr);
         return MESO_EXIT_USAGE;
     }
+    cli_signals_install();
     const char* cmd = argv[1];
     if (!strcmp(cmd, "-h") || !strcmp(cmd, "--help")) {
         fputs(usage_full, stdout);

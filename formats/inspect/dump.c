@@ -17,7 +17,8 @@ static const char* const usage_dump =
     "CHUNK is a TOC index (e.g. 3, as listed by 'mesoinspect info') or\n"
     "TYPE[:OBJECT[:LOD]] (e.g. MESH, MESH:1, TX2D:1:2); it must match one chunk.\n"
     "\n"
-    "  -o, --output FILE   where to write ('-' for standard output)\n"
+    "  -o, --output FILE   where to write ('-' for standard output); atomically, a\n"
+    "                      symbolic link written through, a device, FIFO or directory refused\n"
     "      --stored        the bytes as stored in the file (default: decoded, i.e.\n"
     "                      a Draco MESH is decoded to the raw MESH layout)\n"
     "  -h, --help          this help\n"
@@ -89,23 +90,14 @@ static int write_out(const char* out, const uint8_t* data, size_t size)
         }
         return mi_finish_stdout(MESO_EXIT_OK);
     }
-    FILE* fp = fopen(out, "wb");
-    if (!fp) {
-        mi_error("%s: cannot create: %s", out, strerror(errno));
-        return MESO_EXIT_IO;
-    }
-    int ok = (size == 0 || fwrite(data, 1, size, fp) == size);
-    int e = errno;
-    if (fclose(fp) != 0 && ok) {
-        ok = 0;
-        e = errno;
-    }
-    if (!ok) {
-        mi_error("%s: cannot write: %s", out, strerror(e));
-        remove(out); /* leave no partial file */
-        return MESO_EXIT_IO;
-    }
-    return MESO_EXIT_OK;
+    meso_output* o = NULL;
+    int code = mi_stage_output(out, &o);
+    if (code != MESO_EXIT_OK)
+        return code;
+    meso_error err;
+    memset(&err, 0, sizeof(err));
+    meso_result r = meso_output_write(o, data, size, &err);
+    return r == MESO_OK ? mi_publish_outputs() : mi_output_failed(&err, r);
 }
 
 static int chunk_read_error(const char* path, const meso_error* err, meso_result r)
@@ -150,6 +142,9 @@ int mesoinspect_dump(int argc, char** argv)
     chunk_spec spec;
     if (!parse_spec(spec_s, &spec))
         return mi_usage_error("bad chunk '%s': expected a TOC index or TYPE[:OBJECT[:LOD]], e.g. MESH:1:0", spec_s);
+    const int checked = strcmp(out, "-") ? mi_check_output(out) : MESO_EXIT_OK;
+    if (checked != MESO_EXIT_OK)
+        return checked;
 
     meso_file* f;
     int code = mi_open_or_report(path, &f);

@@ -97,6 +97,16 @@ void mi_print_json(const cJSON* doc, mi_format fmt);
  * else `code`. */
 int mi_finish_stdout(int code);
 
+/* Output files (dump -o, preview -o) go through staged outputs
+ * (bake/cli/cli_output.h): refused unless a regular file or a symbolic link to
+ * one, written beside the destination, renamed into place when complete.
+ * Each of these prints the error and returns the exit code (0 on success);
+ * a failure discards every staged output. */
+int mi_check_output(const char* path);
+int mi_stage_output(const char* path, meso_output** out);
+int mi_publish_outputs(void);
+int mi_output_failed(const meso_error* e, meso_result r);
+
 /* A text table with columns sized to their widest cell. */
 typedef struct mi_table {
     int cols;

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli_output.h"
 #include "inspect.h"
 #include "mesh_chunk.h"
 #include "meso_layout.h"
@@ -59,6 +60,10 @@ static const char* const usage_full =
     "\n"
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
     "            4 internal error, 5 not supported in this build, 7 diff found a difference.\n"
+    "\n"
+    "Files written by dump -o and preview -o appear complete or not at all (also on\n"
+    "SIGINT, SIGTERM, SIGHUP). An output that is a symbolic link is written through\n"
+    "to its target; a dangling link, directory, device, FIFO or socket is refused (exit 2).\n"
     "\n"
     "Run 'mesoinspect <command> --help' for the options of one command.\n";
 
@@ -318,6 +323,7 @@ const char* mi_issue_name(uint32_t code)
         {5005, "IO_READ"},           {5006, "IO_MMAP"},
         {5007, "IO_WRITE"},          {5008, "API_NO_VIEW"},
         {5009, "API_TOO_LARGE"},     {5010, "API_WRITER_LIMIT"},
+        {5011, "IO_DESTINATION"},
     };
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); ++i)
         if (names[i].code == code)
@@ -374,6 +380,39 @@ cJSON* mi_mesh_stats_json(const mi_mesh_stats* s)
 }
 
 /* >>output ---------------------------------------------------------------- */
+
+int mi_output_failed(const meso_error* e, meso_result r)
+{
+    char line[400];
+    mi_format_issue(e, line, sizeof(line));
+    mi_error("%s", line);
+    cli_outputs_discard();
+    return meso_exit_for(r);
+}
+
+int mi_check_output(const char* path)
+{
+    meso_error err;
+    memset(&err, 0, sizeof(err));
+    meso_result r = meso_output_check(path, &err);
+    return r == MESO_OK ? MESO_EXIT_OK : mi_output_failed(&err, r);
+}
+
+int mi_stage_output(const char* path, meso_output** out)
+{
+    meso_error err;
+    memset(&err, 0, sizeof(err));
+    meso_result r = cli_output_stage(path, out, &err);
+    return r == MESO_OK ? MESO_EXIT_OK : mi_output_failed(&err, r);
+}
+
+int mi_publish_outputs(void)
+{
+    meso_error err;
+    memset(&err, 0, sizeof(err));
+    meso_result r = cli_outputs_publish(&err);
+    return r == MESO_OK ? MESO_EXIT_OK : mi_output_failed(&err, r);
+}
 
 void mi_print_json(const cJSON* doc, mi_format fmt)
 {
@@ -473,6 +512,7 @@ int main(int argc, char** argv)
         fputs(usage_short, stderr);
         return MESO_EXIT_USAGE;
     }
+    cli_signals_install();
     const char* cmd = argv[1];
     if (mi_is_help(cmd)) {
         fputs(usage_full, stdout);

@@ -20,6 +20,8 @@
 #include <string.h>
 
 #include "cli_common.h"
+#include "cli_output.h"
+#include "inspect.h"
 #include "mesh_chunk.h"
 #include "meso_file.h"
 #include "meso_rt.h"
@@ -28,14 +30,30 @@
 #include "frustum_reference.h"
 #include "shell_reference.h"
 
-int mesoinspect_preview(int argc, char** argv);
+/* The PNG goes to a staged output (cli_output.h) and is published whole. */
+static int write_png(const char* out, const uint8_t* img, int width, int height)
+{
+    meso_output* o = NULL;
+    int code = mi_stage_output(out, &o);
+    if (code != MESO_EXIT_OK)
+        return code;
+    char why[256];
+    /* Row 0 of the image is the bottom, as glReadPixels'. */
+    if (meso_png_write_rgba8(o->temp, img, width, height, 1, why, sizeof(why)) != 0) {
+        cli_outputs_discard();
+        mi_error("cannot write '%s': %s", out, why);
+        return MESO_EXIT_IO;
+    }
+    return mi_publish_outputs();
+}
 
 static const char* const usage_preview =
     "Usage: mesoinspect preview FILE -o OUT.png [options]\n"
     "\n"
     "Render every drawable object of FILE headlessly (EGL + libmeso) into a PNG.\n"
     "\n"
-    "  -o, --output FILE   PNG to write\n"
+    "  -o, --output FILE   PNG to write (atomically; a symbolic link is written through,\n"
+    "                      a device, FIFO or directory refused)\n"
     "      --size WxH      image size (default 512x512)\n"
     "      --object ID     draw only this object\n"
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
@@ -269,12 +287,8 @@ static int render_reference(const char* path, const char* out, int width, int he
         meso_ref_image_free(&ri);
     }
     box_filter(px, img, width, height);
-    char why[256];
     /* Row 0 of the reference image is the bottom, as glReadPixels'. */
-    if (meso_png_write_rgba8(out, img, width, height, 1, why, sizeof(why)) != 0) {
-        fprintf(stderr, "mesoinspect error: %s\n", why);
-        code = MESO_EXIT_IO;
-    }
+    code = write_png(out, img, width, height);
 done:
     for (int s = 0; s < nobj; ++s) {
         meso_ref_shell_free(&objs[s].shell);
@@ -435,11 +449,8 @@ static int render(const char* path, const char* out, int width, int height, uint
     }
     gl.ReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, px);
     box_filter(px, img, width, height);
-    if (meso_png_write_rgba8(out, img, width, height, 1, why, sizeof(why)) != 0) {
-        fprintf(stderr, "mesoinspect error: %s\n", why);
-        code = MESO_EXIT_IO;
+    if ((code = write_png(out, img, width, height)) != MESO_EXIT_OK)
         goto done;
-    }
     gl.DeleteRenderbuffers(2, rb);
     gl.DeleteFramebuffers(1, &fbo);
 done:
@@ -572,6 +583,9 @@ int mesoinspect_preview(int argc, char** argv)
         fputs(usage_preview, stderr);
         return MESO_EXIT_USAGE;
     }
+    const int checked = mi_check_output(out);
+    if (checked != MESO_EXIT_OK)
+        return checked;
     knobs.technique = technique;
     if (reference)
         return render_reference(file, out, width, height, (uint32_t)only, yaw, pitch,
