@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #ifndef MESO_TEST_DATA
 #error "MESO_TEST_DATA must be defined by the build (tests/data)"
@@ -20,6 +21,22 @@ static inline const char* test_data(const char* name)
     static char buf[4096];
     snprintf(buf, sizeof(buf), "%s/%s", MESO_TEST_DATA, name);
     return buf;
+}
+
+/* A fresh directory for the files a test generates (bakes, renders):
+ * /tmp/meso_NAME_XXXXXX into dir; test_temp_dir_remove deletes it and all
+ * inside. Aborts when either fails. */
+static inline void test_temp_dir(char* dir, size_t size, const char* name)
+{
+    snprintf(dir, size, "/tmp/meso_%s_XXXXXX", name);
+    assert(mkdtemp(dir) != NULL);
+}
+
+static inline void test_temp_dir_remove(const char* dir)
+{
+    char cmd[4200];
+    snprintf(cmd, sizeof(cmd), "rm -rf '%s'", dir);
+    assert(system(cmd) == 0);
 }
 
 /* xorshift64*: deterministic pseudo-random numbers for sampling tests. */

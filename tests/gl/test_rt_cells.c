@@ -526,8 +526,7 @@ int main(int argc, char** argv)
     ctx c;
     memset(&c, 0, sizeof(c));
     c.mesobake = argv[1];
-    snprintf(c.dir, sizeof(c.dir), "/tmp/meso_rt_cells_XXXXXX");
-    CHECK(mkdtemp(c.dir) != NULL);
+    test_temp_dir(c.dir, sizeof(c.dir), "rt_cells");
     CHECK(test_fbo_create(&c.fbo, W, H));
 #define TEST_L(t, n)                                  \
     {                                                 \
@@ -550,9 +549,7 @@ int main(int argc, char** argv)
     test_state_contract(&c);
     test_malformed(&c);
 
-    char cmd[128];
-    snprintf(cmd, sizeof(cmd), "rm -rf '%s'", c.dir);
-    CHECK(system(cmd) == 0);
+    test_temp_dir_remove(c.dir);
     free(c.rgba);
     free(c.depth);
     meso_rt_destroy(c.rt);

@@ -90,19 +90,6 @@ static metrics run_case(ctx* c, const char* name, const uint8_t* file, size_t si
     return run_case_knobs(c, name, file, size, cam, &(meso_rt_draw_desc){.technique = t}, stats_out);
 }
 
-/* The tolerances every accurate technique meets against its reference
- * (the issue's "within 1 pixel"): coverage mismatch and > 1 px hits at most
- * 0.5% of the pixels, mean hit (depth) error at most a quarter pixel, mean
- * colour error at most 1% (2% for the strongly bent curved case). Measured
- * margins are about 1.3-20x (see the log). */
-static void check_close_colour(const char* what, metrics m, double colour_tol)
-{
-    CHECK_MSG(m.coverage_mismatch <= 0.005 && m.off_pixel <= 0.005 && m.hit_err_px <= 0.25 &&
-                  m.colour_mae <= colour_tol,
-              "%s vs reference: coverage %.4f, off > 1 px %.4f, hit error %.3f px, colour %.4f", what,
-              m.coverage_mismatch, m.off_pixel, m.hit_err_px, m.colour_mae);
-}
-
 static void check_close(const char* what, metrics m)
 {
     check_close_colour(what, m, 0.01);
