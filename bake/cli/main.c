@@ -34,8 +34,7 @@ static const char* const usage_full =
     "  frusta   skin a skeleton (SWC, text, or one extracted from a mesh) with conical frusta\n"
     "  cells    fill a mesh with tiled cells: tile map, membership, normal and colour maps\n"
     "\n"
-    "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
-    "            4 internal error, 5 not supported in this build.\n"
+    MESOBAKE_HELP_EXIT_CODES
     "Outputs are written atomically: a failed bake never leaves a partial file.\n";
 
 int main(int argc, char** argv)
