@@ -80,6 +80,27 @@ static int bbox_contains(const comp_info* c, const double p[3])
     return 1;
 }
 
+/* Nesting of component i (its probe point p) among the other judged
+ * components: how many enclose it, and the innermost (smallest volume) of
+ * them. `work` counts box tests and triangles visited. */
+static void nest(const meso_mesh* m, const uint32_t* order, comp_info* comps, uint32_t count, uint32_t i,
+                 const double p[3], uint64_t* work)
+{
+    comp_info* a = &comps[i];
+    *work += count;
+    for (uint32_t j = 0; j < count; ++j) {
+        const comp_info* b = &comps[j];
+        if (j == i || !b->closed || !bbox_contains(b, p))
+            continue;
+        *work += b->face_count;
+        if (fabs(winding(m, order + b->first_face, b->face_count, p)) > 0.5) {
+            a->depth++;
+            if (a->container < 0 || fabs(b->volume6) < fabs(comps[a->container].volume6))
+                a->container = (int)j;
+        }
+    }
+}
+
 /* Components, their volumes and bounds (*comps, malloc'd; NULL when out of
  * memory); `face_comp` gets each face's component, `order` the faces
  * grouped by component. Returns the count. */
@@ -212,7 +233,6 @@ meso_result meso_mesh_orient_outward(meso_mesh* m, meso_mesh_orientation* out, m
         r = mark_closed(m, face_comp, comps, count);
     if (r == MESO_OK && any_negative) {
         /* Judged: closed, with a volume clearly away from zero. */
-        int max_depth = 0;
         for (uint32_t i = 0; i < count; ++i) {
             comp_info* c = &comps[i];
             const double dx = c->hi[0] - c->lo[0], dy = c->hi[1] - c->lo[1], dz = c->hi[2] - c->lo[2];
@@ -220,36 +240,36 @@ meso_result meso_mesh_orient_outward(meso_mesh* m, meso_mesh_orientation* out, m
             c->closed = c->closed && fabs(c->volume6) > 1e-9 * d * d * d;
             out->closed_components += (uint32_t)c->closed;
         }
-        for (uint32_t i = 0; i < count; ++i) {
-            comp_info* a = &comps[i];
-            if (!a->closed)
-                continue;
-            const double p[3] = {m->positions[3 * (size_t)a->probe], m->positions[3 * (size_t)a->probe + 1],
-                                 m->positions[3 * (size_t)a->probe + 2]};
-            for (uint32_t j = 0; j < count; ++j) {
-                const comp_info* b = &comps[j];
-                if (j == i || !b->closed || !bbox_contains(b, p))
-                    continue;
-                if (fabs(winding(m, order + b->first_face, b->face_count, p)) > 0.5) {
-                    a->depth++;
-                    /* The innermost container: the smallest enclosing volume. */
-                    if (a->container < 0 || fabs(b->volume6) < fabs(comps[a->container].volume6))
-                        a->container = (int)j;
-                }
-            }
-            max_depth = a->depth > max_depth ? a->depth : max_depth;
-        }
-        for (int depth = 0; depth <= max_depth; ++depth)
-            for (uint32_t i = 0; i < count; ++i) {
+        /* Negative volumes first: flipped at even depth. Then the positive
+         * components inside a flipped one's box: flipped at odd depth when
+         * their direct container was. Nothing else needs its depth. */
+        uint64_t work = 0;
+        for (int pass = 0; pass < 2 && work <= MESO_ORIENT_MAX_WORK; ++pass)
+            for (uint32_t i = 0; i < count && work <= MESO_ORIENT_MAX_WORK; ++i) {
                 comp_info* c = &comps[i];
-                if (!c->closed || c->depth != depth)
+                if (!c->closed || (pass == 0) != (c->volume6 < 0))
                     continue;
-                c->flip = depth % 2 == 0 ? c->volume6 < 0
-                                         : c->volume6 > 0 && c->container >= 0 && comps[c->container].flip;
-                if (c->flip) {
-                    out->reoriented_components++;
-                    out->reoriented_faces += c->face_count;
-                }
+                const double p[3] = {m->positions[3 * (size_t)c->probe], m->positions[3 * (size_t)c->probe + 1],
+                                     m->positions[3 * (size_t)c->probe + 2]};
+                int near_flipped = 0;
+                for (uint32_t j = 0; pass == 1 && j < count && !near_flipped; ++j)
+                    near_flipped = comps[j].flip && bbox_contains(&comps[j], p);
+                work += pass == 1 ? count : 0;
+                if (pass == 1 && !near_flipped)
+                    continue;
+                nest(m, order, comps, count, i, p, &work);
+                c->flip = pass == 0 ? c->depth % 2 == 0
+                                    : c->depth % 2 == 1 && c->container >= 0 && comps[c->container].flip;
+            }
+        if (work > MESO_ORIENT_MAX_WORK) {
+            out->unchecked = 1; /* too many nested components to judge in bounded time: leave the mesh as it is */
+            for (uint32_t i = 0; i < count; ++i)
+                comps[i].flip = 0;
+        }
+        for (uint32_t i = 0; i < count; ++i)
+            if (comps[i].flip) {
+                out->reoriented_components++;
+                out->reoriented_faces += comps[i].face_count;
             }
     }
     if (r == MESO_OK && out->reoriented_components) {

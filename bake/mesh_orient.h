@@ -19,7 +19,8 @@
  *     component directly enclosing it was flipped (the whole hollow solid was
  *     inside-out); a cavity alone is never "corrected" into an overlapping
  *     second solid.
- * A mesh whose closed components all have positive volume is never touched.
+ * A mesh whose closed components all have positive volume is never touched,
+ * and only the components that can flip get a nesting depth.
  * Open or inconsistently oriented components have no volume sign and are
  * left alone (the topology checks judge them), as are closed components
  * with (near) zero volume.
@@ -38,7 +39,14 @@ typedef struct meso_mesh_orientation {
                                        when some component has a negative volume; else 0) */
     uint32_t reoriented_components; /* flipped by meso_mesh_orient_outward */
     uint32_t reoriented_faces;      /* faces in them */
+    int unchecked;                  /* 1: too many nested closed components to judge within
+                                       MESO_ORIENT_MAX_WORK; nothing was flipped */
 } meso_mesh_orientation;
+
+/* Bound on the nesting tests (box tests plus triangles visited by winding
+ * numbers, ~ a second): a mesh of many inverted components inside large
+ * ones is left as it is (unchecked = 1) rather than judged for minutes. */
+#define MESO_ORIENT_MAX_WORK 400000000ull
 
 /* Flip every inside-out closed component of `m` (rules above): its faces'
  * winding (indices 1 and 2 swapped, `corner_uvs` with them) and its

@@ -168,12 +168,18 @@ static meso_result orient_mesh(const char* path, meso_mesh* m, meso_error* err)
                         "flipped their %u faces\n",
                 path, last_orientation.reoriented_components, last_orientation.closed_components,
                 last_orientation.reoriented_faces);
+    if (r == MESO_OK && last_orientation.unchecked)
+        fprintf(stderr, "mesobake warning: %s: too many nested closed components to check their orientation; "
+                        "left as they are\n",
+                path);
     return r;
 }
 
 void report_mesh_warnings(cJSON* report)
 {
     const meso_mesh_orientation* o = &last_orientation;
+    if (o->unchecked)
+        cJSON_AddBoolToObject(report, "orientation_unchecked", 1);
     if (!o->reoriented_components)
         return; /* reports of well-formed inputs stay as they were */
     cJSON_AddNumberToObject(report, "reoriented_components", o->reoriented_components);
