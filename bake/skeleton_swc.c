@@ -116,7 +116,7 @@ static int64_t find_id(const id_entry* tab, uint32_t n, int64_t id)
 static meso_result out_of_range(meso_error* err, const char* what, uint32_t line, const char* field, double v)
 {
     return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_OUT_OF_RANGE,
-        "%s line %u: %s %g is beyond +-%g (not a skeleton in any sensible unit)", what, line, field, v,
+        "%s line %u: %s %.9g is beyond +-%g (not a skeleton in any sensible unit)", what, line, field, v,
         MESO_SKEL_MAX_COORD);
 }
 
@@ -470,10 +470,12 @@ meso_result meso_skeleton_require_drawable(const meso_skeleton* s, meso_error* e
             return MESO_OK;
     }
     const uint32_t last = s->nodes[s->node_count - 1].line;
+    if (!any_segment && s->node_count == 1)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_SEGMENT,
+            "skeleton: one node (line %u) and no segment: nothing to skin", last);
     if (!any_segment)
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_SEGMENT,
-            "skeleton: %u node%s (lines 1-%u) and no segment between two of them: nothing to skin", s->node_count,
-            s->node_count == 1 ? "" : "s", last);
+            "skeleton: %u nodes (lines 1-%u), every one a root: no segment, nothing to skin", s->node_count, last);
     if (!any_radius)
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_RADIUS,
             "skeleton: every radius is 0 (%u nodes, lines 1-%u): the skin would have no surface", s->node_count, last);

@@ -127,7 +127,7 @@ for cmd in mesh shell cells; do
 done
 row 3 "(E3100|E3252).*(no vertices|no triangles)" "frusta: empty .obj" "$bake" frusta -i "$tmp/empty.obj" -o "$tmp/out.meso"
 row 3 "E3140" "frusta: -i /dev/null (an empty text skeleton)" "$bake" frusta -i /dev/null -o "$tmp/out.meso"
-row 3 "E3301.*no segment" "frusta: one-node SWC" "$bake" frusta -i "$tmp/one_node.swc" -o "$tmp/out.meso"
+row 3 "E3301.*one node.*no segment" "frusta: one-node SWC" "$bake" frusta -i "$tmp/one_node.swc" -o "$tmp/out.meso"
 row 3 "E3301.*no segment" "frusta: one-node text skeleton" "$bake" frusta -i "$tmp/one_node.skel" -o "$tmp/out.meso"
 row 3 "E3300.*line 1.*1e\+300" "frusta: SWC coordinate 1e300" "$bake" frusta -i "$tmp/huge.swc" -o "$tmp/out.meso"
 row 3 "E3300.*line 2" "frusta: text coordinate -1e300" "$bake" frusta -i "$tmp/huge.skel" -o "$tmp/out.meso"
