@@ -146,7 +146,7 @@ static meso_result build_colours(const meso_tile_map* m, const char* spec, uint8
             char* end = NULL;
             errno = 0;
             unsigned long long v = strtoull(spec + 5, &end, 10);
-            if (!end || end == spec + 5 || *end || errno)
+            if (!end || end == spec + 5 || *end || errno || spec[5] < '0' || spec[5] > '9') /* no sign */
                 return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_CELLS_ISSUE_COLOUR_SPEC,
                                       "colour '%s': hash:SEED expects a non-negative integer seed", spec);
             seed = v;
@@ -174,7 +174,7 @@ static meso_result build_colours(const meso_tile_map* m, const char* spec, uint8
                               "colour '%s': expected hash[:SEED] or FILE.raw:R", spec);
     char* end = NULL;
     unsigned long r = strtoul(colon + 1, &end, 10);
-    if (!end || end == colon + 1 || *end || r != R)
+    if (!end || end == colon + 1 || *end || colon[1] < '0' || colon[1] > '9' || r != R)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_CELLS_ISSUE_COLOUR_SPEC,
                               "colour '%s': the raw file's resolution must equal the tile-map resolution %u", spec, R);
     char path[4096];

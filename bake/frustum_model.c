@@ -458,7 +458,7 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         s->end_kind[0] = s->end_kind[1] = MESO_FRUSTUM_END_TIP;
     }
     if (m.segment_count == 0) {
-        r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 3149u, "frusta: the skeleton has no segment of non-zero length");
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3149u, "frusta: the skeleton has no segment of non-zero length");
         goto done;
     }
     /* Incidence lists per representative node (counting sort). */

@@ -167,9 +167,10 @@ typedef struct meso_frustum_model {
     meso_frustum_stats stats;
 } meso_frustum_model;
 
-/* Builds the model of a skeleton. `opt` may be NULL (defaults). Fails
- * (MESO_ERR_INVALID_ARG) only on NULL arguments or a skeleton with no
- * segment of non-zero length (issue 3149), MESO_ERR_OUT_OF_MEMORY. */
+/* Builds the model of a skeleton. `opt` may be NULL (defaults). Fails only
+ * on NULL arguments (MESO_ERR_INVALID_ARG), a skeleton with no segment of
+ * non-zero length (MESO_ERR_CORRUPT, issue 3149: an input that cannot be
+ * drawn), MESO_ERR_OUT_OF_MEMORY. */
 meso_result meso_frustum_model_build(const meso_skeleton* s, const meso_frustum_options* opt, meso_frustum_model* out,
     meso_error* err);
 

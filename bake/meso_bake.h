@@ -62,7 +62,12 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  * Skeletons from meshes (bake/skeleton_from_mesh.h): 3170..3179, listed there.
  * Voxelization and membership maps (bake/voxelize.h, bake/membership.h):
  *   3180..3189, listed there.
- * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there. */
+ * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there.
+ * Input meshes, whole-file and orientation: 3250..3299 —
+ *   3250 (a warning) inside-out closed components were flipped (mesh_orient.h)
+ *   3251 not a mesh file mesobake can read (unknown extension, e.g. /dev/null)
+ *   3252 no triangles (an empty file, or not a mesh)
+ * Skeletons, continued (bake/skeleton_swc.h): 3300..3349, listed there. */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */

@@ -113,6 +113,13 @@ static int64_t find_id(const id_entry* tab, uint32_t n, int64_t id)
     return (lo < n && tab[lo].id == id) ? (int64_t)tab[lo].index : -1;
 }
 
+static meso_result out_of_range(meso_error* err, const char* what, uint32_t line, const char* field, double v)
+{
+    return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_OUT_OF_RANGE,
+        "%s line %u: %s %.9g is beyond +-%g (not a skeleton in any sensible unit)", what, line, field, v,
+        MESO_SKEL_MAX_COORD);
+}
+
 /* Parses one line's tokens into a node, or fails naming the line. */
 static meso_result parse_node(const token* tok, uint32_t ntok, uint32_t line, meso_skeleton_node* nd, int64_t* parent_id,
     meso_error* err)
@@ -145,6 +152,8 @@ static meso_result parse_node(const token* tok, uint32_t ntok, uint32_t line, me
             return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NON_FINITE,
                 "swc line %u: %s '%s' is not finite", line, field_names[2 + k], show);
         }
+        if (fabs(dv[k]) > MESO_SKEL_MAX_COORD)
+            return out_of_range(err, "swc", line, field_names[2 + k], dv[k]);
     }
     if (dv[3] < 0.0)
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NEGATIVE_RADIUS,
@@ -187,6 +196,8 @@ static meso_result parse_text_node(const token* tok, uint32_t ntok, uint32_t lin
             return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NON_FINITE,
                 "skeleton line %u: %s '%s' is not finite", line, names[k], show);
         }
+        if (fabs(dv[k]) > MESO_SKEL_MAX_COORD)
+            return out_of_range(err, "skeleton", line, names[k], dv[k]);
     }
     if (dv[3] < 0.0)
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NEGATIVE_RADIUS,
@@ -440,6 +451,37 @@ meso_result meso_skeleton_load(const char* path, meso_skeleton_format fmt, meso_
         r = meso_skeleton_parse(buf, len, fmt, out, err);
     free(buf);
     return r;
+}
+
+meso_result meso_skeleton_require_drawable(const meso_skeleton* s, meso_error* err)
+{
+    if (!s || s->node_count == 0)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_EMPTY, "skeleton: no node");
+    int any_segment = 0, any_radius = 0;
+    for (uint32_t i = 0; i < s->node_count; ++i) {
+        const meso_skeleton_node* n = &s->nodes[i];
+        any_radius |= n->radius > 0;
+        if (n->parent < 0)
+            continue;
+        any_segment = 1;
+        const meso_skeleton_node* p = &s->nodes[n->parent];
+        const int long_enough = n->pos[0] != p->pos[0] || n->pos[1] != p->pos[1] || n->pos[2] != p->pos[2];
+        if (long_enough && (n->radius > 0 || p->radius > 0))
+            return MESO_OK;
+    }
+    const uint32_t last = s->nodes[s->node_count - 1].line;
+    if (!any_segment && s->node_count == 1)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_SEGMENT,
+            "skeleton: one node (line %u) and no segment: nothing to skin", last);
+    if (!any_segment)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_SEGMENT,
+            "skeleton: %u nodes (lines 1-%u), every one a root: no segment, nothing to skin", s->node_count, last);
+    if (!any_radius)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_RADIUS,
+            "skeleton: every radius is 0 (%u nodes, lines 1-%u): the skin would have no surface", s->node_count, last);
+    return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_NO_SURFACE,
+        "skeleton: no segment has both a length and a radius (%u nodes, lines 1-%u): the skin would have no surface",
+        s->node_count, last);
 }
 
 void meso_skeleton_free(meso_skeleton* s)

@@ -24,7 +24,17 @@
  *   3146 parent id that no line defines (or a negative parent other than -1)
  *   3147 the parent links form a cycle (a node is its own ancestor)
  *   3148 the file can't be read, or is too large (more than 2^26 nodes)
- * (The 3140s are the skeleton inputs' range; 3149 is kept for them.)
+ *   3300 a coordinate or radius beyond +-MESO_SKEL_MAX_COORD (1e15): finite
+ *        but absurd (squares and float storage would overflow)
+ * (The 3140s are the skeleton inputs' range; 3149 is kept for them, and
+ * 3300..3349 continue it.)
+ *
+ * What can be parsed is not always something to draw: a skin of frusta
+ * needs a segment with a length and a radius. meso_skeleton_require_drawable
+ * refuses the rest, also with MESO_ERR_CORRUPT:
+ *   3301 no segment: every tree is a single node (e.g. a one-node file)
+ *   3302 every radius is zero: the skin has no surface
+ *   3303 no segment has both a length and a radius at one of its ends
  *
  * The text skeleton format (mesobake's `.skel`, for hand-written and
  * generated skeletons) is one node per line, four or five fields:
@@ -61,6 +71,13 @@ extern "C" {
 #define MESO_SKEL_ISSUE_UNKNOWN_PARENT 3146u
 #define MESO_SKEL_ISSUE_CYCLE 3147u
 #define MESO_SKEL_ISSUE_UNREADABLE 3148u
+#define MESO_SKEL_ISSUE_OUT_OF_RANGE 3300u
+#define MESO_SKEL_ISSUE_NO_SEGMENT 3301u
+#define MESO_SKEL_ISSUE_NO_RADIUS 3302u
+#define MESO_SKEL_ISSUE_NO_SURFACE 3303u
+
+/* Largest magnitude of a coordinate or radius accepted. */
+#define MESO_SKEL_MAX_COORD 1e15
 
 /* Largest node count accepted (keeps every index and size in 32 bits). */
 #define MESO_SKEL_MAX_NODES (1u << 26)
@@ -103,6 +120,10 @@ meso_result meso_skeleton_load_swc(const char* path, meso_skeleton* out, meso_er
 meso_result meso_skeleton_parse(const char* text, size_t len, meso_skeleton_format fmt, meso_skeleton* out,
     meso_error* err);
 meso_result meso_skeleton_load(const char* path, meso_skeleton_format fmt, meso_skeleton* out, meso_error* err);
+
+/* MESO_OK when `s` has something to draw (codes 3301..3303 above); the
+ * message names a line of the input. */
+meso_result meso_skeleton_require_drawable(const meso_skeleton* s, meso_error* err);
 
 /* Frees the arrays and zeroes the struct. NULL is allowed. */
 void meso_skeleton_free(meso_skeleton* s);

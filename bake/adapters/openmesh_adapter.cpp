@@ -185,7 +185,7 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
             return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "%s: mesh has no %s", path,
                                   mesh.n_vertices() == 0 ? "vertices" : "faces");
         if (mesh.n_vertices() > UINT32_MAX / 4 || mesh.n_faces() > UINT32_MAX / 4)
-            return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0, "%s: too many elements", path);
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, 3100, "%s: too many elements", path); /* exit 3, not 5 */
 
         mesh.request_face_normals();
         mesh.request_vertex_normals();

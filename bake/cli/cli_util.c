@@ -12,6 +12,7 @@
 #include <cjson/cJSON.h>
 
 #include "adapters.h"
+#include "mesh_orient.h"
 #include "meso_layout.h"
 
 int verbose;
@@ -33,6 +34,12 @@ void err_print(const meso_error* err)
         fprintf(stderr, "mesobake error E%u: %s\n", (unsigned)err->code, msg);
     else
         fprintf(stderr, "mesobake error: %s\n", msg);
+}
+
+void print_help(const char* usage)
+{
+    fputs(usage, stdout);
+    fputs("\n" MESOBAKE_HELP_EXIT_CODES, stdout);
 }
 
 int usage_error(const char* fmt, ...)
@@ -148,6 +155,40 @@ static meso_result check_mesh(const char* path, const meso_mesh* m, meso_error* 
     return MESO_OK;
 }
 
+/* What load_mesh changed in the mesh it loaded, for the bake report. */
+static meso_mesh_orientation last_orientation;
+
+/* Inside-out closed components are flipped with a warning (mesh_orient.h
+ * says which, and why per component). */
+static meso_result orient_mesh(const char* path, meso_mesh* m, meso_error* err)
+{
+    meso_result r = meso_mesh_orient_outward(m, &last_orientation, err);
+    if (r == MESO_OK && last_orientation.reoriented_components)
+        fprintf(stderr, "mesobake warning: %s: %u of %u closed components were inside-out (negative volume); "
+                        "flipped their %u faces\n",
+                path, last_orientation.reoriented_components, last_orientation.closed_components,
+                last_orientation.reoriented_faces);
+    if (r == MESO_OK && last_orientation.unchecked)
+        fprintf(stderr, "mesobake warning: %s: too many nested closed components to check their orientation; "
+                        "left as they are\n",
+                path);
+    return r;
+}
+
+void report_mesh_warnings(cJSON* report)
+{
+    const meso_mesh_orientation* o = &last_orientation;
+    if (o->unchecked)
+        cJSON_AddBoolToObject(report, "orientation_unchecked", 1);
+    if (!o->reoriented_components)
+        return; /* reports of well-formed inputs stay as they were */
+    cJSON_AddNumberToObject(report, "reoriented_components", o->reoriented_components);
+    char msg[160];
+    snprintf(msg, sizeof msg, "E%u: %u inside-out closed components (%u faces) were flipped",
+             MESO_ORIENT_ISSUE_REORIENTED, o->reoriented_components, o->reoriented_faces);
+    cJSON_AddItemToArray(cJSON_AddArrayToObject(report, "warnings"), cJSON_CreateString(msg));
+}
+
 static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_error* err);
 
 meso_result load_mesh(const char* path, meso_mesh* m, meso_error* err)
@@ -188,8 +229,10 @@ static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_erro
         uint32_t dropped = 0;
         if (!(has_suffix(path, ".obj") || has_suffix(path, ".off") || has_suffix(path, ".ply") ||
               has_suffix(path, ".stl") || has_suffix(path, ".om")))
-            return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0,
-                                  "%s: unknown mesh extension (expected .obj .off .ply .stl .om .drc)", path);
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, 3251,
+                                  "%s: not a mesh file we can read: unknown extension (expected .obj .off .ply "
+                                  ".stl .om .drc)",
+                                  path);
         r = meso_openmesh_read(path, m, &dropped, err);
         if (r != MESO_OK)
             return r == MESO_ERR_IO ? meso_bake_fail(err, MESO_ERR_CORRUPT, 3100, "%s", err->message) : r;
@@ -204,7 +247,13 @@ static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_erro
         return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0, "%s: mesh import needs the OpenMesh adapter", path);
 #endif
     }
-    if ((r = check_mesh(path, m, err)) != MESO_OK)
+    if (r == MESO_OK && m->triangle_count == 0) /* empty, or not a mesh at all */
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3252, "%s: no triangles (an empty file, or not a mesh)", path);
+    if (r == MESO_OK)
+        r = check_mesh(path, m, err);
+    if (r == MESO_OK)
+        r = orient_mesh(path, m, err);
+    if (r != MESO_OK)
         meso_mesh_free(m);
     return r;
 }

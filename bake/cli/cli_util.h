@@ -17,6 +17,14 @@
 
 extern int verbose; /* -v: one line per stage on stderr */
 
+/* `usage` on stdout, then the exit codes (README "Exit codes"): every
+ * command's --help. */
+void print_help(const char* usage);
+#define MESOBAKE_HELP_EXIT_CODES                                                                                 \
+    "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input file\n"                        \
+    "            (mesh, skeleton, texture, volume), 4 internal error, 5 not supported in\n"                      \
+    "            this build (a missing adapter).\n"
+
 /* "mesobake error: ..." on stderr. */
 void err_msg(const char* fmt, ...) CLI_PRINTF(1, 2);
 /* "mesobake error E<code>: message" (the code is FORMAT.md's issue number
@@ -32,6 +40,12 @@ meso_result slurp(const char* path, uint8_t** data, size_t* size, meso_error* er
 /* Load a mesh by extension (OpenMesh or Draco) and check it: finite
  * coordinates, indices in range, nothing the reader had to drop. */
 meso_result load_mesh(const char* path, meso_mesh* m, meso_error* err);
+
+typedef struct cJSON cJSON;
+/* Adds what load_mesh changed in the input (inside-out components it
+ * flipped: "reoriented_components" and a "warnings" array) to a bake
+ * report; adds nothing when it changed nothing. */
+void report_mesh_warnings(cJSON* report);
 
 /* >>output ---------------------------------------------------------------- */
 

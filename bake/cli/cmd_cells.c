@@ -7,6 +7,7 @@
  * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h).
  */
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -64,7 +65,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
-            fputs(usage_cells, stdout);
+            print_help(usage_cells);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
@@ -148,8 +149,9 @@ static meso_result make_tile_map(const cells_args* a, uint32_t* res, meso_tile_m
         }
         if (given == 2 && voronoi) {
             char* end = NULL;
+            errno = 0;
             p.rng_seed = strtoull(pb, &end, 10);
-            if (!end || end == pb || *end)
+            if (!end || end == pb || *end || errno || *pb < '0' || *pb > '9') /* no sign, no wrap-around */
                 return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PARAMS,
                                       "--tile-map '%s': RNG must be a non-negative integer", a->tile_map);
         } else if (given == 2 && (!parse_double(pb, &p.radius) || p.radius > 1)) {
@@ -277,8 +279,9 @@ int cmd_cells(int argc, char** argv)
         fprintf(stderr, "mesobake: tile map %s, R = %u: %u cells, %u split cells (%u wrapping cells) (%.0f ms)\n",
                 a.tile_map, R, sc.cell_count, sc.split_count, sc.wrapping_cells, 1e3 * (now_seconds() - t));
     if (r == MESO_OK && sc.split_count == 0)
-        r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_CONTENT,
-                           "--tile-map '%s': the tile map has no cells (every voxel is 0)", a.tile_map);
+        r = meso_bake_fail(&err, tm.kind == MESO_TILE_MAP_RAW ? MESO_ERR_CORRUPT : MESO_ERR_INVALID_ARG,
+                           MESO_TILEMAP_ISSUE_CONTENT, "--tile-map '%s': the tile map has no cells (every voxel is 0)",
+                           a.tile_map); /* a file of zeros is an invalid input (3), a generated one a bad option (1) */
     if (r == MESO_OK)
         r = make_grid(&a, &m, R, &g, &err);
     if (r == MESO_OK)
@@ -319,6 +322,7 @@ int cmd_cells(int argc, char** argv)
         r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
 
         rep = cJSON_CreateObject();
+        report_mesh_warnings(rep);
         cJSON_AddNumberToObject(rep, "tiles", (double)mb.tile_count);
         cJSON_AddNumberToObject(rep, "split_cells", sc.split_count);
         cJSON_AddNumberToObject(rep, "cells_inside", (double)mb.cells_inside);

@@ -61,7 +61,10 @@ static const char* const usage_frusta =
     "\n"
     "fit_error: mesh input: two-sided distance between the frusta (as round-ended cones)\n"
     "and the mesh (max), mean distance of the mesh's vertices to them;\n"
-    "skeleton input: how far the fit moved the surface from the input radii.\n";
+    "skeleton input: how far the fit moved the surface from the input radii.\n"
+    "\n"
+    "Skeletons with nothing to draw are invalid input (exit 3): a single node, every\n"
+    "radius 0, only zero-length segments; so are coordinates or radii beyond 1e15.\n";
 
 typedef struct frusta_args {
     const char *in, *out, *report, *relief;
@@ -76,7 +79,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
-            fputs(usage_frusta, stdout);
+            print_help(usage_frusta);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
@@ -237,6 +240,8 @@ int cmd_frusta(int argc, char** argv)
     size_t file_size = 0;
 
     meso_result r = load_skeleton(&a, &sk, &src, &err);
+    if (r == MESO_OK && strcmp(src.kind, "mesh") != 0) /* nothing to draw is an invalid input, not a bake */
+        r = meso_skeleton_require_drawable(&sk, &err);
     if (r == MESO_OK && verbose)
         fprintf(stderr, "mesobake: %s: %u nodes, %u roots (%s input)\n", a.in, sk.node_count, sk.root_count, src.kind);
     if (r == MESO_OK && a.relief) {
@@ -303,6 +308,7 @@ int cmd_frusta(int argc, char** argv)
         const int mesh_in = !strcmp(src.kind, "mesh");
         rep = report_json(&m, &src, mesh_in ? src.fit_error_max : m.stats.radius_change_max,
             mesh_in ? src.fit_error_mean : m.stats.radius_change_mean, &obj);
+        report_mesh_warnings(rep);
         bake_chunk chunks[5];
         int count = 0;
         chunks[count++] = (bake_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj.node_count, 1, 1}},

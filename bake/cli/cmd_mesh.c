@@ -20,23 +20,39 @@ static const char* const usage_mesh =
     "      --name NAME         object name (default: the input's base name, 31 bytes max)\n"
     "Compression:\n"
     "      --draco             store the mesh Draco-compressed (quantised)\n"
-    "      --draco-bits P,N,T  quantisation bits for positions, normals, uvs (default 14,10,12)\n"
+    "      --draco-bits P,N,T  quantisation bits for positions (1..30), normals (2..30: Draco's\n"
+    "                          octahedral normals need two) and uvs (1..30); default 14,10,12\n"
     "Reporting:\n"
     "      --report FILE       write the bake report as JSON (also stored in the file)\n"
     "  -v, --verbose           one line per stage on stderr\n"
-    "  -h, --help              this help\n";
+    "  -h, --help              this help\n"
+    "\n"
+    "A closed mesh (or closed part) whose faces point inward is turned outward with a\n"
+    "warning, which the report records (\"reoriented_components\", \"warnings\").\n";
 
+/* "P,N,T": integers in 1..30, N in 2..30 (Draco refuses one-bit normals),
+ * overflow-checked by parse_int. */
 static int parse_bits(const char* s, meso_draco_options* o)
 {
-    int p, n, t;
-    char tail;
-    if (sscanf(s, "%d,%d,%d%c", &p, &n, &t, &tail) != 3)
+    long bits[3];
+    char buf[64];
+    if (strlen(s) >= sizeof buf)
         return 0;
-    if (p < 1 || p > 30 || n < 1 || n > 30 || t < 1 || t > 30)
-        return 0;
-    o->position_bits = p;
-    o->normal_bits = n;
-    o->uv_bits = t;
+    memcpy(buf, s, strlen(s) + 1);
+    char* field = buf;
+    for (int k = 0; k < 3; ++k) {
+        char* comma = strchr(field, ',');
+        if ((k < 2) != (comma != NULL))
+            return 0;
+        if (comma)
+            *comma = 0;
+        if (!parse_int(field, k == 1 ? 2 : 1, 30, &bits[k]))
+            return 0;
+        field = comma + 1;
+    }
+    o->position_bits = (int)bits[0];
+    o->normal_bits = (int)bits[1];
+    o->uv_bits = (int)bits[2];
     return 1;
 }
 
@@ -49,7 +65,7 @@ int cmd_mesh(int argc, char** argv)
         const char* a = argv[i];
         const int has_val = i + 1 < argc;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            fputs(usage_mesh, stdout);
+            print_help(usage_mesh);
             return MESO_EXIT_OK;
         } else if ((!strcmp(a, "-i") || !strcmp(a, "--input")) && has_val) {
             in = argv[++i];
@@ -63,7 +79,7 @@ int cmd_mesh(int argc, char** argv)
             use_draco = 1;
         } else if (!strcmp(a, "--draco-bits") && has_val) {
             if (!parse_bits(argv[++i], &dopt))
-                return usage_error("--draco-bits expects P,N,T with each in 1..30, got '%s'", argv[i]);
+                return usage_error("--draco-bits expects P,N,T in 1..30 (N in 2..30), got '%s'", argv[i]);
             use_draco = 1;
         } else if (!strcmp(a, "-v") || !strcmp(a, "--verbose")) {
             verbose = 1;
@@ -123,6 +139,7 @@ int cmd_mesh(int argc, char** argv)
     r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), in, &err);
 
     cJSON* rep = cJSON_CreateObject();
+    report_mesh_warnings(rep);
     cJSON_AddNumberToObject(rep, "vertices", m.vertex_count);
     cJSON_AddNumberToObject(rep, "triangles", m.triangle_count);
     cJSON_AddNumberToObject(rep, "bbox_diagonal", diag);

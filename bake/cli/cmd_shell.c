@@ -147,7 +147,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
-            fputs(usage_shell, stdout);
+            print_help(usage_shell);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
@@ -196,7 +196,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         } else if (!strcmp(s, "--theta")) {
             char* end = NULL;
             a->theta = strtod(v, &end);
-            if (!end || *end || !(a->theta >= 0 && a->theta <= 1.5))
+            if (!end || end == v || *end || !(a->theta >= 0 && a->theta <= 1.5))
                 return usage_error("--theta expects an angle in [0, 1.5], got '%s'", v);
         } else if (!strcmp(s, "--angle-tol")) {
             if (!parse_double(v, &a->angle_tol_deg) || a->angle_tol_deg > 90)
@@ -664,6 +664,7 @@ int cmd_shell(int argc, char** argv)
         for (uint32_t v = 0; v < nv; ++v)
             lp_count += lp_mask[v];
         rep = report_json(&val, &hs_total, lp_count, shortened_total, nv, &ts, &fs);
+        report_mesh_warnings(rep);
         if (a.texture)
             texture_json(rep, &a, &tx, 1);
         const int height = tx.fn.kind == MESO_TEXFN_HEIGHT;

@@ -34,8 +34,7 @@ static const char* const usage_full =
     "  frusta   skin a skeleton (SWC, text, or one extracted from a mesh) with conical frusta\n"
     "  cells    fill a mesh with tiled cells: tile map, membership, normal and colour maps\n"
     "\n"
-    "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
-    "            4 internal error, 5 not supported in this build.\n"
+    MESOBAKE_HELP_EXIT_CODES
     "Outputs (-o, --report) are written atomically and together: a failed or\n"
     "interrupted bake (SIGINT, SIGTERM, SIGHUP) publishes nothing and leaves no\n"
     "temporary file. An output that is a symbolic link is written through to its\n"

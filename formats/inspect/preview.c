@@ -14,6 +14,7 @@
  * so the two PNGs compare pixel by pixel. Several objects are composited by
  * depth (the nearest sample wins, as GL_LESS).
  */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -187,7 +188,8 @@ static int render_reference(const char* path, const char* out, int width, int he
     meso_result r = meso_file_open_path(path, &(meso_open_desc){.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0},
                                         &f, &err);
     if (r != MESO_OK) {
-        fprintf(stderr, "mesoinspect error: %s\n", err.message);
+        fprintf(stderr, "mesoinspect error: %s%s%s\n", strstr(err.message, path) ? "" : path,
+                strstr(err.message, path) ? "" : ": ", err.message);
         free(objs);
         return meso_exit_for(r);
     }
@@ -370,7 +372,8 @@ static int render(const char* path, const char* out, int width, int height, uint
     meso_result r = meso_file_open_path(path, &(meso_open_desc){.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0},
                                         &f, &err);
     if (r != MESO_OK) {
-        fprintf(stderr, "mesoinspect error: %s\n", err.message);
+        fprintf(stderr, "mesoinspect error: %s%s%s\n", strstr(err.message, path) ? "" : path,
+                strstr(err.message, path) ? "" : ": ", err.message);
         code = meso_exit_for(r);
         goto done;
     }
@@ -463,6 +466,26 @@ done:
 }
 #endif
 
+/* "WxH", each 1..8192; digits only, so nothing can overflow or wrap
+ * (sscanf's %d would, and 4294967297 became 1). */
+static int parse_size(const char* s, int* w, int* h)
+{
+    long v[2];
+    for (int k = 0; k < 2; ++k) {
+        char* end = NULL;
+        if (*s < '0' || *s > '9')
+            return 0;
+        errno = 0;
+        v[k] = strtol(s, &end, 10);
+        if (errno || v[k] < 1 || v[k] > 8192 || *end != (k == 0 ? 'x' : '\0'))
+            return 0;
+        s = end + 1;
+    }
+    *w = (int)v[0];
+    *h = (int)v[1];
+    return 1;
+}
+
 int mesoinspect_preview(int argc, char** argv)
 {
     const char *file = NULL, *out = NULL;
@@ -483,15 +506,15 @@ int mesoinspect_preview(int argc, char** argv)
         } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && val) {
             out = argv[++i];
         } else if (!strcmp(a, "--size") && val) {
-            if (sscanf(argv[++i], "%dx%d", &width, &height) != 2 || width < 1 || height < 1 || width > 8192 ||
-                height > 8192) {
+            if (!parse_size(argv[++i], &width, &height)) {
                 fprintf(stderr, "mesoinspect error: --size expects WxH (1..8192), got '%s'\n"
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--object") && val) {
+            errno = 0;
             only = strtoul(argv[++i], &end, 10);
-            if (!end || *end || only == 0 || only > UINT32_MAX) {
+            if (!end || *end || errno || argv[i][0] < '0' || argv[i][0] > '9' || only == 0 || only > UINT32_MAX) {
                 fprintf(stderr, "mesoinspect error: --object expects an object id >= 1, got '%s'\n"
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;

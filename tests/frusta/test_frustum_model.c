@@ -613,7 +613,7 @@ static void test_data_files(void)
     }
     /* no segment of non-zero length */
     s = skel_from("1 1 0 0 0 1 -1\n2 1 0 0 0 1 1\n");
-    assert(meso_frustum_model_build(&s, NULL, &m, &err) == MESO_ERR_INVALID_ARG && err.code == 3149u);
+    assert(meso_frustum_model_build(&s, NULL, &m, &err) == MESO_ERR_CORRUPT && err.code == 3149u);
     meso_skeleton_free(&s);
 }
 

@@ -88,6 +88,9 @@ static void test_errors(void)
         {"1 1 0 0 0 1 -1\n2 1 0 0 1 1 -2\n", MESO_SKEL_ISSUE_UNKNOWN_PARENT, "line 2", "-2"},
         {"1 1 0 0 0 1 -1\n2 1 0 0 1 1 3\n3 1 0 0 2 1 4\n4 1 0 0 3 1 2\n", MESO_SKEL_ISSUE_CYCLE, "line", "cycle"},
         {"5 1 0 0 0 1 5\n", MESO_SKEL_ISSUE_CYCLE, "line 1", "own ancestor"},
+        {"1 1 1e300 0 0 1 -1\n2 1 0 1 0 1 1\n", MESO_SKEL_ISSUE_OUT_OF_RANGE, "line 1", "x 1e+300"},
+        {"1 1 0 0 0 1 -1\n2 1 0 -1.000001e15 0 1 1\n", MESO_SKEL_ISSUE_OUT_OF_RANGE, "line 2", "y"},
+        {"1 1 0 0 0 2e15 -1\n", MESO_SKEL_ISSUE_OUT_OF_RANGE, "line 1", "radius"},
         {"1 1 0 0 0 1 -1\n2 1 0 0 0\0 1 1\n", MESO_SKEL_ISSUE_NOT_A_NUMBER, "line 2", NULL},
     };
     for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
@@ -111,6 +114,43 @@ static void test_errors(void)
     assert(meso_skeleton_parse_swc("x", 1, NULL, &err) == MESO_ERR_INVALID_ARG);
 }
 
+/* Parsed but nothing to draw (meso_skeleton_require_drawable), in both
+ * formats; the largest accepted magnitude (1e15) parses and draws. */
+static void test_drawable(void)
+{
+    static const struct {
+        meso_skeleton_format fmt;
+        const char* text;
+        uint32_t code; /* 0: drawable */
+    } cases[] = {
+        {MESO_SKELETON_SWC, "1 1 0 0 0 1 -1\n", MESO_SKEL_ISSUE_NO_SEGMENT},
+        {MESO_SKELETON_SWC, "1 1 0 0 0 1 -1\n2 1 5 0 0 1 -1\n", MESO_SKEL_ISSUE_NO_SEGMENT},
+        {MESO_SKELETON_SWC, "1 1 0 0 0 0 -1\n2 3 0 1 0 0 1\n3 3 0 2 0 0 2\n", MESO_SKEL_ISSUE_NO_RADIUS},
+        {MESO_SKELETON_SWC, "1 1 0 0 0 1 -1\n2 3 0 0 0 1 1\n", MESO_SKEL_ISSUE_NO_SURFACE},
+        {MESO_SKELETON_SWC, "1 1 0 0 0 1 -1\n2 3 0 0 0 1 1\n3 3 0 0 1 0 -1\n4 3 0 0 2 0 3\n",
+            MESO_SKEL_ISSUE_NO_SURFACE},
+        {MESO_SKELETON_SWC, "1 1 0 0 0 0 -1\n2 3 0 1 0 0.5 1\n", 0},
+        {MESO_SKELETON_SWC, "1 1 -1e15 0 0 1e15 -1\n2 3 1e15 0 0 1 1\n", 0},
+        {MESO_SKELETON_TEXT, "0 0 0 1\n", MESO_SKEL_ISSUE_NO_SEGMENT},
+        {MESO_SKELETON_TEXT, "0 0 0 0\n0 1 0 0\n", MESO_SKEL_ISSUE_NO_RADIUS},
+        {MESO_SKELETON_TEXT, "0 0 0 1\n0 0 0 1\n", MESO_SKEL_ISSUE_NO_SURFACE},
+        {MESO_SKELETON_TEXT, "0 0 0 1\n0 1 0 0\n", 0},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
+        meso_skeleton s;
+        meso_error err;
+        memset(&err, 0, sizeof(err));
+        assert(meso_skeleton_parse(cases[i].text, strlen(cases[i].text), cases[i].fmt, &s, &err) == MESO_OK);
+        memset(&err, 0, sizeof(err));
+        const meso_result r = meso_skeleton_require_drawable(&s, &err);
+        fprintf(stderr, "    case %zu: E%u %s\n", i, err.code, err.message);
+        assert(r == (cases[i].code ? MESO_ERR_CORRUPT : MESO_OK));
+        assert(err.code == cases[i].code);
+        assert(!cases[i].code || strstr(err.message, "line"));
+        meso_skeleton_free(&s);
+    }
+}
+
 /* Every prefix of a valid file, and many single-byte mutations: either a
  * skeleton or a coded error, never a crash (ASan/UBSan build). */
 static void test_mutations(void)
@@ -131,7 +171,8 @@ static void test_mutations(void)
             ++ok;
         else {
             ++bad;
-            assert(err.code >= MESO_SKEL_ISSUE_EMPTY && err.code <= MESO_SKEL_ISSUE_UNREADABLE);
+            assert((err.code >= MESO_SKEL_ISSUE_EMPTY && err.code <= MESO_SKEL_ISSUE_UNREADABLE) ||
+                   err.code == MESO_SKEL_ISSUE_OUT_OF_RANGE);
         }
         meso_skeleton_free(&s);
     }
@@ -155,7 +196,8 @@ static void test_mutations(void)
                 assert(s.nodes[i].radius >= 0 && isfinite(s.nodes[i].pos[0]));
         } else {
             ++bad;
-            assert(err.code >= MESO_SKEL_ISSUE_EMPTY && err.code <= MESO_SKEL_ISSUE_UNREADABLE);
+            assert((err.code >= MESO_SKEL_ISSUE_EMPTY && err.code <= MESO_SKEL_ISSUE_UNREADABLE) ||
+                   err.code == MESO_SKEL_ISSUE_OUT_OF_RANGE);
             assert(strstr(err.message, "swc"));
         }
         meso_skeleton_free(&s);
@@ -169,6 +211,7 @@ int main(void)
     TEST_RUN(test_valid);
     TEST_RUN(test_files);
     TEST_RUN(test_errors);
+    TEST_RUN(test_drawable);
     TEST_RUN(test_mutations);
     return 0;
 }
