@@ -146,6 +146,11 @@ meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint1
 meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t** tile, uint8_t** memb,
                                         meso_error* err);
 /* Type-specific element/encoding rules (full tier, and the writer). */
+/* The object tier of the full check (file_validate_objects.c): `rec`
+ * against its kind's chunks, counts and values; every issue goes to fn
+ * (NULL: stop at the first), including the chunk issues of chunks it reads.
+ * Returns the first issue's result. */
+meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso_issue_fn fn, void* user);
 meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso_error* err);
 /* Contents of a decoded structured chunk (META/RPRT JSON, OBJT, MESH, SKEL,
  * FRUS); OK for other types. `base` is the file offset for reports

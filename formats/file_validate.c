@@ -593,6 +593,27 @@ static meso_result check_mesh(const uint8_t* d, size_t n, int32_t chunk, uint64_
                                     "chunk %d (MESH): index %u is %u, vertex_count is %u", (int)chunk, i, v,
                                     l.vertex_count);
     }
+    /* Every vertex value finite (4312): a NaN position or normal would be
+     * drawn as garbage or poison a ray caster's bounds. */
+    const struct {
+        const char* name;
+        uint64_t off;
+        uint32_t stride;
+    } attr[3] = {{"position", l.positions_offset, MESO_MESH_POSITION_STRIDE},
+                 {"normal", l.normals_offset, MESO_MESH_NORMAL_STRIDE},
+                 {"uv", l.uvs_offset, MESO_MESH_UV_STRIDE}};
+    for (int a = 0; a < 3; a++) {
+        if (attr[a].off == 0)
+            continue;
+        const uint64_t floats = (uint64_t)l.vertex_count * (attr[a].stride / 4u);
+        for (uint64_t k = 0; k < floats; k++) {
+            uint64_t o = attr[a].off + 4u * k;
+            if (!isfinite(mesoi_ldf32(d + o)))
+                return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_VALUE, at(base, o), chunk,
+                                        "chunk %d (MESH): vertex %llu has a non-finite %s", (int)chunk,
+                                        (unsigned long long)(k / (attr[a].stride / 4u)), attr[a].name);
+        }
+    }
     return MESO_OK;
 }
 
@@ -1194,6 +1215,41 @@ meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t**
     return r;
 }
 
+/* Objects against their kinds (file_validate_objects.c). Only the object
+ * issues (6xxx) are new here: a chunk an object check reads again reports
+ * the issue of its own check, already listed. */
+static int object_issue(void* user, const meso_error* e)
+{
+    validate_state* s = (validate_state*)user;
+    if ((e->code < MESO_ISSUE_OBJ_CHUNKS || e->code >= 7000u) && e->result != MESO_ERR_OUT_OF_MEMORY)
+        return 0;
+    return report(s, e);
+}
+
+static void validate_objects(meso_file* f, validate_state* s)
+{
+    uint32_t count = 0;
+    meso_error e;
+    if (meso_file_objects(f, NULL, 0, &count, &e) != MESO_OK || count == 0) {
+        if (count == 0 && e.result == MESO_ERR_OUT_OF_MEMORY)
+            report(s, &e); /* other failures: a bad OBJT, reported with its chunk */
+        return;
+    }
+    meso_object_record* recs = (meso_object_record*)mesoi_file_alloc(&f->alloc, (size_t)count * sizeof *recs);
+    if (!recs) {
+        mesoi_file_error(&e, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1,
+                         "out of memory for %u object records", count);
+        report(s, &e);
+        return;
+    }
+    if (meso_file_objects(f, recs, count, &count, &e) != MESO_OK)
+        object_issue(s, &e);
+    else
+        for (uint32_t i = 0; i < count && !s->stop; i++)
+            mesoi_check_object(f, &recs[i], object_issue, s);
+    mesoi_file_free(&f->alloc, recs);
+}
+
 meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn, void* user)
 {
     if (f == NULL || (unsigned)level >= MESO_CHECK_COUNT)
@@ -1235,6 +1291,8 @@ meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn,
             e.code >= MESO_ISSUE_CELL_CHUNKS && e.code <= MESO_ISSUE_CELL_MEMB)
             report(&s, &e);
     }
+    if (!s.stop)
+        validate_objects(f, &s);
     mesoi_file_free(&f->alloc, buf);
     return s.first;
 }
