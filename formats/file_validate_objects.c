@@ -147,7 +147,7 @@ static int mesh_header(obj_check* c, int32_t i, meso_mesh_layout* l)
 static void shell_texture(obj_check* c)
 {
     const int32_t hi = finest(c, MESO_CHUNK_TX2D), vi = finest(c, MESO_CHUNK_TX3D), xi = finest(c, MESO_CHUNK_DIST);
-    const unsigned u8_u16 = (1u << MESO_DTYPE_U8) | (1u << MESO_DTYPE_U16);
+    const unsigned u8_u16 = MESOI_DT(U8) | MESOI_DT(U16);
     if (hi >= 0 && vi >= 0)
         ISSUE(c, MESO_ISSUE_SHELL_TEXTURE, vi, "shell %u has both a TX2D height field and a TX3D volume", c->id);
     const struct {
@@ -156,12 +156,12 @@ static void shell_texture(obj_check* c)
         const char* want;
     } t[3] = {{hi, u8_u16, "TX2D: U8 or U16 x 1"},
               {vi, u8_u16, "TX3D: U8 or U16 x 1"},
-              {xi, u8_u16 | (1u << MESO_DTYPE_F32), "DIST: U8, U16 or F32 x 1"}};
+              {xi, u8_u16 | MESOI_DT(F32), "DIST: U8, U16 or F32 x 1"}};
     for (int k = 0; k < 3 && !c->stop; k++) {
         if (t[k].i < 0 || !rules_ok(c, t[k].i))
             continue;
         const meso_chunk_info* q = &c->f->chunks[t[k].i];
-        if (q->dtype >= 16 || !((t[k].dtypes >> q->dtype) & 1u) || q->components != 1)
+        if (!mesoi_is_dtype(q, t[k].dtypes) || q->components != 1)
             ISSUE(c, MESO_ISSUE_SHELL_TEXTURE, t[k].i, "shell %u: chunk %d is dtype %u x %u; a shell's %s", c->id,
                   (int)t[k].i, q->dtype, q->components, t[k].want);
     }
