@@ -146,6 +146,25 @@ meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint1
 meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t** tile, uint8_t** memb,
                                         meso_error* err);
 /* Type-specific element/encoding rules (full tier, and the writer). */
+/* a * b without wrapping; returns 0 on overflow. */
+static inline int mesoi_mul_u64(uint64_t a, uint64_t b, uint64_t* out)
+{
+    if (a != 0 && b > UINT64_MAX / a)
+        return 0;
+    *out = a * b;
+    return 1;
+}
+/* Is the chunk's dtype in `mask` (bits MESOI_DT(U8) | ...)? */
+#define MESOI_DT(t) (1u << MESO_DTYPE_##t)
+static inline int mesoi_is_dtype(const meso_chunk_info* c, unsigned mask)
+{
+    return c->dtype < 16 && ((mask >> c->dtype) & 1u);
+}
+/* The object tier of the full check (file_validate_objects.c): `rec`
+ * against its kind's chunks, counts and values; every issue goes to fn
+ * (NULL: stop at the first), including the chunk issues of chunks it reads.
+ * Returns the first issue's result. */
+meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso_issue_fn fn, void* user);
 meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso_error* err);
 /* Contents of a decoded structured chunk (META/RPRT JSON, OBJT, MESH, SKEL,
  * FRUS); OK for other types. `base` is the file offset for reports

@@ -55,15 +55,6 @@ int mesoi_known_type(uint32_t type)
     }
 }
 
-/* a * b without wrapping; returns 0 on overflow. */
-static int mul_u64(uint64_t a, uint64_t b, uint64_t* out)
-{
-    if (a != 0 && b > UINT64_MAX / a)
-        return 0;
-    *out = a * b;
-    return 1;
-}
-
 meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint16_t minor, int32_t chunk, uint64_t eo,
                               meso_error* err)
 {
@@ -124,8 +115,8 @@ meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint1
                                 (unsigned long long)c->stored_size, MESO_DRACO_EXPANSION_SLACK);
     if (c->dtype != MESO_DTYPE_BYTES && c->dtype < MESO_DTYPE_COUNT) {
         uint64_t n = meso_dtype_size((meso_dtype)c->dtype);
-        int ok = mul_u64(n, c->components, &n) && mul_u64(n, c->dims[0], &n) && mul_u64(n, c->dims[1], &n) &&
-                 mul_u64(n, c->dims[2], &n);
+        int ok = mesoi_mul_u64(n, c->components, &n) && mesoi_mul_u64(n, c->dims[0], &n) && mesoi_mul_u64(n, c->dims[1], &n) &&
+                 mesoi_mul_u64(n, c->dims[2], &n);
         if (!ok || n != c->decoded_size)
             return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_TYPED_SIZE, eo + MESO_TOC_OFF_DECODED_SIZE,
                                     chunk,
@@ -147,9 +138,7 @@ static meso_result elem_error(const meso_chunk_info* c, int32_t chunk, meso_erro
                             c->dtype, c->components, c->dims[0], c->dims[1], c->dims[2], cc, want);
 }
 
-static int is_dtype(const meso_chunk_info* c, unsigned mask) { return c->dtype < 16 && ((mask >> c->dtype) & 1u); }
-
-#define DT(t) (1u << MESO_DTYPE_##t)
+#define DT(t) MESOI_DT(t)
 #define DT_TYPED (DT(U8) | DT(U16) | DT(U32) | DT(I8) | DT(I16) | DT(I32) | DT(F16) | DT(F32))
 
 meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso_error* err)
@@ -192,27 +181,27 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
         return MESO_OK;
     case MESO_CHUNK_TX2D:
     case MESO_CHUNK_RELF:
-        if (!is_dtype(c, DT_TYPED) || c->components > 4 || c->dims[2] != 1)
+        if (!mesoi_is_dtype(c, DT_TYPED) || c->components > 4 || c->dims[2] != 1)
             return elem_error(c, chunk, err, "a numeric dtype x 1..4, dims W x H x 1");
         return MESO_OK;
     case MESO_CHUNK_TX3D:
-        if (!is_dtype(c, DT_TYPED) || c->components > 4)
+        if (!mesoi_is_dtype(c, DT_TYPED) || c->components > 4)
             return elem_error(c, chunk, err, "a numeric dtype x 1..4");
         return MESO_OK;
     case MESO_CHUNK_DIST:
-        if (!is_dtype(c, DT(U8) | DT(U16) | DT(F16) | DT(F32)) || c->components != 1)
+        if (!mesoi_is_dtype(c, DT(U8) | DT(U16) | DT(F16) | DT(F32)) || c->components != 1)
             return elem_error(c, chunk, err, "U8, U16, F16 or F32 x 1");
         return MESO_OK;
     case MESO_CHUNK_TILE:
-        if (!is_dtype(c, DT(U16) | DT(U32)) || c->components != 1)
+        if (!mesoi_is_dtype(c, DT(U16) | DT(U32)) || c->components != 1)
             return elem_error(c, chunk, err, "U16 or U32 x 1");
         return MESO_OK;
     case MESO_CHUNK_SPLT:
-        if (!is_dtype(c, DT(U8) | DT(U16) | DT(U32)) || !flat)
+        if (!mesoi_is_dtype(c, DT(U8) | DT(U16) | DT(U32)) || !flat)
             return elem_error(c, chunk, err, "U8, U16 or U32 x faces, dims N x 1 x 1");
         return MESO_OK;
     case MESO_CHUNK_MEMB:
-        if (!is_dtype(c, DT(U8) | DT(U32)) || c->components != 1 || c->dims[2] != 1)
+        if (!mesoi_is_dtype(c, DT(U8) | DT(U32)) || c->components != 1 || c->dims[2] != 1)
             return elem_error(c, chunk, err, "U8 or U32 x 1, dims words x tiles x 1");
         return MESO_OK;
     case MESO_CHUNK_NRMM:
@@ -592,6 +581,27 @@ static meso_result check_mesh(const uint8_t* d, size_t n, int32_t chunk, uint64_
             return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_INDEX, at(base, o), chunk,
                                     "chunk %d (MESH): index %u is %u, vertex_count is %u", (int)chunk, i, v,
                                     l.vertex_count);
+    }
+    /* Every vertex value finite (4312): a NaN position or normal would be
+     * drawn as garbage or poison a ray caster's bounds. */
+    const struct {
+        const char* name;
+        uint64_t off;
+        uint32_t stride;
+    } attr[3] = {{"position", l.positions_offset, MESO_MESH_POSITION_STRIDE},
+                 {"normal", l.normals_offset, MESO_MESH_NORMAL_STRIDE},
+                 {"uv", l.uvs_offset, MESO_MESH_UV_STRIDE}};
+    for (int a = 0; a < 3; a++) {
+        if (attr[a].off == 0)
+            continue;
+        const uint64_t floats = (uint64_t)l.vertex_count * (attr[a].stride / 4u);
+        for (uint64_t k = 0; k < floats; k++) {
+            uint64_t o = attr[a].off + 4u * k;
+            if (!isfinite(mesoi_ldf32(d + o)))
+                return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_VALUE, at(base, o), chunk,
+                                        "chunk %d (MESH): vertex %llu has a non-finite %s", (int)chunk,
+                                        (unsigned long long)(k / (attr[a].stride / 4u)), attr[a].name);
+        }
     }
     return MESO_OK;
 }
@@ -1009,189 +1019,39 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
     mesoi_file_free(&f->alloc, owned);
 }
 
-/* >>cells objects (FORMAT.md §7.8) ---------------------------------------- */
-
-typedef struct cells_read {
-    meso_file* f;
-    uint32_t object;
-    meso_error* err;
-} cells_read;
-
-/* Find `type` of the object at lod 0 and check its element type and dims
- * against CELL (issue 4803); on success *index is the chunk. */
-static meso_result cells_find(const cells_read* c, uint32_t type, unsigned dtypes, uint16_t comps, uint64_t d0,
-                              uint64_t d1, uint64_t d2, int32_t* index)
+/* Objects against their kinds (file_validate_objects.c). Only the object
+ * issues (6xxx) are new here: a chunk an object check reads again reports
+ * the issue of its own check, already listed. */
+static int object_issue(void* user, const meso_error* e)
 {
-    char cc[5];
-    mesoi_fourcc_str(type, cc);
-    int32_t i = meso_file_find(c->f, type, c->object, 0);
-    if (i < 0)
-        return mesoi_file_error(c->err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_CHUNKS, UINT64_MAX, -1,
-                                "cells object %u: no %s chunk (lod 0)", c->object, cc);
-    const meso_chunk_info* k = &c->f->chunks[i];
-    if (!is_dtype(k, dtypes) || k->components != comps || k->dims[0] != d0 || k->dims[1] != d1 || k->dims[2] != d2)
-        return mesoi_file_error(c->err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_CHUNKS, UINT64_MAX, i,
-                                "cells object %u: chunk %d (%s) is dtype %u x %u, %ux%ux%u; CELL implies %u "
-                                "components, %llux%llux%llu",
-                                c->object, (int)i, cc, k->dtype, k->components, k->dims[0], k->dims[1], k->dims[2],
-                                comps, (unsigned long long)d0, (unsigned long long)d1, (unsigned long long)d2);
-    *index = i;
-    return MESO_OK;
+    validate_state* s = (validate_state*)user;
+    if ((e->code < MESO_ISSUE_OBJ_CHUNKS || e->code >= 7000u) && e->result != MESO_ERR_OUT_OF_MEMORY)
+        return 0;
+    return report(s, e);
 }
 
-/* Read a whole raw chunk into a fresh allocation. */
-static meso_result cells_load(const cells_read* c, int32_t i, uint8_t** out)
+static void validate_objects(meso_file* f, validate_state* s)
 {
-    uint64_t n = c->f->chunks[i].decoded_size;
-    *out = NULL;
-    if (n > SIZE_MAX)
-        return mesoi_file_error(c->err, MESO_ERR_UNSUPPORTED, MESO_ISSUE_API_TOO_LARGE, UINT64_MAX, i,
-                                "chunk %d: %llu bytes do not fit in memory", (int)i, (unsigned long long)n);
-    *out = (uint8_t*)mesoi_file_alloc(&c->f->alloc, (size_t)n);
-    if (!*out)
-        return mesoi_file_error(c->err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, i,
-                                "chunk %d: out of memory for %llu bytes", (int)i, (unsigned long long)n);
-    return meso_file_read_chunk(c->f, (uint32_t)i, *out, (size_t)n, c->err);
-}
-
-static uint32_t popcount32(uint32_t v)
-{
-    uint32_t n = 0;
-    for (; v; v &= v - 1)
-        n++;
-    return n;
-}
-
-/* MEMB: classes (no value 3, zero past T), rank, record count M, records
- * (no tag 3, zero past S). Returns a reason or NULL. */
-static const char* check_memb(const uint8_t* d, uint64_t tiles, uint64_t mixed, uint32_t splits, uint32_t words,
-                              uint64_t* where)
-{
-    const uint64_t cw = (tiles + 15) / 16;
-    uint64_t seen = 0;
-    for (uint64_t w = 0; w < cw; w++) {
-        uint32_t v = mesoi_ld32(d + 4 * w), hi = v & 0xAAAAAAAAu, lo = v & 0x55555555u;
-        *where = 4 * w;
-        if (hi & (lo << 1))
-            return "a tile class is 3";
-        uint64_t used = tiles - 16 * w < 16 ? tiles - 16 * w : 16;
-        if (used < 16 && (v >> (2 * used)) != 0)
-            return "class bits past the last tile are not zero";
-        *where = 4 * (cw + w);
-        if (mesoi_ld32(d + 4 * (cw + w)) != seen)
-            return "rank is not the number of MIXED tiles before the word";
-        seen += popcount32(hi);
+    uint32_t count = 0;
+    meso_error e;
+    if (meso_file_objects(f, NULL, 0, &count, &e) != MESO_OK || count == 0) {
+        if (count == 0 && e.result == MESO_ERR_OUT_OF_MEMORY)
+            report(s, &e); /* other failures: a bad OBJT, reported with its chunk */
+        return;
     }
-    *where = 0;
-    if (seen != mixed)
-        return "the classes hold a different number of MIXED tiles than CELL";
-    const uint64_t last = (uint64_t)splits - 16 * ((uint64_t)words - 1); /* split fields in the last word, 1..16 */
-    for (uint64_t r = 0; r < mixed; r++)
-        for (uint32_t w = 0; w < words; w++) {
-            uint64_t off = 4 * (2 * cw + r * words + w);
-            uint32_t v = mesoi_ld32(d + off);
-            *where = off;
-            if ((v & 0xAAAAAAAAu) & ((v & 0x55555555u) << 1))
-                return "a record holds tag 3";
-            if (w == words - 1 && last < 16 && (v >> (2 * last)) != 0)
-                return "record bits past the last split cell are not zero";
-        }
-    return NULL;
-}
-
-meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err)
-{
-    return mesoi_file_check_cells_keep(f, object, NULL, NULL, err);
-}
-
-meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t** tile_out, uint8_t** memb_out,
-                                        meso_error* err)
-{
-    if (f == NULL)
-        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
-                                "meso_file_check_cells: NULL file");
-    cells_read c = {f, object, err};
-    uint8_t cell[MESO_CELL_RECORD_SIZE];
-    uint8_t *tile = NULL, *splt = NULL, *memb = NULL;
-    int32_t ci = meso_file_find(f, MESO_CHUNK_CELL, object, 0), ti, si, mi, ni, oi;
-    if (ci < 0)
-        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_CHUNKS, UINT64_MAX, -1,
-                                "cells object %u: no CELL chunk", object);
-    if (f->chunks[ci].decoded_size != MESO_CELL_RECORD_SIZE)
-        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_SIZE, UINT64_MAX, ci,
-                                "chunk %d (CELL): size %llu, must be one 64-byte record", (int)ci,
-                                (unsigned long long)f->chunks[ci].decoded_size);
-    meso_result r = meso_file_read_chunk(f, (uint32_t)ci, cell, sizeof cell, err);
-    if (r != MESO_OK)
-        return r;
-    uint64_t tiles = 1, R = mesoi_ld32(cell + MESO_CELL_OFF_TILE_RES);
-    for (int a = 0; a < 3; a++)
-        tiles *= mesoi_ld32(cell + MESO_CELL_OFF_TILES + 4 * a);
-    const uint32_t S = mesoi_ld32(cell + MESO_CELL_OFF_SPLIT_COUNT), C = mesoi_ld32(cell + MESO_CELL_OFF_CELL_COUNT);
-    const uint64_t M = mesoi_ld64(cell + MESO_CELL_OFF_MIXED_TILES);
-    /* T <= 2^42 and M <= T (CELL's ranges), W < 2^28: M W may overflow, so
-     * a MEMB longer than a u32 dims[0] can hold is a mismatch by itself. */
-    const uint32_t W = (uint32_t)((2 * (uint64_t)S + 31) / 32);
-    uint64_t memb_words = UINT64_MAX, mw;
-    if (mul_u64(M, W, &mw) && mw <= UINT32_MAX)
-        memb_words = 2 * ((tiles + 15) / 16) + mw;
-    const unsigned tile_types = S <= 65535 ? DT(U16) : DT(U32);
-    if ((r = cells_find(&c, MESO_CHUNK_TILE, tile_types, 1, R, R, R, &ti)) != MESO_OK ||
-        (r = cells_find(&c, MESO_CHUNK_SPLT, DT(U32), MESO_SPLT_COMPONENTS, S, 1, 1, &si)) != MESO_OK ||
-        (r = cells_find(&c, MESO_CHUNK_MEMB, DT(U32), 1, memb_words, 1, 1, &mi)) != MESO_OK ||
-        (r = cells_find(&c, MESO_CHUNK_NRMM, DT(U16), 2, R, R, R, &ni)) != MESO_OK ||
-        (r = cells_find(&c, MESO_CHUNK_COLR, DT(U8), 4, R, R, R, &oi)) != MESO_OK)
-        return r;
-    (void)ni;
-    (void)oi;
-    if ((r = cells_load(&c, ti, &tile)) == MESO_OK) {
-        const uint64_t n = R * R * R;
-        for (uint64_t v = 0; v < n; v++) {
-            uint32_t s = S <= 65535 ? mesoi_ld16(tile + 2 * v) : mesoi_ld32(tile + 4 * v);
-            if (s > S) {
-                r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_TILE, UINT64_MAX, ti,
-                                     "chunk %d (TILE): voxel %llu holds split cell %u > split_count %u", (int)ti,
-                                     (unsigned long long)v, s, S);
-                break;
-            }
-        }
+    meso_object_record* recs = (meso_object_record*)mesoi_file_alloc(&f->alloc, (size_t)count * sizeof *recs);
+    if (!recs) {
+        mesoi_file_error(&e, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1,
+                         "out of memory for %u object records", count);
+        report(s, &e);
+        return;
     }
-    if (r == MESO_OK && (r = cells_load(&c, si, &splt)) == MESO_OK) {
-        uint32_t prev = 0;
-        for (uint32_t s = 0; s < S && r == MESO_OK; s++) {
-            const uint8_t* q = splt + 4 * MESO_SPLT_COMPONENTS * (size_t)s;
-            uint32_t cell_id = mesoi_ld32(q + 4 * MESO_SPLT_CELL), face = mesoi_ld32(q + 4 * MESO_SPLT_FACE_CODE);
-            uint32_t index = mesoi_ld32(q + 4 * MESO_SPLT_TILE_INDEX);
-            const char* why = cell_id != prev && cell_id != prev + 1 ? "cell ids do not run 1, 1.., 2.. without gaps"
-                              : face > 63                             ? "face code above 63"
-                              : index < 1 || index > 65535            ? "tile-map index outside 1..65535"
-                              : s == S - 1 && cell_id != C            ? "the last split cell's cell is not cell_count"
-                                                                      : NULL;
-            if (why)
-                r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_SPLT, UINT64_MAX, si,
-                                     "chunk %d (SPLT): split cell %u: %s", (int)si, s + 1, why);
-            prev = cell_id;
-        }
-    }
-    if (r == MESO_OK && (r = cells_load(&c, mi, &memb)) == MESO_OK) {
-        uint64_t where = 0;
-        const char* why = check_memb(memb, tiles, M, S, W, &where);
-        if (why)
-            r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_MEMB, UINT64_MAX, mi,
-                                 "chunk %d (MEMB): %s (byte %llu)", (int)mi, why, (unsigned long long)where);
-    }
-    if (r == MESO_OK && tile_out) {
-        *tile_out = tile;
-        tile = NULL;
-    }
-    if (r == MESO_OK && memb_out) {
-        *memb_out = memb;
-        memb = NULL;
-    }
-    mesoi_file_free(&f->alloc, tile);
-    mesoi_file_free(&f->alloc, splt);
-    mesoi_file_free(&f->alloc, memb);
-    return r;
+    if (meso_file_objects(f, recs, count, &count, &e) != MESO_OK)
+        object_issue(s, &e);
+    else
+        for (uint32_t i = 0; i < count && !s->stop; i++)
+            mesoi_check_object(f, &recs[i], object_issue, s);
+    mesoi_file_free(&f->alloc, recs);
 }
 
 meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn, void* user)
@@ -1235,6 +1095,8 @@ meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn,
             e.code >= MESO_ISSUE_CELL_CHUNKS && e.code <= MESO_ISSUE_CELL_MEMB)
             report(&s, &e);
     }
+    if (!s.stop)
+        validate_objects(f, &s);
     mesoi_file_free(&f->alloc, buf);
     return s.first;
 }

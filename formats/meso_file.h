@@ -274,6 +274,20 @@ MESO_API meso_result meso_file_validate(meso_file* f, meso_check level, meso_iss
  * are checked too). MESO_CHECK_FULL runs it for every CELL chunk. */
 MESO_API meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err);
 
+/* Check object `object` (an OBJT record) against what its kind is made of
+ * (FORMAT.md §7.2, issues 6001..6204): the chunks the kind requires, the
+ * counts that tie them together (SDIR and STHK per MESH vertex, one FSEG
+ * per FRUS, SKEL node references in range) and the values a renderer relies
+ * on (finite directors, thickness > 0, texture types, non-degenerate
+ * frusta). Reads the MESH header (64 bytes) and, for shells and frusta, the
+ * SDIR, STHK, DIST (F32), SKEL, FRUS, FSEG and BALL chunks with
+ * meso_file_read_chunk, so their CRCs and contents are checked too; a cells
+ * object's CELL rules are meso_file_check_cells'. Returns the first issue
+ * (MESO_ERR_CORRUPT), MESO_ERR_NOT_FOUND when no OBJT record has this id.
+ * MESO_CHECK_FULL runs it for every object; libmeso's loader runs it before
+ * it uploads an object. */
+MESO_API meso_result meso_file_check_object(meso_file* f, uint32_t object, meso_error* err);
+
 /* >>writer ---------------------------------------------------------------- */
 
 typedef struct meso_writer meso_writer;
@@ -418,6 +432,7 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_MESH_BOUNDS 4309u
 #define MESO_ISSUE_MESH_TRAILING 4310u
 #define MESO_ISSUE_MESH_INDEX 4311u
+#define MESO_ISSUE_MESH_VALUE 4312u          /* non-finite position, normal or uv */
 #define MESO_ISSUE_SKEL_SIZE 4401u
 #define MESO_ISSUE_SKEL_PARENT 4402u
 #define MESO_ISSUE_SKEL_VALUE 4403u
@@ -433,6 +448,15 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_CELL_TILE 4804u
 #define MESO_ISSUE_CELL_SPLT 4805u
 #define MESO_ISSUE_CELL_MEMB 4806u
+#define MESO_ISSUE_OBJ_CHUNKS 6001u          /* an object lacks a chunk its kind requires */
+#define MESO_ISSUE_SHELL_COUNT 6101u         /* SDIR/STHK count != MESH vertex count, or no triangles */
+#define MESO_ISSUE_SHELL_SDIR 6102u          /* non-finite director */
+#define MESO_ISSUE_SHELL_STHK 6103u          /* thickness not finite or not > 0 */
+#define MESO_ISSUE_SHELL_TEXTURE 6104u       /* texture function chunks not as FORMAT.md 7.2 */
+#define MESO_ISSUE_FRUSTA_COUNT 6201u        /* FSEG and FRUS record counts differ */
+#define MESO_ISSUE_FRUSTA_NODE 6202u         /* a SKEL node reference out of range */
+#define MESO_ISSUE_FRUSTA_AXIS 6203u         /* zero-length axis or zero cutting-plane normal */
+#define MESO_ISSUE_FRUSTA_RELF 6204u         /* RELF not U8 or U16 x 1 */
 #define MESO_ISSUE_API_ARG 5001u
 #define MESO_ISSUE_API_BUFFER 5002u
 #define MESO_ISSUE_API_MEMORY 5003u

@@ -124,6 +124,16 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     if (r == MESO_OK)
         r = mesoi_read_whole(rt, f, di, &dirs, &dirs_size);
     const size_t nv = s->vertex_count;
+    /* Non-finite directors would send every ray through a prism with NaN
+     * corners (FORMAT.md issue 6102); MESH values were checked by the read. */
+    for (size_t k = 0; r == MESO_OK && k < dirs_size / sizeof(float); ++k)
+        if (!isfinite(((const float*)dirs)[k])) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                      "shell %u: SDIR value %zu is not finite (FORMAT.md issue 6102)", id, k);
+            r = MESO_ERR_CORRUPT;
+        }
+    if (r != MESO_OK)
+        mesoi_rt_free(rt, dirs);
     if (r == MESO_OK) {
         s->directors = dirs;
         s->positions = mesoi_rt_alloc(rt, sizeof(float) * 3 * nv);

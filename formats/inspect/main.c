@@ -310,7 +310,8 @@ const char* mi_issue_name(uint32_t code)
         {4305, "MESH_QUANT"},        {4306, "MESH_PRESENCE"},
         {4307, "MESH_ALIGN"},        {4308, "MESH_OVERLAP"},
         {4309, "MESH_BOUNDS"},       {4310, "MESH_TRAILING"},
-        {4311, "MESH_INDEX"},        {4401, "SKEL_SIZE"},
+        {4311, "MESH_INDEX"},        {4312, "MESH_VALUE"},
+        {4401, "SKEL_SIZE"},
         {4402, "SKEL_PARENT"},       {4403, "SKEL_VALUE"},
         {4501, "FRUS_SIZE"},         {4502, "FRUS_VALUE"},
         {4601, "FSEG_SIZE"},         {4602, "FSEG_VALUE"},
@@ -324,6 +325,11 @@ const char* mi_issue_name(uint32_t code)
         {5007, "IO_WRITE"},          {5008, "API_NO_VIEW"},
         {5009, "API_TOO_LARGE"},     {5010, "API_WRITER_LIMIT"},
         {5011, "IO_DESTINATION"},
+        {6001, "OBJ_CHUNKS"},        {6101, "SHELL_COUNT"},
+        {6102, "SHELL_SDIR"},        {6103, "SHELL_STHK"},
+        {6104, "SHELL_TEXTURE"},     {6201, "FRUSTA_COUNT"},
+        {6202, "FRUSTA_NODE"},       {6203, "FRUSTA_AXIS"},
+        {6204, "FRUSTA_RELF"},
     };
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); ++i)
         if (names[i].code == code)

@@ -52,6 +52,8 @@ static const char* const usage_preview =
     "Usage: mesoinspect preview FILE -o OUT.png [options]\n"
     "\n"
     "Render every drawable object of FILE headlessly (EGL + libmeso) into a PNG.\n"
+    "FILE is first checked as 'mesoinspect validate --full' does; a file with\n"
+    "issues is not drawn: they are listed on stderr and the exit code is 3.\n"
     "\n"
     "  -o, --output FILE   PNG to write (atomically; a symbolic link is written through,\n"
     "                      a device, FIFO or directory refused)\n"
@@ -486,6 +488,47 @@ static int parse_size(const char* s, int* w, int* h)
     return 1;
 }
 
+/* >>validation ------------------------------------------------------------- */
+
+typedef struct preview_issues {
+    const char* path;
+    size_t count;
+    int code;
+} preview_issues;
+
+static int print_issue(void* user, const meso_error* e)
+{
+    preview_issues* p = user;
+    char line[400];
+    mi_format_issue(e, line, sizeof(line));
+    mi_error("%s: %s", p->path, line);
+    const int c = e->result == MESO_ERR_IO              ? MESO_EXIT_IO
+                  : e->result == MESO_ERR_OUT_OF_MEMORY ? MESO_EXIT_INTERNAL
+                                                        : MESO_EXIT_INVALID;
+    if (p->code == MESO_EXIT_OK || c == MESO_EXIT_IO)
+        p->code = c;
+    p->count++;
+    return 0;
+}
+
+/* The full check before anything is drawn, so neither libmeso nor the
+ * reference ever sees a file the validator refuses: exit 3 (2 on a read
+ * failure) with the issues listed, as `validate --full` lists them. */
+static int preview_validate(const char* path)
+{
+    meso_file* f = NULL;
+    int code = mi_open_or_report(path, &f);
+    if (code != MESO_EXIT_OK)
+        return code;
+    preview_issues p = {path, 0, MESO_EXIT_OK};
+    meso_file_validate(f, MESO_CHECK_FULL, print_issue, &p);
+    meso_file_close(f);
+    if (p.count)
+        mi_error("%s: %zu issue%s; not drawn (see 'mesoinspect validate --full')", path, p.count,
+                 p.count == 1 ? "" : "s");
+    return p.code;
+}
+
 int mesoinspect_preview(int argc, char** argv)
 {
     const char *file = NULL, *out = NULL;
@@ -610,6 +653,9 @@ int mesoinspect_preview(int argc, char** argv)
     if (checked != MESO_EXIT_OK)
         return checked;
     knobs.technique = technique;
+    const int valid = preview_validate(file);
+    if (valid != MESO_EXIT_OK)
+        return valid;
     if (reference)
         return render_reference(file, out, width, height, (uint32_t)only, yaw, pitch,
                                 technique == MESO_SHELL_CURVED, (int)samples, &knobs);

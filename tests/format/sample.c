@@ -190,7 +190,11 @@ static void build(void)
     assert(objt);
     meso_object_record rec = {1, MESO_OBJECT_MESH, {0, 0, 0}, {1, 1, 1}, "tetra"};
     meso_object_record_encode(&rec, objt);
-    meso_object_record rec2 = {2, MESO_OBJECT_SHELL, {-0.1f, -0.1f, -0.1f}, {1.1f, 1.1f, 1.1f}, "tetra shell"};
+    /* Object 2 is a mesh (its own MESH is added last, so the chunk indices
+     * of the rest stay put): its SDIR..RELF exercise every chunk type's
+     * rules without making it a shell, whose texture function and values
+     * the object checks (FORMAT.md 6xxx) would hold these patterns to. */
+    meso_object_record rec2 = {2, MESO_OBJECT_MESH, {-0.1f, -0.1f, -0.1f}, {1.1f, 1.1f, 1.1f}, "tetra shell"};
     meso_object_record_encode(&rec2, objt + 64);
     add(MESO_CHUNK_OBJT, 0, 0, MESO_DTYPE_BYTES, 1, 2, 1, 1, objt, 128);
 
@@ -253,6 +257,10 @@ static void build(void)
     add(MESO_CHUNK_FRUS, 4, 0, MESO_DTYPE_BYTES, 1, 2, 1, 1, frus, 128);
     p = typed(2, 4, 8, 8, 1, 14, &n);
     add(MESO_CHUNK_RELF, 2, 0, MESO_DTYPE_F16, 4, 8, 8, 1, p, n);
+    uint8_t* mesh2 = (uint8_t*)malloc((size_t)l.size);
+    assert(mesh2);
+    memcpy(mesh2, mesh, (size_t)l.size);
+    add(MESO_CHUNK_MESH, 2, 0, MESO_DTYPE_BYTES, 1, 1, 1, 1, mesh2, (size_t)l.size);
 }
 
 size_t sample_chunks(const sample_chunk** out)

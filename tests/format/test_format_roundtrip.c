@@ -372,7 +372,7 @@ static uint8_t* draco_file(size_t* size, const sample_chunk** mesh_out)
     const sample_chunk* mesh = NULL;
     const sample_chunk* sthk = NULL;
     for (size_t i = 0; i < n; i++) {
-        if (sc[i].desc.type == MESO_CHUNK_MESH)
+        if (sc[i].desc.type == MESO_CHUNK_MESH && !mesh)
             mesh = &sc[i];
         if (sc[i].desc.type == MESO_CHUNK_STHK)
             sthk = &sc[i];

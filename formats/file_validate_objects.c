@@ -1,0 +1,389 @@
+/*
+ * file_validate_objects.c — the object tier of the full check: each OBJT
+ * object against what its kind is made of (FORMAT.md §7.2, issues 6xxx).
+ *
+ * The chunk checks (file_validate.c) look at one chunk at a time, so a file
+ * whose every chunk is well formed can still hold objects nothing can draw:
+ * a shell without its MESH, directors for another vertex count, a frustum
+ * whose node index runs past the skeleton. These are the rules that tie an
+ * object's chunks together, plus the values of chunks whose layout alone
+ * (F32 × 3 directors, F32 thickness) says nothing about their meaning.
+ * They apply only to the chunks a kind uses: a chunk of an object whose
+ * kind does not use it, or of an id without an OBJT record, is not checked
+ * here (the golden files carry such chunks).
+ *
+ * A chunk that fails its own checks (CRC, element rules, contents) is
+ * reported by those; the object checks then skip what depends on it and
+ * pass the chunk's issue on (meso_file_validate drops it as a duplicate).
+ */
+#include "file_internal.h"
+
+#include <math.h>
+
+typedef struct obj_check {
+    meso_file* f;
+    uint32_t id;
+    meso_issue_fn fn; /* NULL: stop at the first issue */
+    void* user;
+    meso_result first;
+    int stop;
+} obj_check;
+
+static void note(obj_check* c, const meso_error* e)
+{
+    if (c->first == MESO_OK)
+        c->first = e->result;
+    if (!c->fn || c->fn(c->user, e))
+        c->stop = 1;
+}
+
+#define ISSUE(c, code, chunk, ...)                                                                    \
+    do {                                                                                              \
+        meso_error e_;                                                                                \
+        mesoi_file_error(&e_, MESO_ERR_CORRUPT, (code), UINT64_MAX, (chunk), __VA_ARGS__);            \
+        note((c), &e_);                                                                               \
+    } while (0)
+
+static const char* kind_name(uint32_t kind)
+{
+    switch (kind) {
+    case MESO_OBJECT_MESH: return "mesh";
+    case MESO_OBJECT_SHELL: return "shell";
+    case MESO_OBJECT_CELLS: return "cells";
+    default: return "frusta";
+    }
+}
+
+/* The object's chunk of `type` at its finest level (lowest lod), as the
+ * runtime picks it; -1 when there is none. */
+static int32_t finest(const obj_check* c, uint32_t type)
+{
+    int32_t best = -1;
+    for (uint32_t i = 0; i < c->f->chunk_count; i++) {
+        const meso_chunk_info* k = &c->f->chunks[i];
+        if (k->type == type && k->object == c->id && (best < 0 || k->lod < c->f->chunks[best].lod))
+            best = (int32_t)i;
+    }
+    return best;
+}
+
+/* The chunk of `type` the kind requires; reports 6001 when it is missing. */
+static int32_t required(obj_check* c, uint32_t kind, uint32_t type)
+{
+    int32_t i = finest(c, type);
+    if (i < 0 && !c->stop) {
+        char cc[5];
+        mesoi_fourcc_str(type, cc);
+        ISSUE(c, MESO_ISSUE_OBJ_CHUNKS, -1, "%s object %u has no %s chunk (FORMAT.md 7.2)", kind_name(kind), c->id,
+              cc);
+    }
+    return i;
+}
+
+/* The chunk's element rules hold (else their issue is passed on). */
+static int rules_ok(obj_check* c, int32_t i)
+{
+    meso_error e;
+    if (mesoi_check_type_rules(&c->f->chunks[i], i, &e) == MESO_OK)
+        return 1;
+    note(c, &e);
+    return 0;
+}
+
+/* Read a whole chunk (CRC and content checks included) into a fresh
+ * allocation; NULL after passing its issue on. */
+static uint8_t* load(obj_check* c, int32_t i)
+{
+    meso_error e;
+    const meso_chunk_info* k = &c->f->chunks[i];
+    if (k->decoded_size > SIZE_MAX) {
+        mesoi_file_error(&e, MESO_ERR_UNSUPPORTED, MESO_ISSUE_API_TOO_LARGE, UINT64_MAX, i,
+                         "chunk %d: %llu bytes do not fit in memory", (int)i, (unsigned long long)k->decoded_size);
+        note(c, &e);
+        return NULL;
+    }
+    uint8_t* p = (uint8_t*)mesoi_file_alloc(&c->f->alloc, (size_t)k->decoded_size);
+    if (!p) {
+        mesoi_file_error(&e, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, i,
+                         "chunk %d: out of memory for %llu bytes", (int)i, (unsigned long long)k->decoded_size);
+        note(c, &e);
+        return NULL;
+    }
+    if (meso_file_read_chunk(c->f, (uint32_t)i, p, (size_t)k->decoded_size, &e) != MESO_OK) {
+        note(c, &e);
+        mesoi_file_free(&c->f->alloc, p);
+        return NULL;
+    }
+    return p;
+}
+
+/* The MESH header (raw or Draco: the stored payload starts with it and
+ * describes the decoded layout), checked against decoded_size. */
+static int mesh_header(obj_check* c, int32_t i, meso_mesh_layout* l)
+{
+    const meso_chunk_info* k = &c->f->chunks[i];
+    uint8_t h[MESO_MESH_HDR_SIZE];
+    meso_error e;
+    if (!rules_ok(c, i))
+        return 0;
+    if (k->stored_size < MESO_MESH_HDR_SIZE) {
+        mesoi_file_error(&e, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_SIZE, k->offset, i,
+                         "chunk %d (MESH): payload smaller than the 64-byte mesh header", (int)i);
+        note(c, &e);
+        return 0;
+    }
+    if (mesoi_read_at(c->f, k->offset, h, sizeof h, &e) != MESO_OK ||
+        mesoi_check_mesh_header(h, k->decoded_size, l, i, k->offset, &e) != MESO_OK) {
+        note(c, &e);
+        return 0;
+    }
+    return 1;
+}
+
+/* >>shell (kind 2) ---------------------------------------------------------- */
+
+/* The texture function (§7.2 "A shell may carry one texture function"):
+ * what the runtime and the reference sample, at the level they pick. */
+static void shell_texture(obj_check* c)
+{
+    const int32_t hi = finest(c, MESO_CHUNK_TX2D), vi = finest(c, MESO_CHUNK_TX3D), xi = finest(c, MESO_CHUNK_DIST);
+    const unsigned u8_u16 = MESOI_DT(U8) | MESOI_DT(U16);
+    if (hi >= 0 && vi >= 0)
+        ISSUE(c, MESO_ISSUE_SHELL_TEXTURE, vi, "shell %u has both a TX2D height field and a TX3D volume", c->id);
+    const struct {
+        int32_t i;
+        unsigned dtypes;
+        const char* want;
+    } t[3] = {{hi, u8_u16, "TX2D: U8 or U16 x 1"},
+              {vi, u8_u16, "TX3D: U8 or U16 x 1"},
+              {xi, u8_u16 | MESOI_DT(F32), "DIST: U8, U16 or F32 x 1"}};
+    for (int k = 0; k < 3 && !c->stop; k++) {
+        if (t[k].i < 0 || !rules_ok(c, t[k].i))
+            continue;
+        const meso_chunk_info* q = &c->f->chunks[t[k].i];
+        if (!mesoi_is_dtype(q, t[k].dtypes) || q->components != 1)
+            ISSUE(c, MESO_ISSUE_SHELL_TEXTURE, t[k].i, "shell %u: chunk %d is dtype %u x %u; a shell's %s", c->id,
+                  (int)t[k].i, q->dtype, q->components, t[k].want);
+    }
+    if (xi < 0 || c->stop)
+        return;
+    if (hi < 0 && vi < 0) {
+        ISSUE(c, MESO_ISSUE_SHELL_TEXTURE, xi,
+              "shell %u has a DIST distance map but no TX2D or TX3D texture function it could bound", c->id);
+        return;
+    }
+    const meso_chunk_info* q = &c->f->chunks[xi];
+    if (q->dtype != MESO_DTYPE_F32 || q->components != 1)
+        return;
+    uint8_t* d = load(c, xi);
+    if (!d)
+        return;
+    const uint64_t n = q->decoded_size / 4;
+    for (uint64_t v = 0; v < n; v++) {
+        float x = mesoi_ldf32(d + 4 * v);
+        if (!isfinite(x) || x < 0.0f) {
+            ISSUE(c, MESO_ISSUE_SHELL_TEXTURE, xi, "shell %u: DIST cell %llu holds %g, not a finite distance >= 0",
+                  c->id, (unsigned long long)v, (double)x);
+            break;
+        }
+    }
+    mesoi_file_free(&c->f->alloc, d);
+}
+
+/* One value per vertex (layer): SDIR finite (6102), STHK finite and > 0 (6103). */
+static void shell_values(obj_check* c, int32_t i, int thickness)
+{
+    uint8_t* d = load(c, i);
+    if (!d)
+        return;
+    const meso_chunk_info* q = &c->f->chunks[i];
+    const uint64_t n = q->decoded_size / 4;
+    for (uint64_t v = 0; v < n; v++) {
+        float x = mesoi_ldf32(d + 4 * v);
+        if (thickness && !(isfinite(x) && x > 0.0f)) {
+            ISSUE(c, MESO_ISSUE_SHELL_STHK, i, "shell %u: STHK vertex %llu has thickness %g, must be finite and > 0",
+                  c->id, (unsigned long long)v, (double)x);
+            break;
+        }
+        if (!thickness && !isfinite(x)) {
+            const uint64_t per_layer = (uint64_t)q->dims[0] * 3;
+            ISSUE(c, MESO_ISSUE_SHELL_SDIR, i, "shell %u: SDIR layer %llu vertex %llu has a non-finite director",
+                  c->id, (unsigned long long)(v / per_layer), (unsigned long long)(v % per_layer / 3));
+            break;
+        }
+    }
+    mesoi_file_free(&c->f->alloc, d);
+}
+
+static void check_shell(obj_check* c)
+{
+    const int32_t mi = required(c, MESO_OBJECT_SHELL, MESO_CHUNK_MESH);
+    const int32_t di = required(c, MESO_OBJECT_SHELL, MESO_CHUNK_SDIR);
+    const int32_t ti = required(c, MESO_OBJECT_SHELL, MESO_CHUNK_STHK);
+    meso_mesh_layout l;
+    const int have_mesh = mi >= 0 && !c->stop && mesh_header(c, mi, &l);
+    if (have_mesh && l.index_count == 0 && !c->stop)
+        ISSUE(c, MESO_ISSUE_SHELL_COUNT, mi, "shell %u: its MESH has no triangles to grow prisms on", c->id);
+    const int32_t per_vertex[2] = {di, ti};
+    for (int k = 0; k < 2 && !c->stop; k++) {
+        const int32_t i = per_vertex[k];
+        if (i < 0 || !rules_ok(c, i))
+            continue;
+        const meso_chunk_info* q = &c->f->chunks[i];
+        if (have_mesh && q->dims[0] != l.vertex_count) {
+            ISSUE(c, MESO_ISSUE_SHELL_COUNT, i, "shell %u: %s holds %u vertices, its MESH %u", c->id,
+                  k ? "STHK" : "SDIR", q->dims[0], l.vertex_count);
+            continue;
+        }
+        if (!c->stop)
+            shell_values(c, i, k);
+    }
+    if (!c->stop)
+        shell_texture(c);
+}
+
+/* >>frusta (kind 4) --------------------------------------------------------- */
+
+static void check_frusta(obj_check* c)
+{
+    const int32_t fr = required(c, MESO_OBJECT_FRUSTA, MESO_CHUNK_FRUS);
+    const int32_t fs = required(c, MESO_OBJECT_FRUSTA, MESO_CHUNK_FSEG);
+    const int32_t sk = required(c, MESO_OBJECT_FRUSTA, MESO_CHUNK_SKEL);
+    const int32_t ba = finest(c, MESO_CHUNK_BALL), re = finest(c, MESO_CHUNK_RELF);
+    if (re >= 0 && !c->stop && rules_ok(c, re)) {
+        const meso_chunk_info* q = &c->f->chunks[re];
+        if ((q->dtype != MESO_DTYPE_U8 && q->dtype != MESO_DTYPE_U16) || q->components != 1)
+            ISSUE(c, MESO_ISSUE_FRUSTA_RELF, re, "frusta %u: RELF is dtype %u x %u, must be U8 or U16 x 1", c->id,
+                  q->dtype, q->components);
+    }
+    if (fr < 0 || fs < 0 || sk < 0 || c->stop)
+        return;
+    uint8_t* frus = load(c, fr);
+    uint8_t* fseg = frus ? load(c, fs) : NULL;
+    uint8_t* skel = fseg ? load(c, sk) : NULL;
+    uint8_t* ball = skel && ba >= 0 ? load(c, ba) : NULL;
+    if (!skel || (ba >= 0 && !ball))
+        goto done;
+    const uint64_t nf = c->f->chunks[fr].decoded_size / MESO_FRUS_RECORD_SIZE;
+    const uint64_t ns = c->f->chunks[fs].decoded_size / MESO_FSEG_RECORD_SIZE;
+    const uint64_t nodes = c->f->chunks[sk].decoded_size / MESO_SKEL_RECORD_SIZE;
+    if (nf != ns) {
+        ISSUE(c, MESO_ISSUE_FRUSTA_COUNT, fs, "frusta %u: FSEG holds %llu records, FRUS %llu (one each per frustum)",
+              c->id, (unsigned long long)ns, (unsigned long long)nf);
+        goto done;
+    }
+    for (uint64_t i = 0; i < nf && !c->stop; i++) {
+        const uint8_t* s = fseg + i * MESO_FSEG_RECORD_SIZE;
+        const uint8_t* p = frus + i * MESO_FRUS_RECORD_SIZE;
+        const uint32_t n0 = mesoi_ld32(s + MESO_FSEG_OFF_NODE0), n1 = mesoi_ld32(s + MESO_FSEG_OFF_NODE1);
+        const uint32_t sn = mesoi_ld32(p + MESO_FRUS_OFF_SKEL_NODE);
+        if (n0 >= nodes || n1 >= nodes || (sn != UINT32_MAX && sn >= nodes)) {
+            ISSUE(c, MESO_ISSUE_FRUSTA_NODE, n0 >= nodes || n1 >= nodes ? fs : fr,
+                  "frusta %u: frustum %llu refers to SKEL node %u, the skeleton has %llu nodes", c->id,
+                  (unsigned long long)i, n0 >= nodes ? n0 : n1 >= nodes ? n1 : sn, (unsigned long long)nodes);
+            break;
+        }
+        double h2 = 0, p0 = 0, p1 = 0;
+        for (int k = 0; k < 3; k++) {
+            const double a = (double)mesoi_ldf32(p + MESO_FRUS_OFF_CENTER1 + 4 * k) -
+                             (double)mesoi_ldf32(p + MESO_FRUS_OFF_CENTER0 + 4 * k);
+            const double q0 = mesoi_ldf32(p + MESO_FRUS_OFF_PLANE0 + 4 * k), q1 = mesoi_ldf32(p + MESO_FRUS_OFF_PLANE1 + 4 * k);
+            h2 += a * a;
+            p0 += q0 * q0;
+            p1 += q1 * q1;
+        }
+        if (!(h2 > 0) || !(p0 > 0) || !(p1 > 0)) {
+            ISSUE(c, MESO_ISSUE_FRUSTA_AXIS, fr, "frusta %u: frustum %llu has %s", c->id, (unsigned long long)i,
+                  h2 > 0 ? "a zero cutting-plane normal" : "coincident centres (no axis)");
+            break;
+        }
+    }
+    const uint64_t nb = ball ? c->f->chunks[ba].decoded_size / MESO_BALL_RECORD_SIZE : 0;
+    for (uint64_t i = 0; i < nb && !c->stop; i++) {
+        const uint32_t n = mesoi_ld32(ball + i * MESO_BALL_RECORD_SIZE + MESO_BALL_OFF_NODE);
+        if (n >= nodes) {
+            ISSUE(c, MESO_ISSUE_FRUSTA_NODE, ba, "frusta %u: ball %llu closes SKEL node %u, the skeleton has %llu nodes",
+                  c->id, (unsigned long long)i, n, (unsigned long long)nodes);
+            break;
+        }
+    }
+done:
+    mesoi_file_free(&c->f->alloc, frus);
+    mesoi_file_free(&c->f->alloc, fseg);
+    mesoi_file_free(&c->f->alloc, skel);
+    mesoi_file_free(&c->f->alloc, ball);
+}
+
+/* >>entry points ------------------------------------------------------------ */
+
+meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso_issue_fn fn, void* user)
+{
+    obj_check c = {f, rec->id, fn, user, MESO_OK, 0};
+    meso_mesh_layout l;
+    int32_t i;
+    switch (rec->kind) {
+    case MESO_OBJECT_MESH:
+        if ((i = required(&c, rec->kind, MESO_CHUNK_MESH)) >= 0)
+            mesh_header(&c, i, &l);
+        break;
+    case MESO_OBJECT_CELLS:
+        /* The CELL record and what it implies: meso_file_check_cells. */
+        if ((i = required(&c, rec->kind, MESO_CHUNK_MESH)) >= 0 && !c.stop)
+            mesh_header(&c, i, &l);
+        if (!c.stop)
+            required(&c, rec->kind, MESO_CHUNK_CELL);
+        break;
+    case MESO_OBJECT_SHELL: check_shell(&c); break;
+    case MESO_OBJECT_FRUSTA: check_frusta(&c); break;
+    default: break; /* OBJT's own check refuses other kinds (4204) */
+    }
+    return c.first;
+}
+
+static int keep_first(void* user, const meso_error* e)
+{
+    *(meso_error*)user = *e;
+    return 1;
+}
+
+meso_result meso_file_check_object(meso_file* f, uint32_t object, meso_error* err)
+{
+    mesoi_file_error_clear(err);
+    if (f == NULL || object == 0)
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
+                                "meso_file_check_object: NULL file or object 0");
+    const int32_t oi = meso_file_find(f, MESO_CHUNK_OBJT, UINT32_MAX, UINT16_MAX);
+    const meso_chunk_info* oc = oi >= 0 ? &f->chunks[oi] : NULL;
+    uint8_t* objt = NULL;
+    meso_error e;
+    meso_result r = MESO_OK;
+    if (oc) {
+        objt = (uint8_t*)mesoi_file_alloc(&f->alloc, (size_t)oc->decoded_size);
+        if (!objt)
+            return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, oi,
+                                    "chunk %d (OBJT): out of memory", (int)oi);
+        if ((r = meso_file_read_chunk(f, (uint32_t)oi, objt, (size_t)oc->decoded_size, &e)) != MESO_OK) {
+            if (err)
+                *err = e;
+            mesoi_file_free(&f->alloc, objt);
+            return r;
+        }
+    }
+    r = MESO_ERR_NOT_FOUND;
+    for (uint64_t k = 0; oc && k < oc->decoded_size / MESO_OBJT_RECORD_SIZE; k++) {
+        meso_object_record rec;
+        meso_object_record_decode(objt + k * MESO_OBJT_RECORD_SIZE, &rec);
+        if (rec.id != object)
+            continue;
+        memset(&e, 0, sizeof e);
+        r = mesoi_check_object(f, &rec, keep_first, &e);
+        if (r != MESO_OK && err)
+            *err = e;
+        break;
+    }
+    mesoi_file_free(&f->alloc, objt);
+    if (r == MESO_ERR_NOT_FOUND)
+        return mesoi_file_error(err, MESO_ERR_NOT_FOUND, MESO_ISSUE_API_ARG, UINT64_MAX, oi,
+                                "object %u is not in the OBJT table", object);
+    return r;
+}
