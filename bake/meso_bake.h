@@ -62,7 +62,9 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  * Skeletons from meshes (bake/skeleton_from_mesh.h): 3170..3179, listed there.
  * Voxelization and membership maps (bake/voxelize.h, bake/membership.h):
  *   3180..3189, listed there.
- * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there. */
+ * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there.
+ * Mesh files before any reader sees them (bake/mesh_guard.h): 3200..3249,
+ *   listed there. */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */
