@@ -521,9 +521,10 @@ static meso_result check_off(guard* g)
     if (nv == 0 || nf == 0)
         return CORRUPT(g, MESO_MESH_GUARD_EMPTY, off_of(g, s), "OFF: line %llu: the header counts %llu vertices and %llu faces",
                        (unsigned long long)t.line, (unsigned long long)nv, (unsigned long long)nf);
-    /* Smallest encodings: "0 0 0\n" (6 bytes) a vertex, "3 0 1 2\n" (8) a face. */
+    /* Smallest encodings: "0 0 0\n" (6 bytes) a vertex, "3\n" a face
+     * (refused later, but with its own code). */
     uint64_t left = (uint64_t)(t.end - t.p);
-    if (nv > left / 6 || nf > left / 8 || 6 * nv + 8 * nf > left + 1)
+    if (nv > left / 6 || nf > left / 2 || 6 * nv + 2 * nf > left + 1)
         return CORRUPT(g, MESO_MESH_GUARD_SIZE, off_of(g, s),
                        "OFF: line %llu: %llu vertices and %llu faces cannot fit in the %llu bytes that follow",
                        (unsigned long long)t.line, (unsigned long long)nv, (unsigned long long)nf,
@@ -828,6 +829,17 @@ static meso_result ply_value(guard* g, int fmt, ply_text* pt, size_t* at, uint8_
     return MESO_OK;
 }
 
+/* The smallest size of one instance: ASCII "0 " per property, binary the
+ * scalars and the list counts. */
+static uint64_t ply_min_size(const ply_elem* x, int fmt)
+{
+    uint64_t min = 0;
+    for (int p = 0; p < x->nprops; ++p)
+        min += fmt == 0 ? 2 : x->props[p].is_list ? ply_types[x->props[p].list_type].size
+                                                  : ply_types[x->props[p].type].size;
+    return min;
+}
+
 static meso_result check_ply(guard* g)
 {
     ply_elem el[PLY_MAX_ELEMENTS];
@@ -868,6 +880,18 @@ static meso_result check_ply(guard* g)
     if (nv == 0 || nf == 0)
         return CORRUPT(g, MESO_MESH_GUARD_EMPTY, 0, "PLY: %llu vertices and %llu faces", (unsigned long long)nv,
                        (unsigned long long)nf);
+    /* All elements at their smallest against the body, before the budget. */
+    uint64_t body = (uint64_t)(g->size - at) + (fmt == 0), need = 0;
+    for (int i = 0; i < nel; ++i) {
+        uint64_t min = ply_min_size(&el[i], fmt);
+        if (el[i].count && (el[i].count > body / min || (need += el[i].count * min) > body))
+            return CORRUPT(g, MESO_MESH_GUARD_SIZE, at,
+                           "PLY: line %llu: element '%.*s' claims %llu instances of at least %llu bytes; with the "
+                           "elements before it that is more than the %llu bytes after the header",
+                           (unsigned long long)el[i].line, (int)(el[i].name.n > 32 ? 32 : el[i].name.n),
+                           (const char*)el[i].name.s, (unsigned long long)el[i].count, (unsigned long long)min,
+                           (unsigned long long)(g->size - at));
+    }
     if ((r = budget(g, nv, nf, "PLY")) != MESO_OK)
         return r;
     ply_text pt = {g->base + at, g->base + g->size, 0};
@@ -882,10 +906,7 @@ static meso_result check_ply(guard* g)
         const ply_elem* x = &el[i];
         /* Smallest size of one instance against what is left. */
         uint64_t left = fmt == 0 ? (uint64_t)(pt.end - pt.p) : (uint64_t)(g->size - at);
-        uint64_t min = 0;
-        for (int p = 0; p < x->nprops; ++p)
-            min += fmt == 0 ? 2 : x->props[p].is_list ? ply_types[x->props[p].list_type].size
-                                                      : ply_types[x->props[p].type].size;
+        uint64_t min = ply_min_size(x, fmt);
         if (x->count && (x->count > (left + 1) / min))
             return free(corners),
                    CORRUPT(g, MESO_MESH_GUARD_SIZE, fmt == 0 ? off_of(g, pt.p) : at,
