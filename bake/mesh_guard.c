@@ -79,6 +79,25 @@ static meso_result budget(guard* g, uint64_t vertices, uint64_t triangles, const
     return MESO_OK;
 }
 
+/* Where a face or element is, formatted only when a message needs it (the
+ * loops would otherwise spend more time on snprintf than on checking). */
+typedef struct place {
+    const char* kind; /* "line", "triangle", "element 'face'", ... */
+    uint64_t index;
+    uint64_t byte; /* NO_BYTE for text lines */
+} place;
+#define NO_BYTE UINT64_MAX
+
+static const char* place_str(const place* pl, char buf[96])
+{
+    if (pl->byte == NO_BYTE)
+        snprintf(buf, 96, "%s %llu", pl->kind, (unsigned long long)pl->index);
+    else
+        snprintf(buf, 96, "%s %llu at byte %llu", pl->kind, (unsigned long long)pl->index,
+                 (unsigned long long)pl->byte);
+    return buf;
+}
+
 /* ---- faces: corners, repeated vertices, directed edges ----------------- */
 
 static uint64_t edge_hash(uint64_t key)
@@ -88,33 +107,51 @@ static uint64_t edge_hash(uint64_t key)
     return key ^ (key >> 32);
 }
 
+/* Grow the table to hold `n` edges at half load (rehashing what it holds). */
+static int edge_reserve(edge_set* e, size_t n)
+{
+    size_t cap = e->cap ? e->cap : 1024;
+    while (cap / 2 < n)
+        cap *= 2;
+    if (cap == e->cap)
+        return 0;
+    uint64_t* keys = calloc(cap, sizeof(uint64_t));
+    uint64_t* wh = malloc(cap * sizeof(uint64_t));
+    if (!keys || !wh) {
+        free(keys);
+        free(wh);
+        return -1;
+    }
+    for (size_t i = 0; i < e->cap; ++i)
+        if (e->keys[i]) {
+            size_t j = (size_t)edge_hash(e->keys[i]) & (cap - 1);
+            while (keys[j])
+                j = (j + 1) & (cap - 1);
+            keys[j] = e->keys[i];
+            wh[j] = e->where[i];
+        }
+    free(e->keys);
+    free(e->where);
+    e->keys = keys;
+    e->where = wh;
+    e->cap = cap;
+    return 0;
+}
+
+/* Reserve for `faces` triangles' edges once the counts passed the budget
+ * (a failure only means the table grows as it fills). */
+static void edge_presize(guard* g, uint64_t faces)
+{
+    if (faces <= GUARD_MAX_ELEMENTS)
+        (void)edge_reserve(&g->edges, (size_t)(3 * faces));
+}
+
 /* Insert a->b; returns the earlier face's number in *prev and 1 when the
  * edge was there already, 0 when inserted, -1 out of memory. */
 static int edge_insert(edge_set* e, uint32_t a, uint32_t b, uint64_t where, uint64_t* prev)
 {
-    if (2 * (e->count + 1) > e->cap) {
-        size_t cap = e->cap ? 2 * e->cap : 1024;
-        uint64_t* keys = calloc(cap, sizeof(uint64_t));
-        uint64_t* wh = malloc(cap * sizeof(uint64_t));
-        if (!keys || !wh) {
-            free(keys);
-            free(wh);
-            return -1;
-        }
-        for (size_t i = 0; i < e->cap; ++i)
-            if (e->keys[i]) {
-                size_t j = (size_t)edge_hash(e->keys[i]) & (cap - 1);
-                while (keys[j])
-                    j = (j + 1) & (cap - 1);
-                keys[j] = e->keys[i];
-                wh[j] = e->where[i];
-            }
-        free(e->keys);
-        free(e->where);
-        e->keys = keys;
-        e->where = wh;
-        e->cap = cap;
-    }
+    if (2 * (e->count + 1) > e->cap && edge_reserve(e, e->count + 1) != 0)
+        return -1;
     uint64_t key = (((uint64_t)a << 32) | b) + 1;
     size_t j = (size_t)edge_hash(key) & (e->cap - 1);
     while (e->keys[j]) {
@@ -137,23 +174,24 @@ static int cmp_u32(const void* a, const void* b)
 }
 
 /* A face of k >= 3 in-range corners v[0..k): distinct vertices, and directed
- * edges no earlier face used. `where` is its line or face number, `loc` the
+ * edges no earlier face used. `where` is its line or face number, `pl` the
  * place for messages. */
 static meso_result face_check(guard* g, const uint32_t* v, size_t k, uint64_t where, uint64_t offset,
-                              const char* loc)
+                              const place* pl)
 {
+    char lb[96];
     if (k <= 16) {
         for (size_t i = 0; i < k; ++i)
             for (size_t j = i + 1; j < k; ++j)
                 if (v[i] == v[j])
                     return CORRUPT(g, MESO_MESH_GUARD_REPEATED_CORNER, offset,
-                                   "%s: the face names vertex %u twice (corners %zu and %zu)", loc, v[i], i + 1,
+                                   "%s: the face names vertex %u twice (corners %zu and %zu)", place_str(pl, lb), v[i], i + 1,
                                    j + 1);
     } else {
         if (k > g->sorted_cap) {
             uint32_t* s = realloc(g->sorted, k * sizeof(uint32_t));
             if (!s)
-                return fail(g, MESO_ERR_OUT_OF_MEMORY, 0, offset, "%s: out of memory", loc);
+                return fail(g, MESO_ERR_OUT_OF_MEMORY, 0, offset, "%s: out of memory", place_str(pl, lb));
             g->sorted = s;
             g->sorted_cap = k;
         }
@@ -162,18 +200,18 @@ static meso_result face_check(guard* g, const uint32_t* v, size_t k, uint64_t wh
         for (size_t i = 1; i < k; ++i)
             if (g->sorted[i] == g->sorted[i - 1])
                 return CORRUPT(g, MESO_MESH_GUARD_REPEATED_CORNER, offset, "%s: the face names vertex %u twice",
-                               loc, g->sorted[i]);
+                               place_str(pl, lb), g->sorted[i]);
     }
     for (size_t i = 0; i < k; ++i) {
         uint64_t prev = 0;
         int r = edge_insert(&g->edges, v[i], v[(i + 1) % k], where, &prev);
         if (r < 0)
-            return fail(g, MESO_ERR_OUT_OF_MEMORY, 0, offset, "%s: out of memory for the edge table", loc);
+            return fail(g, MESO_ERR_OUT_OF_MEMORY, 0, offset, "%s: out of memory for the edge table", place_str(pl, lb));
         if (r > 0)
             return CORRUPT(g, MESO_MESH_GUARD_DUPLICATE_EDGE, offset,
                            "%s: the edge from vertex %u to vertex %u is also used, in the same direction, by the "
                            "face at %s %llu (a duplicated face, or more than two faces on an edge)",
-                           loc, v[i], v[(i + 1) % k], g->where_word, (unsigned long long)prev);
+                           place_str(pl, lb), v[i], v[(i + 1) % k], g->where_word, (unsigned long long)prev);
     }
     g->st.faces++;
     g->st.triangles += k - 2;
@@ -382,6 +420,7 @@ static meso_result check_obj(guard* g)
     meso_result r = budget(g, nv, nf, "OBJ");
     if (r != MESO_OK)
         return r;
+    edge_presize(g, nf);
 
     uint32_t* corners = NULL;
     size_t cap = 0;
@@ -437,13 +476,13 @@ static meso_result check_obj(guard* g)
             }
             if (r != MESO_OK)
                 break;
-            char loc[48];
-            snprintf(loc, sizeof(loc), "line %llu", (unsigned long long)t.line);
+            char lb[96];
+            const place pl_ = {"line", t.line, NO_BYTE}, *pl = &pl_;
             if (n < 3)
-                r = CORRUPT(g, MESO_MESH_GUARD_FACE_SIZE, off_of(g, s), "%s: a face with %zu corners (needs 3)", loc,
+                r = CORRUPT(g, MESO_MESH_GUARD_FACE_SIZE, off_of(g, s), "%s: a face with %zu corners (needs 3)", place_str(pl, lb),
                             n);
             else
-                r = face_check(g, corners, n, t.line, off_of(g, s), loc);
+                r = face_check(g, corners, n, t.line, off_of(g, s), pl);
         }
     }
     free(corners);
@@ -532,6 +571,7 @@ static meso_result check_off(guard* g)
     meso_result r = budget(g, nv, nf, "OFF");
     if (r != MESO_OK)
         return r;
+    edge_presize(g, nf);
     for (uint64_t i = 0; i < nv; ++i) {
         if (!next_data_line(&t, &s, &e))
             return CORRUPT(g, MESO_MESH_GUARD_SIZE, g->size, "OFF: the file ends after %llu of %llu vertices",
@@ -547,18 +587,18 @@ static meso_result check_off(guard* g)
                         (unsigned long long)f, (unsigned long long)nf);
             break;
         }
-        char loc[48];
-        snprintf(loc, sizeof(loc), "line %llu", (unsigned long long)t.line);
+        char lb[96];
+        const place pl_ = {"line", t.line, NO_BYTE}, *pl = &pl_;
         p = s;
         int64_t kk;
         next_token(&p, e, 1, &k);
         if (parse_int(k, &kk) != 0) {
-            r = CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, k.s), "%s: face size '%.*s' is not an integer", loc,
+            r = CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, k.s), "%s: face size '%.*s' is not an integer", place_str(pl, lb),
                         (int)(k.n > 32 ? 32 : k.n), (const char*)k.s);
             break;
         }
         if (kk < 3) {
-            r = CORRUPT(g, MESO_MESH_GUARD_FACE_SIZE, off_of(g, k.s), "%s: a face with %lld corners (needs 3)", loc,
+            r = CORRUPT(g, MESO_MESH_GUARD_FACE_SIZE, off_of(g, k.s), "%s: a face with %lld corners (needs 3)", place_str(pl, lb),
                         (long long)kk);
             break;
         }
@@ -567,21 +607,21 @@ static meso_result check_off(guard* g)
             tok x;
             int64_t v;
             if (!next_token(&p, e, 1, &x)) {
-                r = CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, e), "%s: the face has %lld of its %lld indices", loc,
+                r = CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, e), "%s: the face has %lld of its %lld indices", place_str(pl, lb),
                             (long long)j, (long long)kk);
             } else if (parse_int(x, &v) != 0) {
-                r = CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, x.s), "%s: index '%.*s' is not an integer", loc,
+                r = CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, x.s), "%s: index '%.*s' is not an integer", place_str(pl, lb),
                             (int)(x.n > 32 ? 32 : x.n), (const char*)x.s);
             } else if (v < 0 || (uint64_t)v >= nv) {
                 r = CORRUPT(g, MESO_MESH_GUARD_INDEX_RANGE, off_of(g, x.s),
-                            "%s: corner %lld refers to vertex %lld (the file has %llu)", loc, (long long)j + 1,
+                            "%s: corner %lld refers to vertex %lld (the file has %llu)", place_str(pl, lb), (long long)j + 1,
                             (long long)v, (unsigned long long)nv);
             } else {
                 r = push_corner(g, &corners, &n, &cap, (uint32_t)v);
             }
         }
         if (r == MESO_OK)
-            r = face_check(g, corners, n, t.line, off_of(g, s), loc);
+            r = face_check(g, corners, n, t.line, off_of(g, s), pl);
     }
     free(corners);
     if (r == MESO_OK && next_data_line(&t, &s, &e))
@@ -804,14 +844,15 @@ static int ply_token(ply_text* pt, tok* out)
 /* One value of property type `type`: from text or binary. *v as double,
  * *iv as integer (integer types). Returns MESO_OK or the error. */
 static meso_result ply_value(guard* g, int fmt, ply_text* pt, size_t* at, uint8_t type, double* v, int64_t* iv,
-                             const char* loc)
+                             const place* pl)
 {
+    char lb[96];
     if (fmt == 0) {
         tok t;
         if (!ply_token(pt, &t))
-            return CORRUPT(g, MESO_MESH_GUARD_SIZE, g->size, "PLY: %s: the file ends inside the element", loc);
+            return CORRUPT(g, MESO_MESH_GUARD_SIZE, g->size, "PLY: %s: the file ends inside the element", place_str(pl, lb));
         if (ply_types[type].is_float ? parse_number(t, v) != 0 : parse_int(t, iv) != 0)
-            return CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, t.s), "PLY: %s (line %llu): '%.*s' is not %s", loc,
+            return CORRUPT(g, MESO_MESH_GUARD_NUMBER, off_of(g, t.s), "PLY: %s (line %llu): '%.*s' is not %s", place_str(pl, lb),
                            (unsigned long long)pt->line + 1, (int)(t.n > 32 ? 32 : t.n), (const char*)t.s,
                            ply_types[type].is_float ? "a number" : "an integer");
         if (!ply_types[type].is_float)
@@ -822,7 +863,7 @@ static meso_result ply_value(guard* g, int fmt, ply_text* pt, size_t* at, uint8_
     }
     size_t n = ply_types[type].size;
     if (g->size - *at < n)
-        return CORRUPT(g, MESO_MESH_GUARD_SIZE, *at, "PLY: %s: the file ends inside the element (byte %zu)", loc,
+        return CORRUPT(g, MESO_MESH_GUARD_SIZE, *at, "PLY: %s: the file ends inside the element (byte %zu)", place_str(pl, lb),
                        *at);
     *v = ply_read(g->base + *at, type, fmt == 2, iv);
     *at += n;
@@ -894,6 +935,7 @@ static meso_result check_ply(guard* g)
     }
     if ((r = budget(g, nv, nf, "PLY")) != MESO_OK)
         return r;
+    edge_presize(g, nf);
     ply_text pt = {g->base + at, g->base + g->size, 0};
     {
         /* lines of the header, for ascii line numbers */
@@ -915,30 +957,31 @@ static meso_result check_ply(guard* g)
                            (unsigned long long)x->line, (int)(x->name.n > 32 ? 32 : x->name.n),
                            (const char*)x->name.s, (unsigned long long)x->count, (unsigned long long)min,
                            (unsigned long long)left);
+        char kind[40];
+        snprintf(kind, sizeof(kind), "element '%.*s'", (int)(x->name.n > 24 ? 24 : x->name.n), (const char*)x->name.s);
         for (uint64_t j = 0; j < x->count && r == MESO_OK; ++j) {
-            char loc[96];
+            char lb[96];
             uint64_t start = fmt == 0 ? off_of(g, pt.p) : at;
-            snprintf(loc, sizeof(loc), "element '%.*s' %llu at byte %llu", (int)(x->name.n > 24 ? 24 : x->name.n),
-                     (const char*)x->name.s, (unsigned long long)j, (unsigned long long)start);
+            const place pl_ = {kind, j, start}, *pl = &pl_;
             size_t n = 0;
             for (int p = 0; p < x->nprops && r == MESO_OK; ++p) {
                 const ply_prop* pr = &x->props[p];
                 double v;
                 int64_t ii;
                 if (!pr->is_list) {
-                    r = ply_value(g, fmt, &pt, &at, pr->type, &v, &ii, loc);
+                    r = ply_value(g, fmt, &pt, &at, pr->type, &v, &ii, pl);
                     if (r == MESO_OK && i == iv && ply_types[pr->type].is_float && !finite_float(v))
                         r = CORRUPT(g, MESO_MESH_GUARD_NONFINITE, start, "PLY: vertex %llu (byte %llu): property %d is not a finite float",
                                     (unsigned long long)j, (unsigned long long)start, p + 1);
                     continue;
                 }
-                if ((r = ply_value(g, fmt, &pt, &at, pr->list_type, &v, &ii, loc)) != MESO_OK)
+                if ((r = ply_value(g, fmt, &pt, &at, pr->list_type, &v, &ii, pl)) != MESO_OK)
                     break;
                 uint64_t item = fmt == 0 ? 2 : ply_types[pr->type].size;
                 uint64_t rest = fmt == 0 ? (uint64_t)(pt.end - pt.p) + 1 : (uint64_t)(g->size - at);
                 if (ii < 0 || (uint64_t)ii > rest / item) {
                     r = CORRUPT(g, MESO_MESH_GUARD_SIZE, start, "PLY: %s: a list of %lld items, %llu bytes are left",
-                                loc, (long long)ii, (unsigned long long)rest);
+                                place_str(pl, lb), (long long)ii, (unsigned long long)rest);
                     break;
                 }
                 int face = i == jf && pr->role == 4;
@@ -949,7 +992,7 @@ static meso_result check_ply(guard* g)
                 }
                 for (int64_t q = 0; q < ii && r == MESO_OK; ++q) {
                     int64_t w;
-                    r = ply_value(g, fmt, &pt, &at, pr->type, &v, &w, loc);
+                    r = ply_value(g, fmt, &pt, &at, pr->type, &v, &w, pl);
                     if (r != MESO_OK || !face)
                         continue;
                     if (w < 0 || (uint64_t)w >= nv)
@@ -961,9 +1004,8 @@ static meso_result check_ply(guard* g)
                         r = push_corner(g, &corners, &n, &cap, (uint32_t)w);
                 }
                 if (r == MESO_OK && face) {
-                    snprintf(loc, sizeof(loc), "PLY: face %llu (byte %llu)", (unsigned long long)j,
-                             (unsigned long long)start);
-                    r = face_check(g, corners, n, j, start, loc);
+                    const place fpl = {"PLY: face", j, start};
+                    r = face_check(g, corners, n, j, start, &fpl);
                     n = 0;
                 }
             }
@@ -1001,15 +1043,16 @@ static int same_point(const double* a, const double* b)
     return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
 }
 
-static meso_result stl_triangle(guard* g, const double c[9], uint64_t tri, uint64_t offset, const char* loc)
+static meso_result stl_triangle(guard* g, const double c[9], uint64_t tri, uint64_t offset, const place* pl)
 {
+    char lb[96];
     for (int i = 0; i < 9; ++i)
         if (!finite_float(c[i]))
             return CORRUPT(g, MESO_MESH_GUARD_NONFINITE, offset, "STL: %s: corner %d has a non-finite coordinate",
-                           loc, i / 3 + 1);
+                           place_str(pl, lb), i / 3 + 1);
     if (same_point(c, c + 3) || same_point(c + 3, c + 6) || same_point(c, c + 6))
         return CORRUPT(g, MESO_MESH_GUARD_REPEATED_CORNER, offset, "STL: %s: triangle %llu has two equal corners",
-                       loc, (unsigned long long)tri);
+                       place_str(pl, lb), (unsigned long long)tri);
     g->st.faces++;
     g->st.triangles++;
     g->st.vertices += 3;
@@ -1029,10 +1072,8 @@ static meso_result check_stl(guard* g)
                 double c[9];
                 for (int k = 0; k < 9; ++k)
                     c[k] = (double)le_float(p + 4 * k);
-                char loc[64];
-                snprintf(loc, sizeof(loc), "triangle %llu at byte %llu", (unsigned long long)i,
-                         (unsigned long long)(84 + 50 * i));
-                r = stl_triangle(g, c, i, 84 + 50 * i, loc);
+                const place pl = {"triangle", i, 84 + 50 * i};
+                r = stl_triangle(g, c, i, 84 + 50 * i, &pl);
             }
             return r;
         }
@@ -1058,15 +1099,15 @@ static meso_result check_stl(guard* g)
                            (unsigned long long)pt.line + 1);
         if (tok_is_nocase(t, "endsolid"))
             break;
-        char loc[48];
-        snprintf(loc, sizeof(loc), "line %llu", (unsigned long long)pt.line + 1);
+        char lb[96];
+        const place pl_ = {"line", pt.line + 1, NO_BYTE}, *pl = &pl_;
         uint64_t start = off_of(g, t.s);
         if (!tok_is_nocase(t, "facet"))
-            return CORRUPT(g, MESO_MESH_GUARD_STL_STRUCTURE, start, "STL: %s: expected 'facet' or 'endsolid'", loc);
+            return CORRUPT(g, MESO_MESH_GUARD_STL_STRUCTURE, start, "STL: %s: expected 'facet' or 'endsolid'", place_str(pl, lb));
         double c[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
         for (int w = 0; w < 6 + 3 * 4 + 2; ++w) {
             if (!ply_token(&pt, &t))
-                return CORRUPT(g, MESO_MESH_GUARD_STL_STRUCTURE, g->size, "STL: %s: the file ends inside the facet", loc);
+                return CORRUPT(g, MESO_MESH_GUARD_STL_STRUCTURE, g->size, "STL: %s: the file ends inside the facet", place_str(pl, lb));
             const char* want = w < 6 ? facet_words[w] : w < 18 ? ((w - 6) % 4 == 0 ? "vertex" : "") : w == 18 ? "endloop" : "endfacet";
             if (want[0]) {
                 if (!tok_is_nocase(t, want))
@@ -1082,7 +1123,7 @@ static meso_result check_stl(guard* g)
             if (w >= 6)
                 c[(w - 6) / 4 * 3 + (w - 6) % 4 - 1] = v;
         }
-        meso_result r = stl_triangle(g, c, tri++, start, loc);
+        meso_result r = stl_triangle(g, c, tri++, start, pl);
         if (r != MESO_OK)
             return r;
     }
