@@ -310,7 +310,8 @@ static int finite_float(double v)
 }
 
 /* A decimal integer [+-]digits. Returns 0, or -1 when not an integer;
- * magnitudes beyond 2^62 are clamped (still out of every range). */
+ * magnitudes stop growing past 2^58 (still out of every range, and
+ * 10 x 2^58 + 9 cannot overflow). */
 static int parse_int(tok t, int64_t* v)
 {
     size_t i = 0;
@@ -325,7 +326,7 @@ static int parse_int(tok t, int64_t* v)
     for (; i < t.n; ++i) {
         if (t.s[i] < '0' || t.s[i] > '9')
             return -1;
-        if (x < (INT64_C(1) << 62))
+        if (x < (INT64_C(1) << 58))
             x = 10 * x + (t.s[i] - '0');
     }
     *v = neg ? -x : x;

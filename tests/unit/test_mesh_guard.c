@@ -193,6 +193,8 @@ static void obj_defects_refused(void)
     /* relative indices count the vertices before the face, not the file's */
     refuse_text(MESO_MESH_FORMAT_OBJ, "v 0 0 0\nv 1 0 0\nf -3 -2 -1\nv 0 1 0\n", MESO_MESH_GUARD_INDEX_RANGE,
                 "line 3");
+    refuse_text(MESO_MESH_FORMAT_OBJ, TET_OBJ "f 1 2 99999999999999999999999\n", MESO_MESH_GUARD_INDEX_RANGE,
+                "line 5");
     refuse_text(MESO_MESH_FORMAT_OBJ, TET_OBJ "f 0 3 2\n", MESO_MESH_GUARD_INDEX_ZERO, "line 5");
     refuse_text(MESO_MESH_FORMAT_OBJ, TET_OBJ "f 1 3\nf 1 2 4\n", MESO_MESH_GUARD_FACE_SIZE, "line 5");
     refuse_text(MESO_MESH_FORMAT_OBJ, TET_OBJ "vt 0 0\nf 1/1 2/2 3/1\n", MESO_MESH_GUARD_ATTR_INDEX, "line 6");
@@ -214,6 +216,7 @@ static void off_defects_refused(void)
 {
     refuse_text(MESO_MESH_FORMAT_OFF, "OFF\n2147483648 1 0\n0 0 0\n", MESO_MESH_GUARD_SIZE, "line 2");
     refuse_text(MESO_MESH_FORMAT_OFF, "OFF\n4 4000000000 0\n0 0 0\n", MESO_MESH_GUARD_SIZE, "line 2");
+    refuse_text(MESO_MESH_FORMAT_OFF, "OFF\n99999999999999999999999 1 0\n0 0 0\n", MESO_MESH_GUARD_SIZE, "line 2");
     refuse_text(MESO_MESH_FORMAT_OFF, "OFF\n-4 4 0\n0 0 0\n", MESO_MESH_GUARD_HEADER, "line 2");
     refuse_text(MESO_MESH_FORMAT_OFF, "OFF\n4 -1 0\n0 0 0\n", MESO_MESH_GUARD_HEADER, "line 2");
     refuse_text(MESO_MESH_FORMAT_OFF, "OFF\n", MESO_MESH_GUARD_HEADER, NULL);
