@@ -20,10 +20,14 @@ typedef struct tok {
     size_t n;
 } tok;
 
-/* Directed edges seen so far: open addressing, key (a << 32 | b) + 1, 0 empty. */
+/* Directed edges seen so far: open addressing, key (a << 32 | b) + 1, 0 empty;
+ * key and face side by side (one cache miss a probe). */
+typedef struct edge_slot {
+    uint64_t key;
+    uint64_t where; /* line or face number of the face that used it */
+} edge_slot;
 typedef struct edge_set {
-    uint64_t* keys;
-    uint64_t* where; /* line or face number of the face that used it */
+    edge_slot* slots;
     size_t cap, count;
 } edge_set;
 
@@ -115,25 +119,18 @@ static int edge_reserve(edge_set* e, size_t n)
         cap *= 2;
     if (cap == e->cap)
         return 0;
-    uint64_t* keys = calloc(cap, sizeof(uint64_t));
-    uint64_t* wh = malloc(cap * sizeof(uint64_t));
-    if (!keys || !wh) {
-        free(keys);
-        free(wh);
+    edge_slot* slots = calloc(cap, sizeof(edge_slot));
+    if (!slots)
         return -1;
-    }
     for (size_t i = 0; i < e->cap; ++i)
-        if (e->keys[i]) {
-            size_t j = (size_t)edge_hash(e->keys[i]) & (cap - 1);
-            while (keys[j])
+        if (e->slots[i].key) {
+            size_t j = (size_t)edge_hash(e->slots[i].key) & (cap - 1);
+            while (slots[j].key)
                 j = (j + 1) & (cap - 1);
-            keys[j] = e->keys[i];
-            wh[j] = e->where[i];
+            slots[j] = e->slots[i];
         }
-    free(e->keys);
-    free(e->where);
-    e->keys = keys;
-    e->where = wh;
+    free(e->slots);
+    e->slots = slots;
     e->cap = cap;
     return 0;
 }
@@ -154,15 +151,15 @@ static int edge_insert(edge_set* e, uint32_t a, uint32_t b, uint64_t where, uint
         return -1;
     uint64_t key = (((uint64_t)a << 32) | b) + 1;
     size_t j = (size_t)edge_hash(key) & (e->cap - 1);
-    while (e->keys[j]) {
-        if (e->keys[j] == key) {
-            *prev = e->where[j];
+    while (e->slots[j].key) {
+        if (e->slots[j].key == key) {
+            *prev = e->slots[j].where;
             return 1;
         }
         j = (j + 1) & (e->cap - 1);
     }
-    e->keys[j] = key;
-    e->where[j] = where;
+    e->slots[j].key = key;
+    e->slots[j].where = where;
     e->count++;
     return 0;
 }
@@ -1216,8 +1213,7 @@ meso_result meso_mesh_guard_check(meso_mesh_format format, const uint8_t* data, 
         r = CORRUPT(&g, MESO_MESH_GUARD_EXTENSION, 0, "unknown mesh format (expected .obj .off .ply .stl .om .drc)");
         break;
     }
-    free(g.edges.keys);
-    free(g.edges.where);
+    free(g.edges.slots);
     free(g.sorted);
     if (stats)
         *stats = g.st;
