@@ -63,6 +63,8 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  * Voxelization and membership maps (bake/voxelize.h, bake/membership.h):
  *   3180..3189, listed there.
  * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there.
+ * Mesh files before any reader sees them (bake/mesh_guard.h): 3200..3249,
+ *   listed there.
  * Input meshes, whole-file and orientation: 3250..3299 —
  *   3250 (a warning) inside-out closed components were flipped (mesh_orient.h)
  *   3251 not a mesh file mesobake can read (unknown extension, e.g. /dev/null)

@@ -12,6 +12,7 @@
 #include <cjson/cJSON.h>
 
 #include "adapters.h"
+#include "mesh_guard.h"
 #include "mesh_orient.h"
 #include "meso_layout.h"
 
@@ -208,6 +209,10 @@ static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_erro
         return meso_bake_fail(err, MESO_ERR_IO, 5001, "%s: cannot open: %s", path, strerror(errno));
     fclose(probe);
     meso_result r;
+    /* No third-party reader sees a file the guard refuses (bake/mesh_guard.h). */
+    if (meso_mesh_format_from_path(path) != MESO_MESH_FORMAT_UNKNOWN &&
+        (r = meso_mesh_guard_check_file(path, MESO_MESH_GUARD_DEFAULT_MAX_BYTES, NULL, err)) != MESO_OK)
+        return r;
     if (has_suffix(path, ".drc")) {
 #if MESO_HAVE_DRACO
         uint8_t* data;
