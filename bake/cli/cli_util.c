@@ -12,6 +12,7 @@
 #include <cjson/cJSON.h>
 
 #include "adapters.h"
+#include "memory_budget.h"
 #include "meso_layout.h"
 
 int verbose;
@@ -273,6 +274,17 @@ int write_report_file(const char* path, cJSON* report, size_t file_size, double 
     }
     cJSON_free(s);
     return code;
+}
+
+int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad)
+{
+    if (strcmp(opt, "--max-memory"))
+        return 0;
+    *bad = meso_parse_size(value, budget)
+               ? 0
+               : usage_error("--max-memory expects a size such as 512M, 8G or a byte count (1 .. 2^62), got '%s'",
+                             value);
+    return 1;
 }
 
 int parse_double(const char* s, double* out)

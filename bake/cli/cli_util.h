@@ -69,6 +69,15 @@ int option_value(const char* opt, const char* value, const char* const* valued, 
  * -o/--output or --report, with `value` stored in its place; else 0. */
 int path_option(const char* opt, const char* value, const char** in, const char** out, const char** report);
 
+/* --max-memory SIZE (memory_budget.h): 1 when `opt` is --max-memory, with
+ * `value` parsed into *budget, or *bad set to the usage error's exit code
+ * when it does not parse; else 0. */
+int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad);
+/* The --help line of --max-memory, shared by every bake command. */
+#define MEMORY_OPTION_HELP \
+    "      --max-memory SIZE   refuse, before allocating, a bake whose memory estimate is larger\n" \
+    "                          (512M, 8G, 1.5GiB or bytes; default: half of physical memory)\n"
+
 /* Parse a positive finite number; 0 on failure. */
 int parse_double(const char* s, double* out);
 int parse_int(const char* s, long lo, long hi, long* out);

@@ -55,6 +55,7 @@ static const char* const usage_frusta =
     "      --report FILE       the bake report as JSON: segments, joints, branch_points,\n"
     "                          cap_intersections_found, cap_intersections_unhandled,\n"
     "                          fit_error_max, fit_error_mean, seconds_total, bytes, ...\n"
+    MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this text\n"
     "\n"
@@ -66,6 +67,7 @@ typedef struct frusta_args {
     const char *in, *out, *report, *relief;
     double tolerance, max_joint_angle, relief_depth, relief_repeat;
     int no_fit, keep_caps;
+    uint64_t max_memory; /* --max-memory; 0 until parsed = the default */
 } frusta_args;
 
 static int parse_args(int argc, char** argv, frusta_args* a)
@@ -87,7 +89,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             a->keep_caps = 1;
             continue;
         }
-        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--tolerance",
+        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tolerance",
             "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat"};
         const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
         if (bad)
@@ -95,6 +97,12 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         ++i;
         if (path_option(s, v, &a->in, &a->out, &a->report))
             continue;
+        int bad_size = 0;
+        if (memory_option(s, v, &a->max_memory, &bad_size)) {
+            if (bad_size)
+                return bad_size;
+            continue;
+        }
         if (!strcmp(s, "--relief"))
             a->relief = v;
         else if (!strcmp(s, "--tolerance")) {

@@ -73,7 +73,10 @@ static const char* const usage_shell =
     "                          for a height field, about one cell per typical height step)\n"
     "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n"
     "Reporting:\n"
-    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
+    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n";
+/* (in two parts: one literal would pass the 4095 characters C11 promises) */
+static const char* const usage_shell_end =
+    MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this help\n"
     "\n"
@@ -100,6 +103,7 @@ typedef struct shell_args {
     int dist_type;        /* index into dist_type_names */
     int kind, mode, repair;
     long threads, smooth;
+    uint64_t max_memory; /* --max-memory; 0 until parsed = the default */
 } shell_args;
 
 static const char* const dist_type_names[] = {"u8", "u16", "f32"};
@@ -148,6 +152,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
             fputs(usage_shell, stdout);
+            fputs(usage_shell_end, stdout);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
@@ -156,7 +161,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
             a->repair = s[2] == 'r';
             continue;
         }
-        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--thickness",
+        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
             "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type"};
         const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
@@ -165,6 +170,12 @@ static int parse_args(int argc, char** argv, shell_args* a)
         ++i;
         if (path_option(s, v, &a->in, &a->out, &a->report))
             continue;
+        int bad_size = 0;
+        if (memory_option(s, v, &a->max_memory, &bad_size)) {
+            if (bad_size)
+                return bad_size;
+            continue;
+        }
         if (!strcmp(s, "--texture"))
             a->texture = v;
         else if (!strcmp(s, "--tiling")) {
@@ -214,6 +225,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         a->thickness = 0; /* from --thickness-rel once the mesh is known */
     if (!a->in || !a->out) {
         fputs(usage_shell, stderr);
+        fputs(usage_shell_end, stderr);
         return MESO_EXIT_USAGE;
     }
     if (!a->texture && (a->dist_res[0] || a->dist_type || a->tiling[0] != 1.0 || a->tiling[1] != 1.0))
