@@ -255,3 +255,31 @@ uint64_t meso_distmap_estimate(uint64_t cells)
 {
     return meso_size_mul(cells, 4 + 2 + 8 + 4 + 4 + 4);
 }
+
+uint64_t meso_skeleton_estimate(uint64_t bytes, uint64_t lines)
+{
+    return meso_size_add(BASE_BYTES, meso_size_add(bytes, meso_size_mul(lines, 1024)));
+}
+
+meso_result meso_count_lines(const char* path, uint64_t* bytes, uint64_t* lines, meso_error* err)
+{
+    *bytes = *lines = 0;
+    FILE* fp = fopen(path, "rb");
+    if (!fp)
+        return meso_bake_fail(err, MESO_ERR_IO, 5001, "%s: cannot open: %s", path, strerror(errno));
+    char buf[1 << 16];
+    size_t got;
+    int last = '\n';
+    while ((got = fread(buf, 1, sizeof buf, fp)) > 0) {
+        *bytes += got;
+        for (const char* p = buf; (p = memchr(p, '\n', got - (size_t)(p - buf))) != NULL; ++p)
+            ++*lines;
+        last = buf[got - 1];
+    }
+    const int failed = ferror(fp);
+    fclose(fp);
+    if (failed)
+        return meso_bake_fail(err, MESO_ERR_IO, 5001, "%s: read error", path);
+    *lines += last != '\n';
+    return MESO_OK;
+}

@@ -14,6 +14,7 @@
 #include "cli_util.h"
 #include "frusta_chunks.h"
 #include "frustum_model.h"
+#include "memory_budget.h"
 #include "skeleton_swc.h"
 #include "texture_function.h"
 #if MESO_HAVE_CGAL
@@ -146,8 +147,26 @@ typedef struct skeleton_source {
     double seconds_skeleton;
 } skeleton_source;
 
+/* Limits up front: a skeleton file's nodes (at most its lines) against the
+ * budget before it is read and parsed (memory_budget.h). */
+static meso_result check_skeleton_size(const frusta_args* a, meso_error* err)
+{
+    uint64_t bytes = 0, lines = 0;
+    meso_error ignored = {0};
+    if (meso_count_lines(a->in, &bytes, &lines, &ignored) != MESO_OK)
+        return MESO_OK; /* the reader reports an unreadable file in its own words */
+    return meso_budget_check(meso_skeleton_estimate(bytes, lines), a->max_memory, MESO_LIMIT_ISSUE_SKELETON, err,
+                              "skeleton %s (%llu bytes, up to %llu nodes)", a->in, (unsigned long long)bytes,
+                              (unsigned long long)lines);
+}
+
 static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skeleton_source* src, meso_error* err)
 {
+    if (!is_mesh_path(a->in)) {
+        const meso_result r = check_skeleton_size(a, err);
+        if (r != MESO_OK)
+            return r;
+    }
     if (has_suffix(a->in, ".swc")) {
         src->kind = "swc";
         return meso_skeleton_load(a->in, MESO_SKELETON_SWC, sk, err);
@@ -232,6 +251,8 @@ int cmd_frusta(int argc, char** argv)
     int pr = parse_args(argc, argv, &a);
     if (pr != 0)
         return pr < 0 ? MESO_EXIT_OK : pr;
+    if (!a.max_memory)
+        a.max_memory = meso_memory_default_budget();
     const double t0 = now_seconds();
     meso_error err = {0};
     meso_skeleton sk = {0};
@@ -247,7 +268,7 @@ int cmd_frusta(int argc, char** argv)
     if (r == MESO_OK && verbose)
         fprintf(stderr, "mesobake: %s: %u nodes, %u roots (%s input)\n", a.in, sk.node_count, sk.root_count, src.kind);
     if (r == MESO_OK && a.relief) {
-        r = meso_texfn_from_spec(a.relief, &relief, &err);
+        r = meso_texfn_from_spec_max(a.relief, a.max_memory, &relief, &err);
         if (r == MESO_OK && relief.kind != MESO_TEXFN_HEIGHT)
             r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
                 "--relief '%s' is a volume; frusta take height fields (height:FILE.png, bricks, cobble, ribs)", a.relief);

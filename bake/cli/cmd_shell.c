@@ -21,6 +21,7 @@
 #include "mesh_chunk.h"
 #include "shell_hybrid.h"
 #include "shell_validate.h"
+#include "memory_budget.h"
 #include "texture_function.h"
 
 static const char* const usage_shell =
@@ -292,7 +293,7 @@ static void texture_free(shell_texture* tx)
 static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_error* err)
 {
     double t = now_seconds();
-    meso_result r = meso_texfn_from_spec(a->texture, &tx->fn, err);
+    meso_result r = meso_texfn_from_spec_max(a->texture, a->max_memory, &tx->fn, err);
     if (r != MESO_OK)
         return r;
     const uint32_t* td = tx->fn.dims;
@@ -303,6 +304,14 @@ static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_
     uint32_t res[3] = {a->dist_res[0], a->dist_res[1], a->dist_res[2]};
     if (!res[0])
         meso_distmap_default_res(&tx->fn, res);
+    /* Limits up front: the texture is held, the distance map not yet made. */
+    const uint64_t cells = (uint64_t)res[0] * res[1] * res[2];
+    const uint64_t texels = (uint64_t)td[0] * td[1] * td[2];
+    r = meso_budget_check(meso_size_add(meso_texture_estimate(texels), meso_distmap_estimate(cells)), a->max_memory,
+                          MESO_LIMIT_ISSUE_REQUEST, err, "distance map %ux%ux%u (%s) of a %ux%ux%u texture", res[0],
+                          res[1], res[2], a->dist_res[0] ? "--dist-res" : "default", td[0], td[1], td[2]);
+    if (r != MESO_OK)
+        return r;
     t = now_seconds();
     r = meso_distmap_build(&tx->fn, res, dist_dtypes[a->dist_type], (int)a->threads, &tx->dist, err);
     if (r == MESO_OK && verbose)
@@ -454,6 +463,8 @@ int cmd_shell(int argc, char** argv)
     int rc = parse_args(argc, argv, &a);
     if (rc != 0)
         return rc < 0 ? MESO_EXIT_OK : rc;
+    if (!a.max_memory)
+        a.max_memory = meso_memory_default_budget();
     const double t0 = now_seconds();
     meso_error err = {0};
     shell_texture tx;
