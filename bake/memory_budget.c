@@ -76,6 +76,8 @@ int meso_parse_size(const char* s, uint64_t* out)
     }
     if (*p)
         return 0;
+    if (!shift && (whole < 1 || whole > ((uint64_t)1 << 62)))
+        return 0;
     const double v = ((double)whole + frac) * (double)((uint64_t)1 << shift);
     if (!(v >= 1) || v > (double)((uint64_t)1 << 62))
         return 0;
