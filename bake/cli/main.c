@@ -36,7 +36,9 @@ static const char* const usage_full =
     "\n"
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
     "            4 internal error, 5 not supported in this build.\n"
-    "Outputs are written atomically: a failed bake never leaves a partial file.\n";
+    "Outputs are written atomically: a failed bake never leaves a partial file.\n"
+    "Every bake command takes --max-memory SIZE and refuses, before allocating, a\n"
+    "request whose memory estimate is larger (default: half of physical memory).\n";
 
 int main(int argc, char** argv)
 {
