@@ -143,7 +143,7 @@ int meso_regular_file_size(FILE* fp, uint64_t* size)
  * count. grow 0: the tiles each triangle meets (the voxelizer's own
  * triangle-box test, boxes grown a little more than it grows them), counted
  * per z-layer of tiles into layer[] (T2 entries) when not NULL; a triangle
- * whose bounding box spans more than 4096 tiles, or once 2^24 tests are
+ * whose bounding box spans more than 4096 tiles, or once 2^22 tests are
  * spent, counts its whole box. grow 1: every tile within one tile of a
  * triangle's bounding box. */
 static uint64_t near_surface(const meso_mesh* m, const meso_voxel_grid* g, int grow, uint64_t* layer)
@@ -166,7 +166,7 @@ static uint64_t near_surface(const meso_mesh* m, const meso_voxel_grid* g, int g
             continue;
         const uint64_t nx = (uint64_t)(b[0] - a[0] + 1), ny = (uint64_t)(b[1] - a[1] + 1);
         const uint64_t nz = (uint64_t)(b[2] - a[2] + 1), box = meso_size_mul(meso_size_mul(nx, ny), nz);
-        const int exact = !grow && box <= 4096 && tests < ((uint64_t)1 << 24);
+        const int exact = !grow && box <= 4096 && tests < ((uint64_t)1 << 22);
         tests += exact ? box : 0;
         for (uint64_t z = (uint64_t)a[2]; z <= (uint64_t)b[2]; ++z) {
             uint64_t n = nx * ny;
