@@ -108,7 +108,15 @@ static int read_body(png_structp png, png_infop info, png_ctx* c, int* width, in
     png_init_io(png, c->fp);
     png_set_sig_bytes(png, 8);
     png_set_user_limits(png, 65536, 65536);
-    png_set_chunk_malloc_max(png, (png_alloc_size_t)8 << 20); /* ancillary chunks (text, ICC) */
+    png_set_chunk_malloc_max(png, (png_alloc_size_t)8 << 20);
+    /* Ancillary chunks are skipped unread: libpng 1.6.39 allocates a zTXt
+     * chunk's declared length (2 GB in a 205-byte file, found by
+     * tests/fuzz/fuzz_png.c) before it finds the stream too short, and none
+     * of them changes channel 0 (no gamma or colour conversion is done). */
+    static const png_byte ignored[] = "bKGD\0cHRM\0eXIf\0gAMA\0hIST\0iCCP\0iTXt\0oFFs\0pCAL\0pHYs\0sBIT\0"
+                                      "sCAL\0sPLT\0sRGB\0tEXt\0tIME\0zTXt";
+    png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, ignored, (int)(sizeof ignored / 5));
+    png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, NULL, 0); /* and chunks libpng does not know */
     png_read_info(png, info);
     png_set_expand(png); /* palette -> RGB, grey < 8 bits -> 8 bits, tRNS -> alpha */
     (void)png_set_interlace_handling(png);

@@ -2,7 +2,7 @@
  * fuzz_raw_volume.c — libFuzzer target for raw density volumes as
  * `--texture volume:FILE.raw:WxHxD` reads them (bake/texture_function.c,
  * meso_texfn_from_spec_max). The input is "DIMS\n" followed by the file's
- * bytes: DIMS (up to 63 bytes, any text but ':') becomes the spec's WxHxD,
+ * bytes: DIMS (up to 63 bytes, any text but ':' and ".vdb") becomes the spec's WxHxD,
  * the rest is written to a scratch file that the spec names. Budget 256 MiB.
  *
  *   # replay (any compiler, meson test --suite fuzz):
@@ -58,7 +58,9 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     char dims[64];
     memcpy(dims, data, dl);
     dims[dl] = 0;
-    if (strlen(dims) != dl || strchr(dims, ':'))
+    /* The path stays the scratch file: no ':' (it would move the split), no
+     * ".vdb" (the spec would name an OpenVDB file: not this target's). */
+    if (strlen(dims) != dl || strchr(dims, ':') || strstr(dims, ".vdb"))
         return 0;
     if (!scratch[0])
         snprintf(scratch, sizeof scratch, "/tmp/meso_fuzz_raw_%ld.raw", (long)getpid());
