@@ -62,7 +62,9 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  * Skeletons from meshes (bake/skeleton_from_mesh.h): 3170..3179, listed there.
  * Voxelization and membership maps (bake/voxelize.h, bake/membership.h):
  *   3180..3189, listed there.
- * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there. */
+ * Cells-object chunks (bake/cells_chunks.h): 3190..3194, listed there.
+ * Limits up front, --max-memory (bake/memory_budget.h): 3400..3449, listed
+ *   there (3400 a request from the options, 3401.. sizes input files dictate). */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */
