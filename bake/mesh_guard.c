@@ -77,7 +77,7 @@ static meso_result budget(guard* g, uint64_t vertices, uint64_t triangles, const
     if (need > (double)g->max_bytes)
         return CORRUPT(g, MESO_MESH_GUARD_BUDGET, 0,
                        "%s: %llu vertices and %llu triangles would need about %.0f MB to read, more than the "
-                       "%.0f MB allowed",
+                       "%.3g MB allowed (raise it with --max-memory SIZE)",
                        what, (unsigned long long)vertices, (unsigned long long)triangles, need / 1e6,
                        (double)g->max_bytes / 1e6);
     return MESO_OK;
@@ -1158,7 +1158,8 @@ static meso_result check_drc(guard* g)
         return CORRUPT(g, MESO_MESH_GUARD_HEADER, 0, "DRC: no 'DRACO' header");
     if ((uint64_t)g->size > g->max_bytes / MESO_MESH_GUARD_DRACO_EXPANSION)
         return CORRUPT(g, MESO_MESH_GUARD_BUDGET, 0,
-                       "DRC: %zu bytes may decode to more than the %.0f MB allowed (%u x the file size)", g->size,
+                       "DRC: %zu bytes may decode to more than the %.3g MB allowed (%u x the file size; raise it with "
+                       "--max-memory SIZE)", g->size,
                        (double)g->max_bytes / 1e6, MESO_MESH_GUARD_DRACO_EXPANSION);
     return MESO_OK;
 }
@@ -1197,7 +1198,7 @@ meso_result meso_mesh_guard_check(meso_mesh_format format, const uint8_t* data, 
     if (stats)
         memset(stats, 0, sizeof(*stats));
     if ((uint64_t)size > g.max_bytes)
-        return CORRUPT(&g, MESO_MESH_GUARD_BUDGET, 0, "%zu bytes: larger than the %.0f MB allowed", size,
+        return CORRUPT(&g, MESO_MESH_GUARD_BUDGET, 0, "%zu bytes: larger than the %.3g MB allowed (raise it with --max-memory SIZE)", size,
                        (double)g.max_bytes / 1e6);
     if (size == 0)
         return CORRUPT(&g, MESO_MESH_GUARD_EMPTY, 0, "%s: empty file", meso_mesh_format_name(format));
@@ -1243,7 +1244,8 @@ meso_result meso_mesh_guard_check_file(const char* path, uint64_t max_bytes, mes
     if ((uint64_t)n > limit) {
         fclose(f);
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_MESH_GUARD_BUDGET,
-                              "%s: %ld bytes: larger than the %.0f MB allowed", path, n, (double)limit / 1e6);
+                              "%s: %ld bytes: larger than the %.3g MB allowed (raise it with --max-memory SIZE)",
+                              path, n, (double)limit / 1e6);
     }
     uint8_t* buf = malloc(n ? (size_t)n : 1);
     if (!buf) {

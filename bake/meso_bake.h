@@ -69,7 +69,9 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  *   3250 (a warning) inside-out closed components were flipped (mesh_orient.h)
  *   3251 not a mesh file mesobake can read (unknown extension, e.g. /dev/null)
  *   3252 no triangles (an empty file, or not a mesh)
- * Skeletons, continued (bake/skeleton_swc.h): 3300..3349, listed there. */
+ * Skeletons, continued (bake/skeleton_swc.h): 3300..3349, listed there.
+ * Limits up front, --max-memory (bake/memory_budget.h): 3400..3449, listed
+ *   there (3400 a request from the options, 3401.. sizes input files dictate). */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 
 /* Fill an error struct (printf-style message). Returns `r`. */

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "adapters.h"
+#include "memory_budget.h"
 #include "png_io.h"
 
 /* >>hash ------------------------------------------------------------------
@@ -355,10 +356,14 @@ double meso_texfn_builtin_value(const char* name, double s, double t, double w)
     return NAN;
 }
 
-static meso_result build_builtin(const builtin* b, uint32_t res, meso_texfn* out, meso_error* err)
+static meso_result build_builtin(const builtin* b, uint32_t res, uint64_t budget, meso_texfn* out, meso_error* err)
 {
     const uint32_t dims[3] = {res, res, b->kind == MESO_TEXFN_HEIGHT ? 1 : res / (uint32_t)b->depth_div};
     const size_t n = (size_t)dims[0] * dims[1] * dims[2];
+    meso_result r = meso_budget_check(meso_texture_estimate(n), budget, MESO_LIMIT_ISSUE_REQUEST, err,
+                                      "texture %s:%u (%ux%ux%u texels)", b->name, res, dims[0], dims[1], dims[2]);
+    if (r != MESO_OK)
+        return r;
     float* v = malloc(sizeof(float) * n);
     if (!v)
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture: out of memory");
@@ -373,7 +378,7 @@ static meso_result build_builtin(const builtin* b, uint32_t res, meso_texfn* out
                 v[((size_t)z * dims[1] + y) * dims[0] + x] =
                     (float)(b->height ? b->height(s, t) : b->density(s, t, w));
             }
-    const meso_result r = meso_texfn_from_values(b->kind, dims, v,
+    r = meso_texfn_from_values(b->kind, dims, v,
                                                  b->kind == MESO_TEXFN_HEIGHT ? MESO_DTYPE_U16 : MESO_DTYPE_U8, out,
                                                  err);
     free(v);
@@ -401,16 +406,27 @@ static meso_result check_readable(const char* path, meso_error* err)
     return MESO_OK;
 }
 
-static meso_result load_png_height(const char* path, meso_texfn* out, meso_error* err)
+/* Bytes a pixel that load_png_height holds beside the reader's: the floats
+ * (4 B), then the function's values (4 B) and payload (2 B). */
+#define PNG_EXTRA_PER_PIXEL 10u
+
+static meso_result load_png_height(const char* path, uint64_t budget, meso_texfn* out, meso_error* err)
 {
-    meso_result r = check_readable(path, err);
-    if (r != MESO_OK)
-        return r;
+    FILE* fp = fopen(path, "rb");
+    if (!fp)
+        return meso_bake_fail(err, MESO_ERR_IO, MESO_TEXFN_ISSUE_FILE, "texture file %s: %s", path, strerror(errno));
     uint16_t* px = NULL;
     int w = 0, h = 0, depth = 0;
-    char why[256];
-    if (meso_png_read_channel0(path, &px, &w, &h, &depth, why, (int)sizeof(why)) != 0)
+    uint64_t need = 0;
+    char why[600];
+    const int rc = meso_png_read_channel0_fp(fp, path, budget, PNG_EXTRA_PER_PIXEL, &px, &w, &h, &depth, &need, why,
+                                             (int)sizeof(why));
+    fclose(fp);
+    if (rc == -2) /* the header asks for more than the budget: nothing was allocated */
+        return meso_budget_check(need, budget, MESO_LIMIT_ISSUE_PNG, err, "texture file %s", why);
+    if (rc != 0)
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_TEXFN_ISSUE_CONTENT, "texture file %s", why);
+    meso_result r;
     const size_t n = (size_t)w * (size_t)h;
     float* v = malloc(sizeof(float) * n);
     if (!v) {
@@ -451,15 +467,33 @@ static int parse_dims(const char* s, uint32_t dims[3])
     return 1;
 }
 
-static meso_result load_raw_volume(const char* path, const uint32_t dims[3], meso_texfn* out, meso_error* err)
+static meso_result load_raw_volume(const char* path, const uint32_t dims[3], uint64_t budget, meso_texfn* out,
+                                   meso_error* err)
 {
     FILE* fp = fopen(path, "rb");
     if (!fp)
         return meso_bake_fail(err, MESO_ERR_IO, MESO_TEXFN_ISSUE_FILE, "texture file %s: %s", path, strerror(errno));
-    const size_t n = (size_t)dims[0] * dims[1] * dims[2];
+    const uint64_t n = (uint64_t)dims[0] * dims[1] * dims[2];
+    /* First what the file can hold (a regular file's length must be the
+     * declared size exactly: exit 3), then what the request costs (exit 1);
+     * both before anything is allocated. A pipe is read and its length
+     * checked after. */
+    uint64_t file_size = 0;
+    meso_result r = MESO_OK;
+    if (meso_regular_file_size(fp, &file_size) && file_size != n)
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_TEXFN_ISSUE_CONTENT,
+                           "texture file %s: has %llu bytes, expected exactly %llu (%ux%ux%u u8 densities)", path,
+                           (unsigned long long)file_size, (unsigned long long)n, dims[0], dims[1], dims[2]);
+    if (r == MESO_OK)
+        r = meso_budget_check(meso_texture_estimate(n), budget, MESO_LIMIT_ISSUE_REQUEST, err,
+                              "texture volume %s:%ux%ux%u", path, dims[0], dims[1], dims[2]);
+    if (r != MESO_OK) {
+        fclose(fp);
+        return r;
+    }
     uint8_t* raw = malloc(n + 1);
     float* v = malloc(sizeof(float) * n);
-    meso_result r = raw && v ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture: out of memory");
+    r = raw && v ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture: out of memory");
     if (r == MESO_OK) {
         const size_t got = fread(raw, 1, n + 1, fp);
         if (ferror(fp))
@@ -519,6 +553,11 @@ static int ends_with(const char* s, size_t len, const char* suffix)
 
 meso_result meso_texfn_from_spec(const char* spec, meso_texfn* out, meso_error* err)
 {
+    return meso_texfn_from_spec_max(spec, UINT64_MAX, out, err);
+}
+
+meso_result meso_texfn_from_spec_max(const char* spec, uint64_t max_bytes, meso_texfn* out, meso_error* err)
+{
     memset(out, 0, sizeof(*out));
     const char* colon = strchr(spec, ':');
     const size_t head = colon ? (size_t)(colon - spec) : strlen(spec);
@@ -535,13 +574,13 @@ meso_result meso_texfn_from_spec(const char* spec, meso_texfn* out, meso_error* 
                 return spec_error(err, spec, b->max_res == 1024 ? "RES must be an integer in 8..1024"
                                                                 : "RES must be an even integer in 8..256");
         }
-        return build_builtin(b, (uint32_t)res, out, err);
+        return build_builtin(b, (uint32_t)res, max_bytes, out, err);
     }
     meso_result r;
     if (head == 6 && !strncmp(spec, "height", 6)) {
         if (!rest || !*rest)
             return spec_error(err, spec, "height needs a PNG file");
-        r = load_png_height(rest, out, err);
+        r = load_png_height(rest, max_bytes, out, err);
     } else if (head == 6 && !strncmp(spec, "volume", 6)) {
         if (!rest || !*rest)
             return spec_error(err, spec, "volume needs a .raw or .vdb file");
@@ -565,7 +604,7 @@ meso_result meso_texfn_from_spec(const char* spec, meso_texfn* out, meso_error* 
                 return spec_error(err, spec, "bad .raw path");
             memcpy(path, rest, plen);
             path[plen] = 0;
-            r = load_raw_volume(path, dims, out, err);
+            r = load_raw_volume(path, dims, max_bytes, out, err);
         }
     } else {
         return spec_error(err, spec, "unknown texture source");

@@ -73,6 +73,15 @@ typedef struct meso_texfn {
  * MESO_ERR_UNSUPPORTED). */
 meso_result meso_texfn_from_spec(const char* spec, meso_texfn* out, meso_error* err);
 
+/* The same with a memory budget (memory_budget.h), checked before anything
+ * large is allocated: a built-in's RES or a .raw volume's WxHxD over it is
+ * MESO_ERR_INVALID_ARG (code 3400, a request from the options); a PNG whose
+ * header claims more pixels than it allows is MESO_ERR_CORRUPT (3401). A
+ * regular .raw file whose length is not W*H*D exactly is MESO_ERR_CORRUPT
+ * (3122), refused before its size is allocated. .vdb input is sampled at
+ * most 256 texels a side (64 MiB of floats): bounded by construction. */
+meso_result meso_texfn_from_spec_max(const char* spec, uint64_t max_bytes, meso_texfn* out, meso_error* err);
+
 /* Build a function from normalised values (copied; quantised to `dtype`,
  * and `values` of the result are the quantised ones). dims[2] must be 1 for
  * a height field. */

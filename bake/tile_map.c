@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "bake_threads.h"
+#include "memory_budget.h"
 
 uint64_t meso_splitmix64(uint64_t* state)
 {
@@ -230,8 +231,15 @@ meso_result meso_tile_map_read_raw(const char* path, uint32_t res, meso_tile_map
     if (!fp)
         return meso_bake_fail(err, MESO_ERR_IO, MESO_TILEMAP_ISSUE_FILE, "tile map %s: %s", path, strerror(errno));
     const size_t want = 2 * (size_t)res * res * res;
-    /* Read one byte more than needed: a longer file is refused without
-     * trusting its size from the file system. */
+    /* A regular file of the wrong length is refused before the buffer is
+     * allocated (R = 1024 asks for 2 GiB). Then read one byte more than
+     * needed: a longer file (or a pipe) is refused without trusting its size
+     * from the file system. */
+    uint64_t file_size = 0;
+    if (meso_regular_file_size(fp, &file_size) && file_size != want) {
+        fclose(fp);
+        return wrong_size(err, path, file_size, res);
+    }
     uint8_t* buf = malloc(want + 1);
     if (!buf) {
         fclose(fp);

@@ -597,6 +597,11 @@ static int tri_box(const double centre[3], const double half[3], const double* t
     return 1;
 }
 
+int meso_triangle_box_overlap(const double centre[3], const double half[3], const double tv[9])
+{
+    return tri_box(centre, half, tv);
+}
+
 /* >>grid ---------------------------------------------------------------------- */
 
 typedef struct grid {

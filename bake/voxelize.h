@@ -147,6 +147,12 @@ typedef enum meso_voxelizer {
     MESO_VOXELIZE_COUNT
 } meso_voxelizer;
 
+/* Whether triangle tv (3 corners, xyz) meets the closed box centre +- half
+ * (separating axes; the test the voxelizer uses for candidate tiles: grow
+ * the box, and rounding can only add overlaps). For estimates of the
+ * tiles a mesh meets (memory_budget.h). */
+int meso_triangle_box_overlap(const double centre[3], const double half[3], const double tv[9]);
+
 /* "auto", "parity", "winding"; "?" for anything else. Never NULL. */
 const char* meso_voxelizer_name(meso_voxelizer v);
 

@@ -14,6 +14,7 @@
 #include "adapters.h"
 #include "mesh_guard.h"
 #include "mesh_orient.h"
+#include "memory_budget.h"
 #include "meso_layout.h"
 
 int verbose;
@@ -190,18 +191,18 @@ void report_mesh_warnings(cJSON* report)
     cJSON_AddItemToArray(cJSON_AddArrayToObject(report, "warnings"), cJSON_CreateString(msg));
 }
 
-static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_error* err);
+static meso_result load_mesh_unchecked(const char* path, uint64_t max_memory, meso_mesh* m, meso_error* err);
 
-meso_result load_mesh(const char* path, meso_mesh* m, meso_error* err)
+meso_result load_mesh(const char* path, uint64_t max_memory, meso_mesh* m, meso_error* err)
 {
-    meso_result r = load_mesh_unchecked(path, m, err);
+    meso_result r = load_mesh_unchecked(path, max_memory, m, err);
     /* Every failure carries a code: 3100 for an input the readers reject. */
     if (r != MESO_OK && err && err->code == 0)
         err->code = r == MESO_ERR_IO ? 5004 : 3100;
     return r;
 }
 
-static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_error* err)
+static meso_result load_mesh_unchecked(const char* path, uint64_t max_memory, meso_mesh* m, meso_error* err)
 {
     memset(m, 0, sizeof(*m));
     FILE* probe = fopen(path, "rb");
@@ -211,7 +212,7 @@ static meso_result load_mesh_unchecked(const char* path, meso_mesh* m, meso_erro
     meso_result r;
     /* No third-party reader sees a file the guard refuses (bake/mesh_guard.h). */
     if (meso_mesh_format_from_path(path) != MESO_MESH_FORMAT_UNKNOWN &&
-        (r = meso_mesh_guard_check_file(path, MESO_MESH_GUARD_DEFAULT_MAX_BYTES, NULL, err)) != MESO_OK)
+        (r = meso_mesh_guard_check_file(path, max_memory, NULL, err)) != MESO_OK)
         return r;
     if (has_suffix(path, ".drc")) {
 #if MESO_HAVE_DRACO
@@ -354,6 +355,17 @@ int check_outputs(const char* out, const char* report)
         return MESO_EXIT_OK;
     err_print(&err);
     return meso_exit_for(r);
+}
+
+int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad)
+{
+    if (strcmp(opt, "--max-memory"))
+        return 0;
+    *bad = meso_parse_size(value, budget)
+               ? 0
+               : usage_error("--max-memory expects a size such as 512M, 8G or a byte count (1 .. 2^62), got '%s'",
+                             value);
+    return 1;
 }
 
 int parse_double(const char* s, double* out)

@@ -37,9 +37,13 @@ const char* base_name(const char* path);
 int has_suffix(const char* s, const char* suffix);
 /* Read a whole file (provenance checksums, .drc input). */
 meso_result slurp(const char* path, uint8_t** data, size_t* size, meso_error* err);
-/* Load a mesh by extension (OpenMesh or Draco) and check it: finite
- * coordinates, indices in range, nothing the reader had to drop. */
-meso_result load_mesh(const char* path, meso_mesh* m, meso_error* err);
+/* Load a mesh by extension: its bytes through the guard (bake/mesh_guard.h,
+ * with `max_memory` — the --max-memory budget, 0 = the guard's default — as
+ * the bound on what its header counts may make a reader allocate), then
+ * OpenMesh or Draco; then check it (finite coordinates, indices in range,
+ * nothing the reader had to drop) and turn inside-out closed components
+ * outward (bake/mesh_orient.h). */
+meso_result load_mesh(const char* path, uint64_t max_memory, meso_mesh* m, meso_error* err);
 
 typedef struct cJSON cJSON;
 /* Adds what load_mesh changed in the input (inside-out components it
@@ -90,6 +94,15 @@ int option_value(const char* opt, const char* value, const char* const* valued, 
 /* The paths every bake command takes: 1 when `opt` is -i/--input,
  * -o/--output or --report, with `value` stored in its place; else 0. */
 int path_option(const char* opt, const char* value, const char** in, const char** out, const char** report);
+
+/* --max-memory SIZE (memory_budget.h): 1 when `opt` is --max-memory, with
+ * `value` parsed into *budget, or *bad set to the usage error's exit code
+ * when it does not parse; else 0. */
+int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad);
+/* The --help line of --max-memory, shared by every bake command. */
+#define MEMORY_OPTION_HELP \
+    "      --max-memory SIZE   refuse, before allocating, a bake whose memory estimate is larger\n" \
+    "                          (512M, 8G, 1.5GiB or bytes; default: half of physical memory)\n"
 
 /* Parse a positive finite number; 0 on failure. */
 int parse_double(const char* s, double* out);

@@ -15,6 +15,7 @@
 
 #include "cells_chunks.h"
 #include "cli_util.h"
+#include "memory_budget.h"
 #include "mesh_check.h"
 #include "mesh_chunk.h"
 #include "meso_layout.h"
@@ -49,6 +50,7 @@ static const char* const usage_cells =
     "  -j, --threads N         threads (default: all cores); the output does not depend on it\n"
     "      --report FILE       the bake report as JSON: tiles, split_cells, cells_inside,\n"
     "                          cells_outside, cells_intersected, bytes, seconds_total, voxelizer, ...\n"
+    MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this text\n";
 
@@ -56,6 +58,7 @@ typedef struct cells_args {
     const char *in, *out, *report, *tile_map, *colour, *voxelizer;
     long tiles, tile_res, threads;
     double cell_size;
+    uint64_t max_memory; /* --max-memory; 0 until parsed = the default */
 } cells_args;
 
 static int parse_args(int argc, char** argv, cells_args* a)
@@ -71,7 +74,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
             verbose = 1;
             continue;
         }
-        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--tiles", "--cell-size",
+        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tiles", "--cell-size",
             "--tile-res", "--tile-map", "--colour", "--voxelizer", "-j", "--threads"};
         const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
         if (bad)
@@ -79,6 +82,12 @@ static int parse_args(int argc, char** argv, cells_args* a)
         ++i;
         if (path_option(s, v, &a->in, &a->out, &a->report))
             continue;
+        int bad_size = 0;
+        if (memory_option(s, v, &a->max_memory, &bad_size)) {
+            if (bad_size)
+                return bad_size;
+            continue;
+        }
         if (!strcmp(s, "--tile-map"))
             a->tile_map = v;
         else if (!strcmp(s, "--colour"))
@@ -218,6 +227,48 @@ static meso_result make_grid(const cells_args* a, const meso_mesh* m, uint32_t R
     return r;
 }
 
+/* The tile resolution make_tile_map will use: --tile-res, else the R of
+ * FILE.raw:R, else the generators' 32 (a spec that does not parse fails in
+ * make_tile_map). */
+static uint32_t planned_res(const cells_args* a)
+{
+    const char* colon = strrchr(a->tile_map, ':');
+    long r = 32;
+    if (!a->tile_res && strncmp(a->tile_map, "voronoi", 7) && strncmp(a->tile_map, "spheres", 7) && colon &&
+        !parse_int(colon + 1, 1, MESO_TILE_MAP_MAX_RES, &r))
+        r = 32;
+    return a->tile_res ? (uint32_t)a->tile_res : (uint32_t)r;
+}
+
+/* Limits up front (memory_budget.h): the grid is fixed by the options and
+ * the mesh's box, so the bake's peak is known before the tile map is made;
+ * checked again once the split cells (S) are known, before the membership.
+ *
+ * Estimate (of allocations: calloc'd pages never written are not resident)
+ * against peak RSS, `mesobake cells -i tests/data/spot_low_resolution.obj
+ * -o o.meso -j 2 -v ...` under `/usr/bin/time -f %M` (2-core machine):
+ *   --tile-res 32                 estimate  99 MiB   peak RSS  36 MiB
+ *   --tile-res 128                estimate 238 MiB   peak RSS  87 MiB
+ *   --tile-res 256                estimate 512 MiB   peak RSS 497 MiB
+ *   --tiles 64 --tile-res 16      estimate 121 MiB   peak RSS  41 MiB
+ *   --tiles 128 --tile-res 32     estimate 239 MiB   peak RSS  95 MiB
+ *   --tiles 256 --tile-res 16     estimate 335 MiB   peak RSS 142 MiB
+ * (96 MiB of each estimate is the program and its libraries). */
+static meso_result check_budget(const cells_args* a, const meso_mesh* m, const meso_voxel_grid* g, uint32_t splits,
+                                meso_error* err)
+{
+    uint64_t mixed = 0;
+    const uint64_t need = meso_cells_estimate(m, g, splits, (int)a->threads, &mixed);
+    if (verbose) {
+        char n[32], b[32];
+        fprintf(stderr, "mesobake: memory estimate %s (%u split cells), budget %s\n",
+                meso_format_size(need, n, sizeof n), splits, meso_format_size(a->max_memory, b, sizeof b));
+    }
+    return meso_budget_check(need, a->max_memory, MESO_LIMIT_ISSUE_REQUEST, err,
+                             "cells: %u^3 voxels per tile, %ux%ux%u tiles (%llu of them near the surface)",
+                             g->tile_res, g->tiles[0], g->tiles[1], g->tiles[2], (unsigned long long)mixed);
+}
+
 /* parity / vdb: refuse what parity would get wrong (it leaks through holes). */
 static meso_result require_closed(const meso_mesh* m, const char* path, meso_error* err)
 {
@@ -267,9 +318,15 @@ int cmd_cells(int argc, char** argv)
                                   : !strcmp(a.voxelizer, "auto")  ? MESO_VOXELIZE_AUTO
                                                                   : MESO_VOXELIZE_PARITY;
 
-    meso_result r = load_mesh(a.in, &m, &err);
+    if (!a.max_memory)
+        a.max_memory = meso_memory_default_budget();
+    meso_result r = load_mesh(a.in, a.max_memory, &m, &err);
     if (r == MESO_OK && method == MESO_VOXELIZE_PARITY)
         r = require_closed(&m, a.in, &err);
+    if (r == MESO_OK)
+        r = make_grid(&a, &m, planned_res(&a), &g, &err);
+    if (r == MESO_OK)
+        r = check_budget(&a, &m, &g, 1, &err);
     double t = now_seconds();
     if (r == MESO_OK)
         r = make_tile_map(&a, &R, &tm, &err);
@@ -282,8 +339,10 @@ int cmd_cells(int argc, char** argv)
         r = meso_bake_fail(&err, tm.kind == MESO_TILE_MAP_RAW ? MESO_ERR_CORRUPT : MESO_ERR_INVALID_ARG,
                            MESO_TILEMAP_ISSUE_CONTENT, "--tile-map '%s': the tile map has no cells (every voxel is 0)",
                            a.tile_map); /* a file of zeros is an invalid input (3), a generated one a bad option (1) */
+    if (r == MESO_OK && R != g.tile_res) /* planned_res and make_tile_map disagree: a bug */
+        r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, 0, "cells: tile resolution %u, planned %u", R, g.tile_res);
     if (r == MESO_OK)
-        r = make_grid(&a, &m, R, &g, &err);
+        r = check_budget(&a, &m, &g, sc.split_count, &err);
     if (r == MESO_OK)
         r = meso_membership_compute(&m, &g, &sc, method, threads, &mb, &err);
     if (r == MESO_OK && verbose)

@@ -14,6 +14,7 @@
 #include "cli_util.h"
 #include "frusta_chunks.h"
 #include "frustum_model.h"
+#include "memory_budget.h"
 #include "skeleton_swc.h"
 #include "texture_function.h"
 #if MESO_HAVE_CGAL
@@ -56,6 +57,7 @@ static const char* const usage_frusta =
     "      --report FILE       the bake report as JSON: segments, joints, branch_points,\n"
     "                          cap_intersections_found, cap_intersections_unhandled,\n"
     "                          fit_error_max, fit_error_mean, seconds_total, bytes, ...\n"
+    MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this text\n"
     "\n"
@@ -70,6 +72,7 @@ typedef struct frusta_args {
     const char *in, *out, *report, *relief;
     double tolerance, max_joint_angle, relief_depth, relief_repeat;
     int no_fit, keep_caps;
+    uint64_t max_memory; /* --max-memory; 0 until parsed = the default */
 } frusta_args;
 
 static int parse_args(int argc, char** argv, frusta_args* a)
@@ -91,7 +94,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             a->keep_caps = 1;
             continue;
         }
-        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--tolerance",
+        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tolerance",
             "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat"};
         const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
         if (bad)
@@ -99,6 +102,12 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         ++i;
         if (path_option(s, v, &a->in, &a->out, &a->report))
             continue;
+        int bad_size = 0;
+        if (memory_option(s, v, &a->max_memory, &bad_size)) {
+            if (bad_size)
+                return bad_size;
+            continue;
+        }
         if (!strcmp(s, "--relief"))
             a->relief = v;
         else if (!strcmp(s, "--tolerance")) {
@@ -142,8 +151,26 @@ typedef struct skeleton_source {
     double seconds_skeleton;
 } skeleton_source;
 
+/* Limits up front: a skeleton file's nodes (at most its lines) against the
+ * budget before it is read and parsed (memory_budget.h). */
+static meso_result check_skeleton_size(const frusta_args* a, meso_error* err)
+{
+    uint64_t bytes = 0, lines = 0;
+    meso_error ignored = {0};
+    if (meso_count_lines(a->in, &bytes, &lines, &ignored) != MESO_OK)
+        return MESO_OK; /* the reader reports an unreadable file in its own words */
+    return meso_budget_check(meso_skeleton_estimate(bytes, lines), a->max_memory, MESO_LIMIT_ISSUE_SKELETON, err,
+                              "skeleton %s (%llu bytes, up to %llu nodes)", a->in, (unsigned long long)bytes,
+                              (unsigned long long)lines);
+}
+
 static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skeleton_source* src, meso_error* err)
 {
+    if (!is_mesh_path(a->in)) {
+        const meso_result r = check_skeleton_size(a, err);
+        if (r != MESO_OK)
+            return r;
+    }
     if (has_suffix(a->in, ".swc")) {
         src->kind = "swc";
         return meso_skeleton_load(a->in, MESO_SKELETON_SWC, sk, err);
@@ -155,7 +182,7 @@ static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skelet
     src->kind = "mesh";
 #if MESO_HAVE_CGAL
     meso_mesh m;
-    meso_result r = load_mesh(a->in, &m, err);
+    meso_result r = load_mesh(a->in, a->max_memory, &m, err);
     if (r != MESO_OK)
         return r;
     double t0 = now_seconds();
@@ -228,6 +255,8 @@ int cmd_frusta(int argc, char** argv)
     int pr = parse_args(argc, argv, &a);
     if (pr != 0)
         return pr < 0 ? MESO_EXIT_OK : pr;
+    if (!a.max_memory)
+        a.max_memory = meso_memory_default_budget();
     const double t0 = now_seconds();
     meso_error err = {0};
     meso_skeleton sk = {0};
@@ -245,7 +274,7 @@ int cmd_frusta(int argc, char** argv)
     if (r == MESO_OK && verbose)
         fprintf(stderr, "mesobake: %s: %u nodes, %u roots (%s input)\n", a.in, sk.node_count, sk.root_count, src.kind);
     if (r == MESO_OK && a.relief) {
-        r = meso_texfn_from_spec(a.relief, &relief, &err);
+        r = meso_texfn_from_spec_max(a.relief, a.max_memory, &relief, &err);
         if (r == MESO_OK && relief.kind != MESO_TEXFN_HEIGHT)
             r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
                 "--relief '%s' is a volume; frusta take height fields (height:FILE.png, bricks, cobble, ribs)", a.relief);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli_util.h"
+#include "memory_budget.h"
 #include "mesh_chunk.h"
 
 static const char* const usage_mesh =
@@ -24,6 +25,7 @@ static const char* const usage_mesh =
     "                          octahedral normals need two) and uvs (1..30); default 14,10,12\n"
     "Reporting:\n"
     "      --report FILE       write the bake report as JSON (also stored in the file)\n"
+    MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this help\n"
     "\n"
@@ -61,6 +63,9 @@ int cmd_mesh(int argc, char** argv)
     const char *in = NULL, *out = NULL, *name = NULL, *report = NULL;
     int use_draco = 0;
     meso_draco_options dopt = {14, 10, 12, 7};
+    /* --max-memory: parsed like every bake command's; the mesh readers'
+     * limits (the mesh guard) take their byte budget from it. */
+    uint64_t max_memory = 0;
     for (int i = 0; i < argc; ++i) {
         const char* a = argv[i];
         const int has_val = i + 1 < argc;
@@ -75,6 +80,11 @@ int cmd_mesh(int argc, char** argv)
             name = argv[++i];
         } else if (!strcmp(a, "--report") && has_val) {
             report = argv[++i];
+        } else if (!strcmp(a, "--max-memory") && has_val) {
+            int bad = 0;
+            memory_option(a, argv[++i], &max_memory, &bad);
+            if (bad)
+                return bad;
         } else if (!strcmp(a, "--draco")) {
             use_draco = 1;
         } else if (!strcmp(a, "--draco-bits") && has_val) {
@@ -85,7 +95,8 @@ int cmd_mesh(int argc, char** argv)
             verbose = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             int known = !strcmp(a, "-i") || !strcmp(a, "--input") || !strcmp(a, "-o") || !strcmp(a, "--output") ||
-                        !strcmp(a, "--name") || !strcmp(a, "--report") || !strcmp(a, "--draco-bits");
+                        !strcmp(a, "--name") || !strcmp(a, "--report") || !strcmp(a, "--draco-bits") ||
+                        !strcmp(a, "--max-memory");
             return usage_error(known ? "option '%s' needs a value" : "unrecognized option '%s'", a);
         } else {
             return usage_error("unexpected argument '%s'", a);
@@ -101,7 +112,9 @@ int cmd_mesh(int argc, char** argv)
     const double t0 = now_seconds();
     meso_error err = {0};
     meso_mesh m;
-    meso_result r = load_mesh(in, &m, &err);
+    if (!max_memory)
+        max_memory = meso_memory_default_budget();
+    meso_result r = load_mesh(in, max_memory, &m, &err);
     if (r != MESO_OK) {
         err_print(&err);
         return meso_exit_for(r);

@@ -21,6 +21,7 @@
 #include "mesh_chunk.h"
 #include "shell_hybrid.h"
 #include "shell_validate.h"
+#include "memory_budget.h"
 #include "texture_function.h"
 
 static const char* const usage_shell =
@@ -73,7 +74,10 @@ static const char* const usage_shell =
     "                          for a height field, about one cell per typical height step)\n"
     "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n"
     "Reporting:\n"
-    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
+    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n";
+/* (in two parts: one literal would pass the 4095 characters C11 promises) */
+static const char* const usage_shell_end =
+    MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this help\n"
     "\n"
@@ -100,6 +104,7 @@ typedef struct shell_args {
     int dist_type;        /* index into dist_type_names */
     int kind, mode, repair;
     long threads, smooth;
+    uint64_t max_memory; /* --max-memory; 0 until parsed = the default */
 } shell_args;
 
 static const char* const dist_type_names[] = {"u8", "u16", "f32"};
@@ -147,7 +152,8 @@ static int parse_args(int argc, char** argv, shell_args* a)
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
-            print_help(usage_shell);
+            fputs(usage_shell, stdout);
+            print_help(usage_shell_end);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
@@ -156,7 +162,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
             a->repair = s[2] == 'r';
             continue;
         }
-        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--thickness",
+        static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
             "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type"};
         const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
@@ -165,6 +171,12 @@ static int parse_args(int argc, char** argv, shell_args* a)
         ++i;
         if (path_option(s, v, &a->in, &a->out, &a->report))
             continue;
+        int bad_size = 0;
+        if (memory_option(s, v, &a->max_memory, &bad_size)) {
+            if (bad_size)
+                return bad_size;
+            continue;
+        }
         if (!strcmp(s, "--texture"))
             a->texture = v;
         else if (!strcmp(s, "--tiling")) {
@@ -214,6 +226,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         a->thickness = 0; /* from --thickness-rel once the mesh is known */
     if (!a->in || !a->out) {
         fputs(usage_shell, stderr);
+        fputs(usage_shell_end, stderr);
         return MESO_EXIT_USAGE;
     }
     if (!a->texture && (a->dist_res[0] || a->dist_type || a->tiling[0] != 1.0 || a->tiling[1] != 1.0))
@@ -280,7 +293,7 @@ static void texture_free(shell_texture* tx)
 static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_error* err)
 {
     double t = now_seconds();
-    meso_result r = meso_texfn_from_spec(a->texture, &tx->fn, err);
+    meso_result r = meso_texfn_from_spec_max(a->texture, a->max_memory, &tx->fn, err);
     if (r != MESO_OK)
         return r;
     const uint32_t* td = tx->fn.dims;
@@ -291,6 +304,14 @@ static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_
     uint32_t res[3] = {a->dist_res[0], a->dist_res[1], a->dist_res[2]};
     if (!res[0])
         meso_distmap_default_res(&tx->fn, res);
+    /* Limits up front: the texture is held, the distance map not yet made. */
+    const uint64_t cells = (uint64_t)res[0] * res[1] * res[2];
+    const uint64_t texels = (uint64_t)td[0] * td[1] * td[2];
+    r = meso_budget_check(meso_size_add(meso_texture_estimate(texels), meso_distmap_estimate(cells)), a->max_memory,
+                          MESO_LIMIT_ISSUE_REQUEST, err, "distance map %ux%ux%u (%s) of a %ux%ux%u texture", res[0],
+                          res[1], res[2], a->dist_res[0] ? "--dist-res" : "default", td[0], td[1], td[2]);
+    if (r != MESO_OK)
+        return r;
     t = now_seconds();
     r = meso_distmap_build(&tx->fn, res, dist_dtypes[a->dist_type], (int)a->threads, &tx->dist, err);
     if (r == MESO_OK && verbose)
@@ -442,6 +463,8 @@ int cmd_shell(int argc, char** argv)
     int rc = parse_args(argc, argv, &a);
     if (rc != 0)
         return rc < 0 ? MESO_EXIT_OK : rc;
+    if (!a.max_memory)
+        a.max_memory = meso_memory_default_budget();
     const double t0 = now_seconds();
     meso_error err = {0};
     shell_texture tx;
@@ -454,7 +477,7 @@ int cmd_shell(int argc, char** argv)
         return meso_exit_for(r);
     }
     meso_mesh m;
-    r = load_mesh(a.in, &m, &err);
+    r = load_mesh(a.in, a.max_memory, &m, &err);
     if (r != MESO_OK) {
         texture_free(&tx);
         err_print(&err);

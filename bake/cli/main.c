@@ -38,7 +38,9 @@ static const char* const usage_full =
     "Outputs (-o, --report) are written atomically and together: a failed or\n"
     "interrupted bake (SIGINT, SIGTERM, SIGHUP) publishes nothing and leaves no\n"
     "temporary file. An output that is a symbolic link is written through to its\n"
-    "target; a dangling link, directory, device, FIFO or socket is refused (exit 2).\n";
+    "target; a dangling link, directory, device, FIFO or socket is refused (exit 2).\n"
+    "Every bake command takes --max-memory SIZE and refuses, before allocating, a\n"
+    "request whose memory estimate is larger (default: half of physical memory).\n";
 
 int main(int argc, char** argv)
 {

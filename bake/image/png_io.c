@@ -70,6 +70,10 @@ typedef struct png_ctx {
     int why_size;
     const char* path;
     FILE* fp;
+    int own_fp;          /* fp is closed by ctx_free */
+    uint64_t max_bytes;  /* read: budget for what the image needs */
+    unsigned extra;      /* read: the caller's bytes per pixel, counted in it */
+    uint64_t need;       /* read: what it needs (set when over the budget) */
     uint8_t* pixels;    /* decoded image (read) */
     png_bytep* rows;    /* row pointers */
 } png_ctx;
@@ -91,7 +95,7 @@ static void ctx_free(png_ctx* c)
 {
     free(c->pixels);
     free(c->rows);
-    if (c->fp)
+    if (c->fp && c->own_fp)
         fclose(c->fp);
     c->pixels = NULL;
     c->rows = NULL;
@@ -104,6 +108,15 @@ static int read_body(png_structp png, png_infop info, png_ctx* c, int* width, in
     png_init_io(png, c->fp);
     png_set_sig_bytes(png, 8);
     png_set_user_limits(png, 65536, 65536);
+    png_set_chunk_malloc_max(png, (png_alloc_size_t)8 << 20);
+    /* Ancillary chunks are skipped unread: libpng 1.6.39 allocates a zTXt
+     * chunk's declared length (2 GB in a 205-byte file, found by
+     * tests/fuzz/fuzz_png.c) before it finds the stream too short, and none
+     * of them changes channel 0 (no gamma or colour conversion is done). */
+    static const png_byte ignored[] = "bKGD\0cHRM\0eXIf\0gAMA\0hIST\0iCCP\0iTXt\0oFFs\0pCAL\0pHYs\0sBIT\0"
+                                      "sCAL\0sPLT\0sRGB\0tEXt\0tIME\0zTXt";
+    png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, ignored, (int)(sizeof ignored / 5));
+    png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, NULL, 0); /* and chunks libpng does not know */
     png_read_info(png, info);
     png_set_expand(png); /* palette -> RGB, grey < 8 bits -> 8 bits, tRNS -> alpha */
     (void)png_set_interlace_handling(png);
@@ -115,6 +128,16 @@ static int read_body(png_structp png, png_infop info, png_ctx* c, int* width, in
     if (w == 0 || h == 0 || (*depth != 8 && *depth != 16)) {
         snprintf(c->why, (size_t)c->why_size, "%s: unsupported PNG layout", c->path);
         return -1;
+    }
+    /* The header's size against the budget, before the rows are allocated:
+     * decoded rows, row pointers, 2-byte samples, the caller's buffers.
+     * (w, h < 2^16 and rowbytes <= 8 w, so nothing here overflows.) */
+    const uint64_t px = (uint64_t)w * h;
+    c->need = (uint64_t)rowbytes * h + sizeof(png_bytep) * (uint64_t)h + (2 + (uint64_t)c->extra) * px;
+    if (c->need > c->max_bytes) {
+        snprintf(c->why, (size_t)c->why_size, "%s: %ux%u pixels (as its header says; %d-bit, %d channel%s)", c->path,
+                 (unsigned)w, (unsigned)h, *depth, *channels, *channels > 1 ? "s" : "");
+        return -2;
     }
     c->pixels = malloc(rowbytes * h);
     c->rows = malloc(sizeof(png_bytep) * h);
@@ -135,23 +158,35 @@ int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int*
                            int why_size)
 {
     *values = NULL;
-    png_ctx ctx = {.why = why, .why_size = why_size, .path = path};
-    png_ctx* c = &ctx;
-    c->fp = fopen(path, "rb");
-    if (!c->fp) {
+    FILE* fp = fopen(path, "rb");
+    if (!fp) {
         snprintf(why, (size_t)why_size, "%s: can not open", path);
         return -1;
     }
+    const int rc = meso_png_read_channel0_fp(fp, path, UINT64_MAX, 0, values, width, height, bit_depth, NULL, why,
+                                             why_size);
+    fclose(fp);
+    return rc;
+}
+
+int meso_png_read_channel0_fp(FILE* fp, const char* name, uint64_t max_bytes, unsigned extra_per_pixel,
+                              uint16_t** values, int* width, int* height, int* bit_depth, uint64_t* need, char* why,
+                              int why_size)
+{
+    *values = NULL;
+    png_ctx ctx = {.why = why, .why_size = why_size, .path = name, .fp = fp, .max_bytes = max_bytes,
+                   .extra = extra_per_pixel};
+    png_ctx* c = &ctx;
     uint8_t sig[8];
     if (fread(sig, 1, 8, c->fp) != 8 || png_sig_cmp(sig, 0, 8)) {
-        snprintf(why, (size_t)why_size, "%s: not a PNG file", path);
+        snprintf(why, (size_t)why_size, "%s: not a PNG file", name);
         ctx_free(c);
         return -1;
     }
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, c, ctx_error, ctx_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!info) {
-        snprintf(why, (size_t)why_size, "%s: out of memory", path);
+        snprintf(why, (size_t)why_size, "%s: out of memory", name);
         png_destroy_read_struct(&png, NULL, NULL);
         ctx_free(c);
         return -1;
@@ -160,9 +195,11 @@ int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int*
     if (setjmp(png_jmpbuf(png)) == 0)
         rc = read_body(png, info, c, &w, &h, &depth, &channels);
     png_destroy_read_struct(&png, &info, NULL);
+    if (rc == -2 && need)
+        *need = c->need;
     uint16_t* out = rc == 0 ? malloc(sizeof(uint16_t) * (size_t)w * (size_t)h) : NULL;
     if (rc == 0 && !out) {
-        snprintf(why, (size_t)why_size, "%s: out of memory", path);
+        snprintf(why, (size_t)why_size, "%s: out of memory", name);
         rc = -1;
     }
     if (rc == 0) {

@@ -5,6 +5,7 @@
 #define MESO_PNG_IO_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 /* Write RGBA8 rows top to bottom (or bottom to top with flip_y). Returns 0 on
  * success; on failure writes a reason to `why`. */
@@ -20,6 +21,16 @@ int meso_png_read_rgba8(const char* path, uint8_t** rgba, int* width, int* heigh
  * failure writes a reason to `why`. */
 int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int* height, int* bit_depth, char* why,
                            int why_size);
+/* The same from an open stream (not closed here; `name` is for messages),
+ * with a byte budget checked against the header before the image is
+ * decoded: what the reader allocates (the decoded rows, their pointers and
+ * the samples) plus `extra_per_pixel` bytes a pixel for the caller's own
+ * buffers. Over the budget: returns -2, nothing allocated, *need (may be
+ * NULL) gets the bytes it would take and `why` says so. Other failures
+ * (not a PNG, a bad header, truncated or corrupt image data): -1. */
+int meso_png_read_channel0_fp(FILE* fp, const char* name, uint64_t max_bytes, unsigned extra_per_pixel,
+                              uint16_t** values, int* width, int* height, int* bit_depth, uint64_t* need, char* why,
+                              int why_size);
 /* Write a grey PNG from width*height samples, rows top to bottom, with
  * bit_depth 8 (values 0..255) or 16. Returns 0 on success. */
 int meso_png_write_gray(const char* path, const uint16_t* values, int width, int height, int bit_depth, char* why,

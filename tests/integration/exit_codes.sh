@@ -122,10 +122,10 @@ row 2 "missing.meso" "preview: file not found" "$inspect" preview "$tmp/missing.
 for cmd in mesh shell cells; do
   row 3 "E3251.*unknown extension" "$cmd: unknown mesh extension" "$bake" $cmd -i "$tmp/sphere.xyz" -o "$tmp/out.meso"
   row 3 "E3251.*/dev/null" "$cmd: -i /dev/null" "$bake" $cmd -i /dev/null -o "$tmp/out.meso"
-  row 3 "(E3100|E3252).*(no vertices|no triangles)" "$cmd: empty .obj" "$bake" $cmd -i "$tmp/empty.obj" -o "$tmp/out.meso"
-  row 3 "(E3100|E3252).*(no vertices|no triangles)" "$cmd: .obj of words" "$bake" $cmd -i "$tmp/words.obj" -o "$tmp/out.meso"
+  row 3 "(E3100|E3200|E3252).*(empty file|no vertices|no triangles)" "$cmd: empty .obj" "$bake" $cmd -i "$tmp/empty.obj" -o "$tmp/out.meso"
+  row 3 "(E3100|E3200|E3252).*(empty file|no vertices|no triangles)" "$cmd: .obj of words" "$bake" $cmd -i "$tmp/words.obj" -o "$tmp/out.meso"
 done
-row 3 "(E3100|E3252).*(no vertices|no triangles)" "frusta: empty .obj" "$bake" frusta -i "$tmp/empty.obj" -o "$tmp/out.meso"
+row 3 "(E3100|E3200|E3252).*(empty file|no vertices|no triangles)" "frusta: empty .obj" "$bake" frusta -i "$tmp/empty.obj" -o "$tmp/out.meso"
 row 3 "E3140" "frusta: -i /dev/null (an empty text skeleton)" "$bake" frusta -i /dev/null -o "$tmp/out.meso"
 row 3 "E3301.*one node.*no segment" "frusta: one-node SWC" "$bake" frusta -i "$tmp/one_node.swc" -o "$tmp/out.meso"
 row 3 "E3301.*no segment" "frusta: one-node text skeleton" "$bake" frusta -i "$tmp/one_node.skel" -o "$tmp/out.meso"
