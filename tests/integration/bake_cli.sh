@@ -10,43 +10,7 @@ set -u
 MB=$1
 DATA=$2
 
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
-
-failures=0
-checks=0
-
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL: $*" >&2
-    if [ -s "$T/out" ]; then echo "--- stdout:" >&2; head -n 20 "$T/out" >&2; fi
-    if [ -s "$T/err" ]; then echo "--- stderr:" >&2; head -n 20 "$T/err" >&2; fi
-}
-ok() { checks=$((checks + 1)); }
-run() {
-    "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-}
-expect_rc() {
-    if [ "$rc" -eq "$1" ]; then ok; else fail "$2: exit $rc, expected $1"; fi
-}
-expect_out() {
-    if grep -Eq -- "$1" "$T/out"; then ok; else fail "$2: stdout lacks /$1/"; fi
-}
-expect_err() {
-    if grep -Eq -- "$1" "$T/err"; then ok; else fail "$2: stderr lacks /$1/"; fi
-}
-expect_eq() {
-    if [ "$1" = "$2" ]; then ok; else fail "$3: got '$1', expected '$2'"; fi
-}
-# nothing in directory $1 but the files named in $2 (space-separated)
-expect_only() {
-    extra=$(ls -A "$1" | while read -r f; do
-        case " $2 " in *" $f "*) ;; *) echo "$f" ;; esac
-    done)
-    if [ -z "$extra" ]; then ok; else fail "$3: unexpected files in $1: $extra"; fi
-}
+. "$(dirname "$0")/check_lib.sh" # $T, run, expect_*, fail, ok
 json_nums() {
     tr -d ' \t\r\n' <"$1" | grep -o "\"$2\":[0-9-]*" | cut -d: -f2
 }

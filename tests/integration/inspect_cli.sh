@@ -14,40 +14,7 @@ MB=$2
 DATA=$3
 HDR=$4
 
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
-
-failures=0
-checks=0
-
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL: $*" >&2
-    if [ -s "$T/out" ]; then echo "--- stdout:" >&2; head -n 20 "$T/out" >&2; fi
-    if [ -s "$T/err" ]; then echo "--- stderr:" >&2; head -n 20 "$T/err" >&2; fi
-}
-ok() { checks=$((checks + 1)); }
-
-# run CMD...: run with stdout/stderr captured in $T/out, $T/err; rc in $rc
-run() {
-    "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-}
-# expect_rc N DESC
-expect_rc() {
-    if [ "$rc" -eq "$1" ]; then ok; else fail "$2: exit $rc, expected $1"; fi
-}
-# expect_out / expect_err PATTERN DESC (grep -E)
-expect_out() {
-    if grep -Eq -- "$1" "$T/out"; then ok; else fail "$2: stdout lacks /$1/"; fi
-}
-expect_err() {
-    if grep -Eq -- "$1" "$T/err"; then ok; else fail "$2: stderr lacks /$1/"; fi
-}
-expect_eq() {
-    if [ "$1" = "$2" ]; then ok; else fail "$3: got '$1', expected '$2'"; fi
-}
+. "$(dirname "$0")/check_lib.sh" # $T, run, expect_*, fail, ok
 # issue code constant from meso_file.h
 issue_code() {
     sed -n "s/^#define MESO_ISSUE_$1 \([0-9]*\)u.*/\1/p" "$HDR"

@@ -12,18 +12,7 @@ set -u
 
 MB=$1
 
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
-
-failures=0
-checks=0
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL: $*" >&2
-    if [ -s "$T/err" ]; then echo "--- stderr:" >&2; head -n 5 "$T/err" >&2; fi
-}
-ok() { checks=$((checks + 1)); }
+. "$(dirname "$0")/check_lib.sh" # $T, run, expect_*, fail, ok
 
 V='v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n'
 F='f 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n'

@@ -22,39 +22,7 @@ MB=$1
 MI=$2
 DATA=$3
 
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-trap 'exit 1' INT TERM
-
-failures=0
-checks=0
-
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL: $*" >&2
-    if [ -s "$T/err" ]; then echo "--- stderr:" >&2; head -n 20 "$T/err" >&2; fi
-}
-ok() { checks=$((checks + 1)); }
-run() {
-    "$@" >"$T/out" 2>"$T/err"
-    rc=$?
-}
-expect_rc() {
-    if [ "$rc" -eq "$1" ]; then ok; else fail "$2: exit $rc, expected $1"; fi
-}
-expect_err() {
-    if grep -Fq -- "$1" "$T/err"; then ok; else fail "$2: stderr lacks '$1'"; fi
-}
-# nothing in directory $1 but the files named in $2 (space-separated)
-expect_only() {
-    extra=$(ls -A "$1" | while read -r f; do
-        case " $2 " in *" $f "*) ;; *) echo "$f" ;; esac
-    done)
-    if [ -z "$extra" ]; then ok; else fail "$3: unexpected files in $1: $extra"; fi
-}
-same_bytes() {
-    if cmp -s "$1" "$2"; then ok; else fail "$3: $1 differs from $2"; fi
-}
+. "$(dirname "$0")/check_lib.sh" # $T, run, expect_*, fail, ok
 # `ls -ld` type letter of $1 (d, l, p, s, c, -), without following links
 kind() { ls -ld "$1" | cut -c1; }
 
@@ -127,18 +95,18 @@ for n in $nodes; do
     what=${n#*:}
     run "$MB" mesh -i "$MESH" -o "$W/$name"
     expect_rc 2 "-o $name"
-    expect_err "$W/$name" "-o $name: message names the path"
-    expect_err "$what" "-o $name: message says what it is"
+    expect_err_text "$W/$name" "-o $name: message names the path"
+    expect_err_text "$what" "-o $name: message says what it is"
     run "$MB" mesh -i "$MESH" -o "$T/new.meso" --report "$W/$name"
     expect_rc 2 "--report $name"
-    expect_err "$what" "--report $name: message says what it is"
+    expect_err_text "$what" "--report $name: message says what it is"
     if [ -e "$T/new.meso" ]; then fail "--report $name: the .meso was published"; rm -f "$T/new.meso"; else ok; fi
     run "$MI" preview "$T/ref.meso" -o "$W/$name" --reference
     expect_rc 2 "mesoinspect preview -o $name"
-    expect_err "$what" "preview -o $name: message says what it is"
+    expect_err_text "$what" "preview -o $name: message says what it is"
     run "$MI" dump "$T/ref.meso" META -o "$W/$name"
     expect_rc 2 "mesoinspect dump -o $name"
-    expect_err "$what" "dump -o $name: message says what it is"
+    expect_err_text "$what" "dump -o $name: message says what it is"
 done
 ls -lA "$W" >"$T/after"
 same_bytes "$T/after" "$T/before" "refused destinations: the directory listing (kinds, sizes, targets)"
@@ -150,7 +118,7 @@ mkdir "$W"
 # ------------------------------------- a failed --report publishes nothing
 run "$MB" mesh -i "$MESH" -o "$W/x.meso" --report "$W/nodir/r.json"
 expect_rc 2 "--report nodir/r.json"
-expect_err "$W/nodir/r.json" "--report nodir/r.json: message names the path"
+expect_err_text "$W/nodir/r.json" "--report nodir/r.json: message names the path"
 expect_only "$W" "" "--report nodir/r.json: no .meso published"
 echo old-meso >"$W/x.meso"
 cp "$W/x.meso" "$T/x.old"
