@@ -215,7 +215,7 @@ meso_result meso_cells_chunks_build(const meso_tile_map* m, const meso_split_cel
     const uint64_t class_words = (mb->tile_count + 15) / 16;
     const uint64_t memb_words = 2 * class_words + mb->record_count * mb->words_per_tile;
     if (memb_words > UINT32_MAX)
-        return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, MESO_CELLS_ISSUE_SIZE,
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_CELLS_ISSUE_SIZE, /* --tiles/--tile-res: exit 1 */
                               "cells: the membership map needs %llu words; MEMB holds at most 2^32 - 1",
                               (unsigned long long)memb_words);
 

@@ -440,7 +440,7 @@ static meso_result finish(builder* B, meso_membership* out, meso_error* err)
         records += !all_in && !all_out;
     }
     if (records > UINT32_MAX || records * W > ((uint64_t)1 << 40)) {
-        r = meso_bake_fail(err, MESO_ERR_UNSUPPORTED, MESO_MEMB_ISSUE_SIZE,
+        r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_MEMB_ISSUE_SIZE, /* --tiles/--tile-res: exit 1 */
                            "membership: %llu mixed tiles of %u words: too large for the encoding",
                            (unsigned long long)records, W);
         goto done;

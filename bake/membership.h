@@ -140,7 +140,8 @@ typedef struct meso_membership {
  * after its tags are taken) and build the map for the split cells `sc`
  * (sc->res must equal g->tile_res). threads <= 0: all cores. Failures:
  * MESO_ERR_INVALID_ARG (NULL; code 3185 for a resolution mismatch, or the
- * voxelizer's codes), MESO_ERR_OUT_OF_MEMORY, MESO_ERR_UNSUPPORTED (3186);
+ * voxelizer's codes; 3186 when the map is too large for the encoding, which
+ * the options chose), MESO_ERR_OUT_OF_MEMORY;
  * *out is then zeroed. */
 meso_result meso_membership_compute(const meso_mesh* m, const meso_voxel_grid* g, const meso_split_cells* sc,
                                     meso_voxelizer method, int threads, meso_membership* out, meso_error* err);

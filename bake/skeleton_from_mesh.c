@@ -1817,7 +1817,7 @@ static meso_result make_output(const fit_state* f, meso_skeleton* out, meso_erro
             nroots += f->sparent[i] < 0;
         }
     if (nk > MESO_SKEL_MAX_NODES)
-        return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, MESO_SKELFIT_ISSUE_CGAL,
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKELFIT_ISSUE_CGAL, /* the mesh dictates it: exit 3 */
                               "skeleton from mesh: %u nodes, more than %u", nk, MESO_SKEL_MAX_NODES);
     out->nodes = calloc(nk ? nk : 1, sizeof(meso_skeleton_node));
     out->children = malloc(sizeof(uint32_t) * (nk - nroots ? nk - nroots : 1));

@@ -106,7 +106,8 @@
  *   3174 inconsistent orientation (two faces traverse an edge the same way)
  *   3175 degenerate: zero-area or duplicated faces, or zero volume
  *   3176 more than one connected component (count, sizes of the first two)
- *   3177 CGAL failed, or returned an empty skeleton or a bad correspondence
+ *   3177 CGAL failed, or returned an empty skeleton, a bad correspondence
+ *        or more nodes than a skeleton may have
  *   (3178, 3179 reserved)
  * Shape errors are MESO_ERR_CORRUPT; a build without CGAL gives
  * MESO_ERR_UNSUPPORTED (code 0), NULL arguments or bad options

@@ -354,11 +354,11 @@ meso_result meso_split_cells_check_packing(const meso_split_cells* sc, meso_spli
     if (meso_split_cells_packing(sc) <= packing)
         return MESO_OK;
     if (packing == MESO_SPLIT_PACK_THESIS)
-        return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, MESO_TILEMAP_ISSUE_PACKING,
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PACKING,
                               "tile map: %u split cells in %u cells, up to %u in one cell; the thesis's 128-bit "
                               "tile code holds at most 8 cells of at most 8 split cells each",
                               sc->split_count, sc->cell_count, sc->max_splits_per_cell);
-    return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, MESO_TILEMAP_ISSUE_PACKING,
+    return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PACKING,
                           "tile map: %u split cells in %u cells; a 128-bit tile code holds at most 64",
                           sc->split_count, sc->cell_count);
 }

@@ -144,8 +144,9 @@ typedef enum meso_split_packing {
 meso_split_packing meso_split_cells_packing(const meso_split_cells* sc);
 
 /* MESO_OK when the tile fits `packing` (WIDE always fits); otherwise
- * MESO_ERR_UNSUPPORTED, code 3153 and a message with the counts that do not
- * fit (split cells, cells, most split cells of one cell). */
+ * MESO_ERR_INVALID_ARG (the tile map the options chose is too dense for the
+ * encoding: a command-line error, exit 1), code 3153 and a message with the
+ * counts that do not fit (split cells, cells, most split cells of one cell). */
 meso_result meso_split_cells_check_packing(const meso_split_cells* sc, meso_split_packing packing, meso_error* err);
 
 #ifdef __cplusplus

@@ -520,7 +520,7 @@ static void comb_cell_has_eleven_split_cells(void)
     assert(sc.splits[10].face_code == MESO_FACE_X1 && sc.splits[10].thesis_slot == 10);
     assert(meso_split_cells_packing(&sc) == MESO_SPLIT_PACK_DENSE64);
     meso_error err;
-    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_THESIS, &err) == MESO_ERR_UNSUPPORTED);
+    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_THESIS, &err) == MESO_ERR_INVALID_ARG);
     assert(err.code == MESO_TILEMAP_ISSUE_PACKING);
     fprintf(stderr, "    E%u %s\n", err.code, err.message);
     assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_DENSE64, &err) == MESO_OK);
@@ -542,10 +542,10 @@ static void more_than_64_split_cells_do_not_fit(void)
     assert(sc.split_count == 125 && sc.cell_count == 125 && sc.max_splits_per_cell == 1);
     assert(meso_split_cells_packing(&sc) == MESO_SPLIT_PACK_WIDE);
     meso_error err;
-    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_THESIS, &err) == MESO_ERR_UNSUPPORTED);
+    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_THESIS, &err) == MESO_ERR_INVALID_ARG);
     assert(err.code == MESO_TILEMAP_ISSUE_PACKING && strstr(err.message, "125 split cells"));
     fprintf(stderr, "    E%u %s\n", err.code, err.message);
-    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_DENSE64, &err) == MESO_ERR_UNSUPPORTED);
+    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_DENSE64, &err) == MESO_ERR_INVALID_ARG);
     fprintf(stderr, "    E%u %s\n", err.code, err.message);
     assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_WIDE, &err) == MESO_OK);
     meso_split_cells_free(&sc);
@@ -555,7 +555,7 @@ static void more_than_64_split_cells_do_not_fit(void)
            MESO_OK);
     sc = check(&m, "voronoi K=20");
     assert(sc.cell_count == 20 && meso_split_cells_packing(&sc) != MESO_SPLIT_PACK_THESIS);
-    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_THESIS, &err) == MESO_ERR_UNSUPPORTED);
+    assert(meso_split_cells_check_packing(&sc, MESO_SPLIT_PACK_THESIS, &err) == MESO_ERR_INVALID_ARG);
     meso_split_cells_free(&sc);
     meso_tile_map_free(&m);
 
