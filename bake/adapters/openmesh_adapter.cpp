@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include <cstdlib>
+#include <cctype>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -197,8 +198,15 @@ extern "C" meso_result meso_openmesh_read(const char* path, meso_mesh* out, uint
         out->positions = alloc_array<float>(3 * nv);
         out->normals = alloc_array<float>(3 * nv);
         out->indices = alloc_array<uint32_t>(3 * nf);
-        const bool has_vertex_uv = opt.check(OpenMesh::IO::Options::VertexTexCoord);
-        const bool has_corner_uv = opt.check(OpenMesh::IO::Options::FaceTexCoord);
+        // STL has no texture coordinates, but OpenMesh's STL reader leaves the
+        // requested texcoord options set, and the vertex texcoords it never
+        // wrote are uninitialised memory (bakes differed from run to run).
+        const size_t plen = std::strlen(path);
+        bool stl = plen >= 4;
+        for (size_t k = 0; stl && k < 4; ++k)
+            stl = std::tolower(static_cast<unsigned char>(path[plen - 4 + k])) == ".stl"[k];
+        const bool has_vertex_uv = !stl && opt.check(OpenMesh::IO::Options::VertexTexCoord);
+        const bool has_corner_uv = !stl && opt.check(OpenMesh::IO::Options::FaceTexCoord);
         if (has_vertex_uv || has_corner_uv)
             out->uvs = alloc_array<float>(2 * nv);
         for (auto vh : mesh.vertices()) {
