@@ -507,7 +507,7 @@ static meso_result check_off(guard* g)
 {
     text t = {g->base, g->base + g->size, 0};
     const uint8_t *s, *e, *p;
-    tok k;
+    tok k = {0}; /* gcc 12 -O3 cannot see that next_token always sets it */
     if (!next_data_line(&t, &s, &e))
         return CORRUPT(g, MESO_MESH_GUARD_EMPTY, 0, "OFF: empty file");
     p = s;
@@ -989,7 +989,7 @@ static meso_result check_ply(guard* g)
                     break;
                 }
                 for (int64_t q = 0; q < ii && r == MESO_OK; ++q) {
-                    int64_t w;
+                    int64_t w = 0; /* set by ply_value on MESO_OK (gcc 12 -O3 cannot see it) */
                     r = ply_value(g, fmt, &pt, &at, pr->type, &v, &w, pl);
                     if (r != MESO_OK || !face)
                         continue;
