@@ -85,8 +85,9 @@
  *   centres all agree is reported as uniform, so the MIXED set is exactly
  *   the set of tiles with centres on both sides.
  *   The gradient bound ignores cancellation between boundary edges, so for
- *   meshes with long boundaries (a soup such as ../shared/data/defective/
- *   truck.obj, 1570 fan triangles) it decides little and most tiles are
+ *   meshes with long boundaries (a CAD-export triangle soup of ~1570 fan
+ *   triangles, like the generated `soup` of tests/common/defective_meshes.h)
+ *   it decides little and most tiles are
  *   evaluated centre by centre: correct, but slow (2.6 s at 64^3).
  *
  *   Order of work: tiles are processed in rows along x (one ray per voxel row

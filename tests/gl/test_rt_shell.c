@@ -247,8 +247,8 @@ int main(void)
     }
 
     /* 3. The tetra mapping on long thin triangles: an open cylinder of
-     * long thin triangles like ../shared/data/meshes/xcylinder.obj (20
-     * segments, aspect ~11; built here, that file has no license) and the
+     * long thin triangles (20 segments, aspect ~11, like libigl's capped
+     * xcylinder test mesh; generated here, that file has no license) and the
      * wingnut (bundled; needle and sliver triangles next to sharp folds). A
      * prism split into three tetrahedra maps each piece affinely, so the
      * levels w = const buckle across the diagonals, the more the thicker the
