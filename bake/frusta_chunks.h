@@ -5,7 +5,7 @@
  * earlier), BALL, and the relief parametrisation.
  *
  * Decisions:
- *  - FRUS geometry is written by meso_frusta_pose (runtime/frusta_pose.c)
+ *  - FRUS geometry is written by meso_frusta_pose (formats/frusta_pose.c)
  *    from the float node positions, so a runtime's rest-pose rebuild gives
  *    the same bytes.
  *  - Relief texture coordinates: u_scale = `u_repeat` (tiles around the

@@ -221,7 +221,7 @@ MESO_API meso_result meso_rt_shell_info(const meso_rt* rt, meso_rt_object obj, u
  * "the splitting planes between segments have to be recomputed in each time
  * step"): move the skeleton's nodes and rebuild every frustum of a FRUSTA
  * object from them — cutting planes, end centres and radii, u frames and
- * offsets (FORMAT.md §7.2 "Animation", runtime/frusta_pose.h), ball centres
+ * offsets (FORMAT.md §7.2 "Animation", formats/frusta_pose.h), ball centres
  * — then its bounding pyramids, and upload. `node_positions` holds 3 floats
  * per SKEL node, in SKEL order, in object space; node_count must equal the
  * object's (meso_rt_frusta_info). Radii and relief parametrisation stay as

@@ -103,7 +103,7 @@ void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, con
                       const GLuint* textures);
 meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
 
-/* rt_mesh.c */
+/* rt_objects.c */
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions
  * at attribute 0, normals at 1, the chunk's own layout). */
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);

@@ -225,7 +225,7 @@ double meso_ref_relief_height(const meso_ref_texfn* height, double s, double t, 
 
 /* >>records and files */
 
-/* FORMAT.md records (runtime/frusta_pose.h) → reference segments and
+/* FORMAT.md records (formats/frusta_pose.h) → reference segments and
  * balls: geometry from FRUS (plane e through center e: d = n·center),
  * caps, frame and relief parametrisation from FSEG. */
 void meso_ref_frustum_from_rec(const meso_frustum_rec* rec, meso_ref_frustum* out);

@@ -5,7 +5,7 @@
  *  segments each, with joints, branch points and balls, baked in memory
  *  with mesobake's own code; cacti_swc below):
  *    pose_us_per_1000      meso_frusta_pose alone (planes, centres, radii,
- *                          u frames; runtime/frusta_pose.c) per 1000 frusta
+ *                          u frames; formats/frusta_pose.c) per 1000 frusta
  *    cpu_us_per_1000       the CPU part of meso_rt_frusta_set_pose: the pose
  *                          plus the §2.6 bounding pyramids and the texels
  *    set_pose_us_per_1000  meso_rt_frusta_set_pose with its upload

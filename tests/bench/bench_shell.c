@@ -12,7 +12,7 @@
  * The checked-in results had the Stanford bunny where wingnut (6090
  * triangles, about the bunny's size) now is, read from outside the
  * repository; its terms forbid commercial use, so it is not bundled. Settings are those of `mesobake
- * shell` (bake/cli/cmd_shell.c) unless a sweep says otherwise: p = 3, θ = 0.5
+ * shell` (tools/mesobake/cmd_shell.c) unless a sweep says otherwise: p = 3, θ = 0.5
  * (the CLI's --theta default, not the field's MESO_LP_DEFAULT_THETA), angle
  * tolerance 5°, smoothing 0 rounds ($MESO_BENCH_SMOOTH overrides), repair on
  * (30 rounds), threads = THREADS. Field options {p, θ, near_radius = 2h} and

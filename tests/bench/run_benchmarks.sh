@@ -36,9 +36,9 @@ echo "results in $results"
 # Skip with MESO_BENCH_SKIP_SHELL=1; sizes up to level 4 (423k triangles) by
 # default, `bench_shell size DIR 5` adds 1.7M (much longer).
 if [ "${MESO_BENCH_SKIP_SHELL:-0}" != 1 ]; then
-    ninja -C "$build" tests/bench/bench_shell bake/mesobake
+    ninja -C "$build" tests/bench/bench_shell tools/mesobake
     echo "== bench_shell"
-    nice "$build/tests/bench/bench_shell" all "$results" "$build/bake/mesobake"
+    nice "$build/tests/bench/bench_shell" all "$results" "$build/tools/mesobake"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_shell.gp"
     echo "shell results in $results"
 fi
@@ -48,9 +48,9 @@ fi
 # shell_render_cost_error.png, shell_render_table1.png. Skip with
 # MESO_BENCH_SKIP_RENDER=1; `quick` as a 4th argument for a smoke run.
 if [ "${MESO_BENCH_SKIP_RENDER:-0}" != 1 ]; then
-    ninja -C "$build" tests/bench/bench_shell_render bake/mesobake
+    ninja -C "$build" tests/bench/bench_shell_render tools/mesobake
     echo "== bench_shell_render"
-    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_shell_render" "$results" "$build/bake/mesobake" \
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_shell_render" "$results" "$build/tools/mesobake" \
         "$src/tests/data"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_shell_render.gp"
     echo "render results in $results"
@@ -62,11 +62,11 @@ fi
 # frusta_vs_tess.csv, frusta_relief_steps.csv, frusta_fit.csv,
 # frusta_vs_tess.png. Skip with MESO_BENCH_SKIP_FRUSTA=1.
 if [ "${MESO_BENCH_SKIP_FRUSTA:-0}" != 1 ]; then
-    ninja -C "$build" tests/bench/bench_frusta tests/bench/bench_frusta_render bake/mesobake
+    ninja -C "$build" tests/bench/bench_frusta tests/bench/bench_frusta_render tools/mesobake
     echo "== bench_frusta"
     MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta" "$results"
     echo "== bench_frusta_render"
-    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta_render" "$results" "$build/bake/mesobake" \
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta_render" "$results" "$build/tools/mesobake" \
         "$src/tests/data" "$fit_mesh"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_frusta.gp"
     echo "frusta results in $results"
@@ -79,9 +79,9 @@ fi
 # Skip with MESO_BENCH_SKIP_CELLS=1; a setup is killed after
 # MESO_BENCH_CELLS_TIMEOUT seconds (default 900).
 if [ "${MESO_BENCH_SKIP_CELLS:-0}" != 1 ]; then
-    ninja -C "$build" tests/bench/bench_cells_bake bake/mesobake
+    ninja -C "$build" tests/bench/bench_cells_bake tools/mesobake
     echo "== bench_cells_bake"
-    nice "$build/tests/bench/bench_cells_bake" "$build/bake/mesobake" "$bench_mesh" "$results"
+    nice "$build/tests/bench/bench_cells_bake" "$build/tools/mesobake" "$bench_mesh" "$results"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_bake.gp"
     echo "cells results in $results"
 fi
@@ -95,9 +95,9 @@ fi
 # cells_reflect.png, cells_refract.png. Skip with
 # MESO_BENCH_SKIP_CELLS_RENDER=1; `quick` as a 4th argument for a smoke run.
 if [ "${MESO_BENCH_SKIP_CELLS_RENDER:-0}" != 1 ]; then
-    ninja -C "$build" tests/bench/bench_cells_render bake/mesobake
+    ninja -C "$build" tests/bench/bench_cells_render tools/mesobake
     echo "== bench_cells_render"
-    MESA_SHADER_CACHE_DISABLE=true nice "$build/tests/bench/bench_cells_render" "$results" "$build/bake/mesobake" \
+    MESA_SHADER_CACHE_DISABLE=true nice "$build/tests/bench/bench_cells_render" "$results" "$build/tools/mesobake" \
         "$bench_mesh"
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_render.gp"
     echo "cells render results in $results"

@@ -1,4 +1,4 @@
-/* test_cli_output.c — the programs' staged outputs (bake/cli/cli_output.c,
+/* test_cli_output.c — the programs' staged outputs (tools/common/cli_output.c,
  * shared by mesobake and mesoinspect): a signal removes every staged
  * temporary file and ends the process with that signal, whichever thread it
  * is delivered to; a signal inherited as ignored stays ignored (nohup);

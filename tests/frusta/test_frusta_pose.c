@@ -1,6 +1,6 @@
 /*
  * test_frusta_pose.c — the frusta object records and the pose rebuild
- * (runtime/frusta_pose.c, bake/frusta_chunks.c), against expectations that
+ * (formats/frusta_pose.c, bake/frusta_chunks.c), against expectations that
  * do not come from the code under test:
  *  - rest pose: every record's planes and radii equal the double-precision
  *    model's (bake/frustum_model.c) to float rounding; each centre lies on

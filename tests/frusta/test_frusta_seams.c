@@ -6,7 +6,7 @@
  *
  * Every case goes the way a file does: SWC text → frustum model
  * (bake/frustum_model.h) → FRUS/FSEG/BALL records (bake/frusta_chunks.h,
- * which poses them with runtime/frusta_pose.c) → the exact CPU reference
+ * which poses them with formats/frusta_pose.c) → the exact CPU reference
  * (meso_ref_frustum_from_rec, meso_ref_frusta_render), no GL.
  *
  * "Inside the silhouette" is defined without the frusta's planes, caps and

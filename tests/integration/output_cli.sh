@@ -13,7 +13,7 @@
 # - SIGINT, SIGTERM and SIGHUP while the outputs are staged leave no
 #   ".NAME.tmp.XXXXXX" file and the old outputs byte-identical. The moment is
 #   made deterministic by the test-only hook MESO_TEST_HOLD_OUTPUTS
-#   (bake/cli/cli_output.h): with every temporary file complete, the program
+#   (tools/common/cli_output.h): with every temporary file complete, the program
 #   waits for a signal instead of renaming; the test waits (bounded) for the
 #   temporary files to appear, then sends the signal. No timing race.
 set -u

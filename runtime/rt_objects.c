@@ -1,6 +1,9 @@
 /*
- * rt_mesh.c — MESH objects: streaming a MESH chunk from a .meso file into one
- * GL buffer and drawing it as the shaded base mesh.
+ * rt_objects.c — the object table and the dispatch for every kind: load a
+ * record's object (MESH, SHELL, FRUSTA, CELLS) into a generation-checked
+ * slot, release it, and route meso_rt_draw to the kind's renderer; plus the
+ * MESH kind itself (streaming a MESH chunk into one GL buffer, drawn as the
+ * shaded base mesh) and the shader compile/link helpers every kind uses.
  *
  * The decoded MESH chunk is uploaded as it is: its positions, normals and
  * indices arrays sit at 16-byte aligned offsets inside the chunk

@@ -1,16 +1,40 @@
 /*
- * vec3d.h — the double-precision 3-vector helpers shared by the CPU
- * references (shell_map.c, frustum_reference.c) and the frusta pose rebuild
- * (frusta_pose.c, which mesobake also compiles). Internal, header-only.
+ * vec3d.h — the one set of double-precision 3-vector helpers, used by the
+ * baker (bake/), the CPU references (runtime/reference/) and the frusta pose
+ * rebuild (frusta_pose.c). Internal, header-only, in the bottom layer so
+ * every layer above shares it. One argument order: inputs first, the output
+ * last; an output may alias an input.
  */
-#ifndef MESO_REF_VEC3D_H
-#define MESO_REF_VEC3D_H
+#ifndef MESO_VEC3D_H
+#define MESO_VEC3D_H
 
 #include <math.h>
+
+/* o = a - b. */
+static inline void sub3(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[0] - b[0];
+    o[1] = a[1] - b[1];
+    o[2] = a[2] - b[2];
+}
 
 static inline double dot3(const double a[3], const double b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* |a| */
+static inline double len3(const double a[3])
+{
+    return sqrt(dot3(a, a));
+}
+
+/* |a - b| */
+static inline double dist3(const double a[3], const double b[3])
+{
+    double d[3];
+    sub3(a, b, d);
+    return len3(d);
 }
 
 /* o = a × b (o may alias a or b). */
@@ -44,4 +68,4 @@ static inline void any_perp3(const double a[3], double o[3])
     normalize3(o);
 }
 
-#endif /* MESO_REF_VEC3D_H */
+#endif /* MESO_VEC3D_H */

@@ -98,7 +98,7 @@ void mi_print_json(const cJSON* doc, mi_format fmt);
 int mi_finish_stdout(int code);
 
 /* Output files (dump -o, preview -o) go through staged outputs
- * (bake/cli/cli_output.h): refused unless a regular file or a symbolic link to
+ * (tools/common/cli_output.h): refused unless a regular file or a symbolic link to
  * one, written beside the destination, renamed into place when complete.
  * Each of these prints the error and returns the exit code (0 on success);
  * a failure discards every staged output. */

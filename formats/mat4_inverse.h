@@ -1,7 +1,8 @@
 /*
  * mat4_inverse.h — the general 4×4 inverse (cofactors), column-major, in
  * double precision. Internal: shared by libmeso (rt_shell.c) and the CPU
- * reference (runtime/reference), which must unproject pixels identically.
+ * reference (runtime/reference), which must unproject pixels identically;
+ * here in the bottom layer so neither includes the other.
  */
 #ifndef MESO_MAT4_INVERSE_H
 #define MESO_MAT4_INVERSE_H

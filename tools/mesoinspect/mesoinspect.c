@@ -55,7 +55,7 @@ static const char* const usage_full =
     "\n"
     "Output:\n"
     "  --format text        aligned text for humans (default)\n"
-    "  --format json        one JSON document on stdout (schemas: formats/inspect/schema/)\n"
+    "  --format json        one JSON document on stdout (schemas: tools/mesoinspect/schema/)\n"
     "  --format mini-json   the same JSON on one line\n"
     "\n"
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
