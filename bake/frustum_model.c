@@ -12,6 +12,7 @@
 
 #include "frusta_pose.h"
 #include "meso_bake.h"
+#include "vec3d.h"
 
 #define TAU 6.283185307179586
 #define CUT_SAMPLES 512
@@ -20,35 +21,6 @@
 #define FIT_RANGE 1.25 /* the §2.2 fit may scale a radius by 1/1.25 .. 1.25 */
 
 /* >>vectors ---------------------------------------------------------------- */
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double o[3])
-{
-    double t[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    memcpy(o, t, sizeof(t));
-}
-
-static double normalize3(double v[3])
-{
-    double l = sqrt(dot3(v, v));
-    if (l > 0)
-        for (int i = 0; i < 3; ++i)
-            v[i] /= l;
-    return l;
-}
-
-static void any_perp(const double a[3], double o[3])
-{
-    double e[3] = {0, 0, 0};
-    int m = fabs(a[0]) < fabs(a[1]) ? (fabs(a[0]) < fabs(a[2]) ? 0 : 2) : (fabs(a[1]) < fabs(a[2]) ? 1 : 2);
-    e[m] = 1;
-    cross3(a, e, o);
-    normalize3(o);
-}
 
 /* >>segment geometry ------------------------------------------------------- */
 
@@ -116,7 +88,7 @@ static double cut_margin(const meso_frustum_segment* s)
         }
     }
     double x[3];
-    any_perp(a, x);
+    any_perp3(a, x);
     double margin = DBL_MAX;
     for (int j = 0; j < CUT_SAMPLES; ++j) {
         double w[3], y0, y1;
@@ -135,7 +107,7 @@ double meso_frustum_lateral_area(const meso_frustum_segment* s, uint32_t samples
     double a[3], x[3];
     double h = seg_axis(s, a);
     double k = (s->r1 - s->r0) / h;
-    any_perp(a, x);
+    any_perp3(a, x);
     double sum = 0;
     for (uint32_t j = 0; j < samples; ++j) {
         double w[3], y0, y1;
@@ -294,7 +266,7 @@ static double seam_gap(const meso_frustum_model* m, const meso_frustum_joint* j)
         double aa[3], ab[3], xa[3];
         double ha = seg_axis(sa, aa), hb = seg_axis(sb, ab);
         double ka = (sa->r1 - sa->r0) / ha, kb = (sb->r1 - sb->r0) / hb;
-        any_perp(aa, xa);
+        any_perp3(aa, xa);
         for (int t = 0; t < SEAM_SAMPLES; ++t) {
             double w[3], y, X[3], q[3], X2[3];
             radial_dir(aa, xa, TAU * t / SEAM_SAMPLES, w);
@@ -307,7 +279,7 @@ static double seam_gap(const meso_frustum_model* m, const meso_frustum_joint* j)
             for (int i = 0; i < 3; ++i)
                 q[i] = X[i] - sb->c0[i] - yb * ab[i];
             if (normalize3(q) == 0)
-                any_perp(ab, q);
+                any_perp3(ab, q);
             if (!meso_frustum_generator_plane(sb, eb, q, &yb))
                 return INFINITY;
             generator_point(sb, ab, kb, q, yb, X2);
@@ -342,7 +314,7 @@ static void project_frame(meso_frustum_segment* s, const double x[3])
     for (int i = 0; i < 3; ++i)
         s->frame_x[i] = x[i] - m * a[i];
     if (normalize3(s->frame_x) < 1e-6)
-        any_perp(a, s->frame_x);
+        any_perp3(a, s->frame_x);
 }
 
 /* Frames segment `to` from `from` across joint j (or a ball when j < 0). */
@@ -657,7 +629,7 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         meso_frustum_segment* s = &m.segments[s0];
         double a[3];
         seg_axis(s, a);
-        any_perp(a, s->frame_x);
+        any_perp3(a, s->frame_x);
         s->u_offset = 0;
         seen[s0] = 1;
         s->align_from = -1;

@@ -2,6 +2,7 @@
  * closed-form p = 3 triangle integrals, adaptive quadrature for other p, and a
  * Barnes–Hut tree (paper §4.1–4.2). Derivations are in lp_distance.h. */
 #include "lp_distance.h"
+#include "vec3d.h"
 
 #include <float.h>
 #include <math.h>
@@ -41,25 +42,6 @@ struct meso_lp_field {
 };
 
 /* >>small vector helpers ------------------------------------------------- */
-
-static inline double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static inline void sub3(const double a[3], const double b[3], double r[3])
-{
-    r[0] = a[0] - b[0];
-    r[1] = a[1] - b[1];
-    r[2] = a[2] - b[2];
-}
-
-static inline void cross3(const double a[3], const double b[3], double r[3])
-{
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 /* r^−p from r² (pint: p as an integer or 0): integer p avoids pow(), which
  * dominates the quadrature and far-field cost otherwise. */

@@ -2,6 +2,7 @@
  * membership.c — pre-merge tags per MIXED tile from 64-voxel words, the
  * §4.5 merge over cell copies, and the sparse encoding. See membership.h.
  */
+#include "meso_clock.h"
 #include "membership.h"
 
 #include <stdlib.h>
@@ -314,12 +315,6 @@ void meso_membership_free(meso_membership* mb)
 
 /* >>driver ------------------------------------------------------------------------- */
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void builder_free(builder* B)
 {
@@ -542,14 +537,14 @@ static meso_result conclude(builder* B, meso_result r, double t0, meso_membershi
     if (r != MESO_OK)
         meso_membership_free(out);
     else
-        out->seconds = now_seconds() - t0;
+        out->seconds = meso_seconds() - t0;
     return r;
 }
 
 meso_result meso_membership_compute(const meso_mesh* m, const meso_voxel_grid* g, const meso_split_cells* sc,
                                     meso_voxelizer method, int threads, meso_membership* out, meso_error* err)
 {
-    const double t0 = now_seconds();
+    const double t0 = meso_seconds();
     if (!out)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "membership: NULL argument");
     memset(out, 0, sizeof(*out));
@@ -563,7 +558,7 @@ meso_result meso_membership_compute(const meso_mesh* m, const meso_voxel_grid* g
 meso_result meso_membership_from_voxels(const meso_voxels* v, const meso_split_cells* sc, int threads,
                                         meso_membership* out, meso_error* err)
 {
-    const double t0 = now_seconds();
+    const double t0 = meso_seconds();
     if (!out || !v)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "membership: NULL argument");
     memset(out, 0, sizeof(*out));

@@ -35,6 +35,7 @@
  *    by Barnes-Hut (lp_distance.h explains why we do not cut them off).
  */
 #include "shell_directors.h"
+#include "vec3d.h"
 
 #include <math.h>
 #include <stdatomic.h>
@@ -45,20 +46,10 @@
 #include <omp.h>
 #endif
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static double norm3(const double a[3])
-{
-    return sqrt(dot3(a, a));
-}
-
 /* cos of the angle between a and b, 1 for a zero vector (no turn known). */
 static double cos_angle(const double a[3], const double b[3])
 {
-    const double la = norm3(a), lb = norm3(b);
+    const double la = len3(a), lb = len3(b);
     if (la == 0.0 || lb == 0.0)
         return 1.0;
     return dot3(a, b) / (la * lb);
@@ -80,7 +71,7 @@ meso_result meso_shell_trace(const meso_lp_field* field, const double x0[3], con
         double delta = fmin(2.0 * step, h - s), xn[3], gn[3], dist;
         for (;;) {
             delta = fmin(delta * 0.5, h - s);
-            const double speed = fmax(norm3(g), 1.0);
+            const double speed = fmax(len3(g), 1.0);
             for (int k = 0; k < 3; ++k)
                 xn[k] = x[k] + delta * g[k] / speed;
             st.evaluations++;
@@ -130,7 +121,7 @@ meso_result meso_vertex_normals(const meso_mesh* m, float* normals, meso_error* 
                 a[k] = p[(c + 1) % 3][k] - p[c][k];
                 b[k] = p[(c + 2) % 3][k] - p[c][k];
             }
-            const double la = norm3(a), lb = norm3(b);
+            const double la = len3(a), lb = len3(b);
             if (la == 0.0 || lb == 0.0)
                 continue;
             const double angle = acos(fmax(-1.0, fmin(1.0, dot3(a, b) / (la * lb))));
@@ -140,7 +131,7 @@ meso_result meso_vertex_normals(const meso_mesh* m, float* normals, meso_error* 
     }
     for (uint32_t v = 0; v < m->vertex_count; ++v) {
         double* a = acc + 3 * (size_t)v;
-        const double len = norm3(a);
+        const double len = len3(a);
         for (int k = 0; k < 3; ++k)
             normals[3 * (size_t)v + k] = len > 0 ? (float)(a[k] / len) : (k == 2 ? 1.0f : 0.0f);
     }
@@ -176,7 +167,7 @@ meso_result meso_field_surface_build(const meso_mesh* m, const float* normals, c
             out_dir[0] = ed[1] * nv3[2] - ed[2] * nv3[1];
             out_dir[1] = ed[2] * nv3[0] - ed[0] * nv3[2];
             out_dir[2] = ed[0] * nv3[1] - ed[1] * nv3[0];
-            const double l = norm3(out_dir);
+            const double l = len3(out_dir);
             if (l > 0)
                 for (int k = 0; k < 3; ++k)
                     tangent[3 * (size_t)v + k] += out_dir[k] / l;
@@ -206,7 +197,7 @@ meso_result meso_field_surface_build(const meso_mesh* m, const float* normals, c
         const double tn = t[0] * n[0] + t[1] * n[1] + t[2] * n[2];
         for (int k = 0; k < 3; ++k)
             t[k] -= tn * n[k];
-        const double l = norm3(t);
+        const double l = len3(t);
         for (int k = 0; k < 3; ++k)
             out->positions[3 * (size_t)copy[v] + k] =
                 (float)(m->positions[3 * (size_t)v + k] + (l > 0 ? h * t[k] / l : 0.0));

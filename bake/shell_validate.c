@@ -4,6 +4,7 @@
 #include "shell_validate.h"
 
 #include "adapters.h"
+#include "vec3d.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -19,46 +20,22 @@
  * i.e. degenerate ones. */
 #define EPS_REL 1e-12
 
-static void sub3(double r[3], const double a[3], const double b[3])
-{
-    r[0] = a[0] - b[0];
-    r[1] = a[1] - b[1];
-    r[2] = a[2] - b[2];
-}
-
-static void cross3(double r[3], const double a[3], const double b[3])
-{
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static double len3(const double a[3])
-{
-    return sqrt(dot3(a, a));
-}
-
 void meso_shell_jacobian_bernstein(const double b[9], const double d[9], double c[9])
 {
     double e1[3], e2[3], f1[3], f2[3], t1[3], t2[3], n[3][3], x[3], y[3];
-    sub3(e1, b + 3, b);
-    sub3(e2, b + 6, b);
-    sub3(f1, d + 3, d);
-    sub3(f2, d + 6, d);
+    sub3(b + 3, b, e1);
+    sub3(b + 6, b, e2);
+    sub3(d + 3, d, f1);
+    sub3(d + 6, d, f2);
     for (int k = 0; k < 3; ++k) {
         t1[k] = e1[k] + f1[k];
         t2[k] = e2[k] + f2[k];
     }
-    cross3(n[0], e1, e2);
-    cross3(n[2], t1, t2);
+    cross3(e1, e2, n[0]);
+    cross3(t1, t2, n[2]);
     /* N1 = ½ [e1 × (e2+f2) + (e1+f1) × e2] */
-    cross3(x, e1, t2);
-    cross3(y, t1, e2);
+    cross3(e1, t2, x);
+    cross3(t1, e2, y);
     for (int k = 0; k < 3; ++k)
         n[1][k] = 0.5 * (x[k] + y[k]);
     for (int i = 0; i < 3; ++i)
@@ -114,7 +91,7 @@ uint8_t meso_shell_prism_check(const double b[9], const double d[9], int sign)
     for (int t = 0; t < 2; ++t) {
         const double* p = t ? top : b;
         for (int i = 0; i < 3; ++i) {
-            sub3(r, p + 3 * ((i + 1) % 3), p + 3 * i);
+            sub3(p + 3 * ((i + 1) % 3), p + 3 * i, r);
             double s = dot3(r, r);
             l2 = s > l2 ? s : l2;
         }

@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "mesh_check.h"
+#include "meso_clock.h"
 #include "vec3d.h" /* dot3, cross3, normalize3, any_perp3 (runtime/, shared with the references) */
 #if MESO_HAVE_CGAL
 #include "adapters.h"
@@ -32,21 +33,6 @@
 #define MESO_SKELFIT_LM_ITERATIONS 30
 
 /* >>geometry ------------------------------------------------------------ */
-
-static inline void sub3(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[0] - b[0];
-    o[1] = a[1] - b[1];
-    o[2] = a[2] - b[2];
-}
-
-static inline double dist3(const double a[3], const double b[3])
-{
-    double d[3];
-    sub3(a, b, d);
-    return sqrt(dot3(d, d));
-}
-
 /* Distance in the plane from (x, y) to the segment (x0, y0)-(x1, y1). */
 static double dist_seg2(double x, double y, double x0, double y0, double x1, double y1)
 {
@@ -133,13 +119,6 @@ static double dist_segment(const double a[3], const double b[3], const double p[
     double t = seg_param(a, b, p);
     t = t < 0 ? 0 : t > 1 ? 1 : t;
     return dist_at(a, b, t, p);
-}
-
-static double seconds_since(const struct timespec* t0)
-{
-    struct timespec t1;
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    return (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
 }
 
 /* >>checks -------------------------------------------------------------- */
@@ -1889,10 +1868,9 @@ static meso_result skeleton_tree(const clean_mesh* c, double medial_weight, work
 {
     meso_cgal_skeleton cs;
     const meso_cgal_skeleton_params params = {0, medial_weight};
-    struct timespec t0;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
+    const double t0 = meso_seconds();
     meso_result r = meso_cgal_skeletonize(c->xyz, c->nv, c->tri, c->nt, &params, &cs, err);
-    st->seconds_cgal = seconds_since(&t0);
+    st->seconds_cgal = meso_seconds() - t0;
     if (r != MESO_OK) {
         if (err && !err->code)
             err->code = MESO_SKELFIT_ISSUE_CGAL;
@@ -1949,8 +1927,7 @@ static meso_result cgal_tree_error(const clean_mesh* c, const work_tree* w, meso
 meso_result meso_skeleton_from_mesh(const meso_mesh* mesh, const meso_skeleton_fit_options* opt, meso_skeleton* out,
                                     meso_skeleton_fit_stats* stats, meso_error* err)
 {
-    struct timespec t0;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
+    const double t0 = meso_seconds();
     meso_skeleton_fit_stats st;
     memset(&st, 0, sizeof(st));
     if (stats)
@@ -2007,7 +1984,7 @@ meso_result meso_skeleton_from_mesh(const meso_mesh* mesh, const meso_skeleton_f
     fit_state_free(&f);
     work_tree_free(&w);
     clean_mesh_free(&c);
-    st.seconds_total = seconds_since(&t0);
+    st.seconds_total = meso_seconds() - t0;
     if (stats)
         *stats = st;
     return r;

@@ -3,6 +3,7 @@
  * along x, per tile row. See voxelize.h for the method, the perturbation
  * and the two paths.
  */
+#include "meso_clock.h"
 #include "voxelize.h"
 
 #include <math.h>
@@ -1165,12 +1166,6 @@ static void process_row(const job* jb, scratch* sc, row_out* out)
 
 /* >>driver ----------------------------------------------------------------------- */
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static meso_result check_mesh(const meso_mesh* m, meso_error* err)
 {
@@ -1263,7 +1258,7 @@ static int bin_rows_of_batch(const grid* g, const soup* s, const uint32_t* lstar
 meso_result meso_voxelize_stream(const meso_mesh* m, const meso_voxel_grid* vg, meso_voxelizer method, int threads,
                                  meso_voxel_rows_fn fn, void* user, meso_voxelize_stats* stats, meso_error* err)
 {
-    const double t_start = now_seconds();
+    const double t_start = meso_seconds();
     if (!m || !vg || !fn || method < 0 || method >= MESO_VOXELIZE_COUNT)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "voxelize: NULL or bad argument");
     grid g;
@@ -1406,7 +1401,7 @@ meso_result meso_voxelize_stream(const meso_mesh* m, const meso_voxel_grid* vg, 
     free(yitems);
     free(bedge);
     soup_free(&s);
-    st.seconds = now_seconds() - t_start;
+    st.seconds = meso_seconds() - t_start;
     if (stats)
         *stats = st;
     return r;

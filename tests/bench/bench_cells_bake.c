@@ -38,6 +38,7 @@
  * if set); the checked-in cells_table51.csv was measured on the thesis's
  * Stanford bunny, which cannot be bundled (its terms forbid commercial use).
  */
+#include "meso_clock.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -84,12 +85,6 @@ typedef struct measured {
     uint64_t file_bytes, mesh, cell, tile, splt, memb, nrmm, colr, other;
 } measured;
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static char* slurp(const char* path)
 {
@@ -219,7 +214,7 @@ static measured run_setup(const char* mesobake, const char* bunny, const char* w
         fprintf(stderr, " %s", *a);
     fprintf(stderr, "\n");
     fflush(NULL);
-    const double t0 = now_s();
+    const double t0 = meso_seconds();
     const pid_t pid = fork();
     if (pid < 0) {
         r.status = "failed";
@@ -248,13 +243,13 @@ static measured run_setup(const char* mesobake, const char* bunny, const char* w
             snprintf(r.error, sizeof(r.error), "wait4: %s", strerror(errno));
             return r;
         }
-        if (!killed && now_s() - t0 > timeout) {
+        if (!killed && meso_seconds() - t0 > timeout) {
             kill(pid, SIGKILL);
             killed = 1;
         }
         nanosleep(&(struct timespec){0, 5000000}, NULL);
     }
-    r.wall_s = now_s() - t0;
+    r.wall_s = meso_seconds() - t0;
     r.rss_mib = (double)u.ru_maxrss / 1024.0;
     if (killed) {
         r.status = "timeout";

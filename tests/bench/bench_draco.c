@@ -23,6 +23,7 @@
  * max and RMS, relative to the bounding-box diagonal. One CSV row per
  * (mesh, encoding, bits); tests/bench/plot_draco.gp draws it.
  */
+#include "meso_clock.h"
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -38,12 +39,6 @@
 
 #define RUNS 9
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return 1e3 * (double)ts.tv_sec + 1e-6 * (double)ts.tv_nsec;
-}
 
 static int cmp_double(const void* a, const void* b)
 {
@@ -109,10 +104,10 @@ static double time_read(const uint8_t* file, size_t size, uint8_t** out, size_t*
     memset(buf, 0, (size_t)c->decoded_size);
     double t[RUNS];
     for (int r = 0; r < RUNS; r++) {
-        double s = now_ms();
+        double s = (1e3 * meso_seconds());
         if (meso_file_read_chunk(f, 0, buf, (size_t)c->decoded_size, &err) != MESO_OK)
             die("read_chunk", &err);
-        t[r] = now_ms() - s;
+        t[r] = (1e3 * meso_seconds()) - s;
     }
     *out = buf;
     *out_size = (size_t)c->decoded_size;
@@ -173,10 +168,10 @@ int main(int argc, char** argv)
         meso_mesh_chunk mc;
         double t[RUNS];
         for (int r = 0; r < RUNS; r++) {
-            double s = now_ms();
+            double s = (1e3 * meso_seconds());
             if (meso_bake_mesh_chunk(&m, NULL, &mc, &err) != MESO_OK)
                 die("mesh_chunk raw", &err);
-            t[r] = now_ms() - s;
+            t[r] = (1e3 * meso_seconds()) - s;
             if (r + 1 < RUNS)
                 free(mc.data);
         }
@@ -202,10 +197,10 @@ int main(int argc, char** argv)
         for (size_t b = 0; b < sizeof bits / sizeof bits[0]; b++) {
             meso_draco_options opt = {bits[b], 10, 12, 7};
             for (int r = 0; r < RUNS; r++) {
-                double s = now_ms();
+                double s = (1e3 * meso_seconds());
                 if (meso_bake_mesh_chunk(&m, &opt, &mc, &err) != MESO_OK)
                     die("mesh_chunk draco", &err);
-                t[r] = now_ms() - s;
+                t[r] = (1e3 * meso_seconds()) - s;
                 if (r + 1 < RUNS)
                     free(mc.data);
             }

@@ -31,6 +31,7 @@
  * read(); the line after the table reports the recommended path+read and
  * path+full+read against it.
  */
+#include "meso_clock.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <stdint.h>
@@ -46,12 +47,6 @@
 #define CHUNK_BYTES ((size_t)64 << 20)
 #define RUNS 7
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void die(const char* what, const meso_error* err)
 {
@@ -192,7 +187,7 @@ int main(int argc, char** argv)
             die("writer_add", &err);
     }
     free(chunk);
-    double t0 = now_s();
+    double t0 = meso_seconds();
     if (meso_writer_write_file(w, path, &err) != MESO_OK)
         die("write_file", &err);
     meso_writer_destroy(w);
@@ -201,7 +196,7 @@ int main(int argc, char** argv)
         die("stat failed", NULL);
     const size_t size = (size_t)st.st_size;
     printf("wrote %s: %u chunks, %zu bytes (%.2f GB) in %.2f s (incl. fsync)\n", path, nchunks, size, 1e-9 * (double)size,
-           now_s() - t0);
+           meso_seconds() - t0);
 
     /* Buffers allocated and touched once, outside the timings. */
     uint8_t* buf = malloc(size);
@@ -230,38 +225,38 @@ int main(int argc, char** argv)
     const size_t block = (size_t)1 << 20;
     for (int r = 0; r < RUNS; r++) {
         double s;
-        s = now_s();
+        s = meso_seconds();
         plain_read(path, buf, size);
-        m[M_READ].t[r] = now_s() - s;
-        s = now_s();
+        m[M_READ].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         meso_path(path, buf, size, 2, 0);
-        m[M_PATH_READ].t[r] = now_s() - s;
-        s = now_s();
+        m[M_PATH_READ].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         meso_path(path, buf, size, 3, 0);
-        m[M_PATH_FULL_READ].t[r] = now_s() - s;
-        s = now_s();
+        m[M_PATH_FULL_READ].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         meso_path(path, buf, size, 1, 0);
-        m[M_PATH_FULL].t[r] = now_s() - s;
-        s = now_s();
+        m[M_PATH_FULL].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         meso_mmap(path);
-        m[M_MMAP_FULL_VIEW].t[r] = now_s() - s;
-        s = now_s();
+        m[M_MMAP_FULL_VIEW].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         meso_path(path, buf, size, 2, 1);
-        m[M_MMAP_READ].t[r] = now_s() - s;
-        s = now_s();
+        m[M_MMAP_READ].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         sink = meso_crc32c(0, buf, size);
-        m[M_CRC].t[r] = now_s() - s;
-        s = now_s();
+        m[M_CRC].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         {
             uint32_t c = 0;
             for (size_t done = 0; done < size; done += block)
                 c = meso_crc32c(c, buf, size - done < block ? size - done : block);
             sink = c;
         }
-        m[M_CRC_CACHED].t[r] = now_s() - s;
-        s = now_s();
+        m[M_CRC_CACHED].t[r] = meso_seconds() - s;
+        s = meso_seconds();
         memcpy(buf2, buf, size);
-        m[M_MEMCPY].t[r] = now_s() - s;
+        m[M_MEMCPY].t[r] = meso_seconds() - s;
         sink = buf2[size / 2];
     }
     if (unlink(path) != 0)

@@ -22,6 +22,7 @@
  *
  * usage: bench_frusta RESULTS_DIR [quick]   (quick: sizes up to 1000)
  * The CSV is also printed on stdout. */
+#include "meso_clock.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,12 +45,6 @@
         }                                                                \
     } while (0)
 
-static double now_us(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e6 + t.tv_nsec / 1e3;
-}
 
 static double minimum(const double* v, int n)
 {
@@ -204,10 +199,10 @@ static draw_result time_draw(meso_rt* rt, test_fbo* fbo, meso_rt_object obj, int
     for (int i = 0; i < 3; ++i) {
         test_fbo_clear(fbo, 0, 0, 0);
         fbo->Finish();
-        const double t0 = now_us();
+        const double t0 = (1e6 * meso_seconds());
         CHECK(meso_rt_draw(rt, obj, &d) == MESO_OK);
         fbo->Finish();
-        t[i] = (now_us() - t0) / 1e3;
+        t[i] = ((1e6 * meso_seconds()) - t0) / 1e3;
     }
     res.ms = minimum(t, 3);
     if (getenv("MESO_BENCH_PNG")) {
@@ -269,36 +264,36 @@ int main(int argc, char** argv)
         double tp[5], tc[5], ts[5];
         const int inner = sizes[si] >= 10000 ? 2 : sizes[si] >= 1000 ? 10 : 100; /* calls per timing */
         for (int r = -1; r < reps; ++r) {
-            double t0 = now_us();
+            double t0 = (1e6 * meso_seconds());
             for (int i = 0; i < inner; ++i) {
                 sway(rest, parent, nn, 0.1 * (r * inner + i), pos);
                 CHECK(meso_frusta_pose(recs, nf, balls, nball, pos, nn) == 0);
             }
-            const double a = (now_us() - t0) / inner;
-            t0 = now_us();
+            const double a = ((1e6 * meso_seconds()) - t0) / inner;
+            t0 = (1e6 * meso_seconds());
             for (int i = 0; i < inner; ++i) {
                 sway(rest, parent, nn, 0.1 * (r * inner + i), pos);
                 CHECK(mesoi_frusta_pose_host(rt, obj, pos, nn) == MESO_OK);
             }
-            const double b = (now_us() - t0) / inner;
+            const double b = ((1e6 * meso_seconds()) - t0) / inner;
             fbo.Finish();
-            t0 = now_us();
+            t0 = (1e6 * meso_seconds());
             for (int i = 0; i < inner; ++i) {
                 sway(rest, parent, nn, 0.1 * (r * inner + i), pos);
                 CHECK(meso_rt_frusta_set_pose(rt, obj, pos, nn) == MESO_OK);
             }
             fbo.Finish();
-            const double c = (now_us() - t0) / inner;
+            const double c = ((1e6 * meso_seconds()) - t0) / inner;
             if (r >= 0)
                 tp[r] = a, tc[r] = b, ts[r] = c;
         }
         /* The sway itself is in all three; subtract it. */
         double tsw[5];
         for (int r = 0; r < reps; ++r) {
-            const double t0 = now_us();
+            const double t0 = (1e6 * meso_seconds());
             for (int i = 0; i < inner; ++i)
                 sway(rest, parent, nn, 0.1 * i, pos);
-            tsw[r] = (now_us() - t0) / inner;
+            tsw[r] = ((1e6 * meso_seconds()) - t0) / inner;
         }
         const double sw = minimum(tsw, reps), per = 1000.0 / nf;
         const double pose_us = (minimum(tp, reps) - sw) * per, cpu_us = (minimum(tc, reps) - sw) * per,

@@ -43,6 +43,7 @@
  *   numbers, the exit code and the first stderr line (refusals). goal_met:
  *   no inverted prism, no offset self- and no offset/base intersection.
  */
+#include "meso_clock.h"
 #include <cjson/cJSON.h>
 #include <dirent.h>
 #include <errno.h>
@@ -83,12 +84,6 @@ static int smooth_rounds(void)
     return s && *s ? atoi(s) : SMOOTH_DEFAULT;
 }
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static double peak_rss_mb(void)
 {
@@ -214,13 +209,13 @@ static void ctx_init(shell_ctx* c, meso_mesh* m, double h, int with_field, int b
     c->diag = meso_mesh_bounds(&c->m, lo, hi);
     c->h = h;
     const uint32_t nv = c->m.vertex_count, nt = c->m.triangle_count;
-    double t = now_s();
+    double t = meso_seconds();
     meso_result r = meso_mesh_topology_compute(&c->m, 1e-14 * c->diag * c->diag, &c->topo, &err);
     if (r == MESO_OK)
         r = meso_mesh_topology_require_shellable(&c->topo, "bench mesh", &err);
     check(r, "topology", &err);
-    c->t_topo = now_s() - t;
-    t = now_s();
+    c->t_topo = meso_seconds() - t;
+    t = meso_seconds();
     if (base_check) {
         double* xyz = malloc(sizeof(double) * 3 * (size_t)nv);
         if (!xyz)
@@ -234,14 +229,14 @@ static void ctx_init(shell_ctx* c, meso_mesh* m, double h, int with_field, int b
             fprintf(stderr, "bench_shell: warning: base self-intersects (%llu pairs)\n",
                     (unsigned long long)cnt.pairs);
     }
-    c->t_check = now_s() - t;
-    t = now_s();
+    c->t_check = meso_seconds() - t;
+    t = meso_seconds();
     c->normals = malloc(sizeof(float) * 3 * (size_t)nv);
     if (!c->normals)
         die("out of memory", NULL);
     check(meso_vertex_normals(&c->m, c->normals, &err), "normals", &err);
-    c->t_normals = now_s() - t;
-    t = now_s();
+    c->t_normals = meso_seconds() - t;
+    t = meso_seconds();
     check(meso_field_surface_build(&c->m, c->normals, c->topo.boundary, c->topo.boundary_edges, h, &c->fs, &err),
           "field surface", &err);
     if (with_field) {
@@ -250,7 +245,7 @@ static void ctx_init(shell_ctx* c, meso_mesh* m, double h, int with_field, int b
                                    &c->field, &err),
               "field", &err);
     }
-    c->t_field = now_s() - t;
+    c->t_field = meso_seconds() - t;
 }
 
 static void ctx_free(shell_ctx* c)
@@ -284,30 +279,30 @@ static void side_directors(const shell_ctx* c, int sign, int mode, float* d, sid
 {
     meso_error err = {0};
     const meso_trace_options o = trace_opts(c->h, THETA, ANGLE_TOL_DEG, smooth_rounds());
-    const double t = now_s();
+    const double t = meso_seconds();
     check(meso_shell_side_directors(c->field, &c->m, c->normals, sign, &o, mode, THREADS, d, NULL, &out->hs,
                                     &out->ts, &err),
           "directors", &err);
-    out->t_dir = now_s() - t;
+    out->t_dir = meso_seconds() - t;
 }
 
 static void side_repair(const shell_ctx* c, int sign, float* d, side_result* out)
 {
     meso_error err = {0};
-    const double t = now_s();
+    const double t = meso_seconds();
     check(meso_shell_repair(&c->m, d, sign, REPAIR_ROUNDS, &out->shortened, &out->repair_rounds, &out->bad_left,
                             &err),
           "repair", &err);
-    out->t_repair = now_s() - t;
+    out->t_repair = meso_seconds() - t;
 }
 
 static void side_validate(const shell_ctx* c, int sign, const float* d, side_result* out)
 {
     meso_error err = {0};
-    const double t = now_s();
+    const double t = meso_seconds();
     memset(&out->rep, 0, sizeof(out->rep));
     check(meso_shell_validate(&c->m, d, NULL, c->h, sign, NULL, &out->rep, &err), "validate", &err);
-    out->t_validate = now_s() - t;
+    out->t_validate = meso_seconds() - t;
 }
 
 /* >>size */
@@ -330,7 +325,7 @@ static int size_one(const char* csv, int level, int mode)
     }
     double lo[3], hi[3];
     const double h = 0.05 * meso_mesh_bounds(&m, lo, hi);
-    const double t0 = now_s();
+    const double t0 = meso_seconds();
     shell_ctx c;
     ctx_init(&c, &m, h, 1, 1);
     const uint32_t nv = c.m.vertex_count;
@@ -342,7 +337,7 @@ static int size_one(const char* csv, int level, int mode)
     side_directors(&c, 1, mode, d, &s);
     side_repair(&c, 1, d, &s);
     side_validate(&c, 1, d, &s);
-    const double total = now_s() - t0;
+    const double total = meso_seconds() - t0;
     FILE* f = fopen(csv, "a");
     if (!f)
         die(csv, NULL);
@@ -363,7 +358,7 @@ static int size_one(const char* csv, int level, int mode)
 
 static double run_child(char* const argv[])
 {
-    const double t = now_s();
+    const double t = meso_seconds();
     fflush(NULL);
     const pid_t pid = fork();
     if (pid < 0)
@@ -375,7 +370,7 @@ static double run_child(char* const argv[])
     int status = 0;
     if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
         die("size child failed", NULL);
-    return now_s() - t;
+    return meso_seconds() - t;
 }
 
 static void bench_size(const char* dir, int max_level)
@@ -459,20 +454,20 @@ static void bench_accuracy(const char* dir)
             mask[v] = 1, ++traced;
         meso_trace_options o = trace_opts(h, 0.0, 0.5, 0);
         meso_trace_stats ref_ts = {0, 0, 0};
-        double t = now_s();
+        double t = meso_seconds();
         check(meso_shell_trace_all(c.field, &c.m, c.normals, 1.0, &o, mask, THREADS, dref, &ref_ts, &err), "trace",
               &err);
-        const double ref_s = now_s() - t;
+        const double ref_s = meso_seconds() - t;
         fprintf(stderr, "  %s reference: %u vertices, %.1f s, %llu evaluations\n", meshes[mi].name, traced, ref_s,
                 (unsigned long long)ref_ts.evaluations);
         for (size_t ti = 0; ti < sizeof(thetas) / sizeof(thetas[0]); ++ti)
             for (size_t ai = 0; ai < sizeof(tols) / sizeof(tols[0]); ++ai) {
                 o = trace_opts(h, thetas[ti], tols[ai], 0);
                 meso_trace_stats ts = {0, 0, 0};
-                t = now_s();
+                t = meso_seconds();
                 check(meso_shell_trace_all(c.field, &c.m, c.normals, 1.0, &o, mask, THREADS, d, &ts, &err), "trace",
                       &err);
-                const double secs = now_s() - t;
+                const double secs = meso_seconds() - t;
                 double emax = 0, esum = 0, amax = 0, asum = 0;
                 for (uint32_t v = 0; v < nv; ++v) {
                     if (!mask[v])

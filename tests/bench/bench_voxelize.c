@@ -21,6 +21,7 @@
  * membership map included (Voronoi, 8 seeds), on the plain mesh, instead
  * of the rows above.
  */
+#include "meso_clock.h"
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,12 +36,6 @@
 #include "test_util.h"
 #include "voxelize.h"
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static int cmp_u64(const void* pa, const void* pb)
 {
@@ -135,9 +130,9 @@ static result run_child(int what, const meso_mesh* m, uint32_t tiles, uint32_t R
             } else if (what == 1) { /* OpenVDB narrow band at the same voxel size */
 #if MESO_HAVE_OPENVDB
                 meso_vdb_grid* vg = NULL;
-                const double t0 = now_s();
+                const double t0 = meso_seconds();
                 if (meso_vdb_level_set(m, g.voxel_size, 3.0f, &vg, &err) == MESO_OK) {
-                    r.seconds = now_s() - t0;
+                    r.seconds = meso_seconds() - t0;
                     r.evaluated = meso_vdb_active_voxels(vg);
                     r.ok = 1;
                     meso_vdb_destroy(vg);
@@ -147,12 +142,12 @@ static result run_child(int what, const meso_mesh* m, uint32_t tiles, uint32_t R
                 meso_tile_map map;
                 meso_split_cells sc;
                 meso_membership mb;
-                const double t0 = now_s();
+                const double t0 = meso_seconds();
                 if (meso_tile_map_generate(&(meso_tile_map_params){MESO_TILE_MAP_VORONOI, R, 8, 0, 1}, 2, &map, &err) ==
                         MESO_OK &&
                     meso_split_cells_compute(&map, 2, &sc, &err) == MESO_OK &&
                     meso_membership_compute(m, &g, &sc, MESO_VOXELIZE_AUTO, 2, &mb, &err) == MESO_OK) {
-                    r = (result){now_s() - t0, mb.voxelize.tiles_mixed, mb.voxelize.voxels_evaluated, mb.voxelize.rows,
+                    r = (result){meso_seconds() - t0, mb.voxelize.tiles_mixed, mb.voxelize.voxels_evaluated, mb.voxelize.rows,
                                  mb.bytes, mb.cells_inside, (int)mb.voxelize.method, 1};
                     fprintf(stderr, "  goal: voxelization %.1f s, membership total %.1f s, %llu bytes (thesis %llu)\n",
                             mb.voxelize.seconds, mb.seconds, (unsigned long long)mb.bytes,

@@ -12,6 +12,7 @@
  * cell → 8 split cells, interior cell, a ring touching one face twice, tubes
  * that wrap, a comb with 11 split cells, > 64 split cells refused for the
  * thesis packing). Prints timings at R = 64 and 128 (never asserted). */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -19,12 +20,6 @@
 
 #include "split_cells.h"
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static size_t lin(uint32_t R, int64_t x, int64_t y, int64_t z)
 {
@@ -604,12 +599,12 @@ static void timings(void)
             meso_tile_map m;
             meso_split_cells sc;
             meso_error err;
-            const double t0 = now_s();
+            const double t0 = meso_seconds();
             assert(meso_tile_map_generate(&(meso_tile_map_params){MESO_TILE_MAP_VORONOI, res[i], counts[j], 0, 1}, 1,
                                           &m, &err) == MESO_OK);
-            const double t1 = now_s();
+            const double t1 = meso_seconds();
             assert(meso_split_cells_compute(&m, 1, &sc, &err) == MESO_OK);
-            const double t2 = now_s();
+            const double t2 = meso_seconds();
             fprintf(stderr, "    timing voronoi R=%u K=%u (1 thread): tile map %.3f s, split cells %.3f s; S=%u C=%u max/cell=%u\n",
                     res[i], counts[j], t1 - t0, t2 - t1, sc.split_count, sc.cell_count, sc.max_splits_per_cell);
             meso_split_cells_free(&sc);

@@ -22,6 +22,7 @@
  *    increase measured (a dense grid would need 8 GiB even at 1 bit per
  *    voxel) and sampled centres checked against CGAL;
  *  - argument errors and their codes; timings printed. */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -34,12 +35,6 @@
 #include "voxelize.h"
 #include "winding_number.h"
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static long max_rss_kib(void)
 {
@@ -155,7 +150,7 @@ static void compare_all_with_cgal(const char* name, const meso_mesh* m, const me
     int8_t* side = malloc(slice);
     assert(p && side);
     uint64_t wrong = 0, on = 0, inside = 0;
-    const double t0 = now();
+    const double t0 = meso_seconds();
     for (uint32_t k = 0; k < N2; ++k) {
         for (uint32_t j = 0; j < N1; ++j)
             for (uint32_t i = 0; i < N0; ++i)
@@ -177,7 +172,7 @@ static void compare_all_with_cgal(const char* name, const meso_mesh* m, const me
     }
     fprintf(stderr, "    %-26s %u x %u x %u centres vs CGAL (%.1f s): %llu disagree, %llu on the surface, "
             "%llu inside\n",
-            name, N0, N1, N2, now() - t0, (unsigned long long)wrong, (unsigned long long)on,
+            name, N0, N1, N2, meso_seconds() - t0, (unsigned long long)wrong, (unsigned long long)on,
             (unsigned long long)inside);
     assert(wrong == 0);
     assert(inside > 0);

@@ -8,6 +8,7 @@
  *    every face twice, a sphere with 5% of its faces deleted;
  *  - 1 and 2 threads give the same bits; build errors and their codes;
  *  - timings (printed, not asserted). */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -75,12 +76,6 @@ static double* box_points(const meso_mesh* m, size_t n, double grow, uint64_t se
     return p;
 }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* >>analytic solids --------------------------------------------------------- */
 
@@ -391,24 +386,24 @@ static void timings(void)
     const size_t n = 200000;
     for (size_t k = 0; k < 2; ++k) {
         meso_mesh m = load_obj(names[k]);
-        double t0 = now();
+        double t0 = meso_seconds();
         meso_winding* t = build(&m);
-        const double tb = now() - t0;
+        const double tb = meso_seconds() - t0;
         double* p = box_points(&m, n, 0.1, 0x7133u);
         double* w[2] = {malloc(sizeof(double) * n), malloc(sizeof(double) * n)};
         double qps[2];
         for (int th = 1; th <= 2; ++th) {
-            t0 = now();
+            t0 = meso_seconds();
             meso_winding_query_many(t, p, n, w[th - 1], th);
-            qps[th - 1] = (double)n / (now() - t0);
+            qps[th - 1] = (double)n / (meso_seconds() - t0);
         }
         assert(memcmp(w[0], w[1], sizeof(double) * n) == 0);
         /* The brute force on a subset, for scale. */
-        t0 = now();
+        t0 = meso_seconds();
         double sum = 0.0;
         for (size_t i = 0; i < 2000; ++i)
             sum += meso_winding_exact(&m, &p[3 * i]);
-        const double eqps = 2000.0 / (now() - t0);
+        const double eqps = 2000.0 / (meso_seconds() - t0);
         fprintf(stderr,
                 "    %-24s %5u tris: build %.2f ms; %.0f queries/s on 1 thread, %.0f on 2 (brute force %.0f/s, "
                 "sum of w %.1f)\n",

@@ -4,6 +4,7 @@
 #ifndef MESO_BENCH_GL_H
 #define MESO_BENCH_GL_H
 
+#include "meso_clock.h"
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,12 +14,6 @@
 #include "meso_rt.h"
 #include "shell_scene.h"
 
-static inline double now_ms(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
 
 static inline int cmp_double(const void* a, const void* b)
 {
@@ -75,14 +70,14 @@ static inline double bench_median_ms(bench* b, meso_rt_object obj, meso_rt_draw_
     for (int r = 0; r <= reps; ++r) {
         test_fbo_clear(&b->fbo, 0, 0, 0);
         b->fbo.Finish();
-        const double t0 = now_ms();
+        const double t0 = (1e3 * meso_seconds());
         if (meso_rt_draw(b->rt, obj, &d) != MESO_OK) {
             fprintf(stderr, "bench: draw failed\n");
             exit(1);
         }
         b->fbo.Finish();
         if (r > 0)
-            ms[r - 1] = now_ms() - t0;
+            ms[r - 1] = (1e3 * meso_seconds()) - t0;
     }
     qsort(ms, (size_t)reps, sizeof(double), cmp_double);
     return ms[reps / 2];

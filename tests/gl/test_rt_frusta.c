@@ -28,6 +28,7 @@
  *    as background. Must be 0 everywhere, joints and branches included.
  * Tolerances: see check_close() below.
  * MESO_TEST_PNG=DIR writes each case's GL, reference and difference images. */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <math.h>
@@ -93,12 +94,6 @@ static camera auto_camera(const uint8_t* file, size_t size, const double dir[3],
     return cam;
 }
 
-static double now_ms(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
 
 /* Reference pixels inside its silhouette (3x3 covered) that GL leaves empty. */
 static long holes(const ctx* c, const meso_ref_image* ref)
@@ -134,10 +129,10 @@ static result render_compare(ctx* c, const char* name, meso_rt_object obj, const
     CHECK(meso_rt_draw(c->rt, obj, &d) == MESO_OK); /* warm-up: shader JIT */
     test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
     c->fbo.Finish();
-    const double t0 = now_ms();
+    const double t0 = (1e3 * meso_seconds());
     CHECK(meso_rt_draw(c->rt, obj, &d) == MESO_OK);
     c->fbo.Finish();
-    res.draw_ms = now_ms() - t0;
+    res.draw_ms = (1e3 * meso_seconds()) - t0;
     test_fbo_read(&c->fbo, c->rgba, c->depth);
 
     meso_ref_view v = {.width = W, .height = H};

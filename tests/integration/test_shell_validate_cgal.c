@@ -5,6 +5,7 @@
  * weightings) on the bundled spot and wingnut, every count checked against
  * a brute force over all triangle pairs (see issue_baseline for why not the
  * bunny and armadillo any more). */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -15,12 +16,6 @@
 
 #if MESO_HAVE_CGAL
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void load(const char* path, meso_mesh* m)
 {
@@ -95,10 +90,10 @@ static meso_shell_report validate(const meso_mesh* m, const float* dir, double t
 {
     meso_shell_report rep;
     meso_error err = {0};
-    double t0 = now();
+    double t0 = meso_seconds();
     meso_result r = meso_shell_validate(m, dir, NULL, t, sign, NULL, &rep, &err);
     if (seconds)
-        *seconds = now() - t0;
+        *seconds = meso_seconds() - t0;
     if (r != MESO_OK)
         fprintf(stderr, "validate: %s\n", err.message);
     assert(r == MESO_OK);
@@ -308,11 +303,11 @@ static void pmp_vs_soup(const meso_mesh* m, double f)
         idx[3 * nt + j] = nv + fi[j];
     meso_cgal_intersection_count pmp, soup;
     meso_error err = {0};
-    double t0 = now();
+    double t0 = meso_seconds();
     assert(meso_cgal_self_intersections(xyz, nv + 5, idx, nt, &pmp, &err) == MESO_OK);
-    double t1 = now();
+    double t1 = meso_seconds();
     assert(meso_cgal_self_intersections(xyz, nv + 5, idx, nt + 3, &soup, &err) == MESO_OK);
-    double t2 = now();
+    double t2 = meso_seconds();
     fprintf(stderr, "    PMP %llu pairs (%.3f s), soup fallback %llu pairs (%.3f s)\n", (unsigned long long)pmp.pairs,
             t1 - t0, (unsigned long long)soup.pairs, t2 - t1);
     assert(pmp.pairs == soup.pairs && pmp.degenerate_a == soup.degenerate_a);
@@ -538,10 +533,10 @@ static void issue_baseline(void)
         for (int i = 0; i < 2; ++i)
             for (int w = 0; w < 4; ++w) {
                 n[w][i] = baseline(names[k], &m, nrm[w], wname[w], fr[i]);
-                const double t0 = now();
+                const double t0 = meso_seconds();
                 ref[w][i] = brute_offset(&m, nrm[w], fr[i]);
                 fprintf(stderr, "      brute force over all pairs: %llu (%.2f s)\n", (unsigned long long)ref[w][i],
-                        now() - t0);
+                        meso_seconds() - t0);
                 const double e = (double)ref[w][i];
                 assert(fabs((double)n[w][i] - e) <= 0.005 * e);
             }

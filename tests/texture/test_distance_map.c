@@ -9,6 +9,7 @@
  *  - the built-ins tile seamlessly and are deterministic; thread counts do
  *    not change distance maps;
  *  - SPEC parsing and file inputs (PNG 8/16-bit, raw, .vdb) and their errors. */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <string.h>
@@ -20,12 +21,6 @@
 #include "png_io.h"
 #include "texture_function.h"
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static char tmpdir[256];
 
@@ -452,11 +447,11 @@ static void default_resolutions(void)
     assert(meso_texfn_from_spec("bricks", &f, &err) == MESO_OK);
     meso_distmap_default_res(&f, res);
     assert(res[0] == 128 && res[1] == 128 && res[2] >= 8 && res[2] <= 128 && res[2] % 8 == 0);
-    const double t0 = now_s();
+    const double t0 = meso_seconds();
     meso_distmap dm;
     assert(meso_distmap_build(&f, res, MESO_DTYPE_U8, 0, &dm, &err) == MESO_OK);
     fprintf(stderr, "    bricks 256^2: default dist-res %ux%ux%u, built in %.0f ms\n", res[0], res[1], res[2],
-            1e3 * (now_s() - t0));
+            1e3 * (meso_seconds() - t0));
     meso_distmap_free(&dm);
     meso_texfn_free(&f);
     const float flat[64] = {0};

@@ -2,6 +2,7 @@
  * against independent expectations: brute-force quadrature, finite
  * differences, exact summation, the symmetry of a sphere and a torus, and the
  * far-field limit |∇d_p| → 1. Timings are printed, not asserted. */
+#include "meso_clock.h"
 #include "test_util.h"
 
 #include <pthread.h>
@@ -13,12 +14,6 @@
 
 /* >>helpers ---------------------------------------------------------------- */
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static double dot(const double a[3], const double b[3])
 {
@@ -638,9 +633,9 @@ static void test_threads_and_speed(void)
     double lo[3], hi[3], size = meso_mesh_bounds(&m, lo, hi);
     meso_lp_field* f = NULL;
     meso_error err;
-    double t0 = now_s();
+    double t0 = meso_seconds();
     assert(meso_lp_field_create(m.positions, m.vertex_count, m.indices, m.triangle_count, NULL, &f, &err) == MESO_OK);
-    double t_build = now_s() - t0;
+    double t_build = meso_seconds() - t0;
 
     /* Points just off the surface (vertex + 1% of the size along the normal,
      * both sides), as the director ODE will ask. */
@@ -654,9 +649,9 @@ static void test_threads_and_speed(void)
             pts[3 * i + k] = m.positions[3 * v + k] + (m.normals ? off * m.normals[3 * v + k] : off);
     }
     worker one = {f, pts, a, 0, N};
-    t0 = now_s();
+    t0 = meso_seconds();
     worker_run(&one);
-    double t_bh = now_s() - t0;
+    double t_bh = meso_seconds() - t0;
     pthread_t th[2];
     worker two[2] = {{f, pts, b, 0, N / 2}, {f, pts, b, N / 2, N - N / 2}};
     for (int i = 0; i < 2; ++i)
@@ -666,24 +661,24 @@ static void test_threads_and_speed(void)
     assert(memcmp(a, b, sizeof(a)) == 0); /* bit-identical whatever the threading */
 
     const int nexact = 200;
-    t0 = now_s();
+    t0 = meso_seconds();
     for (int i = 0; i < nexact; ++i) {
         double d, g[3];
         assert(meso_lp_eval_exact(f, pts + 3 * i, &d, g) == MESO_OK);
     }
-    double t_exact = now_s() - t0;
+    double t_exact = meso_seconds() - t0;
     fprintf(stderr, "    %s (%u triangles, points 1%% of the size off the surface, 1 thread): build %.3f s;"
             " exact %.0f points/s; Barnes-Hut:\n", "wingnut", m.triangle_count, t_build,
             nexact / t_exact);
     static const double ths[3] = {0.5, 0.3, 0.2};
     for (int ti = 0; ti < 3; ++ti) {
         meso_lp_stats st = {0};
-        t0 = now_s();
+        t0 = meso_seconds();
         for (int i = 0; i < N; ++i) {
             double d, g[3];
             assert(meso_lp_eval_ex(f, pts + 3 * i, ths[ti], 0.0, &d, g, &st) == MESO_OK);
         }
-        double t = now_s() - t0;
+        double t = meso_seconds() - t0;
         fprintf(stderr, "      theta %.1f: %.0f points/s (%.0f exact + %.0f far tris + %.0f multipoles per point)\n",
                 ths[ti], N / t, (double)st.exact_triangles / N, (double)st.far_triangles / N,
                 (double)st.multipoles / N);
@@ -694,12 +689,12 @@ static void test_threads_and_speed(void)
     /* p = 4 (quadrature near x) for comparison. */
     meso_lp_options o4 = {.p = 4.0};
     f = make_field(&m, &o4);
-    t0 = now_s();
+    t0 = meso_seconds();
     for (int i = 0; i < N / 4; ++i) {
         double d, g[3];
         assert(meso_lp_eval(f, pts + 3 * i, &d, g) == MESO_OK);
     }
-    fprintf(stderr, "    p = 4 (quadrature near x): Barnes-Hut default theta %.0f points/s\n", (N / 4) / (now_s() - t0));
+    fprintf(stderr, "    p = 4 (quadrature near x): Barnes-Hut default theta %.0f points/s\n", (N / 4) / (meso_seconds() - t0));
     meso_lp_field_destroy(f);
     meso_mesh_free(&m);
 }

@@ -79,13 +79,6 @@ int path_option(const char* opt, const char* value, const char** in, const char*
     return slot != NULL;
 }
 
-double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 const char* base_name(const char* path)
 {
     const char* s = strrchr(path, '/');
@@ -393,7 +386,7 @@ int parse_int(const char* s, long lo, long hi, long* out)
 int finish_bake(meso_result r, const meso_error* err, const char* out, const char* report, cJSON* rep,
                 size_t file_size, double t0)
 {
-    const double t_end = now_seconds();
+    const double t_end = meso_seconds();
     if (r != MESO_OK) {
         cli_outputs_discard();
         err_print(err);

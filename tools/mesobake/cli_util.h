@@ -7,6 +7,7 @@
 
 #include "cli_common.h"
 #include "cli_output.h"
+#include "meso_clock.h"
 #include "meso_bake.h"
 
 #if defined(__GNUC__)
@@ -32,7 +33,7 @@ void err_msg(const char* fmt, ...) CLI_PRINTF(1, 2);
 void err_print(const meso_error* err);
 /* A usage error: the message, the hint "See 'mesobake --help'.", exit code 1. */
 int usage_error(const char* fmt, ...) CLI_PRINTF(1, 2);
-double now_seconds(void);
+
 const char* base_name(const char* path);
 int has_suffix(const char* s, const char* suffix);
 /* Read a whole file (provenance checksums, .drc input). */

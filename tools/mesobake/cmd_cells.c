@@ -301,7 +301,7 @@ int cmd_cells(int argc, char** argv)
     int pr = parse_args(argc, argv, &a);
     if (pr != 0)
         return pr < 0 ? MESO_EXIT_OK : pr;
-    const double t0 = now_seconds();
+    const double t0 = meso_seconds();
     const int threads = (int)a.threads;
     meso_error err = {0};
     meso_mesh m = {0};
@@ -327,14 +327,14 @@ int cmd_cells(int argc, char** argv)
         r = make_grid(&a, &m, planned_res(&a), &g, &err);
     if (r == MESO_OK)
         r = check_budget(&a, &m, &g, 1, &err);
-    double t = now_seconds();
+    double t = meso_seconds();
     if (r == MESO_OK)
         r = make_tile_map(&a, &R, &tm, &err);
     if (r == MESO_OK)
         r = meso_split_cells_compute(&tm, threads, &sc, &err);
     if (r == MESO_OK && verbose)
         fprintf(stderr, "mesobake: tile map %s, R = %u: %u cells, %u split cells (%u wrapping cells) (%.0f ms)\n",
-                a.tile_map, R, sc.cell_count, sc.split_count, sc.wrapping_cells, 1e3 * (now_seconds() - t));
+                a.tile_map, R, sc.cell_count, sc.split_count, sc.wrapping_cells, 1e3 * (meso_seconds() - t));
     if (r == MESO_OK && sc.split_count == 0)
         r = meso_bake_fail(&err, tm.kind == MESO_TILE_MAP_RAW ? MESO_ERR_CORRUPT : MESO_ERR_INVALID_ARG,
                            MESO_TILEMAP_ISSUE_CONTENT, "--tile-map '%s': the tile map has no cells (every voxel is 0)",
@@ -354,12 +354,12 @@ int cmd_cells(int argc, char** argv)
                 (unsigned long long)mb.cells_outside, (unsigned long long)mb.cells_intersected,
                 (unsigned long long)mb.tiles_outside, (unsigned long long)mb.tiles_inside,
                 (unsigned long long)mb.tiles_mixed, 1e3 * mb.seconds);
-    t = now_seconds();
+    t = meso_seconds();
     if (r == MESO_OK)
         r = meso_cells_chunks_build(&tm, &sc, &mb, g.origin, g.voxel_size, a.colour, threads, &cc, &err);
     if (r == MESO_OK && verbose)
         fprintf(stderr, "mesobake: normal and colour maps: %llu border voxels of %u^3 (%.0f ms)\n",
-                (unsigned long long)cc.border_voxels, R, 1e3 * (now_seconds() - t));
+                (unsigned long long)cc.border_voxels, R, 1e3 * (meso_seconds() - t));
     if (r == MESO_OK)
         r = meso_bake_mesh_chunk(&m, NULL, &mesh_chunk, &err);
     if (r == MESO_OK) {

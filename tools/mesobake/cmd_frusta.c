@@ -185,7 +185,7 @@ static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skelet
     meso_result r = load_mesh(a->in, a->max_memory, &m, err);
     if (r != MESO_OK)
         return r;
-    double t0 = now_seconds();
+    double t0 = meso_seconds();
     meso_skeleton_fit_options o = {.tolerance = a->tolerance};
     meso_skeleton_fit_stats st;
     r = meso_skeleton_from_mesh(&m, &o, sk, &st, err);
@@ -200,7 +200,7 @@ static meso_result load_skeleton(const frusta_args* a, meso_skeleton* sk, skelet
         src->tolerance = st.tolerance;
         src->skeleton_nodes_before = st.cgal_nodes;
         src->mesh_triangles = st.mesh_triangles;
-        src->seconds_skeleton = now_seconds() - t0;
+        src->seconds_skeleton = meso_seconds() - t0;
         if (verbose)
             fprintf(stderr,
                 "mesobake: skeleton: CGAL %u nodes (%.2f s), %u cycles cut, fitted %u nodes / %u segments; fit "
@@ -257,7 +257,7 @@ int cmd_frusta(int argc, char** argv)
         return pr < 0 ? MESO_EXIT_OK : pr;
     if (!a.max_memory)
         a.max_memory = meso_memory_default_budget();
-    const double t0 = now_seconds();
+    const double t0 = meso_seconds();
     meso_error err = {0};
     meso_skeleton sk = {0};
     meso_frustum_model m = {0};

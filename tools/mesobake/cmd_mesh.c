@@ -109,7 +109,7 @@ int cmd_mesh(int argc, char** argv)
     const int checked = check_outputs(out, report);
     if (checked != MESO_EXIT_OK)
         return checked;
-    const double t0 = now_seconds();
+    const double t0 = meso_seconds();
     meso_error err = {0};
     meso_mesh m;
     if (!max_memory)
@@ -121,7 +121,7 @@ int cmd_mesh(int argc, char** argv)
     }
     if (verbose)
         fprintf(stderr, "mesobake: read %s: %u vertices, %u triangles%s%s (%.0f ms)\n", base_name(in), m.vertex_count,
-                m.triangle_count, m.normals ? ", normals" : "", m.uvs ? ", uvs" : "", 1e3 * (now_seconds() - t0));
+                m.triangle_count, m.normals ? ", normals" : "", m.uvs ? ", uvs" : "", 1e3 * (meso_seconds() - t0));
 
     meso_mesh_chunk chunk;
     r = meso_bake_mesh_chunk(&m, use_draco ? &dopt : NULL, &chunk, &err);
@@ -177,7 +177,7 @@ int cmd_mesh(int argc, char** argv)
         err_print(&err);
         return meso_exit_for(r);
     }
-    const double t_end = now_seconds();
+    const double t_end = meso_seconds();
     const int code = publish_outputs(report, rep, file_size, t_end - t0);
     if (verbose && code == MESO_EXIT_OK)
         fprintf(stderr, "mesobake: wrote %s: %zu bytes, mesh %s (%.0f ms total)\n", out, file_size,

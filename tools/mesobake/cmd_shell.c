@@ -292,7 +292,7 @@ static void texture_free(shell_texture* tx)
 /* Parse the spec, sample the function, bake its distance map. */
 static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_error* err)
 {
-    double t = now_seconds();
+    double t = meso_seconds();
     meso_result r = meso_texfn_from_spec_max(a->texture, a->max_memory, &tx->fn, err);
     if (r != MESO_OK)
         return r;
@@ -300,7 +300,7 @@ static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_
     if (verbose)
         fprintf(stderr, "mesobake: texture %s: %s %ux%ux%u %s (%.0f ms)\n", a->texture,
                 tx->fn.kind == MESO_TEXFN_HEIGHT ? "height field" : "density volume", td[0], td[1], td[2],
-                tx->fn.dtype == MESO_DTYPE_U8 ? "u8" : "u16", 1e3 * (now_seconds() - t));
+                tx->fn.dtype == MESO_DTYPE_U8 ? "u8" : "u16", 1e3 * (meso_seconds() - t));
     uint32_t res[3] = {a->dist_res[0], a->dist_res[1], a->dist_res[2]};
     if (!res[0])
         meso_distmap_default_res(&tx->fn, res);
@@ -312,13 +312,13 @@ static meso_result texture_prepare(const shell_args* a, shell_texture* tx, meso_
                           res[1], res[2], a->dist_res[0] ? "--dist-res" : "default", td[0], td[1], td[2]);
     if (r != MESO_OK)
         return r;
-    t = now_seconds();
+    t = meso_seconds();
     r = meso_distmap_build(&tx->fn, res, dist_dtypes[a->dist_type], (int)a->threads, &tx->dist, err);
     if (r == MESO_OK && verbose)
         fprintf(stderr, "mesobake: distance map %ux%ux%u %s (%s): %llu of %llu cells touch the solid (%.0f ms)\n",
                 res[0], res[1], res[2], dist_type_names[a->dist_type], a->dist_res[0] ? "--dist-res" : "default",
                 (unsigned long long)tx->dist.solid_cells, (unsigned long long)res[0] * res[1] * res[2],
-                1e3 * (now_seconds() - t));
+                1e3 * (meso_seconds() - t));
     return r;
 }
 
@@ -465,7 +465,7 @@ int cmd_shell(int argc, char** argv)
         return rc < 0 ? MESO_EXIT_OK : rc;
     if (!a.max_memory)
         a.max_memory = meso_memory_default_budget();
-    const double t0 = now_seconds();
+    const double t0 = meso_seconds();
     meso_error err = {0};
     shell_texture tx;
     memset(&tx, 0, sizeof(tx));
@@ -522,7 +522,7 @@ int cmd_shell(int argc, char** argv)
     if (verbose)
         fprintf(stderr, "mesobake: %s: %u vertices, %u triangles, %u boundary edges; thickness %g (%.3g of the "
                         "diagonal) (%.0f ms)\n",
-                base_name(a.in), nv, nt, topo.boundary_edges, h, h / diag, 1e3 * (now_seconds() - t0));
+                base_name(a.in), nv, nt, topo.boundary_edges, h, h / diag, 1e3 * (meso_seconds() - t0));
     if (verbose && a.texture)
         fprintf(stderr, "mesobake: texture coordinates (%s): %u seam vertices added, %u output vertices\n",
                 tx.uv_source, tx.seam_vertices, nv + tx.seam_vertices);
@@ -568,7 +568,7 @@ int cmd_shell(int argc, char** argv)
             fprintf(stderr, "mesobake: directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations "
                             "(%.0f ms)\n",
                     sign > 0 ? "outer" : "inner", mode_names[a.mode], hs.vertices_lp, hs.vertices_normal, hs.rounds,
-                    (unsigned long long)ts.evaluations, 1e3 * (now_seconds() - t0));
+                    (unsigned long long)ts.evaluations, 1e3 * (meso_seconds() - t0));
         if (r == MESO_OK && a.repair) {
             uint32_t shortened = 0, rounds = 0, left = 0;
             r = meso_shell_repair(&m, d + 3 * (size_t)nv * (size_t)layer, sign, 30, &shortened, &rounds, &left, &err);
@@ -606,7 +606,7 @@ int cmd_shell(int argc, char** argv)
                     val.inverted_prisms, val.prisms, val.undecided_prisms,
                     (unsigned long long)val.offset_self_intersections,
                     (unsigned long long)val.offset_base_intersections, val.thickness_ratio_min,
-                    val.thickness_ratio_mean, 1e3 * (now_seconds() - t0));
+                    val.thickness_ratio_mean, 1e3 * (meso_seconds() - t0));
     }
 
     size_t file_size = 0;
