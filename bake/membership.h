@@ -71,10 +71,11 @@
  * Working memory: two bytes per tile plus S bytes per MIXED tile.
  * Threads: OpenMP over tiles; results do not depend on the thread count.
  * Measured: the issue's goal setup, a 64^3 tile map (Voronoi, 8 seeds) x
- * 128^3 tiles (N = 8192) on the bunny: 14.2 s in all (13.6 s of it the
- * voxelization, 32 M rays), peak RSS 136 MiB, a map of 2.2 MB where the
- * thesis's 128-bit tile codes take 32 MiB (tests/bench/bench_voxelize.c
- * `goal`; 2 threads on a shared 2-core machine).
+ * 128^3 tiles (N = 8192) on the bunny, baked by mesobake cells: 8.1 s in
+ * all (7.9 s of it voxelization + membership), peak RSS 165 MiB, a map of
+ * 2.2 MB where the thesis's 128-bit tile codes take 32 MiB
+ * (tests/bench/bench_cells_bake.c, results/cells_table51.csv; 2 threads on
+ * a shared 2-core machine).
  */
 #ifndef MESO_MEMBERSHIP_H
 #define MESO_MEMBERSHIP_H

@@ -15,6 +15,7 @@
  */
 #include "frustum_reference.h"
 
+#include "ref_bvh.h"
 #include "ref_common.h"
 #include "vec3d.h"
 
@@ -980,132 +981,53 @@ void meso_ref_frusta_free(meso_ref_frusta* m)
 
 /* >>render ----------------------------------------------------------------- */
 
-/* A bounding-volume hierarchy over the items' bounding spheres (as boxes);
- * items without a bound are tested for every ray. */
-typedef struct bvh_node {
-    double lo[3], hi[3];
-    uint32_t first, count; /* leaf: order[first .. first + count); inner: count 0, children first, first + 1 */
-} bvh_node;
-
-typedef struct sort_key {
-    double key;
-    uint32_t item;
-} sort_key;
-
-static int cmp_key(const void* a, const void* b)
-{
-    const sort_key *x = a, *y = b;
-    return x->key < y->key ? -1 : x->key > y->key ? 1 : (x->item > y->item) - (x->item < y->item);
-}
-
+/* A bounding-volume hierarchy (ref_bvh.h) over the items' bounding spheres
+ * (as boxes); items without a bound are tested for every ray. */
 typedef struct frusta_scene {
     model_ref m;
     mesoi_ref_camera cam;
     double (*box)[6];      /* per item: lo, hi */
-    uint32_t* order;       /* bounded items, grouped by leaf */
+    uint32_t* order;       /* the bounded items */
     uint32_t bounded;
     uint32_t* unbounded;
     uint32_t unbounded_count;
-    bvh_node* nodes;
-    uint32_t node_count;
-    sort_key* tmp;         /* build scratch */
+    mesoi_ref_bvh bvh;
 } frusta_scene;
 
-static void bvh_build(frusta_scene* sc, uint32_t node, uint32_t first, uint32_t count)
-{
-    bvh_node* nd = &sc->nodes[node];
-    for (int k = 0; k < 3; ++k) {
-        nd->lo[k] = INFINITY;
-        nd->hi[k] = -INFINITY;
-    }
-    for (uint32_t i = first; i < first + count; ++i)
-        for (int k = 0; k < 3; ++k) {
-            nd->lo[k] = fmin(nd->lo[k], sc->box[sc->order[i]][k]);
-            nd->hi[k] = fmax(nd->hi[k], sc->box[sc->order[i]][3 + k]);
-        }
-    if (count <= 4) {
-        nd->first = first;
-        nd->count = count;
-        return;
-    }
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-        if (nd->hi[k] - nd->lo[k] > nd->hi[axis] - nd->lo[axis])
-            axis = k;
-    /* Split at the median centre along the longest axis. */
-    for (uint32_t i = 0; i < count; ++i) {
-        const uint32_t it = sc->order[first + i];
-        sc->tmp[i].key = sc->box[it][axis] + sc->box[it][3 + axis];
-        sc->tmp[i].item = it;
-    }
-    qsort(sc->tmp, count, sizeof(*sc->tmp), cmp_key);
-    for (uint32_t i = 0; i < count; ++i)
-        sc->order[first + i] = sc->tmp[i].item;
-    const uint32_t mid = first + count / 2;
-    const uint32_t c = sc->node_count;
-    sc->node_count += 2;
-    nd->first = c;
-    nd->count = 0;
-    bvh_build(sc, c, first, mid - first);
-    bvh_build(sc, c + 1, mid, first + count - mid);
-}
+typedef struct trace_ctx {
+    const frusta_scene* sc;
+    const double *o, *d;
+    meso_ref_frustum_hit* hit;
+    int found;
+    uint32_t samples;
+} trace_ctx;
 
-static int box_hit(const double lo[3], const double hi[3], const double o[3], const double d[3], double best)
+static void trace_leaf(const void* user, const uint32_t* items, uint32_t count, double* tmax)
 {
-    double t0 = 0, t1 = best;
-    for (int k = 0; k < 3; ++k) {
-        if (d[k] == 0) {
-            if (o[k] < lo[k] || o[k] > hi[k])
-                return 0;
-            continue;
+    trace_ctx* c = (trace_ctx*)user;
+    meso_ref_frustum_hit h;
+    for (uint32_t i = 0; i < count; ++i)
+        if (item_intersect(&c->sc->m, items[i], 0, c->o, c->d, 0, *tmax, &h, &c->samples)) {
+            *tmax = h.t;
+            *c->hit = h;
+            c->found = 1;
         }
-        double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
-        if (a > b) {
-            const double t = a;
-            a = b;
-            b = t;
-        }
-        t0 = fmax(t0, a);
-        t1 = fmin(t1, b);
-    }
-    return t0 <= t1;
 }
 
 static int scene_trace(const frusta_scene* sc, const double o[3], const double d[3], meso_ref_frustum_hit* hit)
 {
     double best = 1.0; /* the far plane */
-    int found = 0;
-    uint32_t samples = 0;
+    trace_ctx c = {sc, o, d, hit, 0, 0};
     meso_ref_frustum_hit h;
     for (uint32_t k = 0; k < sc->unbounded_count; ++k)
-        if (item_intersect(&sc->m, sc->unbounded[k], 1, o, d, 0, best, &h, &samples)) {
+        if (item_intersect(&sc->m, sc->unbounded[k], 1, o, d, 0, best, &h, &c.samples)) {
             best = h.t;
             *hit = h;
-            found = 1;
+            c.found = 1;
         }
-    uint32_t stack[128];
-    int sp = 0;
-    if (sc->node_count)
-        stack[sp++] = 0;
-    while (sp > 0) {
-        const bvh_node* nd = &sc->nodes[stack[--sp]];
-        if (!box_hit(nd->lo, nd->hi, o, d, best))
-            continue;
-        if (nd->count == 0) {
-            if (sp + 2 <= 128) {
-                stack[sp++] = nd->first + 1;
-                stack[sp++] = nd->first;
-            }
-            continue;
-        }
-        for (uint32_t i = nd->first; i < nd->first + nd->count; ++i)
-            if (item_intersect(&sc->m, sc->order[i], 0, o, d, 0, best, &h, &samples)) {
-                best = h.t;
-                *hit = h;
-                found = 1;
-            }
-    }
-    return found;
+    const double inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]};
+    mesoi_ref_bvh_trace(&sc->bvh, o, d, inv, &best, trace_leaf, &c);
+    return c.found;
 }
 
 static void frusta_row(const frusta_scene* sc, meso_ref_image* img, int y)
@@ -1160,10 +1082,8 @@ meso_result meso_ref_frusta_render(const meso_ref_frusta* m, const meso_ref_view
     sc.box = malloc(sizeof(*sc.box) * (n ? n : 1));
     sc.order = malloc(sizeof(*sc.order) * (n ? n : 1));
     sc.unbounded = malloc(sizeof(*sc.unbounded) * (n ? n : 1));
-    sc.nodes = malloc(sizeof(*sc.nodes) * 2 * (n ? n : 1));
-    sc.tmp = malloc(sizeof(*sc.tmp) * (n ? n : 1));
     meso_result r = mesoi_ref_image_alloc(out, v->width, v->height);
-    if (r == MESO_OK && (!sc.box || !sc.order || !sc.unbounded || !sc.nodes || !sc.tmp))
+    if (r == MESO_OK && (!sc.box || !sc.order || !sc.unbounded))
         r = MESO_ERR_OUT_OF_MEMORY;
     if (r != MESO_OK)
         goto done;
@@ -1179,18 +1099,16 @@ meso_result meso_ref_frusta_render(const meso_ref_frusta* m, const meso_ref_view
         }
         sc.order[sc.bounded++] = i;
     }
-    if (sc.bounded) {
-        sc.node_count = 1;
-        bvh_build(&sc, 0, 0, sc.bounded);
-    }
+    r = mesoi_ref_bvh_build(&sc.bvh, (const double(*)[6])sc.box, sc.order, sc.bounded);
+    if (r != MESO_OK)
+        goto done;
     const row_ctx rc = {&sc, out};
     mesoi_ref_rows(v->height, v->threads, row_cb, &rc);
 done:
     free(sc.box);
     free(sc.order);
     free(sc.unbounded);
-    free(sc.nodes);
-    free(sc.tmp);
+    mesoi_ref_bvh_free(&sc.bvh);
     if (r != MESO_OK)
         meso_ref_image_free(out);
     return r;

@@ -17,6 +17,7 @@
  */
 #include "shell_reference.h"
 
+#include "ref_bvh.h"
 #include "ref_common.h"
 
 #include <float.h>
@@ -166,18 +167,11 @@ typedef struct ref_prism {
     int planes;
 } ref_prism;
 
-typedef struct bvh_node {
-    double lo[3], hi[3];
-    uint32_t first, count; /* leaf: items[first..first+count); inner: count 0, children first, first + 1 */
-} bvh_node;
-
 typedef struct scene {
     const meso_ref_shell* shell;
     const meso_ref_view* view;
     ref_prism* prisms;
-    uint32_t* items;
-    bvh_node* nodes;
-    uint32_t node_count;
+    mesoi_ref_bvh bvh; /* over the prisms' boxes */
     int curved, samples;
     mesoi_ref_camera cam;
 } scene;
@@ -261,63 +255,6 @@ static void prepare_prism(ref_prism* rp, const meso_ref_shell* s, uint32_t f, do
     }
 }
 
-typedef struct sort_item {
-    double key;
-    uint32_t idx;
-} sort_item;
-
-static int cmp_item(const void* a, const void* b)
-{
-    const sort_item *x = a, *y = b;
-    if (x->key != y->key)
-        return x->key < y->key ? -1 : 1;
-    return x->idx < y->idx ? -1 : x->idx > y->idx;
-}
-
-/* Median split along the longest axis of the centroids, leaves of ≤ 4. */
-static void bvh_build(scene* sc, uint32_t node, uint32_t first, uint32_t count, sort_item* tmp)
-{
-    bvh_node* nd = &sc->nodes[node];
-    double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int c = 0; c < 3; ++c) {
-        nd->lo[c] = INFINITY;
-        nd->hi[c] = -INFINITY;
-    }
-    for (uint32_t i = first; i < first + count; ++i) {
-        const ref_prism* rp = &sc->prisms[sc->items[i]];
-        for (int c = 0; c < 3; ++c) {
-            nd->lo[c] = fmin(nd->lo[c], rp->lo[c]);
-            nd->hi[c] = fmax(nd->hi[c], rp->hi[c]);
-            const double m = 0.5 * (rp->lo[c] + rp->hi[c]);
-            clo[c] = fmin(clo[c], m);
-            chi[c] = fmax(chi[c], m);
-        }
-    }
-    if (count <= 4) {
-        nd->first = first;
-        nd->count = count;
-        return;
-    }
-    int axis = 0;
-    for (int c = 1; c < 3; ++c)
-        if (chi[c] - clo[c] > chi[axis] - clo[axis])
-            axis = c;
-    for (uint32_t i = 0; i < count; ++i) {
-        const ref_prism* rp = &sc->prisms[sc->items[first + i]];
-        tmp[i].key = rp->lo[axis] + rp->hi[axis];
-        tmp[i].idx = sc->items[first + i];
-    }
-    qsort(tmp, count, sizeof(*tmp), cmp_item);
-    for (uint32_t i = 0; i < count; ++i)
-        sc->items[first + i] = tmp[i].idx;
-    const uint32_t half = count / 2, left = sc->node_count;
-    sc->node_count += 2;
-    nd->first = left;
-    nd->count = 0;
-    bvh_build(sc, left, first, half, tmp);
-    bvh_build(sc, left + 1, first + half, count - half, tmp);
-}
-
 /* >>ray casting ------------------------------------------------------------ */
 
 typedef struct ray {
@@ -328,31 +265,6 @@ typedef struct hit {
     double t, uvw[3];
     uint32_t prism;
 } hit;
-
-static int box_interval(const double lo[3], const double hi[3], const ray* r, double* t0, double* t1)
-{
-    double a = *t0, b = *t1;
-    for (int c = 0; c < 3; ++c) {
-        if (r->d[c] == 0) {
-            if (r->o[c] < lo[c] || r->o[c] > hi[c])
-                return 0;
-            continue;
-        }
-        double ta = (lo[c] - r->o[c]) * r->inv[c], tb = (hi[c] - r->o[c]) * r->inv[c];
-        if (ta > tb) {
-            const double x = ta;
-            ta = tb;
-            tb = x;
-        }
-        a = fmax(a, ta);
-        b = fmin(b, tb);
-        if (a > b)
-            return 0;
-    }
-    *t0 = a;
-    *t1 = b;
-    return 1;
-}
 
 static int hull_interval(const ref_prism* rp, const ray* r, double* t0, double* t1)
 {
@@ -429,37 +341,31 @@ static void march_prism(const scene* sc, uint32_t pi, const ray* r, double t0, d
     }
 }
 
+typedef struct trace_ctx {
+    const scene* sc;
+    const ray* r;
+    hit* best;
+} trace_ctx;
+
+static void trace_leaf(const void* user, const uint32_t* items, uint32_t count, double* tmax)
+{
+    const trace_ctx* c = user;
+    for (uint32_t i = 0; i < count; ++i) {
+        const ref_prism* rp = &c->sc->prisms[items[i]];
+        double a = 0, b = fmin(1.0, c->best->t);
+        if (!mesoi_ref_box_interval(rp->lo, rp->hi, c->r->o, c->r->d, c->r->inv, &a, &b) ||
+            !hull_interval(rp, c->r, &a, &b))
+            continue;
+        march_prism(c->sc, items[i], c->r, a, b, c->best);
+    }
+    *tmax = fmin(1.0, c->best->t);
+}
+
 static void trace(const scene* sc, const ray* r, hit* best)
 {
-    uint32_t stack[128];
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-        const bvh_node* nd = &sc->nodes[stack[--sp]];
-        double t0 = 0, t1 = fmin(1.0, best->t);
-        if (!box_interval(nd->lo, nd->hi, r, &t0, &t1))
-            continue;
-        if (nd->count == 0) {
-            /* Nearer child last, so it is popped first. */
-            const bvh_node *a = &sc->nodes[nd->first], *b = &sc->nodes[nd->first + 1];
-            double ta0 = 0, ta1 = 1, tb0 = 0, tb1 = 1;
-            const int ha = box_interval(a->lo, a->hi, r, &ta0, &ta1), hb = box_interval(b->lo, b->hi, r, &tb0, &tb1);
-            const int a_first = !hb || (ha && ta0 <= tb0);
-            if (sp + 2 <= 128) {
-                stack[sp++] = a_first ? nd->first + 1 : nd->first;
-                stack[sp++] = a_first ? nd->first : nd->first + 1;
-            }
-            continue;
-        }
-        for (uint32_t i = nd->first; i < nd->first + nd->count; ++i) {
-            const uint32_t pi = sc->items[i];
-            const ref_prism* rp = &sc->prisms[pi];
-            double a = 0, b = fmin(1.0, best->t);
-            if (!box_interval(rp->lo, rp->hi, r, &a, &b) || !hull_interval(rp, r, &a, &b))
-                continue;
-            march_prism(sc, pi, r, a, b, best);
-        }
-    }
+    const trace_ctx c = {sc, r, best};
+    double tmax = fmin(1.0, best->t);
+    mesoi_ref_bvh_trace(&sc->bvh, r->o, r->d, r->inv, &tmax, trace_leaf, &c);
 }
 
 /* Normal and colour of a hit (shell_reference.h). */
@@ -565,21 +471,23 @@ meso_result meso_ref_render(const meso_ref_shell* s, const meso_ref_view* v, mes
     const double uv_scale = v->uv_scale != 0 ? v->uv_scale : 1.0;
 
     const uint32_t nt = s->triangle_count;
-    sc.prisms = malloc(sizeof(*sc.prisms) * nt);
-    sc.items = malloc(sizeof(*sc.items) * nt);
-    sc.nodes = malloc(sizeof(*sc.nodes) * 2 * (size_t)nt);
-    sort_item* tmp = malloc(sizeof(*tmp) * nt);
+    sc.prisms = malloc(sizeof(*sc.prisms) * (nt ? nt : 1));
+    double(*box)[6] = malloc(sizeof(*box) * (nt ? nt : 1));
+    uint32_t* items = malloc(sizeof(*items) * (nt ? nt : 1));
     meso_result r = mesoi_ref_image_alloc(out, v->width, v->height);
-    if (r == MESO_OK && (!sc.prisms || !sc.items || !sc.nodes || !tmp))
+    if (r == MESO_OK && (!sc.prisms || !box || !items))
         r = MESO_ERR_OUT_OF_MEMORY;
     if (r != MESO_OK)
         goto done;
     for (uint32_t f = 0; f < nt; ++f) {
         prepare_prism(&sc.prisms[f], s, f, uv_scale, sc.curved);
-        sc.items[f] = f;
+        memcpy(box[f], sc.prisms[f].lo, sizeof(sc.prisms[f].lo));
+        memcpy(box[f] + 3, sc.prisms[f].hi, sizeof(sc.prisms[f].hi));
+        items[f] = f;
     }
-    sc.node_count = 1;
-    bvh_build(&sc, 0, 0, nt, tmp);
+    r = mesoi_ref_bvh_build(&sc.bvh, (const double(*)[6])box, items, nt);
+    if (r != MESO_OK)
+        goto done;
 
     int threads = v->threads;
 #ifdef _OPENMP
@@ -592,9 +500,9 @@ meso_result meso_ref_render(const meso_ref_shell* s, const meso_ref_view* v, mes
     (void)threads;
 done:
     free(sc.prisms);
-    free(sc.items);
-    free(sc.nodes);
-    free(tmp);
+    free(box);
+    free(items);
+    mesoi_ref_bvh_free(&sc.bvh);
     if (r != MESO_OK)
         meso_ref_image_free(out);
     return r;
