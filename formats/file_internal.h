@@ -176,4 +176,11 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
 meso_result mesoi_check_mesh_header(const uint8_t* hdr, uint64_t decoded_size, meso_mesh_layout* out, int32_t chunk,
                                     uint64_t base, meso_error* err);
 
+/* file_validate_json.c (FORMAT.md §7.1). The offset of the first byte that
+ * is not valid UTF-8, or SIZE_MAX when all n bytes are. */
+size_t mesoi_utf8_invalid(const uint8_t* s, size_t n);
+/* 1 when d[0..n) is one strict RFC 8259 value with optional surrounding
+ * whitespace; else 0 with the issue code, what is wrong and its offset. */
+int mesoi_json_check(const uint8_t* d, size_t n, uint32_t* code, const char** what, size_t* pos);
+
 #endif /* MESO_FILE_INTERNAL_H */
