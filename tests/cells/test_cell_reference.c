@@ -19,7 +19,10 @@
  *  - a baked object (bake library) written, loaded: tags = meso_membership_get,
  *    normals = meso_octa_decode, colours and TILE equal; corrupted copies
  *    refused with MESO_ERR_CORRUPT naming the chunk;
- *  - threads 1 = 2, byte for byte. */
+ *  - threads 1 = 2, byte for byte.
+ * One program of ~1,190 lines on purpose: the eight parts share the
+ * hand-built objects and the brute-force slab test of >>helpers, and each
+ * part is a numbered section that can be read alone. */
 #include "test_util.h"
 
 #include <math.h>

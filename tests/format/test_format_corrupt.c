@@ -1,6 +1,9 @@
 /* test_format_corrupt.c — every corruption class is rejected with the right
  * meso_result and issue code. Where a corruption would otherwise be caught by
- * a checksum, the CRCs are recomputed (fix_crcs) to reach the deeper check. */
+ * a checksum, the CRCs are recomputed (fix_crcs) to reach the deeper check.
+ * One file of ~1,060 lines on purpose: it is a table of corruption cases, one
+ * short function per FORMAT.md rule, all built on the same sample file and
+ * CRC fix-up, and reads top to bottom in FORMAT.md's order. */
 #undef NDEBUG
 #include "meso_file.h"
 #include "meso_layout.h"
