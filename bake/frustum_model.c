@@ -387,9 +387,7 @@ static double make_segments(const meso_skeleton* sk, incidence* g, meso_frustum_
             hi[c] = fmax(hi[c], sk->nodes[i].pos[c]);
         }
     }
-    double diag = n ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                             (hi[2] - lo[2]) * (hi[2] - lo[2]))
-                    : 0;
+    double diag = n ? dist3(hi, lo) : 0;
     double eps_len = 1e-12 * diag;
     /* Segments and zero-length merges (union-find: order-independent). */
     for (uint32_t i = 0; i < n; ++i) {
@@ -398,8 +396,7 @@ static double make_segments(const meso_skeleton* sk, incidence* g, meso_frustum_
             continue;
         const meso_skeleton_node* a = &sk->nodes[p];
         const meso_skeleton_node* b = &sk->nodes[i];
-        double d[3] = {b->pos[0] - a->pos[0], b->pos[1] - a->pos[1], b->pos[2] - a->pos[2]};
-        if (sqrt(dot3(d, d)) <= eps_len) {
+        if (dist3(b->pos, a->pos) <= eps_len) {
             uint32_t ra = find_rep(g->rep, (uint32_t)p), rb = find_rep(g->rep, i);
             if (ra != rb)
                 g->rep[rb] = ra;

@@ -234,8 +234,7 @@ meso_result mesoi_skel_check_and_clean(const meso_mesh* m, mesoi_clean_mesh* c, 
         c->tri[i] = map[m->indices[i]];
     free(map);
     if (r == MESO_OK) {
-        c->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                       (hi[2] - lo[2]) * (hi[2] - lo[2]));
+        c->diag = dist3(hi, lo);
         r = check_topology(m, c->diag, err);
     }
     if (r == MESO_OK) {

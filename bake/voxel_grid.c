@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "vec3d.h"
 #include "voxelize_internal.h"
 
 /* >>triangle-box overlap ---------------------------------------------------------
@@ -19,18 +20,17 @@ int mesoi_tri_box(const double centre[3], const double half[3], const double* tv
 {
     double v[3][3], e[3][3];
     for (int c = 0; c < 3; ++c)
-        for (int k = 0; k < 3; ++k)
-            v[c][k] = tv[3 * c + k] - centre[k];
+        sub3(tv + 3 * c, centre, v[c]);
     for (int k = 0; k < 3; ++k) {
         if (mesoi_dmin(v[0][k], mesoi_dmin(v[1][k], v[2][k])) > half[k] || mesoi_dmax(v[0][k], mesoi_dmax(v[1][k], v[2][k])) < -half[k])
             return 0;
         for (int c = 0; c < 3; ++c)
             e[c][k] = v[(c + 1) % 3][k] - v[c][k];
     }
-    const double n[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                         e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    double n[3];
+    cross3(e[0], e[1], n);
     const double rn = half[0] * fabs(n[0]) + half[1] * fabs(n[1]) + half[2] * fabs(n[2]);
-    if (fabs(n[0] * v[0][0] + n[1] * v[0][1] + n[2] * v[0][2]) > rn)
+    if (fabs(dot3(n, v[0])) > rn)
         return 0;
     for (int c = 0; c < 3; ++c)
         for (int k = 0; k < 3; ++k) { /* axis = unit_k x e_c */
@@ -40,7 +40,7 @@ int mesoi_tri_box(const double centre[3], const double half[3], const double* tv
             ax[k2] = e[c][k1];
             double lo = INFINITY, hi = -INFINITY;
             for (int j = 0; j < 3; ++j) {
-                const double p = ax[0] * v[j][0] + ax[1] * v[j][1] + ax[2] * v[j][2];
+                const double p = dot3(ax, v[j]);
                 lo = mesoi_dmin(lo, p);
                 hi = mesoi_dmax(hi, p);
             }

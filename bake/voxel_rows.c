@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "vec3d.h"
 #include "voxelize_internal.h"
 
 #define FOUR_PI 12.566370614359172953850573533118
@@ -65,10 +66,11 @@ static long trace(const mesoi_job* jb, mesoi_scratch* sc, uint32_t j, uint32_t k
         } else {
             b += 1; /* K in [a, b] */
         }
-        const double nx = (v[1][1] - v[0][1]) * (v[2][2] - v[0][2]) - (v[1][2] - v[0][2]) * (v[2][1] - v[0][1]);
-        const double ny = (v[1][2] - v[0][2]) * (v[2][0] - v[0][0]) - (v[1][0] - v[0][0]) * (v[2][2] - v[0][2]);
-        const double nz = (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[1][1] - v[0][1]) * (v[2][0] - v[0][0]);
-        const double xi = v[0][0] - (ny * (q[1] - v[0][1]) + nz * (q[2] - v[0][2])) / nx;
+        double e1[3], e2[3], nrm[3];
+        sub3(v[1], v[0], e1);
+        sub3(v[2], v[0], e2);
+        cross3(e1, e2, nrm);
+        const double xi = v[0][0] - (nrm[1] * (q[1] - v[0][1]) + nrm[2] * (q[2] - v[0][2])) / nrm[0];
         int64_t guess = (int64_t)a;
         if (isfinite(xi)) {
             const double f = -mesoi_ffloor(0.5 - (xi - g->o[0]) / g->h); /* ceil(. - 1/2) */
