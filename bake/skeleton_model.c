@@ -102,8 +102,8 @@ void mesoi_mesh_to_model(const mesoi_clean_mesh* c, const mesoi_model* md, doubl
 /* Model -> mesh: points on the union's boundary (each piece's surface at
  * spacing ~h, kept when no other piece contains them) and their exact
  * distance to the mesh. Returns the largest; *count the points used. */
-meso_result mesoi_model_to_mesh(const mesoi_clean_mesh* c, const mesoi_model* md, double h, double* out_max, uint32_t* count,
-                                 meso_error* err)
+meso_result mesoi_model_to_mesh(const mesoi_clean_mesh* c, const mesoi_model* md, double h, double* out_max,
+                                uint32_t* count, meso_error* err)
 {
     /* Bounds of the mesh and of every piece, for the grid. */
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};

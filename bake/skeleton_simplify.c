@@ -211,8 +211,8 @@ static meso_result merge_pass(mesoi_fit_state* f, meso_error* err)
     return MESO_OK;
 }
 
-meso_result mesoi_fit_state_init(mesoi_fit_state* f, const mesoi_clean_mesh* c, const mesoi_work_tree* w, double tol, int refit_on,
-                                  int all, meso_error* err)
+meso_result mesoi_fit_state_init(mesoi_fit_state* f, const mesoi_clean_mesh* c, const mesoi_work_tree* w, double tol,
+                                 int refit_on, int all, meso_error* err)
 {
     memset(f, 0, sizeof(*f));
     const size_t n = w->n;

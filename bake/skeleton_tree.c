@@ -45,7 +45,8 @@ static int cmp_u64(const void* a, const void* b)
 
 /* CGAL's graph (deduplicated) and its correspondence, inverted to a
  * vertex -> node owner and regrouped. */
-static meso_result take_cgal(const mesoi_clean_mesh* c, const meso_cgal_skeleton* s, mesoi_work_tree* w, meso_error* err)
+static meso_result take_cgal(const mesoi_clean_mesh* c, const meso_cgal_skeleton* s, mesoi_work_tree* w,
+                             meso_error* err)
 {
     const uint32_t n = s->vertex_count;
     w->ncgal = n;

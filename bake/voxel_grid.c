@@ -22,7 +22,8 @@ int mesoi_tri_box(const double centre[3], const double half[3], const double* tv
     for (int c = 0; c < 3; ++c)
         sub3(tv + 3 * c, centre, v[c]);
     for (int k = 0; k < 3; ++k) {
-        if (mesoi_dmin(v[0][k], mesoi_dmin(v[1][k], v[2][k])) > half[k] || mesoi_dmax(v[0][k], mesoi_dmax(v[1][k], v[2][k])) < -half[k])
+        if (mesoi_dmin(v[0][k], mesoi_dmin(v[1][k], v[2][k])) > half[k] ||
+            mesoi_dmax(v[0][k], mesoi_dmax(v[1][k], v[2][k])) < -half[k])
             return 0;
         for (int c = 0; c < 3; ++c)
             e[c][k] = v[(c + 1) % 3][k] - v[c][k];
@@ -87,7 +88,8 @@ int mesoi_centre_span(const mesoi_grid* g, int axis, double lo, double hi, int64
         return 0;
     fa = mesoi_dmax(fa, (double)c0 - 4.0); /* keeps the conversions below in range */
     fb = mesoi_dmin(fb, (double)c1 + 4.0);
-    const double a = -mesoi_ffloor(0.5 - fa) - 1, b = mesoi_ffloor(fb - 0.5) + 1; /* ceil(fa - 1/2) - 1, floor(fb - 1/2) + 1 */
+    /* ceil(fa - 1/2) - 1, floor(fb - 1/2) + 1 */
+    const double a = -mesoi_ffloor(0.5 - fa) - 1, b = mesoi_ffloor(fb - 0.5) + 1;
     if (!(a <= b) || b < (double)c0 || a > (double)c1)
         return 0;
     *i0 = a < (double)c0 ? c0 : (int64_t)a;

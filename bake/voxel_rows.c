@@ -150,7 +150,8 @@ static double winding_at(const mesoi_job* jb, mesoi_scratch* sc, long X, int64_t
     const double q[3] = {mesoi_centre_coord(g, 0, i), mesoi_centre_coord(g, 1, j), mesoi_centre_coord(g, 2, k)};
     const double lo[3] = {mesoi_centre_coord(g, 0, (int64_t)t0 * R), mesoi_centre_coord(g, 1, (int64_t)jb->ty * R),
                           mesoi_centre_coord(g, 2, (int64_t)jb->tz * R)};
-    const double hi[3] = {mesoi_centre_coord(g, 0, (int64_t)t1 * R - 1), mesoi_centre_coord(g, 1, (int64_t)jb->ty * R + R - 1),
+    const double hi[3] = {mesoi_centre_coord(g, 0, (int64_t)t1 * R - 1),
+                          mesoi_centre_coord(g, 1, (int64_t)jb->ty * R + R - 1),
                           mesoi_centre_coord(g, 2, (int64_t)jb->tz * R + R - 1)};
     double rho2 = 0.0;
     for (int a = 0; a < 3; ++a) {
@@ -164,8 +165,8 @@ static double winding_at(const mesoi_job* jb, mesoi_scratch* sc, long X, int64_t
 /* WINDING: decide tiles [t0, t1) of the row (no mesh triangle meets them)
  * from the representative row (j, k), or mark the undecidable ones
  * candidates (cand bit 2). */
-static void certify(const mesoi_job* jb, mesoi_scratch* sc, const mesoi_xing* xs, long nx, uint32_t j, uint32_t k, uint32_t t0,
-                    uint32_t t1, uint8_t* classes)
+static void certify(const mesoi_job* jb, mesoi_scratch* sc, const mesoi_xing* xs, long nx, uint32_t j, uint32_t k,
+                    uint32_t t0, uint32_t t1, uint8_t* classes)
 {
     const int64_t i = ((int64_t)t0 + t1) * jb->g->R / 2;
     double spread;
@@ -399,7 +400,8 @@ void mesoi_process_row(const mesoi_job* jb, mesoi_scratch* sc, mesoi_row_out* ou
                             set_bits(bits, base + (uint64_t)(i - i0), base + (uint64_t)(next - i0));
                     } else {
                         for (int64_t x = i; x < next; ++x) {
-                            const double q[3] = {mesoi_centre_coord(g, 0, x), mesoi_centre_coord(g, 1, j), mesoi_centre_coord(g, 2, k)};
+                            const double q[3] = {mesoi_centre_coord(g, 0, x), mesoi_centre_coord(g, 1, j),
+                                                 mesoi_centre_coord(g, 2, k)};
                             if (meso_winding_inside((double)acc - mesoi_cone_winding(s, q, &sc->n.exact)))
                                 set_bits(bits, base + (uint64_t)(x - i0), base + (uint64_t)(x - i0) + 1);
                         }
