@@ -230,6 +230,7 @@ meso_result meso_skeleton_from_mesh(const meso_mesh* mesh, const meso_skeleton_f
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "skeleton from mesh: bad options (fit %d, tolerance %g)",
                               o.fit, o.tolerance);
 #if !MESO_HAVE_CGAL
+    (void)t0;
     return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0, "skeleton from mesh: this build has no CGAL");
 #else
     mesoi_clean_mesh c;
