@@ -363,42 +363,31 @@ void meso_frustum_model_free(meso_frustum_model* m)
     memset(m, 0, sizeof(*m));
 }
 
-meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum_options* opt, meso_frustum_model* out,
-    meso_error* err)
+/* The skeleton's nodes as the builder sees them: zero-length segments
+ * merged (union-find), and per representative node the segment ends there. */
+typedef struct incidence {
+    uint32_t n;       /* skeleton nodes */
+    uint32_t* rep;    /* n: representative (union-find; order-independent) */
+    uint32_t* deg;    /* n: segment ends at each representative */
+    uint32_t* first;  /* n + 1: the ends at v are ends[first[v] .. first[v + 1]) */
+    end_ref* ends;    /* 2 n + 1 */
+    uint32_t* queue;  /* n + 1: scratch (fill counters, then the breadth-first queue) */
+} incidence;
+
+/* Segments of non-zero length, with perpendicular planes and tip ends;
+ * zero-length ones merge their nodes. Returns the bounding-box diagonal. */
+static double make_segments(const meso_skeleton* sk, incidence* g, meso_frustum_model* m)
 {
-    if (!sk || !out)
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "frusta: skeleton or out is NULL");
-    memset(out, 0, sizeof(*out));
-    meso_frustum_options o = {0};
-    if (opt)
-        o = *opt;
-    uint32_t n = sk->node_count;
-    meso_frustum_model m = {0};
-    uint32_t* rep = malloc((size_t)(n ? n : 1) * sizeof(*rep));
-    uint32_t* deg = calloc(n ? n : 1, sizeof(*deg));
-    uint32_t* first = calloc((size_t)n + 1, sizeof(*first));
-    end_ref* ends = malloc((size_t)(2 * n + 1) * sizeof(*ends));
-    uint32_t* queue = malloc((size_t)(n + 1) * sizeof(*queue));
-    uint8_t* seen = NULL;
-    m.segments = calloc(n ? n : 1, sizeof(*m.segments));
-    m.joints = calloc(n ? n : 1, sizeof(*m.joints));
-    m.balls = calloc(n ? n : 1, sizeof(*m.balls));
-    meso_result r = MESO_OK;
-    if (!rep || !deg || !first || !ends || !queue || !m.segments || !m.joints || !m.balls) {
-        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory (%u nodes)", n);
-        goto done;
-    }
+    const uint32_t n = g->n;
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (uint32_t i = 0; i < n; ++i) {
-        rep[i] = i;
+        g->rep[i] = i;
         for (int c = 0; c < 3; ++c) {
             lo[c] = fmin(lo[c], sk->nodes[i].pos[c]);
             hi[c] = fmax(hi[c], sk->nodes[i].pos[c]);
         }
     }
-    double diag = n ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                             (hi[2] - lo[2]) * (hi[2] - lo[2]))
-                    : 0;
+    double diag = n ? dist3(hi, lo) : 0;
     double eps_len = 1e-12 * diag;
     /* Segments and zero-length merges (union-find: order-independent). */
     for (uint32_t i = 0; i < n; ++i) {
@@ -407,15 +396,14 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
             continue;
         const meso_skeleton_node* a = &sk->nodes[p];
         const meso_skeleton_node* b = &sk->nodes[i];
-        double d[3] = {b->pos[0] - a->pos[0], b->pos[1] - a->pos[1], b->pos[2] - a->pos[2]};
-        if (sqrt(dot3(d, d)) <= eps_len) {
-            uint32_t ra = find_rep(rep, (uint32_t)p), rb = find_rep(rep, i);
+        if (dist3(b->pos, a->pos) <= eps_len) {
+            uint32_t ra = find_rep(g->rep, (uint32_t)p), rb = find_rep(g->rep, i);
             if (ra != rb)
-                rep[rb] = ra;
-            m.stats.degenerate_segments++;
+                g->rep[rb] = ra;
+            m->stats.degenerate_segments++;
             continue;
         }
-        meso_frustum_segment* s = &m.segments[m.segment_count++];
+        meso_frustum_segment* s = &m->segments[m->segment_count++];
         s->node[0] = (uint32_t)p;
         s->node[1] = i;
         memcpy(s->c0, a->pos, sizeof(s->c0));
@@ -429,32 +417,36 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         s->cap[1] = s->r1 > 0;
         s->end_kind[0] = s->end_kind[1] = MESO_FRUSTUM_END_TIP;
     }
-    if (m.segment_count == 0) {
-        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3149u, "frusta: the skeleton has no segment of non-zero length");
-        goto done;
-    }
-    /* Incidence lists per representative node (counting sort). */
-    for (uint32_t s = 0; s < m.segment_count; ++s)
+    return diag;
+}
+
+/* Incidence lists per representative node (counting sort), then tips,
+ * branch points and the joints (nodes of two segment ends) with their
+ * planes. */
+static void find_joints(incidence* g, meso_frustum_model* m)
+{
+    const uint32_t n = g->n;
+    for (uint32_t s = 0; s < m->segment_count; ++s)
         for (int e = 0; e < 2; ++e)
-            deg[find_rep(rep, m.segments[s].node[e])]++;
+            g->deg[find_rep(g->rep, m->segments[s].node[e])]++;
     for (uint32_t i = 0; i < n; ++i)
-        first[i + 1] = first[i] + deg[i];
-    memset(queue, 0, (size_t)(n + 1) * sizeof(*queue)); /* fill counters */
-    for (uint32_t s = 0; s < m.segment_count; ++s)
+        g->first[i + 1] = g->first[i] + g->deg[i];
+    memset(g->queue, 0, (size_t)(n + 1) * sizeof(*g->queue)); /* fill counters */
+    for (uint32_t s = 0; s < m->segment_count; ++s)
         for (int e = 0; e < 2; ++e) {
-            uint32_t v = find_rep(rep, m.segments[s].node[e]);
-            ends[first[v] + queue[v]++] = (end_ref){s, e};
+            uint32_t v = find_rep(g->rep, m->segments[s].node[e]);
+            g->ends[g->first[v] + g->queue[v]++] = (end_ref){s, e};
         }
     for (uint32_t v = 0; v < n; ++v) {
-        if (deg[v] == 1)
-            m.stats.tips++;
-        else if (deg[v] == 2) {
-            meso_frustum_joint* j = &m.joints[m.joint_count];
+        if (g->deg[v] == 1)
+            m->stats.tips++;
+        else if (g->deg[v] == 2) {
+            meso_frustum_joint* j = &m->joints[m->joint_count];
             j->node = v;
             for (int k = 0; k < 2; ++k) {
-                j->segment[k] = ends[first[v] + k].seg;
-                j->end[k] = ends[first[v] + k].end;
-                m.segments[j->segment[k]].joint[j->end[k]] = (int32_t)m.joint_count;
+                j->segment[k] = g->ends[g->first[v] + k].seg;
+                j->end[k] = g->ends[g->first[v] + k].end;
+                m->segments[j->segment[k]].joint[j->end[k]] = (int32_t)m->joint_count;
             }
             /* First segment arrives at the joint: if it starts there, swap
              * when the other one ends there (so a chain reads parent→child). */
@@ -466,17 +458,21 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
                 j->segment[1] = ts;
                 j->end[1] = te;
             }
-            joint_plane(&m, j);
-            joint_apply(&m, m.joint_count);
-            m.joint_count++;
-        } else if (deg[v] >= 3)
-            m.stats.branch_points++;
+            joint_plane(m, j);
+            joint_apply(m, m->joint_count);
+            m->joint_count++;
+        } else if (g->deg[v] >= 3)
+            m->stats.branch_points++;
     }
-    /* Joints bending more than the limit are ball joints. */
-    for (uint32_t ji = 0; o.max_joint_angle_deg > 0 && ji < m.joint_count; ++ji) {
-        meso_frustum_joint* j = &m.joints[ji];
-        const meso_frustum_segment* s1 = &m.segments[j->segment[0]];
-        const meso_frustum_segment* s2 = &m.segments[j->segment[1]];
+}
+
+/* Joints bending more than max_deg (> 0) are ball joints. */
+static void ball_sharp_joints(meso_frustum_model* m, double max_deg)
+{
+    for (uint32_t ji = 0; ji < m->joint_count; ++ji) {
+        meso_frustum_joint* j = &m->joints[ji];
+        const meso_frustum_segment* s1 = &m->segments[j->segment[0]];
+        const meso_frustum_segment* s2 = &m->segments[j->segment[1]];
         double m1[3], m2[3];
         for (int i = 0; i < 3; ++i) {
             m1[i] = seg_end_point(s1, j->end[0])[i] - seg_end_point(s1, 1 - j->end[0])[i];
@@ -485,109 +481,126 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         normalize3(m1);
         normalize3(m2);
         double bend = acos(fmax(-1.0, fmin(1.0, dot3(m1, m2)))) * 360.0 / TAU;
-        if (bend > o.max_joint_angle_deg) {
+        if (bend > max_deg) {
             j->ball = 1;
-            m.stats.sharp_joints++;
-            m.stats.ball_joints++;
-            joint_apply(&m, ji);
+            m->stats.sharp_joints++;
+            m->stats.ball_joints++;
+            joint_apply(m, ji);
         }
     }
-    /* §2.2 minor-axis fit: joints in breadth-first order would converge in
-     * one sweep; sweeping until nothing moves needs no order. */
-    for (int sweep = 0; !o.no_minor_axis_fit && sweep < 32; ++sweep) {
+}
+
+/* §2.2 minor-axis fit: joints in breadth-first order would converge in
+ * one sweep; sweeping until nothing moves needs no order. Then how far the
+ * radii at the nodes moved from the skeleton's. */
+static void fit_minor_axes(const meso_skeleton* sk, meso_frustum_model* m, int fit, double diag)
+{
+    for (int sweep = 0; fit && sweep < 32; ++sweep) {
         double moved = 0;
-        for (uint32_t ji = 0; ji < m.joint_count; ++ji) {
-            if (m.joints[ji].ball)
+        for (uint32_t ji = 0; ji < m->joint_count; ++ji) {
+            if (m->joints[ji].ball)
                 continue;
-            double dr = minor_axis_fit(&m, &m.joints[ji]);
+            double dr = minor_axis_fit(m, &m->joints[ji]);
             if (isnan(dr)) {
-                m.joints[ji].ball = 1;
-                m.stats.unfitted_joints++;
-                m.stats.ball_joints++;
+                m->joints[ji].ball = 1;
+                m->stats.unfitted_joints++;
+                m->stats.ball_joints++;
             } else
                 moved = fmax(moved, fabs(dr));
-            joint_apply(&m, ji);
+            joint_apply(m, ji);
         }
-        for (uint32_t ji = 0; ji < m.joint_count; ++ji) {
-            if (!m.joints[ji].ball)
-                joint_plane(&m, &m.joints[ji]);
-            joint_apply(&m, ji);
+        for (uint32_t ji = 0; ji < m->joint_count; ++ji) {
+            if (!m->joints[ji].ball)
+                joint_plane(m, &m->joints[ji]);
+            joint_apply(m, ji);
         }
         if (moved <= 1e-12 * diag)
             break;
     }
     double dr_sum = 0;
-    for (uint32_t s = 0; s < m.segment_count; ++s)
+    for (uint32_t s = 0; s < m->segment_count; ++s)
         for (int e = 0; e < 2; ++e) {
-            const meso_skeleton_node* nd = &sk->nodes[m.segments[s].node[e]];
-            double dr = fabs((e ? m.segments[s].r1 : m.segments[s].r0) - nd->radius);
-            m.stats.radius_change_max = fmax(m.stats.radius_change_max, dr);
+            const meso_skeleton_node* nd = &sk->nodes[m->segments[s].node[e]];
+            double dr = fabs((e ? m->segments[s].r1 : m->segments[s].r0) - nd->radius);
+            m->stats.radius_change_max = fmax(m->stats.radius_change_max, dr);
             dr_sum += dr;
         }
-    m.stats.radius_change_mean = dr_sum / (2.0 * m.segment_count);
-    /* Cap intersections: find, then turn joints at failing segments into
-     * ball joints until nothing changes. */
-    for (uint32_t s = 0; s < m.segment_count; ++s) {
-        m.segments[s].cut_margin = cut_margin(&m.segments[s]);
-        if (m.segments[s].cut_margin <= 0)
-            m.stats.cap_intersections_found++;
+    m->stats.radius_change_mean = dr_sum / (2.0 * m->segment_count);
+}
+
+/* Cap intersections: find, then (unless kept) turn joints at failing
+ * segments into ball joints until nothing changes. */
+static void handle_cap_intersections(meso_frustum_model* m, int keep)
+{
+    for (uint32_t s = 0; s < m->segment_count; ++s) {
+        m->segments[s].cut_margin = cut_margin(&m->segments[s]);
+        if (m->segments[s].cut_margin <= 0)
+            m->stats.cap_intersections_found++;
     }
-    if (!o.keep_cap_intersections) {
-        int changed = 1;
-        while (changed) {
-            changed = 0;
-            for (uint32_t s = 0; s < m.segment_count; ++s) {
-                if (m.segments[s].cut_margin > 0)
+    int changed = !keep;
+    while (changed) {
+        changed = 0;
+        for (uint32_t s = 0; s < m->segment_count; ++s) {
+            if (m->segments[s].cut_margin > 0)
+                continue;
+            for (int e = 0; e < 2; ++e) {
+                int32_t ji = m->segments[s].joint[e];
+                if (ji < 0 || m->joints[ji].ball)
                     continue;
-                for (int e = 0; e < 2; ++e) {
-                    int32_t ji = m.segments[s].joint[e];
-                    if (ji < 0 || m.joints[ji].ball)
-                        continue;
-                    m.joints[ji].ball = 1;
-                    m.stats.ball_joints++;
-                    joint_apply(&m, (uint32_t)ji);
-                    for (int k = 0; k < 2; ++k) {
-                        meso_frustum_segment* t = &m.segments[m.joints[ji].segment[k]];
-                        t->cut_margin = cut_margin(t);
-                    }
-                    changed = 1;
+                m->joints[ji].ball = 1;
+                m->stats.ball_joints++;
+                joint_apply(m, (uint32_t)ji);
+                for (int k = 0; k < 2; ++k) {
+                    meso_frustum_segment* t = &m->segments[m->joints[ji].segment[k]];
+                    t->cut_margin = cut_margin(t);
                 }
+                changed = 1;
             }
         }
     }
-    for (uint32_t s = 0; s < m.segment_count; ++s)
-        if (m.segments[s].cut_margin <= 0)
-            m.stats.cap_intersections_unhandled++;
-    /* A seam the fit left open (no radius closed it, or the cut is not an
-     * ellipse) becomes a ball joint: a knob, never a crack. */
-    for (uint32_t ji = 0; !o.no_minor_axis_fit && ji < m.joint_count; ++ji) {
-        meso_frustum_joint* j = &m.joints[ji];
+    for (uint32_t s = 0; s < m->segment_count; ++s)
+        if (m->segments[s].cut_margin <= 0)
+            m->stats.cap_intersections_unhandled++;
+}
+
+/* A seam the fit left open (no radius closed it, or the cut is not an
+ * ellipse) becomes a ball joint: a knob, never a crack. */
+static void ball_open_seams(meso_frustum_model* m)
+{
+    for (uint32_t ji = 0; ji < m->joint_count; ++ji) {
+        meso_frustum_joint* j = &m->joints[ji];
         if (j->ball)
             continue;
-        const meso_frustum_segment* s1 = &m.segments[j->segment[0]];
+        const meso_frustum_segment* s1 = &m->segments[j->segment[0]];
         double scale = j->end[0] ? s1->r1 : s1->r0;
-        if (!(seam_gap(&m, j) <= SEAM_TOLERANCE * scale)) {
+        if (!(seam_gap(m, j) <= SEAM_TOLERANCE * scale)) {
             j->ball = 1;
-            m.stats.unfitted_joints++;
-            m.stats.ball_joints++;
-            joint_apply(&m, ji);
+            m->stats.unfitted_joints++;
+            m->stats.ball_joints++;
+            joint_apply(m, ji);
         }
     }
-    /* Balls: branch points and ball joints. */
-    for (uint32_t v = 0; v < n; ++v) {
+}
+
+/* Balls: branch points and ball joints. */
+static void make_balls(const incidence* g, meso_frustum_model* m)
+{
+    const uint32_t *deg = g->deg, *first = g->first;
+    const end_ref* ends = g->ends;
+    for (uint32_t v = 0; v < g->n; ++v) {
         int is_ball = deg[v] >= 3;
         if (deg[v] == 2) {
             const end_ref* er = &ends[first[v]];
-            int32_t ji = m.segments[er->seg].joint[er->end];
-            is_ball = ji >= 0 && m.joints[ji].ball;
+            int32_t ji = m->segments[er->seg].joint[er->end];
+            is_ball = ji >= 0 && m->joints[ji].ball;
         }
         if (!is_ball)
             continue;
-        meso_frustum_ball* b = &m.balls[m.ball_count];
+        meso_frustum_ball* b = &m->balls[m->ball_count];
         b->node = v;
         b->radius = 0;
         for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
-            meso_frustum_segment* s = &m.segments[ends[k].seg];
+            meso_frustum_segment* s = &m->segments[ends[k].seg];
             if (k == first[v])
                 memcpy(b->center, seg_end_point(s, ends[k].end), sizeof(b->center));
             b->radius = fmax(b->radius, seg_end_radius(s, ends[k].end));
@@ -596,37 +609,45 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
                 s->cap[ends[k].end] = 0;
                 s->end_kind[ends[k].end] = MESO_FRUSTUM_END_BALL;
             }
-            s->ball[ends[k].end] = (int32_t)m.ball_count;
+            s->ball[ends[k].end] = (int32_t)m->ball_count;
         }
-        m.ball_count++;
+        m->ball_count++;
     }
-    m.stats.segments = m.segment_count;
-    m.stats.joints = m.joint_count;
-    /* Seam gaps of the §2.2 joints. */
+}
+
+/* Seam gaps of the §2.2 joints. */
+static void seam_gap_stats(meso_frustum_model* m)
+{
     uint32_t gap_n = 0;
     double gap_sum = 0;
-    for (uint32_t ji = 0; ji < m.joint_count; ++ji) {
-        meso_frustum_joint* j = &m.joints[ji];
+    for (uint32_t ji = 0; ji < m->joint_count; ++ji) {
+        meso_frustum_joint* j = &m->joints[ji];
         if (j->ball)
             continue;
-        j->seam_gap = seam_gap(&m, j);
-        m.stats.seam_gap_max = fmax(m.stats.seam_gap_max, j->seam_gap);
+        j->seam_gap = seam_gap(m, j);
+        m->stats.seam_gap_max = fmax(m->stats.seam_gap_max, j->seam_gap);
         gap_sum += j->seam_gap;
         gap_n++;
     }
-    m.stats.seam_gap_mean = gap_n ? gap_sum / gap_n : 0;
-    /* Frames and u alignment: breadth-first over segments through nodes. */
-    seen = calloc(m.segment_count, 1);
-    m.order = malloc(m.segment_count * sizeof(*m.order));
+    m->stats.seam_gap_mean = gap_n ? gap_sum / gap_n : 0;
+}
+
+/* Frames and u alignment: breadth-first over segments through nodes
+ * (m->order gets the visiting order). */
+static meso_result align_frames(incidence* g, meso_frustum_model* m, meso_error* err)
+{
+    uint8_t* seen = calloc(m->segment_count, 1);
+    m->order = malloc(m->segment_count * sizeof(*m->order));
     uint32_t order_n = 0;
-    if (!seen || !m.order) {
-        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory");
-        goto done;
+    if (!seen || !m->order) {
+        free(seen);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory");
     }
-    for (uint32_t s0 = 0; s0 < m.segment_count; ++s0) {
+    uint32_t* queue = g->queue;
+    for (uint32_t s0 = 0; s0 < m->segment_count; ++s0) {
         if (seen[s0])
             continue;
-        meso_frustum_segment* s = &m.segments[s0];
+        meso_frustum_segment* s = &m->segments[s0];
         double a[3];
         seg_axis(s, a);
         any_perp3(a, s->frame_x);
@@ -637,33 +658,80 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         queue[qt++] = s0;
         while (qh < qt) {
             uint32_t cur = queue[qh++];
-            m.order[order_n++] = cur;
+            m->order[order_n++] = cur;
             for (int e = 0; e < 2; ++e) {
-                uint32_t v = find_rep(rep, m.segments[cur].node[e]);
-                for (uint32_t k = first[v]; k < first[v + 1]; ++k) {
-                    uint32_t nb = ends[k].seg;
+                uint32_t v = find_rep(g->rep, m->segments[cur].node[e]);
+                for (uint32_t k = g->first[v]; k < g->first[v + 1]; ++k) {
+                    uint32_t nb = g->ends[k].seg;
                     if (seen[nb])
                         continue;
                     seen[nb] = 1;
-                    align_across(&m, cur, e, nb, ends[k].end, deg[v] == 2 ? m.segments[cur].joint[e] : -1);
-                    m.segments[nb].align_from = (int32_t)cur;
-                    m.segments[nb].align_end = ends[k].end;
-                    m.segments[nb].align_from_end = e;
-                    if (qt < n + 1)
+                    align_across(m, cur, e, nb, g->ends[k].end, g->deg[v] == 2 ? m->segments[cur].joint[e] : -1);
+                    m->segments[nb].align_from = (int32_t)cur;
+                    m->segments[nb].align_end = g->ends[k].end;
+                    m->segments[nb].align_from_end = e;
+                    if (qt < g->n + 1)
                         queue[qt++] = nb;
                 }
             }
         }
     }
-    *out = m;
-    memset(&m, 0, sizeof(m));
-done:
-    free(rep);
-    free(deg);
-    free(first);
-    free(ends);
-    free(queue);
     free(seen);
+    return MESO_OK;
+}
+
+meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum_options* opt, meso_frustum_model* out,
+    meso_error* err)
+{
+    if (!sk || !out)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "frusta: skeleton or out is NULL");
+    memset(out, 0, sizeof(*out));
+    meso_frustum_options o = {0};
+    if (opt)
+        o = *opt;
+    uint32_t n = sk->node_count;
+    meso_frustum_model m = {0};
+    incidence g = {.n = n};
+    g.rep = malloc((size_t)(n ? n : 1) * sizeof(*g.rep));
+    g.deg = calloc(n ? n : 1, sizeof(*g.deg));
+    g.first = calloc((size_t)n + 1, sizeof(*g.first));
+    g.ends = malloc((size_t)(2 * n + 1) * sizeof(*g.ends));
+    g.queue = malloc((size_t)(n + 1) * sizeof(*g.queue));
+    m.segments = calloc(n ? n : 1, sizeof(*m.segments));
+    m.joints = calloc(n ? n : 1, sizeof(*m.joints));
+    m.balls = calloc(n ? n : 1, sizeof(*m.balls));
+    meso_result r = MESO_OK;
+    if (!g.rep || !g.deg || !g.first || !g.ends || !g.queue || !m.segments || !m.joints || !m.balls) {
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory (%u nodes)", n);
+        goto done;
+    }
+    const double diag = make_segments(sk, &g, &m);
+    if (m.segment_count == 0) {
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3149u, "frusta: the skeleton has no segment of non-zero length");
+        goto done;
+    }
+    find_joints(&g, &m);
+    if (o.max_joint_angle_deg > 0)
+        ball_sharp_joints(&m, o.max_joint_angle_deg);
+    fit_minor_axes(sk, &m, !o.no_minor_axis_fit, diag);
+    handle_cap_intersections(&m, o.keep_cap_intersections);
+    if (!o.no_minor_axis_fit)
+        ball_open_seams(&m);
+    make_balls(&g, &m);
+    m.stats.segments = m.segment_count;
+    m.stats.joints = m.joint_count;
+    seam_gap_stats(&m);
+    r = align_frames(&g, &m, err);
+    if (r == MESO_OK) {
+        *out = m;
+        memset(&m, 0, sizeof(m));
+    }
+done:
+    free(g.rep);
+    free(g.deg);
+    free(g.first);
+    free(g.ends);
+    free(g.queue);
     meso_frustum_model_free(&m);
     return r;
 }

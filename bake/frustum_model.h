@@ -58,9 +58,14 @@
  *    u_offset is the paper's u_t: the u, in the new frame, of the point
  *    where the previous segment's u = 0 generator meets the joint plane.
  *    Across a ball joint the frame is projected the same way and
- *    u_offset = 0 (no alignment is defined there). twist = 0 (a per-segment
- *    artist parameter in the paper).
- *  *  - Minor-axis fit (§2.2): at each joint the radius of segment 2 (the one
+ *    u_offset = 0: u is not matched across a ball (align_across stops).
+ *    twist turns the u = 0 generator by `twist` radians from v = 0 to
+ *    v = 1 (formats/FORMAT.md, frusta: u = atan2(q·x, q·z)/2π − u_offset +
+ *    v·twist/2π); the alignment above takes it into account on both sides
+ *    of a joint, so a twisted segment still meets its neighbour's u. The
+ *    builder sets twist = 0 on every segment (the paper's per-segment
+ *    artist parameter; no option sets it yet).
+ *  - Minor-axis fit (§2.2): at each joint the radius of segment 2 (the one
  *    leaving the joint) at the joint is adjusted until the minor semi-axes
  *    of the two cut ellipses agree (bisection on [r/4, 4r] around the node
  *    radius, the bracket nearest the node radius); the plane is recomputed

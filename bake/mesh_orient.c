@@ -16,6 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "vec3d.h"
+
 typedef struct orient_edge {
     uint64_t key;  /* min << 32 | max */
     uint32_t from; /* the face traverses from -> to */
@@ -59,14 +61,12 @@ static double winding(const meso_mesh* m, const uint32_t* faces, uint32_t n, con
         for (int c = 0; c < 3; ++c) {
             for (int k = 0; k < 3; ++k)
                 v[c][k] = (double)m->positions[3 * (size_t)ix[c] + (size_t)k] - p[k];
-            l[c] = sqrt(v[c][0] * v[c][0] + v[c][1] * v[c][1] + v[c][2] * v[c][2]);
+            l[c] = len3(v[c]);
         }
         const double det = v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1]) -
                            v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0]) +
                            v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0]);
-        const double d01 = v[0][0] * v[1][0] + v[0][1] * v[1][1] + v[0][2] * v[1][2];
-        const double d02 = v[0][0] * v[2][0] + v[0][1] * v[2][1] + v[0][2] * v[2][2];
-        const double d12 = v[1][0] * v[2][0] + v[1][1] * v[2][1] + v[1][2] * v[2][2];
+        const double d01 = dot3(v[0], v[1]), d02 = dot3(v[0], v[2]), d12 = dot3(v[1], v[2]);
         sum += 2.0 * atan2(det, l[0] * l[1] * l[2] + d01 * l[2] + d02 * l[1] + d12 * l[0]);
     }
     return sum / (4.0 * M_PI);
@@ -235,8 +235,7 @@ meso_result meso_mesh_orient_outward(meso_mesh* m, meso_mesh_orientation* out, m
         /* Judged: closed, with a volume clearly away from zero. */
         for (uint32_t i = 0; i < count; ++i) {
             comp_info* c = &comps[i];
-            const double dx = c->hi[0] - c->lo[0], dy = c->hi[1] - c->lo[1], dz = c->hi[2] - c->lo[2];
-            const double d = sqrt(dx * dx + dy * dy + dz * dz);
+            const double d = dist3(c->hi, c->lo);
             c->closed = c->closed && fabs(c->volume6) > 1e-9 * d * d * d;
             out->closed_components += (uint32_t)c->closed;
         }

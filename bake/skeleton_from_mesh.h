@@ -63,11 +63,11 @@
  *     that CGAL mis-assigned at a junction, pull with a bounded force) of
  *     each vertex's distance to its segment's axis minus the radius there
  *     (t clamped, so past an end it is the end ball), plus a weak prior to
- *     CGAL's values (see refit() in the .c). Why fit at all: the flow
- *     rounds corners and stops short of rounded ends; with the fit the
- *     capsule is one segment with ends within 0.0004 of the caps' centres
- *     and the 45° bent tube two segments whose joint is within 0.0007 of the
- *     corner (CGAL's tree alone is beyond the tolerance there). On the
+ *     CGAL's values (mesoi_skel_refit in skeleton_radius_fit.c). Why fit
+ *     at all: the flow rounds corners and stops short of rounded ends; with
+ *     the fit the capsule is one segment with ends within 0.0004 of the caps'
+ *     centres and the 45° bent tube two segments whose joint is within 0.0007
+ *     of the corner (CGAL's tree alone is beyond the tolerance there). On the
  *     armadillo (29170 triangles, default tolerance 1 % of the diagonal):
  *     89 segments, error max 2.47 % / mean 0.30 % of the diagonal, 3.9 s
  *     (CGAL 2.2 s); MESO_SKELFIT_CGAL_NODES (same splits and merges at

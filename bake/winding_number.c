@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "bake_threads.h"
+#include "vec3d.h"
 
 #define FOUR_PI 12.566370614359172953850573533118
 #define TWO_PI 6.283185307179586476925286766559
@@ -41,17 +42,14 @@ double meso_winding_triangle(const double A[3], const double B[3], const double 
     /* Van Oosterom & Strackee: tan(Omega / 2) = det[a b c] / (|a||b||c| +
      * (a.b)|c| + (a.c)|b| + (b.c)|a|), with a, b, c the corners relative to
      * q. atan2 keeps the quadrant, so Omega covers (-2 pi, 2 pi]. */
-    const double a[3] = {A[0] - q[0], A[1] - q[1], A[2] - q[2]};
-    const double b[3] = {B[0] - q[0], B[1] - q[1], B[2] - q[2]};
-    const double c[3] = {C[0] - q[0], C[1] - q[1], C[2] - q[2]};
-    const double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    const double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-    const double lc = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double a[3], b[3], c[3];
+    sub3(A, q, a);
+    sub3(B, q, b);
+    sub3(C, q, c);
+    const double la = len3(a), lb = len3(b), lc = len3(c);
     const double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
                        a[2] * (b[0] * c[1] - b[1] * c[0]);
-    const double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    const double ac = a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
-    const double bc = b[0] * c[0] + b[1] * c[1] + b[2] * c[2];
+    const double ab = dot3(a, b), ac = dot3(a, c), bc = dot3(b, c);
     const double den = la * lb * lc + ab * lc + ac * lb + bc * la;
     return atan2(det, den) / TWO_PI; /* (2 atan2) / (4 pi) */
 }
@@ -170,11 +168,10 @@ static uint32_t build_node(builder* b, size_t lo, size_t hi, uint32_t depth)
             for (int k = 0; k < 3; ++k)
                 nd->moment[3 * r + k] += an[r] * (c[k] - nd->centre[k]);
         for (int v = 0; v < 3; ++v) {
-            double p[3];
+            double p[3], d[3];
             corner(b->m->positions, b->m->indices[3 * (size_t)t + v], p);
-            const double d2 = (p[0] - nd->centre[0]) * (p[0] - nd->centre[0]) +
-                              (p[1] - nd->centre[1]) * (p[1] - nd->centre[1]) +
-                              (p[2] - nd->centre[2]) * (p[2] - nd->centre[2]);
+            sub3(p, nd->centre, d);
+            const double d2 = dot3(d, d);
             r2 = d2 > r2 ? d2 : r2;
         }
     }
@@ -244,15 +241,15 @@ meso_result meso_winding_build(const meso_mesh* m, int threads, meso_winding** o
         double p[3][3];
         for (int v = 0; v < 3; ++v)
             corner(m->positions, m->indices[3 * f + v], p[v]);
-        const double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        const double e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        const double cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                              e1[0] * e2[1] - e1[1] * e2[0]};
+        double e1[3], e2[3], cr[3];
+        sub3(p[1], p[0], e1);
+        sub3(p[2], p[0], e2);
+        cross3(e1, e2, cr);
         for (int k = 0; k < 3; ++k) {
             b.centroid[3 * f + k] = (p[0][k] + p[1][k] + p[2][k]) / 3.0;
             b.anormal[3 * f + k] = 0.5 * cr[k];
         }
-        b.area[f] = 0.5 * sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+        b.area[f] = 0.5 * len3(cr);
         b.order[f] = (uint32_t)f;
     }
     build_node(&b, 0, n, 0);
@@ -285,8 +282,9 @@ double meso_winding_query(const meso_winding* t, const double q[3])
     stack[top++] = 0;
     while (top > 0) {
         const node* nd = &t->nodes[stack[--top]];
-        const double r[3] = {nd->centre[0] - q[0], nd->centre[1] - q[1], nd->centre[2] - q[2]};
-        const double d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        double r[3];
+        sub3(nd->centre, q, r);
+        const double d2 = dot3(r, r);
         const double br = MESO_WINDING_BETA * nd->radius;
         if (d2 > br * br) {
             /* Far field about p~ with r = p~ - q, G'(r) = r / (4 pi |r|^3):
@@ -296,10 +294,9 @@ double meso_winding_query(const meso_winding* t, const double q[3])
              * function written out). */
             const double d = sqrt(d2), inv3 = 1.0 / (d2 * d), inv5 = inv3 / d2;
             const double* M = nd->moment;
-            const double w1 = (nd->normal[0] * r[0] + nd->normal[1] * r[1] + nd->normal[2] * r[2]) * inv3;
-            const double Mr[3] = {M[0] * r[0] + M[1] * r[1] + M[2] * r[2], M[3] * r[0] + M[4] * r[1] + M[5] * r[2],
-                                  M[6] * r[0] + M[7] * r[1] + M[8] * r[2]};
-            const double rMr = r[0] * Mr[0] + r[1] * Mr[1] + r[2] * Mr[2];
+            const double w1 = dot3(nd->normal, r) * inv3;
+            const double Mr[3] = {dot3(M, r), dot3(M + 3, r), dot3(M + 6, r)};
+            const double rMr = dot3(r, Mr);
             const double w2 = (M[0] + M[4] + M[8]) * inv3 - 3.0 * rMr * inv5;
             w += (w1 + w2) / FOUR_PI;
         } else if (nd->count > 0) {
