@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera.h"
 #include "mesh_chunk.h"
 #include "meso_rt.h"
 #include "png_io.h"
@@ -263,17 +264,6 @@ static void on_scroll(GLFWwindow* w, double dx, double dy)
     o->zoom = fmin(fmax(o->zoom, 0.05), 20.0);
 }
 
-static void perspective(float m[16], double fovy, double aspect, double zn, double zf)
-{
-    const double f = 1.0 / tan(fovy / 2);
-    memset(m, 0, 16 * sizeof(float));
-    m[0] = (float)(f / aspect);
-    m[5] = (float)f;
-    m[10] = (float)((zf + zn) / (zn - zf));
-    m[11] = -1.0f;
-    m[14] = (float)(2 * zf * zn / (zn - zf));
-}
-
 /* View matrix of an orbit camera: rotate by -yaw about y, -pitch about x,
  * then push back by `dist`, around `centre`. Column-major. */
 static void orbit_view(float m[16], const double c[3], double yaw, double pitch, double dist)
@@ -497,7 +487,8 @@ int main(int argc, char** argv)
             meso_rt_draw_desc d = kn.d;
             d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
             orbit_view(d.view, centre, cam.yaw * M_PI / 180.0, cam.pitch * M_PI / 180.0, dist);
-            perspective(d.proj, fovy, (double)fw / fh, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
+            meso_camera_perspective(d.proj, fovy, (double)fw / fh, fmax(dist - 1.5 * radius, 1e-3 * dist),
+                                    dist + 1.5 * radius);
             if (kn.animate) {
                 anim_time += 1.0 / 30.0;
                 for (int i = 0; i < nanim; ++i)
