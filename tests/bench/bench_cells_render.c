@@ -85,13 +85,13 @@ static meso_ref_image reference(const bench* b, const meso_ref_cells* ref, int m
         v.view[i] = b->view[i], v.proj[i] = b->proj[i];
     const meso_ref_cells_opts o = {.mode = mode, .bounces = bounces};
     meso_ref_image img;
-    const double t0 = now_ms();
+    const double t0 = meso_seconds();
     if (meso_ref_cells_render(ref, &v, &o, &img) != MESO_OK) {
         fprintf(stderr, "bench_cells_render: reference failed\n");
         exit(1);
     }
     fprintf(stderr, "reference %s (mode %d, %d bounces) %dx%d: %.1f s\n", what, mode, bounces, scene_w, scene_h,
-            (now_ms() - t0) / 1e3);
+            meso_seconds() - t0);
     return img;
 }
 
@@ -172,12 +172,12 @@ int main(int argc, char** argv)
     snprintf(cmd, sizeof(cmd), "'%s' cells -i '%s' -o '%s' --tile-res 64 --tiles 128 --tile-map voronoi:8 -j 2",
              mesobake, mesh, path);
     fprintf(stderr, "== %s\n", cmd);
-    const double tb = now_ms();
+    const double tb = meso_seconds();
     if (system(cmd) != 0) {
         fprintf(stderr, "bench_cells_render: bake failed\n");
         return 1;
     }
-    fprintf(stderr, "bake: %.1f s\n", (now_ms() - tb) / 1e3);
+    fprintf(stderr, "bake: %.1f s\n", meso_seconds() - tb);
 
     bench b = {0};
     meso_egl* egl = bench_gl_open(&b, "bench_cells_render");
@@ -317,9 +317,9 @@ int main(int argc, char** argv)
             for (int bo = 0; bo <= 3; ++bo) {
                 if (quick && bo != 0 && bo != 3)
                     continue;
-                const double t0 = now_ms();
+                const double t0 = meso_seconds();
                 imgs[bo] = reference(&b, &ref, modes[mi], bo, views[vi].name);
-                secs[bo] = (now_ms() - t0) / 1e3;
+                secs[bo] = meso_seconds() - t0;
                 meso_rt_draw_desc d = {.cell_mode = (meso_cells_mode)modes[mi], .cell_bounces = bo};
                 tim[bo] = time_draw(&b, obj, d, rgba, depth);
                 char prefix[64];

@@ -239,10 +239,10 @@ int main(int argc, char** argv)
     for (int i = 0; i < 16; ++i)
         v.view[i] = b.view[i], v.proj[i] = b.proj[i];
     meso_ref_image refimg;
-    double t0 = now_ms();
+    double t0 = meso_seconds();
     if (meso_ref_frusta_render(&ref, &v, &refimg) != MESO_OK)
         return 1;
-    fprintf(stderr, "reference %dx%d: %.1f s\n", scene_w, scene_h, (now_ms() - t0) / 1e3);
+    fprintf(stderr, "reference %dx%d: %.1f s\n", scene_w, scene_h, meso_seconds() - t0);
 
     /* --- relief steps ----------------------------------------------------- */
     snprintf(csv, sizeof(csv), "%s/frusta_relief_steps.csv", dir);

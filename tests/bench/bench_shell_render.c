@@ -177,11 +177,11 @@ int main(int argc, char** argv)
         meso_ref_view v = {.width = scene_w, .height = scene_h, .curved = cv, .samples_per_prism = 512};
         for (int i = 0; i < 16; ++i)
             v.view[i] = b.view[i], v.proj[i] = b.proj[i];
-        const double t0 = now_ms();
+        const double t0 = meso_seconds();
         if (meso_ref_render(&ref, &v, &refimg[cv]) != MESO_OK)
             return 1;
         fprintf(stderr, "reference (%s) %dx%d: %.1f s\n", cv ? "curved" : "smooth", scene_w, scene_h,
-                (now_ms() - t0) / 1e3);
+                meso_seconds() - t0);
     }
     snprintf(csv, sizeof(csv), "%s/shell_render_sweep.csv", dir);
     FILE* sw = fopen(csv, "w");
