@@ -250,7 +250,7 @@ int main(int argc, char** argv)
     fprintf(rs, "relief_steps,ms,coverage_mismatch,hit_err_px,hit_gt1,colour_mae\n");
     const int steps[] = {4, 8, 16, 32, 64, 128, 256};
     for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); ++i) {
-        double ms = time_draw(&b, obj, (meso_rt_draw_desc){.relief_steps = steps[i]}, rgba, depth);
+        double ms = time_draw(&b, obj, (meso_rt_draw_desc){.frusta = {.relief_steps = steps[i]}}, rgba, depth);
         metrics m = compare(rgba, depth, &refimg, b.view, b.proj, b.cam.fovy, NULL);
         fprintf(rs, "%d,%.2f,%.5f,%.4f,%.5f,%.5f\n", steps[i], ms, m.coverage_mismatch, m.hit_err_px, m.hit_gt1,
                 m.colour_mae);

@@ -403,10 +403,10 @@ static int render(const char* path, const char* out, int width, int height, uint
 
     meso_rt_draw_desc d = {0};
     preview_camera(lo, hi, width, height, yaw, pitch, knobs->zoom, &d);
-    d.technique = knobs->technique;
-    d.cell_mode = knobs->cell_mode;
-    d.cell_bounces = knobs->cell_bounces;
-    d.cell_step = knobs->cell_step;
+    d.shell.technique = knobs->technique;
+    d.cells.mode = knobs->cell_mode;
+    d.cells.bounces = knobs->cell_bounces;
+    d.cells.step = knobs->cell_step;
     for (int i = 0; i < nobj; ++i)
         if (meso_rt_draw(rt, objs[i], &d) != MESO_OK) {
             code = MESO_EXIT_INTERNAL;
