@@ -13,7 +13,7 @@
  *   unit 2  NRMM  3D texture RG16 (unorm), decoded in the shader
  *   unit 3  COLR  3D texture SRGB8_ALPHA8 (fetches are linear)
  *   unit 4  the host's environment cube map, if it passes one
- * plus the base mesh's vertex array (the MESH chunk buffer, as rt_objects.c
+ * plus the base mesh's vertex array (the MESH chunk buffer, as rt_mesh.c
  * uploads it). SPLT is not needed to draw: MEMB's tags are final.
  *
  * Decisions:

@@ -39,19 +39,14 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "object %u has no MESH chunk", object_id);
         return MESO_ERR_NOT_FOUND;
     }
-    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
-    if (c->decoded_size > (uint64_t)PTRDIFF_MAX) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "MESH chunk too large for this platform");
-        return MESO_ERR_UNSUPPORTED;
-    }
-    void* data = mesoi_rt_alloc(rt, (size_t)c->decoded_size);
-    if (!data)
-        return MESO_ERR_OUT_OF_MEMORY;
+    void* data = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
+    if (r != MESO_OK)
+        return r;
     meso_error err;
     meso_mesh_view mv;
-    meso_result r = meso_file_read_chunk(f, (uint32_t)ci, data, (size_t)c->decoded_size, &err);
-    if (r == MESO_OK)
-        r = meso_mesh_parse(data, (size_t)c->decoded_size, &mv, &err);
+    r = meso_mesh_parse(data, size, &mv, &err);
     if (r != MESO_OK) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
         mesoi_rt_free(rt, data);
@@ -73,7 +68,7 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
     gl->GenBuffers(1, &o->buffer);
     gl->BindVertexArray(o->vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, o->buffer);
-    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)c->decoded_size, data, GL_STATIC_DRAW);
+    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)size, data, GL_STATIC_DRAW);
     gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, o->buffer);
     gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.positions_offset);
     gl->EnableVertexAttribArray(0);
