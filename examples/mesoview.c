@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera.h"
 #include "mesh_chunk.h"
 #include "meso_rt.h"
 #include "png_io.h"
@@ -68,31 +69,33 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
         return;
     knobs* k = ((knobs**)glfwGetWindowUserPointer(w))[1];
     meso_rt_draw_desc* d = &k->d;
+    meso_rt_shell_draw* sh = &d->shell;
     if (key >= GLFW_KEY_1 && key <= GLFW_KEY_4)
-        d->technique = (meso_shell_technique)(key - GLFW_KEY_1);
+        sh->technique = (meso_shell_technique)(key - GLFW_KEY_1);
     else if (key == GLFW_KEY_LEFT_BRACKET)
-        d->error_px = fmaxf(d->error_px * 0.5f, 0.0625f);
+        sh->error_px = fmaxf(sh->error_px * 0.5f, 0.0625f);
     else if (key == GLFW_KEY_RIGHT_BRACKET)
-        d->error_px = fminf(d->error_px * 2.0f, 64.0f);
+        sh->error_px = fminf(sh->error_px * 2.0f, 64.0f);
     else if (key == GLFW_KEY_MINUS) {
-        d->max_steps = d->max_steps > 4 ? d->max_steps / 2 : 4;
-        d->relief_steps = d->relief_steps > 2 ? d->relief_steps / 2 : 2;
+        sh->max_steps = sh->max_steps > 4 ? sh->max_steps / 2 : 4;
+        d->frusta.relief_steps = d->frusta.relief_steps > 2 ? d->frusta.relief_steps / 2 : 2;
     } else if (key == GLFW_KEY_EQUAL) {
-        d->max_steps = d->max_steps < 4096 ? d->max_steps * 2 : 4096;
-        d->relief_steps = d->relief_steps < 1024 ? d->relief_steps * 2 : 1024;
+        sh->max_steps = sh->max_steps < 4096 ? sh->max_steps * 2 : 4096;
+        d->frusta.relief_steps = d->frusta.relief_steps < 1024 ? d->frusta.relief_steps * 2 : 1024;
     }
-    else if (key == GLFW_KEY_B)
-        d->bisection_steps = d->bisection_steps >= 8 ? 1 : d->bisection_steps + 1;
-    else if (key == GLFW_KEY_D)
-        d->no_distance_map = !d->no_distance_map;
+    else if (key == GLFW_KEY_B) { /* one count for every kind's bisection */
+        sh->bisection_steps = sh->bisection_steps >= 8 ? 1 : sh->bisection_steps + 1;
+        d->frusta.bisection_steps = d->cells.bisection_steps = sh->bisection_steps;
+    } else if (key == GLFW_KEY_D)
+        sh->no_distance_map = !sh->no_distance_map;
     else if (key == GLFW_KEY_A)
         k->animate = !k->animate;
     else if (key == GLFW_KEY_M)
-        d->cell_mode = (meso_cells_mode)((d->cell_mode + 1) % 3);
+        d->cells.mode = (meso_cells_mode)((d->cells.mode + 1) % 3);
     else if (key == GLFW_KEY_N)
-        d->cell_bounces = (d->cell_bounces + 1) % 4;
+        d->cells.bounces = (d->cells.bounces + 1) % 4;
     else if (key == GLFW_KEY_L)
-        d->cell_step = d->cell_step > 0.0f ? 0.0f : 8.0f;
+        d->cells.step = d->cells.step > 0.0f ? 0.0f : 8.0f;
     else
         return;
     k->changed = 1;
@@ -263,17 +266,6 @@ static void on_scroll(GLFWwindow* w, double dx, double dy)
     o->zoom = fmin(fmax(o->zoom, 0.05), 20.0);
 }
 
-static void perspective(float m[16], double fovy, double aspect, double zn, double zf)
-{
-    const double f = 1.0 / tan(fovy / 2);
-    memset(m, 0, 16 * sizeof(float));
-    m[0] = (float)(f / aspect);
-    m[5] = (float)f;
-    m[10] = (float)((zf + zn) / (zn - zf));
-    m[11] = -1.0f;
-    m[14] = (float)(2 * zf * zn / (zn - zf));
-}
-
 /* View matrix of an orbit camera: rotate by -yaw about y, -pitch about x,
  * then push back by `dist`, around `centre`. Column-major. */
 static void orbit_view(float m[16], const double c[3], double yaw, double pitch, double dist)
@@ -336,7 +328,9 @@ static void load(void* dst, const char* name, int* missing)
 int main(int argc, char** argv)
 {
     int width = 800, height = 600, frames = 0;
-    knobs kn = {.d = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4, .relief_steps = 64, .cell_bounces = 1}};
+    knobs kn = {.d = {.shell = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4},
+                      .frusta = {.relief_steps = 64, .bisection_steps = 4},
+                      .cells = {.bounces = 1, .bisection_steps = 4}}};
     const char *file = NULL, *shot = NULL;
     for (int i = 1; i < argc; ++i) {
         const char* a = argv[i];
@@ -362,7 +356,7 @@ int main(int argc, char** argv)
                 fprintf(stderr, "mesoview error: --cells expects first, reflect or refract, got '%s'\n", m);
                 return 1;
             }
-            kn.d.cell_mode = (meso_cells_mode)found;
+            kn.d.cells.mode = (meso_cells_mode)found;
         } else if (!strcmp(a, "--frames") && i + 1 < argc) {
             frames = atoi(argv[++i]);
         } else if (!strcmp(a, "--screenshot") && i + 1 < argc) {
@@ -377,10 +371,10 @@ int main(int argc, char** argv)
                 fprintf(stderr, "mesoview error: --technique expects smooth, curved, tetra or segment, got '%s'\n", t);
                 return 1;
             }
-            kn.d.technique = (meso_shell_technique)found;
+            kn.d.shell.technique = (meso_shell_technique)found;
         } else if (!strcmp(a, "--error-px") && i + 1 < argc) {
-            kn.d.error_px = (float)atof(argv[++i]);
-            if (!(kn.d.error_px > 0.0f)) {
+            kn.d.shell.error_px = (float)atof(argv[++i]);
+            if (!(kn.d.shell.error_px > 0.0f)) {
                 fprintf(stderr, "mesoview error: --error-px expects a positive number\n");
                 return 1;
             }
@@ -497,7 +491,8 @@ int main(int argc, char** argv)
             meso_rt_draw_desc d = kn.d;
             d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
             orbit_view(d.view, centre, cam.yaw * M_PI / 180.0, cam.pitch * M_PI / 180.0, dist);
-            perspective(d.proj, fovy, (double)fw / fh, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
+            meso_camera_perspective(d.proj, fovy, (double)fw / fh, fmax(dist - 1.5 * radius, 1e-3 * dist),
+                                    dist + 1.5 * radius);
             if (kn.animate) {
                 anim_time += 1.0 / 30.0;
                 for (int i = 0; i < nanim; ++i)
@@ -522,9 +517,10 @@ int main(int argc, char** argv)
             char title[256];
             snprintf(title, sizeof(title),
                      "mesoview  %s  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
-                     technique_names[kn.d.technique], kn.d.error_px, kn.d.max_steps, kn.d.bisection_steps,
-                     kn.d.no_distance_map ? "  no-dist" : "", kn.animate ? "  animated" : "",
-                     cell_mode_names[kn.d.cell_mode], kn.d.cell_bounces, kn.d.cell_step > 0 ? " linear" : "", ms_avg);
+                     technique_names[kn.d.shell.technique], kn.d.shell.error_px, kn.d.shell.max_steps,
+                     kn.d.shell.bisection_steps, kn.d.shell.no_distance_map ? "  no-dist" : "",
+                     kn.animate ? "  animated" : "", cell_mode_names[kn.d.cells.mode], kn.d.cells.bounces,
+                     kn.d.cells.step > 0 ? " linear" : "", ms_avg);
             if (stats.supported && stats.fragments)
                 snprintf(title + strlen(title), sizeof(title) - strlen(title), "  %.1f steps/fragment",
                          (double)stats.steps / (double)stats.fragments);

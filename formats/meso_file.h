@@ -24,8 +24,17 @@
 extern "C" {
 #endif
 
+/* MESO_API marks the functions libmeso exports (this header's and
+ * meso_rt.h's). libmeso and the format library inside it are compiled with
+ * -fvisibility=hidden and MESO_BUILDING_LIBRARY, so these are the only
+ * symbols libmeso.so exports (tests/integration/check_exports.sh checks it).
+ * A host may define MESO_API itself before including the header. */
 #ifndef MESO_API
+#if defined(MESO_BUILDING_LIBRARY) && defined(__GNUC__)
+#define MESO_API __attribute__((visibility("default")))
+#else
 #define MESO_API
+#endif
 #endif
 
 #define MESO_VERSION 100 /* tools/library 0.1.0 as one comparable integer */

@@ -121,14 +121,16 @@ MESO_API meso_result meso_rt_object_bounds(const meso_rt* rt, meso_rt_object obj
 /* Shell ray-casting techniques (papers/smooth-and-curved-shell-mapping.md). */
 typedef enum meso_shell_technique {
     MESO_SHELL_SMOOTH = 0,  /* §3.1/§4: Φ along interpolated directors, corrected ray-path sampling */
-    MESO_SHELL_CURVED,      /* §3.2/§4.5: Coons-patch curved shells (tangent-continuous) */
+    MESO_SHELL_CURVED,      /* §3.2/§4.5: Coons-patch curved shells, continuous across edges and only
+                               approximately tangent-continuous (G1): the crease between two prisms
+                               is a fraction of the flat shell's, not zero (tests/reference/test_shell_map.c
+                               measures 0.065° against 12.8° on a sphere-like pair, 4.1° against 24.6°
+                               on a sharply bent one) */
     MESO_SHELL_TETRA,       /* the baseline: each prism as three tetrahedra, linear in each */
     MESO_SHELL_SEGMENT_ONLY, /* §4.2 only: entry/exit in texture space, no sampling (Table 1's first column) */
     MESO_SHELL_TECHNIQUE_COUNT
 } meso_shell_technique;
 
-/* Work counted by the shaders during one draw (needs OpenGL 4.3 for the
- * counters; on older contexts `supported` is 0 and the counts are 0). */
 /* How cells objects are ray traced (papers/cell-based-object-representation.md §3.2). */
 typedef enum meso_cells_mode {
     MESO_CELLS_FIRST_HIT = 0, /* §3.2.2: the first inside cell's boundary, shaded */
@@ -136,6 +138,9 @@ typedef enum meso_cells_mode {
     MESO_CELLS_REFRACT        /* §3.2.4: refraction through the cells, then the environment */
 } meso_cells_mode;
 
+/* Work counted by the shaders during one draw (needs OpenGL 4.3 for the
+ * counters; on older contexts, and for MESH objects, `supported` is 0 and
+ * the counts are 0). */
 typedef struct meso_rt_draw_stats {
     int supported;
     uint64_t fragments; /* ray-casting fragment invocations */
@@ -143,47 +148,68 @@ typedef struct meso_rt_draw_stats {
     uint64_t hits;      /* fragments that found the surface */
 } meso_rt_draw_stats;
 
-typedef struct meso_rt_draw_desc {
-    float view[16];     /* world -> eye, column-major (OpenGL convention) */
-    float proj[16];     /* eye -> clip */
-    float model[16];    /* object -> world, rigid + uniform scale; all zero means identity */
-    float light_dir[3]; /* towards the light, world space; zero means (0.3, 0.8, 0.5) normalised */
-    float albedo[3];    /* linear RGB; zero means (0.80, 0.74, 0.66) */
-    /* Ray-casting knobs (ignored for meshes); zero means the default in brackets.
-     * Shells use all but relief_steps; frusta use relief_steps and
-     * bisection_steps (their relief march is the paper's uniform sampling plus
-     * bisection, §3). */
+/* The knobs of each object kind: meso_rt_draw reads only the struct of the
+ * object's kind, so one desc may carry all three and draw any object. Every
+ * field's zero means the default in brackets. */
+
+/* MESO_OBJECT_SHELL (FORMAT.md §7.2, papers/smooth-and-curved-shell-mapping.md §4). */
+typedef struct meso_rt_shell_draw {
     meso_shell_technique technique; /* [MESO_SHELL_SMOOTH] */
-    float error_px;            /* image-space error bound of the corrected ray path, pixels; a quarter
-                                  of it is the smallest step near surfaces [1] */
-    int max_steps;             /* march steps per prism and pixel; out of steps, the surface is taken
-                                  to be at the last sample (drawn too high, never a hole) [256] */
-    int bisection_steps;       /* refinement steps once the surface is bracketed [4] */
-    int segment_steps;         /* bisection steps on w for the ray segment (§4.2) [12] */
-    float uv_scale;            /* multiplies the baked texture coordinates (tiling) [1] */
-    int no_distance_map;       /* 1: march at the fixed step below instead of sphere tracing */
-    float fixed_step;          /* texture-space step without a distance map [1/256] */
-    int relief_steps;          /* frusta: uniform samples per relief march, over the ray's part inside
-                                  the relief layer before (and, leaving it, after) the solid core; more
-                                  catches thinner bumps at grazing angles [64] */
-    /* Cells (kind 3; runtime/reference/cell_reference.h states the rules exactly). */
-    meso_cells_mode cell_mode; /* [MESO_CELLS_FIRST_HIT] */
-    int cell_bounces;          /* reflection: rays traced after the first hit (0 = environment mapping at the
-                                  first hit); refraction: exits and re-entries traced after it; 0..8 [0] */
-    float cell_step;           /* 0: exact voxel traversal, never misses a voxel; > 0: the thesis's linear
-                                  search (Algorithm 3.1) at this step in tile-map voxels, then bisection
-                                  (bisection_steps, default: down to 1/64 voxel) [0] */
-    int cell_fixed_step;       /* with cell_step: 1 keeps the step at grazing angles (the thesis's missed
-                                  cells); 0 scales the first hit's step by max(|cos|, 1/8) of the angle to
-                                  the base mesh's normal (§3.2.2) [0] */
-    float cell_reflectivity;   /* k of the reflection rule [0.5] */
-    float cell_ior;            /* refractive index of the cells [1.5] */
-    float cell_transparency;   /* tau of the refraction rule [0.7] */
-    int cell_max_steps;        /* voxel and tile steps per search; a search out of steps misses [4096] */
-    uint32_t cell_environment; /* GL name of a GL_TEXTURE_CUBE_MAP the host owns (linear RGB), looked up
-                                  (level 0) with the world-space direction of rays that leave the object;
-                                  0: the built-in sky of runtime/reference/cell_reference.h [0] */
-    meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) */
+    float error_px;      /* image-space error bound of the corrected ray path, pixels; a quarter of it is
+                            the smallest step near surfaces [1] */
+    int max_steps;       /* march steps per prism and pixel; out of steps, the surface is taken to be at
+                            the last sample (drawn too high, never a hole) [256] */
+    int bisection_steps; /* refinement steps once the surface is bracketed [4] */
+    int segment_steps;   /* bisection steps on w for the ray segment (§4.2) [12] */
+    float uv_scale;      /* multiplies the baked texture coordinates (tiling) [1] */
+    int no_distance_map; /* 1: march at fixed_step instead of sphere tracing the distance map [0] */
+    float fixed_step;    /* texture-space step without a distance map [1/256] */
+} meso_rt_shell_draw;
+
+/* MESO_OBJECT_FRUSTA (papers/relief-mapped-conical-frusta.md §3: the relief
+ * march is uniform sampling plus bisection). */
+typedef struct meso_rt_frusta_draw {
+    int relief_steps;    /* uniform samples per relief march, over the ray's part inside the relief layer
+                            before (and, leaving it, after) the solid core; more catches thinner bumps at
+                            grazing angles [64] */
+    int bisection_steps; /* refinement steps once the surface is bracketed [4] */
+} meso_rt_frusta_draw;
+
+/* MESO_OBJECT_CELLS (papers/cell-based-object-representation.md §3.2;
+ * runtime/reference/cell_reference.h states the rules exactly). */
+typedef struct meso_rt_cells_draw {
+    meso_cells_mode mode; /* [MESO_CELLS_FIRST_HIT] */
+    int bounces;          /* reflection: rays traced after the first hit (0 = environment mapping at the
+                             first hit); refraction: exits and re-entries traced after it; 0..8 [0] */
+    float step;           /* 0: exact voxel traversal, never misses a voxel; > 0: the thesis's linear
+                             search (Algorithm 3.1) at this step in tile-map voxels, then bisection [0] */
+    int fixed_step;       /* with step: 1 keeps the step at grazing angles (the thesis's missed cells);
+                             0 scales the first hit's step by max(|cos|, 1/8) of the angle to the base
+                             mesh's normal (§3.2.2) [0] */
+    int bisection_steps;  /* with step: refinement steps once a cell is bracketed [down to 1/64 voxel:
+                             ceil(log2(64 step)), at least 1] */
+    float reflectivity;   /* k of the reflection rule, 0..1 [0.5] */
+    float ior;            /* refractive index of the cells [1.5] */
+    float transparency;   /* tau of the refraction rule, 0..1 [0.7] */
+    int max_steps;        /* voxel and tile steps per search; a search out of steps misses [4096] */
+    uint32_t environment; /* GL name of a GL_TEXTURE_CUBE_MAP the host owns (linear RGB), looked up
+                             (level 0) with the world-space direction of rays that leave the object;
+                             0: the built-in sky of runtime/reference/cell_reference.h [0] */
+} meso_rt_cells_draw;
+
+/* One draw. Zero-initialise it (`meso_rt_draw_desc d = {0};`) and set what
+ * differs from the defaults; designated initialisers read as
+ * `{.view = ..., .proj = ..., .shell = {.technique = MESO_SHELL_CURVED}}`. */
+typedef struct meso_rt_draw_desc {
+    float view[16];            /* world -> eye, column-major (OpenGL convention) */
+    float proj[16];            /* eye -> clip */
+    float model[16];           /* object -> world, rigid + uniform scale [all zero: identity] */
+    float light_dir[3];        /* towards the light, world space [all zero: (0.3, 0.8, 0.5) normalised] */
+    float albedo[3];           /* linear RGB [all zero: (0.80, 0.74, 0.66)] */
+    meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) [NULL] */
+    meso_rt_shell_draw shell;   /* read for shells only */
+    meso_rt_frusta_draw frusta; /* read for frusta only */
+    meso_rt_cells_draw cells;   /* read for cells only */
 } meso_rt_draw_desc;
 
 /* Draw an object into the host's currently bound framebuffer and viewport,
@@ -194,11 +220,14 @@ typedef struct meso_rt_draw_desc {
  * wall). Cells write the exact depth of the first hit; their rays start on
  * the base mesh's front faces, and when the camera is inside the tile grid
  * also at the near plane behind its back faces, so the camera may be inside
- * the object. The GL state the call changes (program, vertex array, active
- * texture, textures on units 0-4, depth test/func/mask, culling, and on
- * OpenGL 4.3 with `stats` the shader storage buffer binding) is restored
- * before it returns. GL errors are logged
- * (GL_ERROR) and returned as MESO_ERR_GL, never fatal. */
+ * the object. Meshes are rasterised with the host's face culling as it
+ * is. Shells, frusta and cells need the inverse of proj · view · model: a
+ * singular one is refused with MESO_ERR_INVALID_ARG (logged). The GL state
+ * the call changes (program, vertex array, active texture, textures on
+ * units 0-4, depth test/func/mask, culling, and on OpenGL 4.3 with `stats`
+ * the shader storage buffer binding) is restored before it returns, for
+ * every kind. GL errors are logged (GL_ERROR) and returned as MESO_ERR_GL,
+ * never fatal. */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
 
 /* Animation without re-baking: replace a shell's base positions (3 floats

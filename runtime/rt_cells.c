@@ -13,7 +13,7 @@
  *   unit 2  NRMM  3D texture RG16 (unorm), decoded in the shader
  *   unit 3  COLR  3D texture SRGB8_ALPHA8 (fetches are linear)
  *   unit 4  the host's environment cube map, if it passes one
- * plus the base mesh's vertex array (the MESH chunk buffer, as rt_objects.c
+ * plus the base mesh's vertex array (the MESH chunk buffer, as rt_mesh.c
  * uploads it). SPLT is not needed to draw: MEMB's tags are final.
  *
  * Decisions:
@@ -191,14 +191,6 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
 
 /* >>drawing ---------------------------------------------------------------- */
 
-static int zero16(const float* m)
-{
-    for (int i = 0; i < 16; ++i)
-        if (m[i] != 0.0f)
-            return 0;
-    return 1;
-}
-
 static GLuint cells_program(meso_rt* rt, int stats)
 {
     if (rt->cells_programs[stats])
@@ -251,18 +243,19 @@ static int near_plane_in_grid(const mesoi_draw* ds, const mesoi_cells* c)
 meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
 {
     const mesoi_cells* c = o->cells;
-    if (d->cell_mode < MESO_CELLS_FIRST_HIT || d->cell_mode > MESO_CELLS_REFRACT || d->cell_bounces < 0 ||
-        d->cell_bounces > 8 || !(d->cell_step >= 0.0f) || d->cell_ior < 0.0f || d->cell_reflectivity < 0.0f ||
-        d->cell_reflectivity > 1.0f || d->cell_transparency < 0.0f || d->cell_transparency > 1.0f) {
+    const meso_rt_cells_draw* k = &d->cells;
+    if (k->mode < MESO_CELLS_FIRST_HIT || k->mode > MESO_CELLS_REFRACT || k->bounces < 0 ||
+        k->bounces > 8 || !(k->step >= 0.0f) || k->ior < 0.0f || k->reflectivity < 0.0f ||
+        k->reflectivity > 1.0f || k->transparency < 0.0f || k->transparency > 1.0f) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
                   "meso_rt_draw: cells knobs out of range (mode %d, bounces %d of 0..8, step %g, ior %g, "
                   "reflectivity %g and transparency %g of 0..1)",
-                  (int)d->cell_mode, d->cell_bounces, (double)d->cell_step, (double)d->cell_ior,
-                  (double)d->cell_reflectivity, (double)d->cell_transparency);
+                  (int)k->mode, k->bounces, (double)k->step, (double)k->ior,
+                  (double)k->reflectivity, (double)k->transparency);
         return MESO_ERR_INVALID_ARG;
     }
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
     const GLuint prog = cells_program(rt, ds.stats);
@@ -271,7 +264,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     mesoi_gl* gl = &rt->gl;
     static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D,
                                                GL_TEXTURE_CUBE_MAP};
-    const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, d->cell_environment};
+    const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment};
     mesoi_draw_begin(rt, &ds, prog, UNIT_COUNT, targets, bind);
     const int from_near = near_plane_in_grid(&ds, c);
     if (from_near)
@@ -284,12 +277,11 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_nrmm"), UNIT_NRMM);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_colr"), UNIT_COLR);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_env"), UNIT_ENV);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_env"), d->cell_environment != 0);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_env"), k->environment != 0);
     float rot[9]; /* the model's rotation: object -> world directions */
     for (int col = 0; col < 3; ++col)
         for (int row = 0; row < 3; ++row)
-            rot[3 * col + row] = zero16(d->model) ? (float)(row == col)
-                                                   : (float)(d->model[4 * col + row] / ds.model_scale);
+            rot[3 * col + row] = (float)(ds.model[4 * col + row] / ds.model_scale);
     gl->UniformMatrix3fv(gl->GetUniformLocation(prog, "u_env_rot"), 1, GL_FALSE, rot);
     gl->Uniform3fv(gl->GetUniformLocation(prog, "u_origin"), 1, c->origin);
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_h"), c->voxel);
@@ -300,19 +292,19 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_words"), (GLint)c->record_words);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_map_full"), c->map_full);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_from_near"), from_near);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_mode"), (GLint)d->cell_mode);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bounces"), d->cell_bounces);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_refl"), d->cell_reflectivity > 0.0f ? d->cell_reflectivity : 0.5f);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_ior"), d->cell_ior > 0.0f ? d->cell_ior : 1.5f);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_mode"), (GLint)k->mode);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bounces"), k->bounces);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_refl"), k->reflectivity > 0.0f ? k->reflectivity : 0.5f);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_ior"), k->ior > 0.0f ? k->ior : 1.5f);
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_tau"),
-                  d->cell_transparency > 0.0f ? d->cell_transparency : 0.7f);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_step"), d->cell_step);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_fixed_step"), d->cell_fixed_step != 0);
-    int bisect = d->bisection_steps;
+                  k->transparency > 0.0f ? k->transparency : 0.7f);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_step"), k->step);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_fixed_step"), k->fixed_step != 0);
+    int bisect = k->bisection_steps;
     if (bisect <= 0) /* down to 1/64 voxel */
-        bisect = d->cell_step > 0.0f ? (int)ceil(log2((double)d->cell_step * 64.0)) : 0;
+        bisect = k->step > 0.0f ? (int)ceil(log2((double)k->step * 64.0)) : 0;
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect"), bisect > 0 ? bisect : 1);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), d->cell_max_steps > 0 ? d->cell_max_steps : 4096);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), k->max_steps > 0 ? k->max_steps : 4096);
     gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
     return mesoi_draw_end(rt, &ds, d->stats, "cells");
 }

@@ -1,13 +1,14 @@
 /*
- * rt_common.c — what the ray-cast object kinds (shells, frusta) share:
- * streaming and checking a chunk, texture and texture-buffer uploads, and a
- * draw's matrices, light, GL state save/restore and work counters.
+ * rt_common.c — what the object kinds share: streaming and checking a
+ * chunk, texture and texture-buffer uploads, compiling and linking their
+ * shaders, and a draw's matrices, light, GL state save/restore and work
+ * counters.
  *
- * The GL state contract of meso_rt_draw (meso_rt.h) lives here: every draw
- * goes through mesoi_draw_begin / mesoi_draw_end, which save and restore
- * the program, vertex array, active texture and the bindings of the units
- * the kind uses, depth test/func/mask, culling and the shader storage
- * binding of the counters.
+ * The GL state contract of meso_rt_draw (meso_rt.h) lives here: every draw,
+ * of every kind, goes through mesoi_draw_begin / mesoi_draw_end, which save
+ * and restore the program, vertex array, active texture and the bindings of
+ * the units the kind uses, depth test/func/mask, culling and the shader
+ * storage binding of the counters.
  */
 #include "mat4_inverse.h"
 #include "rt_internal.h"
@@ -157,6 +158,53 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
     return mesoi_upload_end(rt, prev, MESO_OK, what);
 }
 
+/* >>shaders ---------------------------------------------------------------- */
+
+/* 1 when the shader compiled (`program` 0) or the program linked (1); else
+ * logs its info log under `name`, deletes it and returns 0. */
+static int built(meso_rt* rt, GLuint obj, int program, const char* name)
+{
+    mesoi_gl* gl = &rt->gl;
+    GLint ok = 0;
+    (program ? gl->GetProgramiv : gl->GetShaderiv)(obj, program ? GL_LINK_STATUS : GL_COMPILE_STATUS, &ok);
+    if (ok)
+        return 1;
+    char log[2048];
+    (program ? gl->GetProgramInfoLog : gl->GetShaderInfoLog)(obj, sizeof(log), NULL, log);
+    mesoi_log(rt, MESO_LOG_ERROR, program ? MESO_LOGITEM_PROGRAM_LINK_FAILED : MESO_LOGITEM_SHADER_COMPILE_FAILED,
+              "%s: %s", name, log);
+    (program ? gl->DeleteProgram : gl->DeleteShader)(obj);
+    return 0;
+}
+
+GLuint mesoi_compile(meso_rt* rt, GLenum type, const char* const* src, int count, const char* name)
+{
+    mesoi_gl* gl = &rt->gl;
+    GLuint s = gl->CreateShader(type);
+    gl->ShaderSource(s, count, src, NULL);
+    gl->CompileShader(s);
+    return built(rt, s, 0, name) ? s : 0;
+}
+
+GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name)
+{
+    mesoi_gl* gl = &rt->gl;
+    if (!vs || !fs) {
+        if (vs)
+            gl->DeleteShader(vs);
+        if (fs)
+            gl->DeleteShader(fs);
+        return 0;
+    }
+    GLuint p = gl->CreateProgram();
+    gl->AttachShader(p, vs);
+    gl->AttachShader(p, fs);
+    gl->LinkProgram(p);
+    gl->DeleteShader(vs);
+    gl->DeleteShader(fs);
+    return built(rt, p, 1, name) ? p : 0;
+}
+
 /* >>draws ------------------------------------------------------------------ */
 
 static void mat4_mul(const double a[16], const double b[16], double out[16])
@@ -180,7 +228,7 @@ static int zero16(const float* v)
     return 1;
 }
 
-meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, mesoi_draw* out)
+meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, mesoi_draw* out)
 {
     memset(out, 0, sizeof(*out));
     if (d->stats)
@@ -193,13 +241,15 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, mesoi_dr
     }
     mat4_mul(proj, view, mvp);
     mat4_mul(mvp, model, mvp);
-    if (!meso_mat4_inverse(mvp, inv)) {
+    const int invertible = meso_mat4_inverse(mvp, inv);
+    if (!invertible && need_inverse) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: singular view/projection");
         return MESO_ERR_INVALID_ARG;
     }
     for (int i = 0; i < 16; ++i) {
+        out->model[i] = (float)model[i];
         out->mvp[i] = (float)mvp[i];
-        out->inv_mvp[i] = (float)inv[i];
+        out->inv_mvp[i] = invertible ? (float)inv[i] : 0.0f;
     }
     out->viewport[2] = out->viewport[3] = 1;
     rt->gl.GetIntegerv(GL_VIEWPORT, out->viewport);

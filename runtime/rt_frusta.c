@@ -597,8 +597,9 @@ void mesoi_frusta_programs_destroy(meso_rt* rt)
 meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
 {
     const mesoi_frusta* s = o->frusta;
+    const meso_rt_frusta_draw* k = &d->frusta;
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
     const GLuint prog = frusta_program(rt, ds.stats);
@@ -612,8 +613,8 @@ meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_relief"), UNIT_RELIEF);
     const GLint size[2] = {s->relief_w, s->relief_h};
     gl->Uniform2iv(gl->GetUniformLocation(prog, "u_relief_size"), 1, size);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_relief_steps"), d->relief_steps > 0 ? d->relief_steps : 64);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect_steps"), d->bisection_steps > 0 ? d->bisection_steps : 4);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_relief_steps"), k->relief_steps > 0 ? k->relief_steps : 64);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect_steps"), k->bisection_steps > 0 ? k->bisection_steps : 4);
     gl->DrawArrays(GL_TRIANGLES, 0, 36 * (GLsizei)(s->count + s->ball_count));
     return mesoi_draw_end(rt, &ds, d->stats, "frusta");
 }

@@ -27,7 +27,7 @@ struct meso_rt {
     mesoi_gl gl;
     int gl_version; /* major*10+minor */
     GLuint mesh_program;
-    GLint u_view, u_proj, u_model, u_light_dir, u_albedo;
+    GLint u_view, u_proj, u_model, u_light_dir; /* of mesh_program */
     GLuint shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], compiled on first use */
     GLuint frusta_programs[2];                            /* [stats], compiled on first use */
     GLuint cells_programs[2];                             /* [stats], compiled on first use */
@@ -78,15 +78,18 @@ meso_result mesoi_upload_end(meso_rt* rt, GLint prev, meso_result r, const char*
 /* Overwrites the first `size` bytes of buffer `buf` (animation updates). */
 meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_t size, const char* what);
 
-/* rt_common.c: one ray-casting draw. prepare (no GL state touched) →
- * begin (saves the state meso_rt_draw promises to restore, binds the
- * textures, the counters and `program` with its common uniforms u_mvp,
- * u_inv_mvp, u_viewport, u_light_obj, u_albedo, and sets depth test GL_LESS
- * with writes, front-face culling and the empty vertex array) → the kind's
- * own uniforms and draw call → end (reads the counters, restores). */
+/* rt_common.c: one draw, of any kind. prepare (no GL state touched; fails
+ * on a singular object -> clip matrix when `need_inverse`, as the ray
+ * casters need it) → begin (saves the state meso_rt_draw promises to
+ * restore, binds the textures, the counters and `program` with its common
+ * uniforms u_mvp, u_inv_mvp, u_viewport, u_light_obj, u_albedo, and sets
+ * depth test GL_LESS with writes, front-face culling and the empty vertex
+ * array) → the kind's own state, uniforms and draw call → end (reads the
+ * counters, restores). */
 #define MESOI_DRAW_MAX_UNITS 8
 typedef struct mesoi_draw {
-    float mvp[16], inv_mvp[16]; /* object -> clip and back */
+    float model[16];            /* object -> world: desc->model, or identity when it is all zero */
+    float mvp[16], inv_mvp[16]; /* object -> clip and back (inv_mvp zero when singular) */
     double proj11;              /* |proj[1][1]| */
     double model_scale;         /* length of the model matrix's first column */
     GLint viewport[4];
@@ -98,21 +101,30 @@ typedef struct mesoi_draw {
     GLint prev_program, prev_vao, prev_func, prev_mask, prev_active, prev_cull_mode, prev_front, prev_ssbo;
     GLboolean prev_test, prev_cull;
 } mesoi_draw;
-meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, mesoi_draw* out);
+meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, mesoi_draw* out);
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, const GLenum* targets,
                       const GLuint* textures);
 meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
 
-/* rt_objects.c */
-/* The object's MESH chunk into o->vao / o->buffer / index_count (positions
- * at attribute 0, normals at 1, the chunk's own layout). */
-meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
+/* rt_common.c: shaders. compile: one shader from `count` sources, 0
+ * (logged with `name`) on failure; link: links and deletes the two shaders
+ * (either may be 0, then both are deleted), 0 (logged) on failure. */
 GLuint mesoi_compile(meso_rt* rt, GLenum type, const char* const* src, int count, const char* name);
 GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name);
-mesoi_object* mesoi_lookup(const meso_rt* rt, meso_rt_object h);
+
+/* rt_mesh.c */
+/* The object's MESH chunk into o->vao / o->buffer / index_count (positions
+ * at attribute 0, normals at 1, the chunk's own layout). Cells use it for
+ * their base mesh. */
+meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 meso_result mesoi_mesh_program_create(meso_rt* rt);
+meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+
+/* rt_objects.c */
+mesoi_object* mesoi_lookup(const meso_rt* rt, meso_rt_object h);
 void mesoi_objects_destroy(meso_rt* rt);
 
+/* meso_rt.c */
 void* mesoi_rt_alloc(meso_rt* rt, size_t size);
 void mesoi_rt_free(meso_rt* rt, void* p);
 /* Log an item with a printf-style detail; silent without a logger. */

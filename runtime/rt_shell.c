@@ -259,23 +259,24 @@ void mesoi_shell_programs_destroy(meso_rt* rt)
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
 {
     const mesoi_shell* s = o->shell;
+    const meso_rt_shell_draw* k = &d->shell;
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
-    if ((unsigned)d->technique >= MESO_SHELL_TECHNIQUE_COUNT) {
+    if ((unsigned)k->technique >= MESO_SHELL_TECHNIQUE_COUNT) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: technique %d",
-                  (int)d->technique);
+                  (int)k->technique);
         return MESO_ERR_INVALID_ARG;
     }
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
-    const GLuint prog = shell_program(rt, d->technique, ds.stats);
+    const GLuint prog = shell_program(rt, k->technique, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
     const double scale = ds.model_scale;
-    const double error_px = d->error_px > 0.0f ? d->error_px : 1.0;
+    const double error_px = k->error_px > 0.0f ? k->error_px : 1.0;
     /* One pixel spans 2 w_clip / (proj[1][1] · height) eye units at clip w. */
     const double err_scale =
         error_px * 2.0 / (ds.proj11 * (ds.viewport[3] > 0 ? ds.viewport[3] : 1)) / (scale > 0 ? scale : 1);
@@ -289,19 +290,19 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     static const char* const samplers[UNIT_COUNT] = {"u_verts", "u_index", "u_height", "u_volume", "u_dist"};
     for (int u = 0; u < UNIT_COUNT; ++u)
         gl->Uniform1i(gl->GetUniformLocation(prog, samplers[u]), u);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_uv_scale"), d->uv_scale > 0.0f ? d->uv_scale : 1.0f);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_uv_scale"), k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_tex_kind"), s->tex_kind);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_dist"), s->dist_tex && !d->no_distance_map);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_dist"), s->dist_tex && !k->no_distance_map);
     gl->Uniform3fv(gl->GetUniformLocation(prog, "u_tex_size"), 1, s->tex_size);
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_err_scale"), (float)err_scale);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), d->max_steps > 0 ? d->max_steps : 256);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect_steps"), d->bisection_steps > 0 ? d->bisection_steps : 4);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_segment_steps"), d->segment_steps > 0 ? d->segment_steps : 12);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_fixed_step"), d->fixed_step > 0.0f ? d->fixed_step : 1.0f / 256);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), k->max_steps > 0 ? k->max_steps : 256);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect_steps"), k->bisection_steps > 0 ? k->bisection_steps : 4);
+    gl->Uniform1i(gl->GetUniformLocation(prog, "u_segment_steps"), k->segment_steps > 0 ? k->segment_steps : 12);
+    gl->Uniform1f(gl->GetUniformLocation(prog, "u_fixed_step"), k->fixed_step > 0.0f ? k->fixed_step : 1.0f / 256);
     /* Where the distance map says 0 (a cell touching the solid), step a
      * quarter texel: finer than the texture's own detail. */
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_min_step"), max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
-    const GLsizei per = d->technique == MESO_SHELL_TETRA ? 36 : 24;
+    const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
     gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
     return mesoi_draw_end(rt, &ds, d->stats, "shell");
 }

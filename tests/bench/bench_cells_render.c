@@ -5,9 +5,9 @@
  * (papers/cell-based-object-representation.md §5.2-5.3):
  *
  *  cells_render_step.csv   first hit: the thesis's linear search
- *               (Algorithm 3.1) at cell_step = R/16 .. R/512 tile-map voxels
+ *               (Algorithm 3.1) at cells.step = R/16 .. R/512 tile-map voxels
  *               (its Table 5.4 steps 1/16 .. 1/512 of a tile), with the step
- *               fixed (cell_fixed_step = 1) and scaled by the angle to the
+ *               fixed (cells.fixed_step = 1) and scaled by the angle to the
  *               base mesh (0), and meso's exact voxel traversal (step 0):
  *               median ms, steps per fragment (the shaders' counters), and
  *               the error against the exact reference: coverage mismatch,
@@ -27,7 +27,7 @@
  * wide): cells_first.png, cells_reflect.png and cells_refract.png (2
  * bounces). Timing: median of 3 draws after a warm-up, glFinish included;
  * the counts come from one more draw with stats (OpenGL 4.3). The
- * searches run with the default cell_max_steps (4096): with the angle rule
+ * searches run with the default cells.max_steps (4096): with the angle rule
  * at steps of 1/4 voxel and below, grazing rays run out of steps and miss
  * (holes; 65536 steps remove them).
  * usage: bench_cells_render RESULTS_DIR MESOBAKE MESH [quick | pictures]
@@ -85,13 +85,13 @@ static meso_ref_image reference(const bench* b, const meso_ref_cells* ref, int m
         v.view[i] = b->view[i], v.proj[i] = b->proj[i];
     const meso_ref_cells_opts o = {.mode = mode, .bounces = bounces};
     meso_ref_image img;
-    const double t0 = now_ms();
+    const double t0 = meso_seconds();
     if (meso_ref_cells_render(ref, &v, &o, &img) != MESO_OK) {
         fprintf(stderr, "bench_cells_render: reference failed\n");
         exit(1);
     }
     fprintf(stderr, "reference %s (mode %d, %d bounces) %dx%d: %.1f s\n", what, mode, bounces, scene_w, scene_h,
-            (now_ms() - t0) / 1e3);
+            meso_seconds() - t0);
     return img;
 }
 
@@ -172,12 +172,12 @@ int main(int argc, char** argv)
     snprintf(cmd, sizeof(cmd), "'%s' cells -i '%s' -o '%s' --tile-res 64 --tiles 128 --tile-map voronoi:8 -j 2",
              mesobake, mesh, path);
     fprintf(stderr, "== %s\n", cmd);
-    const double tb = now_ms();
+    const double tb = meso_seconds();
     if (system(cmd) != 0) {
         fprintf(stderr, "bench_cells_render: bake failed\n");
         return 1;
     }
-    fprintf(stderr, "bake: %.1f s\n", (now_ms() - tb) / 1e3);
+    fprintf(stderr, "bake: %.1f s\n", meso_seconds() - tb);
 
     bench b = {0};
     meso_egl* egl = bench_gl_open(&b, "bench_cells_render");
@@ -237,7 +237,7 @@ int main(int argc, char** argv)
                     {"cells_reflect.png", MESO_CELLS_REFLECT},
                     {"cells_refract.png", MESO_CELLS_REFRACT}};
         for (size_t i = 0; i < sizeof(pics) / sizeof(pics[0]); ++i) {
-            meso_rt_draw_desc d = {.cell_mode = pics[i].mode, .cell_bounces = pics[i].mode ? 2 : 0};
+            meso_rt_draw_desc d = {.cells = {.mode = pics[i].mode, .bounces = pics[i].mode ? 2 : 0}};
             memcpy(d.view, b.view, sizeof(d.view));
             memcpy(d.proj, b.proj, sizeof(d.proj));
             test_fbo_clear(&b.fbo, 0.16f, 0.17f, 0.19f);
@@ -246,9 +246,9 @@ int main(int argc, char** argv)
             test_fbo_read(&b.fbo, rgba, depth);
             write_png(dir, pics[i].file, rgba);
             /* Checked against the reference (MESO_TEST_PNG=DIR: its image and the differences). */
-            meso_ref_image img = reference(&b, &ref, (int)d.cell_mode, d.cell_bounces, "picture");
+            meso_ref_image img = reference(&b, &ref, (int)d.cells.mode, d.cells.bounces, "picture");
             char prefix[64];
-            snprintf(prefix, sizeof(prefix), "cells_picture_%d", (int)d.cell_mode);
+            snprintf(prefix, sizeof(prefix), "cells_picture_%d", (int)d.cells.mode);
             const metrics m = compare(rgba, depth, &img, b.view, b.proj, b.cam.fovy, prefix);
             fprintf(stderr,
                     "  vs reference: coverage mismatch %.4f, hit error %.3f px (> 1 px: %.4f), colour MAE %.4f, "
@@ -285,22 +285,22 @@ int main(int argc, char** argv)
             for (int di = 0; di < (search ? ndivs : 1); ++di) {
                 meso_rt_draw_desc d = {0};
                 if (search) {
-                    d.cell_step = (float)R / (float)divs[di];
-                    d.cell_fixed_step = search == 1;
+                    d.cells.step = (float)R / (float)divs[di];
+                    d.cells.fixed_step = search == 1;
                 }
                 const timing t = time_draw(&b, obj, d, rgba, depth);
                 static const char* const names[3] = {"exact", "linear_fixed", "linear_angle"};
                 char prefix[64]; /* MESO_TEST_PNG=DIR: GL, reference and difference images */
-                snprintf(prefix, sizeof(prefix), "cells_%s_%s_%g", views[vi].name, names[search], (double)d.cell_step);
+                snprintf(prefix, sizeof(prefix), "cells_%s_%s_%g", views[vi].name, names[search], (double)d.cells.step);
                 const metrics m = compare(rgba, depth, &img, b.view, b.proj, b.cam.fovy, prefix);
                 fprintf(fs, "%s,%s,%g,%g,%.2f,%.2f,%llu,%ld,%ld,%.5f,%.4f,%.5f,%.5f,%.5f\n", views[vi].name,
-                        names[search], (double)d.cell_step, (double)d.cell_step / R, t.ms, t.steps_per_frag,
+                        names[search], (double)d.cells.step, (double)d.cells.step / R, t.ms, t.steps_per_frag,
                         (unsigned long long)t.fragments, m.covered_gl, m.covered_ref, m.coverage_mismatch,
                         m.hit_err_px, m.hit_gt1, m.colour_mae, colour_bad(rgba, depth, &img));
                 fprintf(stderr,
                         "%-5s %-12s step %6.3f vx: %7.1f ms  %6.1f steps/frag  cov %.4f  hit %.3f px  >1px %.4f  "
                         "colour %.4f\n",
-                        views[vi].name, names[search], (double)d.cell_step, t.ms, t.steps_per_frag,
+                        views[vi].name, names[search], (double)d.cells.step, t.ms, t.steps_per_frag,
                         m.coverage_mismatch, m.hit_err_px, m.hit_gt1, m.colour_mae);
                 fflush(fs);
             }
@@ -317,10 +317,10 @@ int main(int argc, char** argv)
             for (int bo = 0; bo <= 3; ++bo) {
                 if (quick && bo != 0 && bo != 3)
                     continue;
-                const double t0 = now_ms();
+                const double t0 = meso_seconds();
                 imgs[bo] = reference(&b, &ref, modes[mi], bo, views[vi].name);
-                secs[bo] = (now_ms() - t0) / 1e3;
-                meso_rt_draw_desc d = {.cell_mode = (meso_cells_mode)modes[mi], .cell_bounces = bo};
+                secs[bo] = meso_seconds() - t0;
+                meso_rt_draw_desc d = {.cells = {.mode = (meso_cells_mode)modes[mi], .bounces = bo}};
                 tim[bo] = time_draw(&b, obj, d, rgba, depth);
                 char prefix[64];
                 snprintf(prefix, sizeof(prefix), "cells_%s_%s_%d", views[vi].name, mi ? "refract" : "reflect", bo);

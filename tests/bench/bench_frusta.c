@@ -32,6 +32,7 @@
 #include "egl_context.h"
 #include "frusta_pose.h"
 #include "frusta_scene.h"
+#include "camera.h"
 #include "gl_fbo.h"
 #include "meso_rt.h"
 #include "png_io.h"
@@ -186,8 +187,8 @@ static draw_result time_draw(meso_rt* rt, test_fbo* fbo, meso_rt_object obj, int
     const double fovy = 0.7, dist = r / sin(fovy / 2);
     const double eye[3] = {c[0] + 0.45 * dist, c[1] + 0.55 * dist, c[2] + 0.70 * dist}, up[3] = {0, 1, 0};
     meso_rt_draw_desc d = {0};
-    test_look_at(d.view, eye, c, up);
-    test_perspective(d.proj, fovy, (double)w / h, 0.05 * dist, 3 * dist);
+    meso_camera_look_at(d.view, eye, c, up);
+    meso_camera_perspective(d.proj, fovy, (double)w / h, 0.05 * dist, 3 * dist);
     meso_rt_draw_stats st;
     d.stats = &st;
     test_fbo_clear(fbo, 0, 0, 0);

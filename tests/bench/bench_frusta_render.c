@@ -239,10 +239,10 @@ int main(int argc, char** argv)
     for (int i = 0; i < 16; ++i)
         v.view[i] = b.view[i], v.proj[i] = b.proj[i];
     meso_ref_image refimg;
-    double t0 = now_ms();
+    double t0 = meso_seconds();
     if (meso_ref_frusta_render(&ref, &v, &refimg) != MESO_OK)
         return 1;
-    fprintf(stderr, "reference %dx%d: %.1f s\n", scene_w, scene_h, (now_ms() - t0) / 1e3);
+    fprintf(stderr, "reference %dx%d: %.1f s\n", scene_w, scene_h, meso_seconds() - t0);
 
     /* --- relief steps ----------------------------------------------------- */
     snprintf(csv, sizeof(csv), "%s/frusta_relief_steps.csv", dir);
@@ -250,7 +250,7 @@ int main(int argc, char** argv)
     fprintf(rs, "relief_steps,ms,coverage_mismatch,hit_err_px,hit_gt1,colour_mae\n");
     const int steps[] = {4, 8, 16, 32, 64, 128, 256};
     for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); ++i) {
-        double ms = time_draw(&b, obj, (meso_rt_draw_desc){.relief_steps = steps[i]}, rgba, depth);
+        double ms = time_draw(&b, obj, (meso_rt_draw_desc){.frusta = {.relief_steps = steps[i]}}, rgba, depth);
         metrics m = compare(rgba, depth, &refimg, b.view, b.proj, b.cam.fovy, NULL);
         fprintf(rs, "%d,%.2f,%.5f,%.4f,%.5f,%.5f\n", steps[i], ms, m.coverage_mismatch, m.hit_err_px, m.hit_gt1,
                 m.colour_mae);

@@ -150,7 +150,7 @@ int main(int argc, char** argv)
             scaled[i] = (float)(dirs[i] * rows[r].thick);
         meso_rt_shell_update(b.rt, obj, NULL, scaled, nv);
         for (int t = 0; t < 4; ++t) {
-            meso_rt_draw_desc d = {.technique = tech_order[t], .uv_scale = (float)rows[r].tiling};
+            meso_rt_draw_desc d = {.shell = {.technique = tech_order[t], .uv_scale = (float)rows[r].tiling}};
             timing tm = time_draw(&b, obj, d, reps, NULL, NULL);
             fprintf(t1, "%s,%s,%d,%d,%.2f,%.2f,%.2f,%ld\n", rows[r].name, tech_names[tech_order[t]], rows[r].w,
                     rows[r].h, tm.ms, tm.steps_per_px, tm.frags_per_px, tm.covered);
@@ -177,11 +177,11 @@ int main(int argc, char** argv)
         meso_ref_view v = {.width = scene_w, .height = scene_h, .curved = cv, .samples_per_prism = 512};
         for (int i = 0; i < 16; ++i)
             v.view[i] = b.view[i], v.proj[i] = b.proj[i];
-        const double t0 = now_ms();
+        const double t0 = meso_seconds();
         if (meso_ref_render(&ref, &v, &refimg[cv]) != MESO_OK)
             return 1;
         fprintf(stderr, "reference (%s) %dx%d: %.1f s\n", cv ? "curved" : "smooth", scene_w, scene_h,
-                (now_ms() - t0) / 1e3);
+                meso_seconds() - t0);
     }
     snprintf(csv, sizeof(csv), "%s/shell_render_sweep.csv", dir);
     FILE* sw = fopen(csv, "w");
@@ -199,23 +199,23 @@ int main(int argc, char** argv)
     } while (0)
     const meso_shell_technique three[3] = {MESO_SHELL_SMOOTH, MESO_SHELL_CURVED, MESO_SHELL_TETRA};
     for (int t = 0; t < 3; ++t)
-        MEASURE(three[t], "defaults", 0, ((meso_rt_draw_desc){.technique = three[t]}), obj);
+        MEASURE(three[t], "defaults", 0, ((meso_rt_draw_desc){.shell = {.technique = three[t]}}), obj);
     const float errs[] = {0.25f, 0.5f, 1, 2, 4, 8, 16, 64};
     for (int t = 0; t < 2; ++t)
         for (size_t i = 0; i < sizeof(errs) / sizeof(errs[0]); ++i)
-            MEASURE(three[t], "error_px", errs[i], ((meso_rt_draw_desc){.technique = three[t], .error_px = errs[i]}),
-                    obj);
+            MEASURE(three[t], "error_px", errs[i],
+                    ((meso_rt_draw_desc){.shell = {.technique = three[t], .error_px = errs[i]}}), obj);
     const int steps[] = {2, 4, 8, 12, 16, 24, 32, 64, 256};
     for (int t = 0; t < 3; ++t)
         for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); ++i)
             MEASURE(three[t], "max_steps", steps[i],
-                    ((meso_rt_draw_desc){.technique = three[t], .max_steps = steps[i]}), obj);
+                    ((meso_rt_draw_desc){.shell = {.technique = three[t], .max_steps = steps[i]}}), obj);
     const float fixed[] = {1.0f / 16, 1.0f / 32, 1.0f / 64, 1.0f / 128, 1.0f / 256, 1.0f / 512};
     for (int t = 0; t < 3; ++t)
         for (size_t i = 0; i < sizeof(fixed) / sizeof(fixed[0]); ++i)
             MEASURE(three[t], "fixed_step", fixed[i],
-                    ((meso_rt_draw_desc){.technique = three[t], .no_distance_map = 1, .fixed_step = fixed[i],
-                                         .max_steps = 4096}),
+                    ((meso_rt_draw_desc){.shell = {.technique = three[t], .no_distance_map = 1,
+                                                   .fixed_step = fixed[i], .max_steps = 4096}}),
                     obj);
     const char* const dres[] = {"4x4x4", "8x8x8", "16x16x8", "32x32x16", "64x64x32", "128x128x64"};
     for (size_t i = 0; i < sizeof(dres) / sizeof(dres[0]) && !quick; ++i) {
@@ -233,8 +233,8 @@ int main(int argc, char** argv)
                 ++c;
         }
         for (int t = 0; t < 3; ++t)
-            MEASURE(three[t], "dist_cells", cells, ((meso_rt_draw_desc){.technique = three[t], .max_steps = 4096}),
-                    o2);
+            MEASURE(three[t], "dist_cells", cells,
+                    ((meso_rt_draw_desc){.shell = {.technique = three[t], .max_steps = 4096}}), o2);
         meso_rt_release_object(b.rt, o2);
         unlink(p2);
     }

@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "adapters.h"
+#include "camera.h"
 #include "cell_reference.h"
 #include "cells_chunks.h"
 #include "meso_layout.h"
@@ -486,51 +487,13 @@ static void traversal_matches_brute_force(void)
 
 /* >>3: a box through the renderer, in closed form --------------------------- */
 
-static void look_at(double m[16], const double eye[3], const double at[3], const double up[3])
-{
-    double f[3] = {at[0] - eye[0], at[1] - eye[1], at[2] - eye[2]}, s[3], u[3];
-    double l = sqrt(dot(f, f));
-    for (int k = 0; k < 3; ++k)
-        f[k] /= l;
-    s[0] = f[1] * up[2] - f[2] * up[1];
-    s[1] = f[2] * up[0] - f[0] * up[2];
-    s[2] = f[0] * up[1] - f[1] * up[0];
-    l = sqrt(dot(s, s));
-    for (int k = 0; k < 3; ++k)
-        s[k] /= l;
-    u[0] = s[1] * f[2] - s[2] * f[1];
-    u[1] = s[2] * f[0] - s[0] * f[2];
-    u[2] = s[0] * f[1] - s[1] * f[0];
-    memset(m, 0, 16 * sizeof *m);
-    for (int k = 0; k < 3; ++k) {
-        m[4 * k + 0] = s[k];
-        m[4 * k + 1] = u[k];
-        m[4 * k + 2] = -f[k];
-    }
-    m[12] = -dot(s, eye);
-    m[13] = -dot(u, eye);
-    m[14] = dot(f, eye);
-    m[15] = 1;
-}
-
-static void perspective(double m[16], double fovy, double aspect, double zn, double zf)
-{
-    const double t = 1 / tan(fovy / 2);
-    memset(m, 0, 16 * sizeof *m);
-    m[0] = t / aspect;
-    m[5] = t;
-    m[10] = (zf + zn) / (zn - zf);
-    m[11] = -1;
-    m[14] = 2 * zf * zn / (zn - zf);
-}
-
 static meso_ref_view make_view(const double eye[3], const double at[3], int W, int H)
 {
     meso_ref_view v;
     memset(&v, 0, sizeof v);
     const double up[3] = {0, 1, 0};
-    look_at(v.view, eye, at, up);
-    perspective(v.proj, 0.8, (double)W / H, 0.5, 20);
+    meso_camera_look_at_d(v.view, eye, at, up);
+    meso_camera_perspective_d(v.proj, 0.8, (double)W / H, 0.5, 20);
     v.width = W;
     v.height = H;
     v.threads = 2;

@@ -78,39 +78,4 @@ static inline void test_fbo_destroy(test_fbo* f)
     }
 }
 
-/* Column-major camera helpers: perspective and look-at. */
-static inline void test_perspective(float m[16], double fovy_rad, double aspect, double zn, double zf)
-{
-    const double f = 1.0 / __builtin_tan(fovy_rad / 2);
-    memset(m, 0, 16 * sizeof(float));
-    m[0] = (float)(f / aspect);
-    m[5] = (float)f;
-    m[10] = (float)((zf + zn) / (zn - zf));
-    m[11] = -1.0f;
-    m[14] = (float)(2 * zf * zn / (zn - zf));
-}
-
-static inline void test_look_at(float m[16], const double eye[3], const double at[3], const double up[3])
-{
-    double f[3] = {at[0] - eye[0], at[1] - eye[1], at[2] - eye[2]};
-    double fl = __builtin_sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-    for (int k = 0; k < 3; ++k)
-        f[k] /= fl;
-    double s[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2], f[0] * up[1] - f[1] * up[0]};
-    double sl = __builtin_sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    for (int k = 0; k < 3; ++k)
-        s[k] /= sl;
-    const double u[3] = {s[1] * f[2] - s[2] * f[1], s[2] * f[0] - s[0] * f[2], s[0] * f[1] - s[1] * f[0]};
-    memset(m, 0, 16 * sizeof(float));
-    for (int k = 0; k < 3; ++k) {
-        m[4 * k + 0] = (float)s[k];
-        m[4 * k + 1] = (float)u[k];
-        m[4 * k + 2] = (float)-f[k];
-    }
-    m[12] = (float)-(s[0] * eye[0] + s[1] * eye[1] + s[2] * eye[2]);
-    m[13] = (float)-(u[0] * eye[0] + u[1] * eye[1] + u[2] * eye[2]);
-    m[14] = (float)(f[0] * eye[0] + f[1] * eye[1] + f[2] * eye[2]);
-    m[15] = 1.0f;
-}
-
 #endif

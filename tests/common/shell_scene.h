@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera.h"
 #include "gl_fbo.h"
 #include "mesh_chunk.h"
 #include "meso_bake.h"
@@ -203,8 +204,8 @@ static inline void camera_matrices(const camera* c, float view[16], float proj[1
 {
     const int W = scene_w, H = scene_h;
     const double up[3] = {0, 1, 0};
-    test_look_at(view, c->eye, c->at, up);
-    test_perspective(proj, c->fovy, (double)W / H, c->zn, c->zf);
+    meso_camera_look_at(view, c->eye, c->at, up);
+    meso_camera_perspective(proj, c->fovy, (double)W / H, c->zn, c->zf);
 }
 
 /* Object-space point of pixel (x, y) at window depth z (model = identity). */

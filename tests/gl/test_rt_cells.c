@@ -194,12 +194,12 @@ static int ref_sky_only = 0;
 
 static meso_ref_cells_opts ref_opts(const meso_rt_draw_desc* d)
 {
-    return (meso_ref_cells_opts){.mode = (int)d->cell_mode,
-                                 .bounces = d->cell_bounces,
-                                 .reflectivity = d->cell_reflectivity,
-                                 .ior = d->cell_ior,
-                                 .transparency = d->cell_transparency,
-                                 .env = d->cell_environment && !ref_sky_only ? face_env : NULL};
+    return (meso_ref_cells_opts){.mode = (int)d->cells.mode,
+                                 .bounces = d->cells.bounces,
+                                 .reflectivity = d->cells.reflectivity,
+                                 .ior = d->cells.ior,
+                                 .transparency = d->cells.transparency,
+                                 .env = d->cells.environment && !ref_sky_only ? face_env : NULL};
 }
 
 static result render_compare(ctx* c, const char* name, const loaded* l, const camera* cam,
@@ -288,12 +288,12 @@ static void test_reflection_refraction(ctx* c)
     const camera cam = view_box(&l, dirs[0], 0.6);
     char name[64];
     for (int b = 0; b <= 3; ++b) {
-        meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = b};
+        meso_rt_draw_desc d = {.cells = {.mode = MESO_CELLS_REFLECT, .bounces = b}};
         snprintf(name, sizeof(name), "reflect_%d", b);
         check_close(name, render_compare(c, name, &l, &cam, &d), 0.03);
     }
     for (int b = 0; b <= 4; b += 2) {
-        meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFRACT, .cell_bounces = b, .cell_ior = 1.33f};
+        meso_rt_draw_desc d = {.cells = {.mode = MESO_CELLS_REFRACT, .bounces = b, .ior = 1.33f}};
         snprintf(name, sizeof(name), "refract_%d", b);
         check_close(name, render_compare(c, name, &l, &cam, &d), 0.03);
     }
@@ -301,9 +301,9 @@ static void test_reflection_refraction(ctx* c)
     p = bake(c, "spheres_rr", "torus.obj", "--tiles 8 --tile-res 16 --tile-map spheres:6:0.3");
     l = load(c, p);
     const camera cam2 = view_box(&l, dirs[1], 0.7);
-    meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFRACT, .cell_bounces = 3};
+    meso_rt_draw_desc d = {.cells = {.mode = MESO_CELLS_REFRACT, .bounces = 3}};
     check_close("spheres_refract_3", render_compare(c, "spheres_refract_3", &l, &cam2, &d), 0.03);
-    d = (meso_rt_draw_desc){.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = 2, .cell_reflectivity = 0.8f};
+    d = (meso_rt_draw_desc){.cells = {.mode = MESO_CELLS_REFLECT, .bounces = 2, .reflectivity = 0.8f}};
     check_close("spheres_reflect_2", render_compare(c, "spheres_reflect_2", &l, &cam2, &d), 0.03);
     unload(c, &l);
 }
@@ -336,10 +336,10 @@ static void test_environment(ctx* c)
     const char* p = bake(c, "env", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map voronoi:8");
     loaded l = load(c, p);
     const camera cam = view_box(&l, dirs[0], 0.6);
-    meso_rt_draw_desc d = {.cell_mode = MESO_CELLS_REFLECT, .cell_bounces = 1, .cell_environment = cube};
+    meso_rt_draw_desc d = {.cells = {.mode = MESO_CELLS_REFLECT, .bounces = 1, .environment = cube}};
     const result r = render_compare(c, "environment_reflect_1", &l, &cam, &d);
     check_close("environment_reflect_1", r, 0.01);
-    d = (meso_rt_draw_desc){.cell_mode = MESO_CELLS_REFRACT, .cell_bounces = 2, .cell_environment = cube};
+    d = (meso_rt_draw_desc){.cells = {.mode = MESO_CELLS_REFRACT, .bounces = 2, .environment = cube}};
     check_close("environment_refract_2", render_compare(c, "environment_refract_2", &l, &cam, &d), 0.02);
     /* The cube map is what the rays see: against the built-in sky the same
      * image is far off. */
@@ -414,13 +414,13 @@ static void test_grazing(ctx* c)
         char name[64];
         snprintf(name, sizeof(name), "%s_exact", names[k]);
         const double exact = render_compare(c, name, &l, &cam, NULL).missed;
-        meso_rt_draw_desc d = {.cell_step = 8.0f, .cell_fixed_step = 1};
+        meso_rt_draw_desc d = {.cells = {.step = 8.0f, .fixed_step = 1}};
         snprintf(name, sizeof(name), "%s_linear_8", names[k]);
         const double fixed = render_compare(c, name, &l, &cam, &d).missed;
-        d.cell_fixed_step = 0;
+        d.cells.fixed_step = 0;
         snprintf(name, sizeof(name), "%s_linear_8_angle", names[k]);
         const double angle = render_compare(c, name, &l, &cam, &d).missed;
-        d = (meso_rt_draw_desc){.cell_step = 1.0f, .cell_fixed_step = 1};
+        d = (meso_rt_draw_desc){.cells = {.step = 1.0f, .fixed_step = 1}};
         snprintf(name, sizeof(name), "%s_linear_1", names[k]);
         const double fine = render_compare(c, name, &l, &cam, &d).missed;
         CHECK_MSG(exact <= 0.002, "%s: the exact traversal missed %.4f", names[k], exact);
@@ -450,7 +450,7 @@ static void test_state_contract(ctx* c)
     CHECK(meso_rt_draw(c->rt, l.obj, &d) == MESO_OK);
     CHECK(!c->gl.IsEnabled(GL_CULL_FACE));
     /* Knobs out of range are refused, nothing drawn. */
-    d.cell_bounces = 9;
+    d.cells.bounces = 9;
     c->log.errors = 0;
     CHECK(meso_rt_draw(c->rt, l.obj, &d) == MESO_ERR_INVALID_ARG && c->log.errors == 1);
     unload(c, &l);

@@ -297,7 +297,7 @@ static void test_relief(ctx* c, const texture* height)
     for (int i = 0; i < 6; ++i) {
         char name[64];
         snprintf(name, sizeof(name), "relief_steps_%d", steps[i]);
-        sweep[i] = render_compare(c, name, obj, &ref, &cam, &(meso_rt_draw_desc){.relief_steps = steps[i]});
+        sweep[i] = render_compare(c, name, obj, &ref, &cam, &(meso_rt_draw_desc){.frusta = {.relief_steps = steps[i]}});
         CHECK(sweep[i].stats.supported && (i == 0 || sweep[i].stats.steps > sweep[i - 1].stats.steps));
     }
     CHECK(sweep[0].m.hit_err_px > 4 * sweep[3].m.hit_err_px && sweep[5].m.hit_err_px < sweep[3].m.hit_err_px);

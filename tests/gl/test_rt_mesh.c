@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "adapters.h"
+#include "camera.h"
 #include "egl_context.h"
 #include "mesh_chunk.h"
 #include "meso_layout.h"
@@ -30,25 +31,6 @@ static struct {
 
 enum { W = 128, H = 96 };
 static const double EYE_Z = 3.0, FOVY = 50.0 * M_PI / 180.0, ZNEAR = 0.5, ZFAR = 10.0;
-
-static void perspective(float m[16])
-{
-    const double f = 1.0 / tan(FOVY / 2), aspect = (double)W / H;
-    memset(m, 0, 16 * sizeof(float));
-    m[0] = (float)(f / aspect);
-    m[5] = (float)f;
-    m[10] = (float)((ZFAR + ZNEAR) / (ZNEAR - ZFAR));
-    m[11] = -1.0f;
-    m[14] = (float)(2 * ZFAR * ZNEAR / (ZNEAR - ZFAR));
-}
-
-/* Eye at (0,0,EYE_Z) looking down -z: view = translate(0,0,-EYE_Z). */
-static void view_matrix(float m[16])
-{
-    memset(m, 0, 16 * sizeof(float));
-    m[0] = m[5] = m[10] = m[15] = 1.0f;
-    m[14] = (float)-EYE_Z;
-}
 
 /* Analytic: the eye ray through the pixel centre, its closest distance to the
  * origin, and (when it hits the unit sphere) the eye-space depth of the hit. */
@@ -155,8 +137,9 @@ static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt)
     gl.Disable(GL_DEPTH_TEST);
     gl.DepthFunc(GL_GEQUAL); /* host state that draw must restore */
     meso_rt_draw_desc d = {0};
-    view_matrix(d.view);
-    perspective(d.proj);
+    const double eye[3] = {0, 0, EYE_Z}, at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+    meso_camera_look_at(d.view, eye, at, up); /* looking down -z */
+    meso_camera_perspective(d.proj, FOVY, (double)W / H, ZNEAR, ZFAR);
     assert(meso_rt_draw(rt, obj, &d) == MESO_OK);
     GLint func = 0;
     gl.GetIntegerv(GL_DEPTH_FUNC, &func);

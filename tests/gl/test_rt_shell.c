@@ -44,7 +44,7 @@ typedef struct ctx {
 static metrics run_case_knobs(ctx* c, const char* name, const uint8_t* file, size_t size, const camera* cam,
                               const meso_rt_draw_desc* knobs, meso_rt_draw_stats* stats_out)
 {
-    const meso_shell_technique t = knobs->technique;
+    const meso_shell_technique t = knobs->shell.technique;
     meso_file* f = NULL;
     meso_error err;
     CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
@@ -87,7 +87,7 @@ static metrics run_case_knobs(ctx* c, const char* name, const uint8_t* file, siz
 static metrics run_case(ctx* c, const char* name, const uint8_t* file, size_t size, const camera* cam,
                         meso_shell_technique t, meso_rt_draw_stats* stats_out)
 {
-    return run_case_knobs(c, name, file, size, cam, &(meso_rt_draw_desc){.technique = t}, stats_out);
+    return run_case_knobs(c, name, file, size, cam, &(meso_rt_draw_desc){.shell = {.technique = t}}, stats_out);
 }
 
 static void check_close(const char* what, metrics m)
@@ -222,7 +222,7 @@ int main(void)
          * 64-texel field), same accuracy, more steps. */
         meso_rt_draw_stats sn;
         metrics nd = run_case_knobs(&c, "sphere+height-nodist", file, size, &cam,
-                                    &(meso_rt_draw_desc){.no_distance_map = 1, .max_steps = 1024}, &sn);
+                                    &(meso_rt_draw_desc){.shell = {.no_distance_map = 1, .max_steps = 1024}}, &sn);
         check_close("smooth without distance map", nd);
         printf("distance map: %.1f steps/fragment with, %.1f without\n", (double)st.steps / st.fragments,
                (double)sn.steps / sn.fragments);

@@ -285,7 +285,7 @@ static metrics render(ctx* c, const char* name, meso_rt_object obj, const camera
 {
     static const char* const tn[] = {"smooth", "curved", "tetra", "segment"};
     meso_rt_draw_stats stats;
-    meso_rt_draw_desc d = {.technique = t, .stats = &stats};
+    meso_rt_draw_desc d = {.stats = &stats, .shell = {.technique = t}};
     camera_matrices(cam, d.view, d.proj);
     test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
     CHECK(meso_rt_draw(c->rt, obj, &d) == MESO_OK);

@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera.h"
 #include "cli_common.h"
 #include "cli_output.h"
 #include "inspect.h"
@@ -87,41 +88,6 @@ typedef struct preview_knobs {
 /* Background: the GL preview's clear colour. */
 static const float clear_rgb[3] = {0.18f, 0.20f, 0.24f};
 
-static void perspective(float m[16], double fovy, double aspect, double zn, double zf)
-{
-    const double f = 1.0 / tan(fovy / 2);
-    memset(m, 0, 16 * sizeof(float));
-    m[0] = (float)(f / aspect);
-    m[5] = (float)f;
-    m[10] = (float)((zf + zn) / (zn - zf));
-    m[11] = -1.0f;
-    m[14] = (float)(2 * zf * zn / (zn - zf));
-}
-
-static void look_at(float m[16], const double eye[3], const double at[3])
-{
-    double f[3] = {at[0] - eye[0], at[1] - eye[1], at[2] - eye[2]};
-    double fl = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-    for (int k = 0; k < 3; ++k)
-        f[k] /= fl;
-    const double up[3] = {0, 1, 0};
-    double s[3] = {f[1] * up[2] - f[2] * up[1], f[2] * up[0] - f[0] * up[2], f[0] * up[1] - f[1] * up[0]};
-    double sl = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    for (int k = 0; k < 3; ++k)
-        s[k] /= sl;
-    const double u[3] = {s[1] * f[2] - s[2] * f[1], s[2] * f[0] - s[0] * f[2], s[0] * f[1] - s[1] * f[0]};
-    memset(m, 0, 16 * sizeof(float));
-    for (int k = 0; k < 3; ++k) {
-        m[4 * k + 0] = (float)s[k];
-        m[4 * k + 1] = (float)u[k];
-        m[4 * k + 2] = (float)-f[k];
-    }
-    m[12] = (float)-(s[0] * eye[0] + s[1] * eye[1] + s[2] * eye[2]);
-    m[13] = (float)-(u[0] * eye[0] + u[1] * eye[1] + u[2] * eye[2]);
-    m[14] = (float)(f[0] * eye[0] + f[1] * eye[1] + f[2] * eye[2]);
-    m[15] = 1.0f;
-}
-
 /* The preview camera and light for objects within [lo, hi] (both renderers). */
 static void preview_camera(const double lo[3], const double hi[3], int width, int height, double yaw, double pitch,
                            double zoom, meso_rt_draw_desc* d)
@@ -135,8 +101,9 @@ static void preview_camera(const double lo[3], const double hi[3], int width, in
     const double y = yaw * M_PI / 180.0, p = pitch * M_PI / 180.0;
     const double eye[3] = {centre[0] + dist * cos(p) * sin(y), centre[1] + dist * sin(p),
                            centre[2] + dist * cos(p) * cos(y)};
-    look_at(d->view, eye, centre);
-    perspective(d->proj, fovy, aspect, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
+    const double up[3] = {0, 1, 0};
+    meso_camera_look_at(d->view, eye, centre, up);
+    meso_camera_perspective(d->proj, fovy, aspect, fmax(dist - 1.5 * radius, 1e-3 * dist), dist + 1.5 * radius);
     /* Light from the upper left of the viewer. */
     const double ly = y - 0.6, lp = p + 0.7;
     d->light_dir[0] = (float)(cos(lp) * sin(ly));
@@ -436,10 +403,10 @@ static int render(const char* path, const char* out, int width, int height, uint
 
     meso_rt_draw_desc d = {0};
     preview_camera(lo, hi, width, height, yaw, pitch, knobs->zoom, &d);
-    d.technique = knobs->technique;
-    d.cell_mode = knobs->cell_mode;
-    d.cell_bounces = knobs->cell_bounces;
-    d.cell_step = knobs->cell_step;
+    d.shell.technique = knobs->technique;
+    d.cells.mode = knobs->cell_mode;
+    d.cells.bounces = knobs->cell_bounces;
+    d.cells.step = knobs->cell_step;
     for (int i = 0; i < nobj; ++i)
         if (meso_rt_draw(rt, objs[i], &d) != MESO_OK) {
             code = MESO_EXIT_INTERNAL;

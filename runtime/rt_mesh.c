@@ -1,0 +1,124 @@
+/*
+ * rt_mesh.c — the MESH kind: stream an object's MESH chunk into one GL
+ * buffer and draw it as the shaded base mesh (two-sided Lambert,
+ * shaders/mesh_*.glsl), through the same state save/restore as every kind
+ * (mesoi_draw_begin / mesoi_draw_end, rt_common.c).
+ *
+ * The decoded MESH chunk is uploaded as it is: its positions, normals and
+ * indices arrays sit at 16-byte aligned offsets inside the chunk
+ * (FORMAT.md), so one buffer serves as vertex and index buffer and the
+ * attribute pointers are the chunk's own offsets. No repacking.
+ */
+#include "rt_internal.h"
+#include "shaders_embedded.h"
+
+#include <math.h>
+#include <string.h>
+
+meso_result mesoi_mesh_program_create(meso_rt* rt)
+{
+    mesoi_gl* gl = &rt->gl;
+    const char* vsrc = mesoi_glsl_mesh_vert;
+    const char* fsrc = mesoi_glsl_mesh_frag;
+    GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, &vsrc, 1, "mesh_vert.glsl"),
+                          mesoi_compile(rt, GL_FRAGMENT_SHADER, &fsrc, 1, "mesh_frag.glsl"), "mesh");
+    if (!p)
+        return MESO_ERR_GL;
+    rt->mesh_program = p;
+    rt->u_view = gl->GetUniformLocation(p, "u_view");
+    rt->u_proj = gl->GetUniformLocation(p, "u_proj");
+    rt->u_model = gl->GetUniformLocation(p, "u_model");
+    rt->u_light_dir = gl->GetUniformLocation(p, "u_light_dir");
+    return MESO_OK;
+}
+
+meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
+{
+    const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_MESH, object_id);
+    if (ci < 0) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "object %u has no MESH chunk", object_id);
+        return MESO_ERR_NOT_FOUND;
+    }
+    void* data = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
+    if (r != MESO_OK)
+        return r;
+    meso_error err;
+    meso_mesh_view mv;
+    r = meso_mesh_parse(data, size, &mv, &err);
+    if (r != MESO_OK) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
+        mesoi_rt_free(rt, data);
+        return r;
+    }
+    if (mv.layout.index_count > (uint32_t)INT32_MAX || !mv.normals) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "object %u: MESH without normals or with too many indices", object_id);
+        mesoi_rt_free(rt, data);
+        return MESO_ERR_UNSUPPORTED;
+    }
+    mesoi_gl* gl = &rt->gl;
+    GLint prev_vao = 0, prev_array = 0;
+    gl->GetIntegerv(GL_VERTEX_ARRAY_BINDING, &prev_vao);
+    gl->GetIntegerv(GL_ARRAY_BUFFER_BINDING, &prev_array);
+    while (gl->GetError() != GL_NO_ERROR) {
+    }
+    gl->GenVertexArrays(1, &o->vao);
+    gl->GenBuffers(1, &o->buffer);
+    gl->BindVertexArray(o->vao);
+    gl->BindBuffer(GL_ARRAY_BUFFER, o->buffer);
+    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)size, data, GL_STATIC_DRAW);
+    gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, o->buffer);
+    gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.positions_offset);
+    gl->EnableVertexAttribArray(0);
+    gl->VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.normals_offset);
+    gl->EnableVertexAttribArray(1);
+    gl->BindVertexArray((GLuint)prev_vao);
+    gl->BindBuffer(GL_ARRAY_BUFFER, (GLuint)prev_array);
+    mesoi_rt_free(rt, data);
+    const GLenum e = gl->GetError();
+    if (e != GL_NO_ERROR) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "uploading object %u: GL error 0x%04x", object_id, e);
+        gl->DeleteVertexArrays(1, &o->vao);
+        gl->DeleteBuffers(1, &o->buffer);
+        o->vao = o->buffer = 0;
+        return MESO_ERR_GL;
+    }
+    o->index_count = (GLsizei)mv.layout.index_count;
+    o->indices_offset = mv.layout.indices_offset;
+    return MESO_OK;
+}
+
+meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
+{
+    mesoi_draw ds;
+    meso_result r = mesoi_draw_prepare(rt, d, 0, &ds);
+    if (r != MESO_OK)
+        return r;
+    ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
+    mesoi_draw_begin(rt, &ds, rt->mesh_program, 0, NULL, NULL);
+    /* The light in world space, as the fragment shader takes it. */
+    float light[3] = {0.3f, 0.8f, 0.5f};
+    if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
+        memcpy(light, d->light_dir, sizeof(light));
+    const float len = sqrtf(light[0] * light[0] + light[1] * light[1] + light[2] * light[2]);
+    for (int k = 0; k < 3; ++k)
+        light[k] /= len;
+    mesoi_gl* gl = &rt->gl;
+    /* Meshes are drawn with the host's culling, not the ray casters' back
+     * faces: put back what begin changed. */
+    if (ds.prev_cull) {
+        gl->CullFace((GLenum)ds.prev_cull_mode);
+        gl->FrontFace((GLenum)ds.prev_front);
+    } else {
+        gl->Disable(GL_CULL_FACE);
+    }
+    gl->UniformMatrix4fv(rt->u_view, 1, GL_FALSE, d->view);
+    gl->UniformMatrix4fv(rt->u_proj, 1, GL_FALSE, d->proj);
+    gl->UniformMatrix4fv(rt->u_model, 1, GL_FALSE, ds.model);
+    gl->Uniform3fv(rt->u_light_dir, 1, light);
+    gl->BindVertexArray(o->vao);
+    gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
+    return mesoi_draw_end(rt, &ds, d->stats, "mesh");
+}
