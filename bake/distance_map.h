@@ -46,7 +46,7 @@ extern "C" {
 #endif
 
 /* Largest distance-map side accepted (mesobake --dist-res). */
-#define MESO_DISTMAP_MAX_RES 512u
+#define MESO_DISTMAP_MAX_RES MESO_BAKE_MAX_DIST_RES /* 512 (meso_bake.h) */
 
 typedef struct meso_distmap {
     uint32_t dims[3];     /* W, H, D */

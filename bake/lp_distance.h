@@ -99,7 +99,7 @@ extern "C" {
 #define MESO_LP_DEFAULT_P 3.0
 #define MESO_LP_DEFAULT_THETA 0.3
 #define MESO_LP_DEFAULT_QUAD_TOL 1e-6
-#define MESO_LP_MAX_P 16.0 /* and p > 2 */
+#define MESO_LP_MAX_P MESO_BAKE_MAX_P /* 16, and p > 2 (meso_bake.h) */
 
 typedef struct meso_lp_field meso_lp_field;
 

@@ -88,7 +88,7 @@ int meso_regular_file_size(FILE* fp, uint64_t* size);
 
 /* >>estimates -------------------------------------------------------------- */
 
-/* What a cells bake (tools/mesobake/cmd_cells.c) of mesh `m` over grid `g` holds
+/* What a cells bake (bake/bake_cells.c) of mesh `m` over grid `g` holds
  * at its peak: the larger of its two stages.
  *   voxelization and membership: the tile map (2 B per tile-map voxel), its
  *     split-cell labels (4 B), word masks (<= 1 B); the voxelizer's batch of

@@ -1,9 +1,48 @@
 /*
- * meso_bake.h — the baker's C pipeline API.
+ * meso_bake.h — libmeso_bake, the baker's public C API: the whole pipeline
+ * of `mesobake`, in-process.
  *
- * Every bake stage is a C11 module in bake/ named after its algorithm. The
- * heavy C++ libraries are reached only through the adapters declared in
- * bake/adapters/adapters.h. This header holds what the stages share.
+ *   load      meso_bake_load_mesh      a mesh by extension (.obj .off .ply .stl
+ *                                      .om through OpenMesh, .drc through Draco),
+ *                                      after the mesh guard, checked and turned
+ *                                      outward
+ *             meso_bake_skeleton_load  a skeleton (.swc, text, or from a mesh)
+ *             meso_bake_texture_probe  a texture function / relief SPEC
+ *   bake      meso_bake_mesh  meso_bake_shell  meso_bake_cells  meso_bake_frusta
+ *             each takes an options struct (start from meso_bake_*_defaults(),
+ *             which are the CLI's defaults) and fills a report struct with the
+ *             numbers of the JSON report; the result is a meso_bake_output
+ *   write     meso_bake_output_write_file  (atomic, to a path)
+ *             meso_bake_output_write       (into a staged meso_output the
+ *                                           caller opened and will commit)
+ *             meso_bake_output_copy        (the bytes, into a caller buffer)
+ *
+ * A bake is deterministic: the same inputs and options give the same bytes,
+ * whatever the thread count; `mesobake` is a thin program over this API, so
+ * the bytes are the CLI's.
+ *
+ * Memory: a bake's result is a meso_bake_output holding the encoded chunks
+ * once (the stages' working buffers are freed before the bake returns). The
+ * write functions stream those chunks to a file descriptor one by one, so
+ * writing never needs a second, whole-file buffer; meso_bake_output_copy is
+ * for small bakes and callers that want bytes in memory. A staged output
+ * (meso_output, meso_file.h) lets a program publish several files together
+ * and remove a temporary file on a signal, which this library never handles.
+ *
+ * Errors: every function that can fail returns a meso_result and fills the
+ * meso_error (may be NULL): `code` is an issue number (list below), `message`
+ * names the problem and where (file, line, face, option). Warnings (e.g.
+ * E3250, inside-out components turned outward) go to the progress callback
+ * and into the report. The library never prints, never exits, never installs
+ * a signal handler.
+ *
+ * Linking: pkg-config meso-bake. The shared library exports the functions
+ * marked MESO_BAKE_API and nothing else. meso_file.h (installed beside this
+ * header by libmeso) gives the result, error and output types; link libmeso
+ * too to use its functions (meso_result_string, meso_output_open, ...).
+ *
+ * Also declared here: meso_mesh, the bake's in-memory mesh, with helpers
+ * the stages share (they are public so meso_bake_load_mesh can return one).
  */
 #ifndef MESO_BAKE_H
 #define MESO_BAKE_H
@@ -16,6 +55,19 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* Marks the exported functions. Building libmeso_bake (MESO_BAKE_BUILD,
+ * with -fvisibility=hidden), they get default visibility; elsewhere the
+ * macro is empty. Define it before including this header to override. */
+#ifndef MESO_BAKE_API
+#if defined(MESO_BAKE_BUILD) && (defined(__GNUC__) || defined(__clang__))
+#define MESO_BAKE_API __attribute__((visibility("default")))
+#else
+#define MESO_BAKE_API
+#endif
+#endif
+
+/* >>mesh ------------------------------------------------------------------ */
 
 /* An indexed triangle mesh in host memory (the bake's working form).
  * Arrays are malloc'd and owned by the struct: free with meso_mesh_free. */
@@ -35,14 +87,16 @@ typedef struct meso_mesh {
 } meso_mesh;
 
 /* Frees the arrays and zeroes the struct. NULL is allowed. */
-void meso_mesh_free(meso_mesh* m);
+MESO_BAKE_API void meso_mesh_free(meso_mesh* m);
 
 /* Unit normal of face f (CCW seen from outside) into n; returns twice the
  * face's area (0, with n = 0, for a degenerate face). */
-double meso_mesh_face_normal(const meso_mesh* m, uint32_t f, double n[3]);
+MESO_BAKE_API double meso_mesh_face_normal(const meso_mesh* m, uint32_t f, double n[3]);
 
 /* Axis-aligned bounds of the positions; returns the diagonal length. */
-double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
+MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
+
+/* >>issues ---------------------------------------------------------------- */
 
 /* Issue codes of bake inputs (meso_error.code; mesobake prints "E<code>").
  * Format issues keep FORMAT.md's numbers (1xxx-5xxx); inputs use 31xx:
@@ -71,15 +125,334 @@ double meso_mesh_bounds(const meso_mesh* m, double lo[3], double hi[3]);
  *   3252 no triangles (an empty file, or not a mesh)
  * Skeletons, continued (bake/skeleton_swc.h): 3300..3349, listed there.
  * Limits up front, --max-memory (bake/memory_budget.h): 3400..3449, listed
- *   there (3400 a request from the options, 3401.. sizes input files dictate). */
+ *   there (3400 a request from the options, 3401.. sizes input files dictate).
+ * (The bake/ headers named are the library's sources, not installed.) */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
+#define MESO_BAKE_ISSUE_REORIENTED 3250u /* a warning */
 
-/* Fill an error struct (printf-style message). Returns `r`. */
-meso_result meso_bake_fail(meso_error* err, meso_result r, uint32_t code, const char* fmt, ...)
+/* Fill an error struct (printf-style message; err may be NULL). Returns `r`.
+ * The library's own helper, exported for hosts that report their own
+ * failures the same way. */
+MESO_BAKE_API meso_result meso_bake_fail(meso_error* err, meso_result r, uint32_t code, const char* fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
+
+/* >>progress -------------------------------------------------------------- */
+
+typedef enum meso_bake_event {
+    MESO_BAKE_EVENT_STAGE = 0, /* a stage finished; `message` is its one-line summary (or NULL) */
+    MESO_BAKE_EVENT_TICK,      /* progress inside a long stage: `done` of `total` items */
+    MESO_BAKE_EVENT_WARNING,   /* `message` is a warning, `code` its issue number (0: none) */
+    MESO_BAKE_EVENT_COUNT
+} meso_bake_event;
+
+typedef struct meso_bake_progress {
+    meso_bake_event event;
+    const char* stage;   /* short name: "load", "texture", "distance map", "directors", ... */
+    double fraction;     /* of the whole bake, in [0, 1]; never decreases; the last call has 1 */
+    const char* message; /* STAGE: the line `mesobake -v` prints after "mesobake: "; WARNING:
+                            the text after "mesobake warning: "; NULL for TICK. Valid
+                            during the call only */
+    uint32_t code;       /* WARNING: issue number, e.g. 3250; else 0 */
+    uint64_t done, total; /* TICK: items done of the stage's total (may arrive out of order) */
+} meso_bake_progress;
+
+/* Called on the calling thread, except TICK events, which may come from a
+ * worker thread (one call at a time). Must not call back into a bake. */
+typedef void (*meso_bake_progress_fn)(void* user, const meso_bake_progress* p);
+
+/* What every bake and loader takes. Zero means: no callback, default budget,
+ * all cores. */
+typedef struct meso_bake_common {
+    uint64_t max_memory;            /* bytes a bake may plan to allocate; refused up front
+                                       (code 3400..) when its estimate is larger. 0 = half of
+                                       physical memory (mesobake --max-memory) */
+    int threads;                    /* worker threads, 0 = all cores; never changes the bytes */
+    meso_bake_progress_fn progress; /* stage lines, ticks and warnings; may be NULL */
+    void* user;                     /* passed to `progress` */
+} meso_bake_common;
+
+/* >>load ------------------------------------------------------------------ */
+
+/* What meso_bake_load_mesh changed in (or could not check about) a mesh;
+ * every bake report starts with it. */
+typedef struct meso_bake_mesh_fixes {
+    uint32_t reoriented_components; /* inside-out closed components flipped (warning E3250) */
+    uint32_t closed_components;     /* closed components looked at */
+    uint32_t reoriented_faces;      /* faces flipped */
+    int orientation_unchecked;      /* 1: too many nested components to check; left as they are */
+} meso_bake_mesh_fixes;
+
+/* Load a mesh by extension: its bytes through the mesh guard (with
+ * c->max_memory as the bound on what its header counts may make a reader
+ * allocate), then OpenMesh (.obj .off .ply .stl .om) or Draco (.drc); then
+ * check it (finite coordinates, indices in range, nothing the reader had to
+ * drop) and turn inside-out closed components outward (a WARNING through
+ * c->progress). `c` and `fixes` may be NULL. On success the caller frees *m
+ * with meso_mesh_free; on failure *m is zeroed and err->code is set (3100
+ * for a file the readers reject, 5001/5004 for I/O). A build without the
+ * needed adapter returns MESO_ERR_UNSUPPORTED. */
+MESO_BAKE_API meso_result meso_bake_load_mesh(const char* path, const meso_bake_common* c, meso_mesh* m,
+                                              meso_bake_mesh_fixes* fixes, meso_error* err);
+
+/* A loaded skeleton (opaque). */
+typedef struct meso_bake_skeleton meso_bake_skeleton;
+
+typedef struct meso_bake_skeleton_info {
+    const char* input;       /* "swc", "text" or "mesh" (static string) */
+    uint32_t node_count;
+    uint32_t root_count;
+    /* Mesh input only (skeleton by mean-curvature flow, CGAL), else 0: */
+    double tolerance;        /* the simplification tolerance used */
+    double bbox_diagonal;    /* of the mesh */
+    double fit_error_max;    /* two-sided distance frusta <-> mesh */
+    double fit_error_mean;   /* mean distance of the mesh's vertices to the frusta */
+    double mesh_to_frusta_max;
+    double frusta_to_mesh_max;
+    uint32_t mesh_triangles;
+    uint32_t skeleton_nodes_extracted; /* CGAL's nodes before simplification */
+    meso_bake_mesh_fixes fixes;        /* mesh input: what loading the mesh changed */
+} meso_bake_skeleton_info;
+
+/* Load a skeleton: .swc (SWC), a mesh extension (.obj .off .ply .stl .om
+ * .drc: skeleton extracted by CGAL, simplified to `tolerance` mesh units,
+ * 0 = 1 % of the bounding-box diagonal), anything else the text format
+ * "x y z radius [parent]" per line. A skeleton file is checked against
+ * c->max_memory before it is read. `c` and `info` may be NULL. Free *out
+ * with meso_bake_skeleton_free. */
+MESO_BAKE_API meso_result meso_bake_skeleton_load(const char* path, double tolerance, const meso_bake_common* c,
+                                                  meso_bake_skeleton** out, meso_bake_skeleton_info* info,
+                                                  meso_error* err);
+MESO_BAKE_API void meso_bake_skeleton_free(meso_bake_skeleton* s);
+
+/* A texture function or relief SPEC, as `mesobake shell --texture` and
+ * `mesobake frusta --relief` take it:
+ *   height:FILE.png  volume:FILE.raw:WxHxD  volume:FILE.vdb[:GRID]
+ *   bricks[:RES]  cobble[:RES]  ribs[:RES]     (built-in height fields)
+ *   weave[:RES]  cells[:RES]                   (built-in density volumes) */
+typedef struct meso_bake_texture_info {
+    int density;       /* 0: a height field (TX2D, RELF), 1: a density volume (TX3D) */
+    uint32_t dims[3];  /* texels W, H, D (D = 1 for a height field) */
+    uint16_t dtype;    /* MESO_DTYPE_U8 or MESO_DTYPE_U16 */
+} meso_bake_texture_info;
+
+/* Parse and sample `spec` (checked against c->max_memory), fill *info and
+ * free the samples: an editor's check of a SPEC before a bake. Codes
+ * 3120..3123, 3400, 3401. `c` may be NULL. */
+MESO_BAKE_API meso_result meso_bake_texture_probe(const char* spec, const meso_bake_common* c,
+                                                  meso_bake_texture_info* info, meso_error* err);
+
+/* >>output ---------------------------------------------------------------- */
+
+/* A baked .meso file, ready to write: META, RPRT (the report as JSON, no
+ * timings), OBJT and the object's chunks, encoded. Opaque; free with
+ * meso_bake_output_free. */
+typedef struct meso_bake_output meso_bake_output;
+
+/* Size of the file in bytes. */
+MESO_BAKE_API size_t meso_bake_output_size(const meso_bake_output* o);
+/* The JSON text of the RPRT chunk (compact, NUL-terminated, owned by `o`). */
+MESO_BAKE_API const char* meso_bake_output_report_json(const meso_bake_output* o);
+/* Write to `path` atomically (a temporary file beside it, fsync, rename; see
+ * meso_writer_write_file in meso_file.h). */
+MESO_BAKE_API meso_result meso_bake_output_write_file(meso_bake_output* o, const char* path, meso_error* err);
+/* Write into a staged output the caller opened (meso_output_open, or a
+ * program's own staging) and will commit or abort. */
+MESO_BAKE_API meso_result meso_bake_output_write(meso_bake_output* o, meso_output* staged, meso_error* err);
+/* Copy the file's bytes into dst; with dst == NULL only *needed is set.
+ * MESO_ERR_INVALID_ARG when dst_size is too small. */
+MESO_BAKE_API meso_result meso_bake_output_copy(meso_bake_output* o, void* dst, size_t dst_size, size_t* needed);
+MESO_BAKE_API void meso_bake_output_free(meso_bake_output* o);
+
+/* >>mesh bake --------------------------------------------------------------- */
+
+typedef struct meso_bake_mesh_options {
+    meso_bake_common common;
+    const char* input;       /* mesh path (required) */
+    const char* name;        /* object name; NULL = the input's base name (31 bytes kept) */
+    int draco;               /* 1: store the mesh Draco-compressed (quantised) */
+    int draco_position_bits; /* 1..30; 0 = 14 */
+    int draco_normal_bits;   /* 2..30; 0 = 10 */
+    int draco_uv_bits;       /* 1..30; 0 = 12 */
+} meso_bake_mesh_options;
+
+typedef struct meso_bake_mesh_report {
+    meso_bake_mesh_fixes fixes;
+    uint32_t vertices;
+    uint32_t triangles;
+    double bbox_diagonal;
+    int draco;         /* the encoding: 0 raw, 1 draco */
+    size_t mesh_bytes; /* stored MESH payload */
+    int has_normals;   /* the input had normals (or OpenMesh computed them) */
+    int has_uvs;
+} meso_bake_mesh_report;
+
+/* Zero: the CLI's defaults (raw encoding). */
+MESO_BAKE_API meso_bake_mesh_options meso_bake_mesh_defaults(void);
+
+/* `mesobake mesh`: the input as one MESH object. On success *out is the
+ * file (free with meso_bake_output_free); `report` may be NULL. */
+MESO_BAKE_API meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** out,
+                                         meso_bake_mesh_report* report, meso_error* err);
+
+/* >>shell bake -------------------------------------------------------------- */
+
+typedef enum meso_shell_kind {
+    MESO_SHELL_EXTERIOR = 0, /* directors leave the surface along +normal */
+    MESO_SHELL_INTERIOR,     /* along -normal, into the solid */
+    MESO_SHELL_ENVELOPE,     /* both: half the thickness on each side */
+    MESO_SHELL_KIND_COUNT
+} meso_shell_kind;
+
+/* How shell directors are made (mesobake shell --directors). */
+typedef enum meso_shell_directors {
+    MESO_DIRECTORS_HYBRID = 0, /* normal displacement where provably safe, the Lp field elsewhere */
+    MESO_DIRECTORS_LP,         /* the Lp-averaged distance field everywhere */
+    MESO_DIRECTORS_NORMAL,     /* plain normal displacement (folds at concavities) */
+    MESO_DIRECTORS_COUNT
+} meso_shell_directors;
+
+/* "exterior", "interior", "envelope" / "hybrid", "lp", "normal" (the CLI's
+ * and META's words); NULL when out of range. */
+MESO_BAKE_API const char* meso_bake_shell_kind_name(meso_shell_kind k);
+MESO_BAKE_API const char* meso_bake_directors_name(meso_shell_directors d);
+
+#define MESO_BAKE_MAX_P 16.0       /* --p: in (2, MESO_BAKE_MAX_P] */
+#define MESO_BAKE_MAX_DIST_RES 512u /* --dist-res: each axis 1..this */
+
+typedef struct meso_bake_shell_options {
+    meso_bake_common common;
+    const char* input;           /* mesh path (required) */
+    double thickness;            /* mesh units; 0 = thickness_rel of the bbox diagonal */
+    double thickness_rel;        /* default 0.05 */
+    meso_shell_kind kind;        /* default exterior */
+    meso_shell_directors directors; /* default hybrid */
+    double p;                    /* exponent of the averaged distance, (2, 16], default 3 */
+    double theta;                /* Barnes-Hut opening angle, 0 = exact, default 0.5 */
+    double angle_tol_deg;        /* largest turn of the field per Euler step, default 5 */
+    int smooth;                  /* Laplacian smoothing rounds of traced directors, default 0 */
+    int no_repair;               /* 1: keep directors that still fold (default 0: shorten them) */
+    /* Texture function (what the shell holds); NULL: the whole shell is solid. */
+    const char* texture;         /* SPEC, see meso_bake_texture_info */
+    double tiling[2];            /* tiles along u, v; default 1, 1 */
+    uint32_t dist_res[3];        /* distance-map cells; 0 = the default for the texture */
+    uint16_t dist_dtype;         /* MESO_DTYPE_U8 (default), _U16 or _F32 */
+} meso_bake_shell_options;
+
+typedef struct meso_bake_shell_report {
+    meso_bake_mesh_fixes fixes;
+    uint32_t vertices, triangles, boundary_edges;
+    double thickness;                   /* mesh units */
+    double bbox_diagonal;
+    uint32_t prisms, inverted_prisms, undecided_prisms;
+    uint64_t offset_self_intersections, offset_base_intersections;
+    double thickness_ratio_min, thickness_ratio_mean;
+    uint32_t vertices_lp, vertices_normal, hybrid_rounds, vertices_shortened;
+    uint64_t field_evaluations;
+    uint32_t artificial_faces;
+    /* With a texture: */
+    int density;                        /* 0 height field, 1 density volume */
+    uint32_t texture_res[3];
+    uint32_t dist_res[3];
+    uint64_t dist_solid_cells;
+    uint32_t seam_vertices;             /* vertices split off at uv seams */
+    int planar_uvs;                     /* 1: the mesh had no uvs (warning); projected */
+} meso_bake_shell_report;
+
+/* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,
+ * tiling 1, 1, u8 distances). Zero-initialised options mean the same,
+ * except theta: 0 is exact summation. */
+MESO_BAKE_API meso_bake_shell_options meso_bake_shell_defaults(void);
+
+/* `mesobake shell`: a base mesh plus fold-free directors, validated
+ * exactly, as one SHELL object (MESH, SDIR, STHK, and TX2D/TX3D + DIST with
+ * a texture). Invalid options are MESO_ERR_INVALID_ARG. */
+MESO_BAKE_API meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output** out,
+                                          meso_bake_shell_report* report, meso_error* err);
+
+/* >>cells bake -------------------------------------------------------------- */
+
+#define MESO_BAKE_MAX_TILE_RES 1024u /* --tile-res */
+#define MESO_BAKE_MAX_TILES 16384u   /* --tiles (and tiles x tile_res) */
+
+typedef struct meso_bake_cells_options {
+    meso_bake_common common;
+    const char* input;     /* mesh path (required) */
+    uint32_t tiles;        /* tiles along the longest axis; 0 = 8 (unless cell_size) */
+    double cell_size;      /* or: a tile's edge in mesh units (tiles must be 0) */
+    uint32_t tile_res;     /* voxels per tile edge; 0 = the tile map's (32 for generators) */
+    const char* tile_map;  /* voronoi[:SEEDS[:RNG]] | spheres[:N[:RADIUS]] | FILE.raw:R; NULL = "voronoi" */
+    const char* colour;    /* hash[:SEED] | FILE.raw:R; NULL = "hash" */
+    const char* voxelizer; /* auto | parity | vdb | winding; NULL = "auto" */
+} meso_bake_cells_options;
+
+typedef struct meso_bake_cells_report {
+    meso_bake_mesh_fixes fixes;
+    uint64_t tiles;                       /* tiles in the grid */
+    uint32_t tiles_per_axis[3];
+    uint32_t tile_res;
+    uint32_t split_cells, cells_per_tile, wrapping_cells;
+    uint64_t cells_inside, cells_outside, cells_intersected, wrapping_copies;
+    uint64_t tiles_outside, tiles_inside, tiles_mixed;
+    uint64_t voxels_across;
+    const char* voxelizer;                /* the one used: "parity" or "winding" (static) */
+    size_t membership_bytes, tile_map_bytes, normal_map_bytes, colour_map_bytes;
+    uint64_t memory_estimate;             /* bytes, checked against max_memory */
+} meso_bake_cells_report;
+
+/* All zero (NULL specs mean the defaults above). */
+MESO_BAKE_API meso_bake_cells_options meso_bake_cells_defaults(void);
+
+/* `mesobake cells`: the mesh filled with tiled cells, as one CELLS object. */
+MESO_BAKE_API meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output** out,
+                                          meso_bake_cells_report* report, meso_error* err);
+
+/* >>frusta bake ------------------------------------------------------------- */
+
+typedef struct meso_bake_frusta_options {
+    meso_bake_common common;
+    const char* input;          /* skeleton or mesh path (required; see meso_bake_skeleton_load) */
+    double tolerance;           /* mesh input: simplification tolerance; 0 = 1 % of the diagonal */
+    double max_joint_angle;     /* degrees; sharper joints become balls; default 150, 0 = no limit */
+    int no_fit;                 /* 1: keep node radii at joints (skip the minor-axis fit) */
+    int keep_cap_intersections; /* 1: keep the paper's planes where caps intersect */
+    const char* relief;         /* a height-field SPEC, or NULL */
+    double relief_depth;        /* skeleton units; 0 = a quarter of the mean radius */
+    double relief_repeat;       /* tiles around the circumference; default 1 */
+} meso_bake_frusta_options;
+
+typedef struct meso_bake_frusta_report {
+    meso_bake_skeleton_info skeleton;
+    uint32_t segments, joints, branch_points, tips, balls;
+    uint32_t ball_joints, sharp_joints, unfitted_joints, degenerate_segments;
+    uint32_t cap_intersections_found, cap_intersections_unhandled;
+    double fit_error_max, fit_error_mean; /* mesh input: to the mesh; else how far the fit moved radii */
+    double seam_gap_max, seam_gap_mean, radius_change_max;
+    double relief_depth;                  /* used (0 without relief) */
+} meso_bake_frusta_report;
+
+/* The CLI's defaults (max_joint_angle 150, relief_repeat 1). Zero-initialised
+ * options mean no joint-angle limit and repeat 1. */
+MESO_BAKE_API meso_bake_frusta_options meso_bake_frusta_defaults(void);
+
+/* `mesobake frusta`: a skeleton skinned with conical frusta, as one FRUSTA
+ * object (SKEL, FRUS, FSEG, BALL, RELF). */
+MESO_BAKE_API meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output** out,
+                                           meso_bake_frusta_report* report, meso_error* err);
+
+/* >>parsing ----------------------------------------------------------------- */
+
+/* The number syntax of mesobake's options and of the SPECs above, for
+ * programs that take the same strings. Each returns 1 and sets *out when
+ * the whole string is such a number, else 0 (and leaves *out alone). */
+/* "512M", "8G", "1.5GiB" or a byte count (1 .. 2^62) (mesobake --max-memory). */
+MESO_BAKE_API int meso_bake_parse_size(const char* s, uint64_t* out);
+/* A decimal integer in lo..hi. */
+MESO_BAKE_API int meso_bake_parse_long(const char* s, long lo, long hi, long* out);
+/* A positive finite number below 1e30 (strtod syntax). */
+MESO_BAKE_API int meso_bake_parse_positive(const char* s, double* out);
 
 #ifdef __cplusplus
 }

@@ -11,12 +11,8 @@
 #include "lp_distance.h"
 #include "meso_bake.h"
 
-typedef enum meso_shell_kind {
-    MESO_SHELL_EXTERIOR = 0, /* directors leave the surface along +normal */
-    MESO_SHELL_INTERIOR,     /* along -normal, into the solid */
-    MESO_SHELL_ENVELOPE,     /* both: half the thickness on each side */
-    MESO_SHELL_KIND_COUNT
-} meso_shell_kind;
+/* meso_shell_kind (exterior, interior, envelope) and meso_shell_directors
+ * (hybrid, lp, normal) are public: meso_bake.h. */
 
 typedef struct meso_trace_options {
     double thickness;   /* h, mesh units, > 0 */

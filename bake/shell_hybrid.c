@@ -169,7 +169,7 @@ static int rings_for(const meso_mesh* m, double h)
 }
 
 meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mesh* m, const float* normals, int sign,
-                                      const meso_trace_options* opt, int mode, int threads, float* d,
+                                      const meso_trace_options* opt, meso_shell_directors mode, int threads, float* d,
                                       uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
                                       meso_error* err)
 {
@@ -186,12 +186,12 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
         d[i] = (float)(sign * opt->thickness * normals[i]);
     meso_result r = MESO_OK;
     const int smooth = opt->smooth_iterations;
-    if (mode == 1) {
+    if (mode == MESO_DIRECTORS_LP) {
         memset(mask, 1, nv);
         r = meso_shell_trace_all(field, m, normals, sign, opt, NULL, threads, d, ts, err);
         if (r == MESO_OK && smooth)
             r = smooth_directors(m, d, mask, smooth, err);
-    } else if (mode == 0) {
+    } else if (mode == MESO_DIRECTORS_HYBRID) {
         /* raw: traced (or normal) directors before smoothing; every round
          * smooths the current Lp region afresh from raw, so a vertex is
          * never smoothed twice over. */

@@ -29,10 +29,11 @@ meso_result meso_shell_bad_faces(const meso_mesh* m, const float* d, int sign, u
  *  3. validate again; vertices of faces still bad join, with their ring;
  *     repeat until no face is bad or no vertex is left to switch.
  * Normal displacement is kept only where the final shell passes the exact
- * checks, which is the "provably safe" of the issue. mode: 0 hybrid,
- * 1 all Lp, 2 all normal. lp_mask (nv, may be NULL) gets 1 for Lp vertices. */
+ * checks, which is the "provably safe" of the issue. That is
+ * MESO_DIRECTORS_HYBRID; MESO_DIRECTORS_LP traces every vertex,
+ * MESO_DIRECTORS_NORMAL keeps normal displacement everywhere. lp_mask (nv, may be NULL) gets 1 for Lp vertices. */
 meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mesh* m, const float* normals, int sign,
-                                      const meso_trace_options* opt, int mode, int threads, float* d,
+                                      const meso_trace_options* opt, meso_shell_directors mode, int threads, float* d,
                                       uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
                                       meso_error* err);
 

@@ -66,7 +66,7 @@ extern "C" {
 #define MESO_TILEMAP_ISSUE_CONTENT 3152u
 #define MESO_TILEMAP_ISSUE_PACKING 3153u
 
-#define MESO_TILE_MAP_MAX_RES 1024u     /* largest R */
+#define MESO_TILE_MAP_MAX_RES MESO_BAKE_MAX_TILE_RES /* largest R: 1024 (meso_bake.h) */
 #define MESO_TILE_MAP_MAX_CELLS 65535u  /* largest K (indices are uint16) */
 #define MESO_TILE_MAP_SUBSTEPS 65536u   /* S: lattice points per half voxel */
 

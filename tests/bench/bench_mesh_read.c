@@ -1,7 +1,7 @@
 /*
  * bench_mesh_read.c — read throughput of mesh files, per format: the mesh
  * guard alone (bake/mesh_guard.c) and the whole load (guard + the OpenMesh
- * adapter, what mesobake's load_mesh does).
+ * adapter, what meso_bake_load_mesh does).
  *
  *   bench_mesh_read DIR [CSV [MB [RUNS]]]
  *

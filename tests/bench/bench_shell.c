@@ -12,20 +12,20 @@
  * The checked-in results had the Stanford bunny where wingnut (6090
  * triangles, about the bunny's size) now is, read from outside the
  * repository; its terms forbid commercial use, so it is not bundled. Settings are those of `mesobake
- * shell` (tools/mesobake/cmd_shell.c) unless a sweep says otherwise: p = 3, θ = 0.5
+ * shell` (meso_bake_shell, bake/bake_shell.c) unless a sweep says otherwise: p = 3, θ = 0.5
  * (the CLI's --theta default, not the field's MESO_LP_DEFAULT_THETA), angle
  * tolerance 5°, smoothing 0 rounds ($MESO_BENCH_SMOOTH overrides), repair on
  * (30 rounds), threads = THREADS. Field options {p, θ, near_radius = 2h} and
  * trace options {thickness, angle_tol, θ, smooth_iterations} are built as in
- * cmd_shell.c (no progress callback: the CLI has one only with -v on a tty);
- * hybrid = meso_shell_side_directors mode 0 followed by meso_shell_repair.
+ * bake_shell.c (no progress callback);
+ * hybrid = meso_shell_side_directors MESO_DIRECTORS_HYBRID followed by meso_shell_repair.
  *
  * size: spot subdivided 1:4 (edge midpoints, shared; no smoothing, so the
  *   surface keeps spot's shape and concavities) levels 0..MAX_LEVEL
  *   (1.6k .. 1.7M triangles); exterior shell at 5 % of the diagonal, modes
  *   hybrid and lp (all vertices), each in a fresh child process (exec of
  *   this binary) so that peak RSS (getrusage ru_maxrss) is that run's own.
- *   Stages as in cmd_shell.c: topology, base self-intersection check (CGAL),
+ *   Stages as in bake_shell.c: topology, base self-intersection check (CGAL),
  *   normals, field (boundary strip + Barnes–Hut tree), directors (hybrid:
  *   validate-and-grow rounds incl. their exact checks), repair, validation.
  *   seconds_total = their sum (no file I/O, no mesh read). lp is skipped at a
@@ -34,7 +34,7 @@
  *   repair) of every vertex (every 4th on meshes above 3000 vertices);
  *   reference = exact summation (θ = 0) at 0.5°; sweep θ × angle tolerance.
  *   Error per vertex |d − d_ref| / h and the angle between d and d_ref.
- *   near_radius = 0 as in cmd_shell.c's trace options.
+ *   near_radius = 0 as in bake_shell.c's trace options.
  * thickness: normal, lp, hybrid, each without and with repair, thickness
  *   1..40 % of the diagonal, exterior and interior; full validation.
  * goals: every mesh file of tests/data (or of the folder named by
@@ -66,9 +66,9 @@
 #include "test_util.h"
 
 #define THREADS 2
-#define THETA 0.5 /* cmd_shell.c's --theta default (the field's MESO_LP_DEFAULT_THETA is 0.3) */
+#define THETA 0.5 /* mesobake shell's --theta default (the field's MESO_LP_DEFAULT_THETA is 0.3) */
 #define ANGLE_TOL_DEG 5.0
-#define SMOOTH_DEFAULT 0 /* cmd_shell.c's --smooth default; $MESO_BENCH_SMOOTH overrides */
+#define SMOOTH_DEFAULT 0 /* mesobake shell's --smooth default; $MESO_BENCH_SMOOTH overrides */
 #define REPAIR_ROUNDS 30
 #define LP_BUDGET 120.0
 
@@ -186,7 +186,7 @@ static void subdivide(const meso_mesh* in, meso_mesh* out)
     free(mids);
 }
 
-/* >>one shell side, staged as in cmd_shell.c */
+/* >>one shell side, staged as in bake_shell.c */
 typedef struct shell_ctx {
     meso_mesh m;
     double diag, h;
@@ -257,7 +257,7 @@ static void ctx_free(shell_ctx* c)
     meso_mesh_free(&c->m);
 }
 
-/* As cmd_shell.c's `topt` (near_radius 0, first/min step at their defaults). */
+/* As bake_shell.c's `topt` (near_radius 0, first/min step at their defaults). */
 static meso_trace_options trace_opts(double h, double theta, double tol_deg, int smooth)
 {
     return (meso_trace_options){.thickness = h, .angle_tol = tol_deg * M_PI / 180.0, .theta = theta,
@@ -272,10 +272,8 @@ typedef struct side_result {
     meso_shell_report rep;
 } side_result;
 
-static const char* const mode_names[] = {"hybrid", "lp", "normal"};
-
 /* Directors of one side into d (3 nv floats). */
-static void side_directors(const shell_ctx* c, int sign, int mode, float* d, side_result* out)
+static void side_directors(const shell_ctx* c, int sign, meso_shell_directors mode, float* d, side_result* out)
 {
     meso_error err = {0};
     const meso_trace_options o = trace_opts(c->h, THETA, ANGLE_TOL_DEG, smooth_rounds());
@@ -313,7 +311,7 @@ static const char size_header[] =
     "thickness_ratio_mean,smooth\n";
 
 /* Child: one (level, mode) run, appends a row to csv. */
-static int size_one(const char* csv, int level, int mode)
+static int size_one(const char* csv, int level, meso_shell_directors mode)
 {
     meso_mesh m;
     load(test_data("spot_low_resolution.obj"), &m);
@@ -342,14 +340,14 @@ static int size_one(const char* csv, int level, int mode)
     if (!f)
         die(csv, NULL);
     fprintf(f, "%u,%u,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%llu,%.1f,%u,%u,%u,%llu,%llu,%.4f,%.4f,%d\n",
-            c.m.triangle_count, nv, mode_names[mode], c.t_topo, c.t_check, c.t_normals, c.t_field, s.t_dir,
+            c.m.triangle_count, nv, meso_bake_directors_name(mode), c.t_topo, c.t_check, c.t_normals, c.t_field, s.t_dir,
             s.t_repair, s.t_validate, total, (unsigned long long)s.ts.evaluations, peak_rss_mb(), s.hs.vertices_lp,
             s.hs.rounds, s.rep.inverted_prisms, (unsigned long long)s.rep.offset_self_intersections,
             (unsigned long long)s.rep.offset_base_intersections, s.rep.thickness_ratio_min,
             s.rep.thickness_ratio_mean, smooth_rounds());
     fclose(f);
     fprintf(stderr, "  %u triangles %s: %.2f s (field %.2f, directors %.2f, repair %.2f, validate %.2f), %.0f MB\n",
-            c.m.triangle_count, mode_names[mode], total, c.t_field, s.t_dir, s.t_repair, s.t_validate,
+            c.m.triangle_count, meso_bake_directors_name(mode), total, c.t_field, s.t_dir, s.t_repair, s.t_validate,
             peak_rss_mb());
     free(d);
     ctx_free(&c);
@@ -382,20 +380,20 @@ static void bench_size(const char* dir, int max_level)
     double lp_last = 0;
     int lp_on = 1;
     for (int level = 0; level <= max_level; ++level)
-        for (int mode = 0; mode < 2; ++mode) {
-            if (mode == 1 && lp_on && lp_last * 4.5 > LP_BUDGET) {
+        for (int mode = MESO_DIRECTORS_HYBRID; mode <= MESO_DIRECTORS_LP; ++mode) {
+            if (mode == MESO_DIRECTORS_LP && lp_on && lp_last * 4.5 > LP_BUDGET) {
                 fprintf(stderr, "  lp skipped from level %d on: %.0f s at the previous level predicts > %.0f s\n",
                         level, lp_last, LP_BUDGET);
                 lp_on = 0;
             }
-            if (mode == 1 && !lp_on)
+            if (mode == MESO_DIRECTORS_LP && !lp_on)
                 continue;
             char lv[16], md[16];
             snprintf(lv, sizeof(lv), "%d", level);
             snprintf(md, sizeof(md), "%d", mode);
             char* const argv[] = {"bench_shell", "size-one", csv, lv, md, NULL};
             const double t = run_child(argv);
-            if (mode == 1)
+            if (mode == MESO_DIRECTORS_LP)
                 lp_last = t;
         }
 }
@@ -535,10 +533,10 @@ static void bench_thickness(const char* dir)
                 die("out of memory", NULL);
             for (int side = 0; side < 2; ++side) {
                 const int sign = side ? -1 : 1;
-                for (int mode = 2; mode >= 0; --mode) {
+                for (int mode = MESO_DIRECTORS_NORMAL; mode >= MESO_DIRECTORS_HYBRID; --mode) {
                     side_result s;
                     memset(&s, 0, sizeof(s));
-                    side_directors(&c, sign, mode, d, &s);
+                    side_directors(&c, sign, (meso_shell_directors)mode, d, &s);
                     for (int repair = 0; repair < 2; ++repair) {
                         if (repair)
                             side_repair(&c, sign, d, &s);
@@ -547,7 +545,7 @@ static void bench_thickness(const char* dir)
                                           s.rep.offset_base_intersections == 0;
                         fprintf(f, "%s,%u,%s,%.2f,%s,%d,%u,%u,%llu,%llu,%.4f,%.4f,%u,%llu,%u,%u,%.3f,%d,%d\n",
                                 meshes[mi].name, c.m.triangle_count, side ? "interior" : "exterior", rels[ri],
-                                mode_names[mode], repair, s.rep.inverted_prisms, s.rep.undecided_prisms,
+                                meso_bake_directors_name((meso_shell_directors)mode), repair, s.rep.inverted_prisms, s.rep.undecided_prisms,
                                 (unsigned long long)s.rep.offset_self_intersections,
                                 (unsigned long long)s.rep.offset_base_intersections, s.rep.thickness_ratio_min,
                                 s.rep.thickness_ratio_mean, s.hs.vertices_lp, (unsigned long long)s.ts.evaluations,
@@ -681,7 +679,7 @@ static int usage(void)
 int main(int argc, char** argv)
 {
     if (argc >= 5 && !strcmp(argv[1], "size-one"))
-        return size_one(argv[2], atoi(argv[3]), atoi(argv[4]));
+        return size_one(argv[2], atoi(argv[3]), (meso_shell_directors)atoi(argv[4]));
     if (argc < 3)
         return usage();
     const char* cmd = argv[1];

@@ -1,6 +1,7 @@
 #!/bin/sh
 # `meson install` installs libmeso (static and shared), its headers and a
-# meso.pc that a C program builds and links against; the program runs.
+# meso.pc that a C program builds and links against; the program runs. The
+# same for libmeso_bake (meso_bake.h, meso-bake.pc).
 # usage: install_test.sh BUILD_DIR CC [SANITIZERS]
 set -eu
 build=$1 cc=$2 san=${3:-none}
@@ -35,3 +36,25 @@ flags=$(pkg-config --cflags --libs meso)
 $cc -std=c99 -Wall -Werror $sanflags "$dest/use_meso.c" $flags -o "$dest/use_meso"
 LD_LIBRARY_PATH="$(pkg-config --variable=libdir meso)" "$dest/use_meso" | grep -qx "ok 1.0"
 echo "installed meso.pc builds and runs a C program"
+
+# libmeso_bake: meso-bake.pc, the header beside meso_file.h, a program that
+# bakes nothing (no input: refused with a message) but links and runs.
+pcb=$(find "$dest" -name meso-bake.pc | head -n 1)
+[ -n "$pcb" ] || { echo "no meso-bake.pc installed"; exit 1; }
+ls "$(dirname "$pcb")"/../libmeso_bake.so* >/dev/null
+cat > "$dest/use_bake.c" <<'C'
+#include <meso_bake.h>
+#include <stdio.h>
+int main(void) {
+    meso_bake_mesh_options o = meso_bake_mesh_defaults();
+    meso_bake_output* out = NULL;
+    meso_error err = {0};
+    if (meso_bake_mesh(&o, &out, NULL, &err) != MESO_ERR_INVALID_ARG || out || !err.message[0]) return 1;
+    printf("ok %s\n", meso_bake_directors_name(MESO_DIRECTORS_LP));
+    return 0;
+}
+C
+flags=$(pkg-config --cflags --libs meso-bake)
+$cc -std=c99 -Wall -Werror $sanflags "$dest/use_bake.c" $flags -o "$dest/use_bake"
+LD_LIBRARY_PATH="$(pkg-config --variable=libdir meso-bake)" "$dest/use_bake" | grep -qx "ok lp"
+echo "installed meso-bake.pc builds and runs a C program"

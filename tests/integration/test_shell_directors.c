@@ -31,8 +31,8 @@ typedef struct shell {
     meso_shell_report val;
 } shell;
 
-/* Directors for one side with the given mode (0 hybrid, 1 lp, 2 normal), then validated. */
-static shell bake(const meso_mesh* m, double h, int sign, int mode, int threads)
+/* Directors for one side with the given mode, then validated. */
+static shell bake(const meso_mesh* m, double h, int sign, meso_shell_directors mode, int threads)
 {
     shell s;
     memset(&s, 0, sizeof(s));
@@ -78,7 +78,7 @@ static void sphere_directors_are_radial(void)
 {
     meso_mesh m = load("sphere.obj");
     for (int sign = -1; sign <= 1; sign += 2) {
-        shell s = bake(&m, 0.2, sign, 1, 0);
+        shell s = bake(&m, 0.2, sign, MESO_DIRECTORS_LP, 0);
         double worst = 0, rmin = 1e9, rmax = 0;
         for (uint32_t v = 0; v < m.vertex_count; ++v) {
             const double radial[3] = {sign * m.positions[3 * v], sign * m.positions[3 * v + 1],
@@ -103,7 +103,7 @@ static void sphere_directors_are_radial(void)
 static void torus_directors_follow_tube_normals(void)
 {
     meso_mesh m = load("torus.obj");
-    shell s = bake(&m, 0.05, 1, 1, 0);
+    shell s = bake(&m, 0.05, 1, MESO_DIRECTORS_LP, 0);
     double worst = 0;
     for (uint32_t v = 0; v < m.vertex_count; ++v) {
         const float* p = m.positions + 3 * v;
@@ -185,8 +185,8 @@ static void box_interior_thicker_than_half_compresses(void)
     assert(t.boundary_edges == 0 && t.misoriented_edges == 0 && t.nonmanifold_edges == 0);
     free(t.boundary);
     /* Half the box is 1; ask for 1.3 inwards. */
-    shell normal = bake(&m, 1.3, -1, 2, 0);
-    shell lp = bake(&m, 1.3, -1, 1, 0);
+    shell normal = bake(&m, 1.3, -1, MESO_DIRECTORS_NORMAL, 0);
+    shell lp = bake(&m, 1.3, -1, MESO_DIRECTORS_LP, 0);
     fprintf(stderr, "  box interior h = 1.3: normal %u inverted, %llu self-intersections; lp %u inverted, %llu "
                     "self-intersections, thickness ratio min %.3f mean %.3f\n",
             normal.val.inverted_prisms, (unsigned long long)normal.val.offset_self_intersections,
@@ -209,7 +209,7 @@ static void saddle_folds_with_normals_not_with_lp(void)
     meso_mesh m = load("saddle.obj");
     double lo[3], hi[3];
     const double h = 0.4 * meso_mesh_bounds(&m, lo, hi);
-    shell normal = bake(&m, h, 1, 2, 0), lp = bake(&m, h, 1, 1, 0), hybrid = bake(&m, h, 1, 0, 0);
+    shell normal = bake(&m, h, 1, MESO_DIRECTORS_NORMAL, 0), lp = bake(&m, h, 1, MESO_DIRECTORS_LP, 0), hybrid = bake(&m, h, 1, MESO_DIRECTORS_HYBRID, 0);
     fprintf(stderr, "  saddle h = 0.4 diag: normal %u inverted / %llu self; lp %u / %llu; hybrid %u / %llu (%u lp)\n",
             normal.val.inverted_prisms, (unsigned long long)normal.val.offset_self_intersections,
             lp.val.inverted_prisms, (unsigned long long)lp.val.offset_self_intersections,
@@ -232,7 +232,7 @@ static void saddle_folds_with_normals_not_with_lp(void)
 static void artificial_faces_continue_the_surface(void)
 {
     meso_mesh m = load("saddle.obj");
-    shell s = bake(&m, 0.1, 1, 2, 0);
+    shell s = bake(&m, 0.1, 1, MESO_DIRECTORS_NORMAL, 0);
     meso_mesh ext = {.vertex_count = s.fs.vertex_count, .triangle_count = s.fs.triangle_count,
                      .positions = s.fs.positions, .indices = s.fs.indices};
     meso_mesh_topology t;
@@ -253,7 +253,7 @@ static void artificial_faces_continue_the_surface(void)
 static void hybrid_switches_only_where_needed(void)
 {
     meso_mesh m = load("sphere.obj");
-    shell s = bake(&m, 0.2, 1, 0, 0);
+    shell s = bake(&m, 0.2, 1, MESO_DIRECTORS_HYBRID, 0);
     assert(s.hs.vertices_lp == 0 && s.hs.vertices_normal == m.vertex_count);
     for (uint32_t i = 0; i < 3 * m.vertex_count; ++i)
         assert(fabsf(s.d[i] - 0.2f * s.normals[i]) < 1e-6f);
@@ -262,7 +262,7 @@ static void hybrid_switches_only_where_needed(void)
     m = load("spot_low_resolution.obj");
     double lo[3], hi[3];
     const double h = 0.1 * meso_mesh_bounds(&m, lo, hi);
-    shell n = bake(&m, h, 1, 2, 0), hy = bake(&m, h, 1, 0, 0);
+    shell n = bake(&m, h, 1, MESO_DIRECTORS_NORMAL, 0), hy = bake(&m, h, 1, MESO_DIRECTORS_HYBRID, 0);
     fprintf(stderr, "  spot 10%%: normal %u inverted / %llu self; hybrid %u / %llu with %u lp, %u normal vertices\n",
             n.val.inverted_prisms, (unsigned long long)n.val.offset_self_intersections, hy.val.inverted_prisms,
             (unsigned long long)hy.val.offset_self_intersections, hy.hs.vertices_lp, hy.hs.vertices_normal);
@@ -278,7 +278,7 @@ static void hybrid_switches_only_where_needed(void)
 static void threads_do_not_change_directors(void)
 {
     meso_mesh m = load("spot_low_resolution.obj");
-    shell a = bake(&m, 0.1, 1, 1, 1), b = bake(&m, 0.1, 1, 1, 2);
+    shell a = bake(&m, 0.1, 1, MESO_DIRECTORS_LP, 1), b = bake(&m, 0.1, 1, MESO_DIRECTORS_LP, 2);
     assert(!memcmp(a.d, b.d, sizeof(float) * 3 * m.vertex_count));
     release(&a);
     release(&b);

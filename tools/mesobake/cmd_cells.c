@@ -5,20 +5,13 @@
  * kind 3, §7.8). Stages: tile map (tile_map.h) → split cells
  * (split_cells.h) → exact sparse voxelization and membership
  * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h).
+ * The bake is meso_bake_cells (bake/bake_cells.c); this file parses the
+ * options.
  */
-#include <cjson/cJSON.h>
-#include <errno.h>
-#include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
-#include "cells_chunks.h"
 #include "cli_util.h"
-#include "memory_budget.h"
-#include "mesh_check.h"
-#include "mesh_chunk.h"
-#include "meso_layout.h"
 
 static const char* const usage_cells =
     "Usage: mesobake cells -i MESH -o OUT.meso [options]\n"
@@ -55,15 +48,19 @@ static const char* const usage_cells =
     "  -h, --help              this text\n";
 
 typedef struct cells_args {
-    const char *in, *out, *report, *tile_map, *colour, *voxelizer;
-    long tiles, tile_res, threads;
-    double cell_size;
-    uint64_t max_memory; /* --max-memory; 0 until parsed = the default */
+    const char *out, *report;
+    meso_bake_cells_options o;
 } cells_args;
 
 static int parse_args(int argc, char** argv, cells_args* a)
 {
-    *a = (cells_args){.tile_map = "voronoi", .colour = "hash", .voxelizer = "auto"};
+    *a = (cells_args){.o = meso_bake_cells_defaults()};
+    meso_bake_cells_options* o = &a->o;
+    o->common.progress = cli_progress;
+    o->tile_map = "voronoi";
+    o->colour = "hash";
+    o->voxelizer = "auto";
+    long n;
     for (int i = 0; i < argc; ++i) {
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -80,351 +77,55 @@ static int parse_args(int argc, char** argv, cells_args* a)
         if (bad)
             return bad;
         ++i;
-        if (path_option(s, v, &a->in, &a->out, &a->report))
+        if (path_option(s, v, &o->input, &a->out, &a->report))
             continue;
         int bad_size = 0;
-        if (memory_option(s, v, &a->max_memory, &bad_size)) {
+        if (memory_option(s, v, &o->common.max_memory, &bad_size)) {
             if (bad_size)
                 return bad_size;
             continue;
         }
         if (!strcmp(s, "--tile-map"))
-            a->tile_map = v;
+            o->tile_map = v;
         else if (!strcmp(s, "--colour"))
-            a->colour = v;
+            o->colour = v;
         else if (!strcmp(s, "--voxelizer")) {
             if (strcmp(v, "auto") && strcmp(v, "vdb") && strcmp(v, "parity") && strcmp(v, "winding"))
                 return usage_error("--voxelizer expects auto, vdb, parity or winding, got '%s'", v);
-            a->voxelizer = v;
+            o->voxelizer = v;
         } else if (!strcmp(s, "--tiles")) {
-            if (!parse_int(v, 1, 16384, &a->tiles))
+            if (!meso_bake_parse_long(v, 1, MESO_BAKE_MAX_TILES, &n))
                 return usage_error("--tiles expects an integer in 1..16384, got '%s'", v);
+            o->tiles = (uint32_t)n;
         } else if (!strcmp(s, "--tile-res")) {
-            if (!parse_int(v, 1, MESO_TILE_MAP_MAX_RES, &a->tile_res))
-                return usage_error("--tile-res expects an integer in 1..%u, got '%s'", MESO_TILE_MAP_MAX_RES, v);
+            if (!meso_bake_parse_long(v, 1, MESO_BAKE_MAX_TILE_RES, &n))
+                return usage_error("--tile-res expects an integer in 1..%u, got '%s'", MESO_BAKE_MAX_TILE_RES, v);
+            o->tile_res = (uint32_t)n;
         } else if (!strcmp(s, "-j") || !strcmp(s, "--threads")) {
-            if (!parse_int(v, 1, 1024, &a->threads))
+            if (!meso_bake_parse_long(v, 1, 1024, &n))
                 return usage_error("%s expects a thread count in 1..1024, got '%s'", s, v);
+            o->common.threads = (int)n;
         } else if (!strcmp(s, "--cell-size")) {
-            if (!parse_double(v, &a->cell_size))
+            if (!meso_bake_parse_positive(v, &o->cell_size))
                 return usage_error("--cell-size expects a positive length, got '%s'", v);
         }
     }
-    if (!a->in || !a->out)
+    if (!o->input || !a->out)
         return usage_error("cells needs -i MESH and -o OUT.meso");
-    if (a->tiles && a->cell_size > 0)
+    if (o->tiles && o->cell_size > 0)
         return usage_error("option --tiles can not be used together with --cell-size");
     return check_outputs(a->out, a->report);
-}
-
-/* "NAME[:A[:B]]": copies NAME, returns how many of A, B were given (-1: bad). */
-static int split_spec(const char* spec, char* name, size_t name_size, const char** a, const char** b)
-{
-    const char* c1 = strchr(spec, ':');
-    size_t n = c1 ? (size_t)(c1 - spec) : strlen(spec);
-    if (n >= name_size)
-        return -1;
-    memcpy(name, spec, n);
-    name[n] = 0;
-    *a = *b = NULL;
-    if (!c1)
-        return 0;
-    *a = c1 + 1;
-    const char* c2 = strchr(*a, ':');
-    if (!c2)
-        return 1;
-    *b = c2 + 1;
-    return 2;
-}
-
-static meso_result make_tile_map(const cells_args* a, uint32_t* res, meso_tile_map* tm, meso_error* err)
-{
-    char name[16], num[32];
-    const char *pa, *pb;
-    int given = split_spec(a->tile_map, name, sizeof name, &pa, &pb);
-    const int voronoi = given >= 0 && !strcmp(name, "voronoi"), spheres = given >= 0 && !strcmp(name, "spheres");
-    if (voronoi || spheres) {
-        meso_tile_map_params p = {.kind = voronoi ? MESO_TILE_MAP_VORONOI : MESO_TILE_MAP_SPHERES,
-                                  .res = *res ? *res : 32, .count = 8, .radius = 0.25, .rng_seed = 1};
-        long count = 8;
-        if (given >= 1) {
-            size_t n = pb ? (size_t)(pb - 1 - pa) : strlen(pa);
-            snprintf(num, sizeof num, "%.*s", (int)(n < sizeof num ? n : sizeof num - 1), pa);
-            if (!parse_int(num, 1, MESO_TILE_MAP_MAX_CELLS, &count))
-                return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PARAMS,
-                                      "--tile-map '%s': count must be an integer in 1..%u", a->tile_map,
-                                      MESO_TILE_MAP_MAX_CELLS);
-            p.count = (uint32_t)count;
-        }
-        if (given == 2 && voronoi) {
-            char* end = NULL;
-            errno = 0;
-            p.rng_seed = strtoull(pb, &end, 10);
-            if (!end || end == pb || *end || errno || *pb < '0' || *pb > '9') /* no sign, no wrap-around */
-                return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PARAMS,
-                                      "--tile-map '%s': RNG must be a non-negative integer", a->tile_map);
-        } else if (given == 2 && (!parse_double(pb, &p.radius) || p.radius > 1)) {
-            return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PARAMS,
-                                  "--tile-map '%s': RADIUS must be in (0, 1] tile edges", a->tile_map);
-        }
-        *res = p.res;
-        return meso_tile_map_generate(&p, (int)a->threads, tm, err);
-    }
-    /* FILE.raw:R */
-    const char* colon = strrchr(a->tile_map, ':');
-    long r = 0;
-    if (!colon || !parse_int(colon + 1, 1, MESO_TILE_MAP_MAX_RES, &r))
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PARAMS,
-                              "--tile-map '%s': expected voronoi[:SEEDS[:RNG]], spheres[:N[:RADIUS]] or FILE.raw:R",
-                              a->tile_map);
-    if (*res && *res != (uint32_t)r)
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TILEMAP_ISSUE_PARAMS,
-                              "--tile-map '%s' has resolution %ld but --tile-res is %u", a->tile_map, r, *res);
-    char path[4096];
-    snprintf(path, sizeof path, "%.*s", (int)(colon - a->tile_map), a->tile_map);
-    *res = (uint32_t)r;
-    return meso_tile_map_read_raw(path, (uint32_t)r, tm, err);
-}
-
-/* The grid: --tiles N through meso_voxel_grid_fit; --cell-size S: tiles of
- * edge S, as many as cover the mesh plus one voxel each side, centred. Then
- * origin and voxel size are rounded to f32, the precision CELL stores, so
- * the file states exactly the grid that was classified. */
-static meso_result make_grid(const cells_args* a, const meso_mesh* m, uint32_t R, meso_voxel_grid* g, meso_error* err)
-{
-    meso_result r;
-    if (a->cell_size > 0) {
-        double lo[3], hi[3], ext = 0;
-        meso_mesh_bounds(m, lo, hi);
-        for (int k = 0; k < 3; ++k)
-            ext = fmax(ext, hi[k] - lo[k]);
-        double t = ceil(ext / a->cell_size + 2.0 / R);
-        if (!(t >= 1) || t * R > MESO_VOXELIZE_MAX_RES)
-            return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_VOXELIZE_ISSUE_GRID,
-                                  "--cell-size %g needs %.0f tiles of %u voxels per axis; at most %u voxels fit",
-                                  a->cell_size, t, R, MESO_VOXELIZE_MAX_RES);
-        memset(g, 0, sizeof *g);
-        g->tile_res = R;
-        g->voxel_size = a->cell_size / R;
-        for (int k = 0; k < 3; ++k) {
-            g->tiles[k] = (uint32_t)t;
-            g->origin[k] = 0.5 * (lo[k] + hi[k]) - 0.5 * t * a->cell_size;
-        }
-        r = MESO_OK;
-    } else {
-        uint32_t tiles = a->tiles ? (uint32_t)a->tiles : 8;
-        if ((uint64_t)tiles * R > MESO_VOXELIZE_MAX_RES)
-            return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_VOXELIZE_ISSUE_GRID,
-                                  "%u tiles of %u voxels: %llu voxels per axis, at most %u", tiles, R,
-                                  (unsigned long long)tiles * R, MESO_VOXELIZE_MAX_RES);
-        r = meso_voxel_grid_fit(m, tiles, R, 1.0, g, err);
-    }
-    if (r == MESO_OK) {
-        for (int k = 0; k < 3; ++k)
-            g->origin[k] = (double)(float)g->origin[k];
-        g->voxel_size = (double)(float)g->voxel_size;
-    }
-    return r;
-}
-
-/* The tile resolution make_tile_map will use: --tile-res, else the R of
- * FILE.raw:R, else the generators' 32 (a spec that does not parse fails in
- * make_tile_map). */
-static uint32_t planned_res(const cells_args* a)
-{
-    const char* colon = strrchr(a->tile_map, ':');
-    long r = 32;
-    if (!a->tile_res && strncmp(a->tile_map, "voronoi", 7) && strncmp(a->tile_map, "spheres", 7) && colon &&
-        !parse_int(colon + 1, 1, MESO_TILE_MAP_MAX_RES, &r))
-        r = 32;
-    return a->tile_res ? (uint32_t)a->tile_res : (uint32_t)r;
-}
-
-/* Limits up front (memory_budget.h): the grid is fixed by the options and
- * the mesh's box, so the bake's peak is known before the tile map is made;
- * checked again once the split cells (S) are known, before the membership.
- *
- * Estimate (of allocations: calloc'd pages never written are not resident)
- * against peak RSS, `mesobake cells -i tests/data/spot_low_resolution.obj
- * -o o.meso -j 2 -v ...` under `/usr/bin/time -f %M` (2-core machine):
- *   --tile-res 32                 estimate  99 MiB   peak RSS  36 MiB
- *   --tile-res 128                estimate 238 MiB   peak RSS  87 MiB
- *   --tile-res 256                estimate 512 MiB   peak RSS 497 MiB
- *   --tiles 64 --tile-res 16      estimate 121 MiB   peak RSS  41 MiB
- *   --tiles 128 --tile-res 32     estimate 239 MiB   peak RSS  95 MiB
- *   --tiles 256 --tile-res 16     estimate 335 MiB   peak RSS 142 MiB
- * (96 MiB of each estimate is the program and its libraries). */
-static meso_result check_budget(const cells_args* a, const meso_mesh* m, const meso_voxel_grid* g, uint32_t splits,
-                                meso_error* err)
-{
-    uint64_t mixed = 0;
-    const uint64_t need = meso_cells_estimate(m, g, splits, (int)a->threads, &mixed);
-    if (verbose) {
-        char n[32], b[32];
-        fprintf(stderr, "mesobake: memory estimate %s (%u split cells), budget %s\n",
-                meso_format_size(need, n, sizeof n), splits, meso_format_size(a->max_memory, b, sizeof b));
-    }
-    return meso_budget_check(need, a->max_memory, MESO_LIMIT_ISSUE_REQUEST, err,
-                             "cells: %u^3 voxels per tile, %ux%ux%u tiles (%llu of them near the surface)",
-                             g->tile_res, g->tiles[0], g->tiles[1], g->tiles[2], (unsigned long long)mixed);
-}
-
-/* parity / vdb: refuse what parity would get wrong (it leaks through holes). */
-static meso_result require_closed(const meso_mesh* m, const char* path, meso_error* err)
-{
-    meso_mesh_topology t;
-    double lo[3], hi[3];
-    const double diag = meso_mesh_bounds(m, lo, hi);
-    meso_result r = meso_mesh_topology_compute(m, 1e-12 * diag * diag, &t, err);
-    if (r != MESO_OK)
-        return r;
-    free(t.boundary);
-    if (t.boundary_edges || t.nonmanifold_edges || t.misoriented_edges || t.duplicate_faces)
-        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_VOXELIZE_ISSUE_MESH,
-                              "%s: --voxelizer parity needs a closed, consistently oriented mesh (%u boundary, %u "
-                              "non-manifold, %u misoriented edges, %u duplicate faces); use --voxelizer winding",
-                              path, t.boundary_edges, t.nonmanifold_edges, t.misoriented_edges, t.duplicate_faces);
-    return MESO_OK;
-}
-
-static bake_chunk typed_chunk(uint32_t type, uint32_t flags, uint16_t dtype, uint16_t comps, uint32_t d0, uint32_t d1,
-                              uint32_t d2, const void* data, size_t size)
-{
-    return (bake_chunk){.desc = {.type = type, .flags = flags, .object = 1, .dtype = dtype, .components = comps,
-                                 .dims = {d0, d1, d2}},
-                        .data = data, .size = size};
 }
 
 int cmd_cells(int argc, char** argv)
 {
     cells_args a;
-    int pr = parse_args(argc, argv, &a);
+    const int pr = parse_args(argc, argv, &a);
     if (pr != 0)
         return pr < 0 ? MESO_EXIT_OK : pr;
     const double t0 = meso_seconds();
-    const int threads = (int)a.threads;
     meso_error err = {0};
-    meso_mesh m = {0};
-    meso_tile_map tm = {0};
-    meso_split_cells sc = {0};
-    meso_voxel_grid g = {0};
-    meso_membership mb = {0};
-    meso_cells_chunks cc = {0};
-    meso_mesh_chunk mesh_chunk = {0};
-    cJSON *meta = NULL, *rep = NULL;
-    size_t file_size = 0;
-    uint32_t R = (uint32_t)a.tile_res;
-    const meso_voxelizer method = !strcmp(a.voxelizer, "winding") ? MESO_VOXELIZE_WINDING
-                                  : !strcmp(a.voxelizer, "auto")  ? MESO_VOXELIZE_AUTO
-                                                                  : MESO_VOXELIZE_PARITY;
-
-    if (!a.max_memory)
-        a.max_memory = meso_memory_default_budget();
-    meso_result r = load_mesh(a.in, a.max_memory, &m, &err);
-    if (r == MESO_OK && method == MESO_VOXELIZE_PARITY)
-        r = require_closed(&m, a.in, &err);
-    if (r == MESO_OK)
-        r = make_grid(&a, &m, planned_res(&a), &g, &err);
-    if (r == MESO_OK)
-        r = check_budget(&a, &m, &g, 1, &err);
-    double t = meso_seconds();
-    if (r == MESO_OK)
-        r = make_tile_map(&a, &R, &tm, &err);
-    if (r == MESO_OK)
-        r = meso_split_cells_compute(&tm, threads, &sc, &err);
-    if (r == MESO_OK && verbose)
-        fprintf(stderr, "mesobake: tile map %s, R = %u: %u cells, %u split cells (%u wrapping cells) (%.0f ms)\n",
-                a.tile_map, R, sc.cell_count, sc.split_count, sc.wrapping_cells, 1e3 * (meso_seconds() - t));
-    if (r == MESO_OK && sc.split_count == 0)
-        r = meso_bake_fail(&err, tm.kind == MESO_TILE_MAP_RAW ? MESO_ERR_CORRUPT : MESO_ERR_INVALID_ARG,
-                           MESO_TILEMAP_ISSUE_CONTENT, "--tile-map '%s': the tile map has no cells (every voxel is 0)",
-                           a.tile_map); /* a file of zeros is an invalid input (3), a generated one a bad option (1) */
-    if (r == MESO_OK && R != g.tile_res) /* planned_res and make_tile_map disagree: a bug */
-        r = meso_bake_fail(&err, MESO_ERR_INVALID_ARG, 0, "cells: tile resolution %u, planned %u", R, g.tile_res);
-    if (r == MESO_OK)
-        r = check_budget(&a, &m, &g, sc.split_count, &err);
-    if (r == MESO_OK)
-        r = meso_membership_compute(&m, &g, &sc, method, threads, &mb, &err);
-    if (r == MESO_OK && verbose)
-        fprintf(stderr,
-                "mesobake: %ux%ux%u tiles, %u voxels across, %s: %llu rays; cells %llu inside, %llu outside, %llu "
-                "intersected; tiles %llu outside, %llu inside, %llu mixed (%.0f ms)\n",
-                g.tiles[0], g.tiles[1], g.tiles[2], g.tiles[0] * R, meso_voxelizer_name(mb.voxelize.method),
-                (unsigned long long)mb.voxelize.rows, (unsigned long long)mb.cells_inside,
-                (unsigned long long)mb.cells_outside, (unsigned long long)mb.cells_intersected,
-                (unsigned long long)mb.tiles_outside, (unsigned long long)mb.tiles_inside,
-                (unsigned long long)mb.tiles_mixed, 1e3 * mb.seconds);
-    t = meso_seconds();
-    if (r == MESO_OK)
-        r = meso_cells_chunks_build(&tm, &sc, &mb, g.origin, g.voxel_size, a.colour, threads, &cc, &err);
-    if (r == MESO_OK && verbose)
-        fprintf(stderr, "mesobake: normal and colour maps: %llu border voxels of %u^3 (%.0f ms)\n",
-                (unsigned long long)cc.border_voxels, R, 1e3 * (meso_seconds() - t));
-    if (r == MESO_OK)
-        r = meso_bake_mesh_chunk(&m, NULL, &mesh_chunk, &err);
-    if (r == MESO_OK) {
-        meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_CELLS};
-        for (int k = 0; k < 3; ++k) {
-            rec.bbox_min[k] = (float)g.origin[k];
-            rec.bbox_max[k] = (float)(g.origin[k] + (double)g.tiles[k] * R * g.voxel_size);
-        }
-        snprintf(rec.name, sizeof(rec.name), "%s", base_name(a.in));
-        meta = cJSON_CreateObject();
-        cJSON_AddStringToObject(meta, "generator", "mesobake " MESO_VERSION_STRING);
-        cJSON_AddStringToObject(meta, "command", "cells");
-        cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
-        cJSON_AddStringToObject(params, "tile_map", a.tile_map);
-        cJSON_AddNumberToObject(params, "tile_res", R);
-        cJSON_AddNumberToObject(params, "tiles", g.tiles[0]);
-        cJSON_AddStringToObject(params, "colour", a.colour);
-        cJSON_AddStringToObject(params, "voxelizer", a.voxelizer);
-        r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a.in, &err);
-
-        rep = cJSON_CreateObject();
-        report_mesh_warnings(rep);
-        cJSON_AddNumberToObject(rep, "tiles", (double)mb.tile_count);
-        cJSON_AddNumberToObject(rep, "split_cells", sc.split_count);
-        cJSON_AddNumberToObject(rep, "cells_inside", (double)mb.cells_inside);
-        cJSON_AddNumberToObject(rep, "cells_outside", (double)mb.cells_outside);
-        cJSON_AddNumberToObject(rep, "cells_intersected", (double)mb.cells_intersected);
-        cJSON_AddStringToObject(rep, "voxelizer", meso_voxelizer_name(mb.voxelize.method));
-        cJSON_AddNumberToObject(rep, "tile_res", R);
-        cJSON_AddNumberToObject(rep, "voxels_across", (double)g.tiles[0] * R);
-        cJSON_AddNumberToObject(rep, "cells_per_tile", sc.cell_count);
-        cJSON_AddNumberToObject(rep, "wrapping_cells", sc.wrapping_cells);
-        cJSON_AddNumberToObject(rep, "wrapping_copies", (double)mb.wrapping_copies);
-        cJSON_AddNumberToObject(rep, "tiles_outside", (double)mb.tiles_outside);
-        cJSON_AddNumberToObject(rep, "tiles_inside", (double)mb.tiles_inside);
-        cJSON_AddNumberToObject(rep, "tiles_mixed", (double)mb.tiles_mixed);
-        cJSON_AddNumberToObject(rep, "membership_bytes", (double)cc.memb_size);
-        cJSON_AddNumberToObject(rep, "tile_map_bytes", (double)cc.tile_size);
-        cJSON_AddNumberToObject(rep, "normal_map_bytes", (double)cc.nrmm_size);
-        cJSON_AddNumberToObject(rep, "colour_map_bytes", (double)cc.colr_size);
-
-        const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED, S = sc.split_count;
-        bake_chunk chunks[7];
-        chunks[0] = (bake_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
-                                          .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
-                                 .data = mesh_chunk.data, .size = mesh_chunk.size};
-        chunks[1] = typed_chunk(MESO_CHUNK_CELL, REQ, MESO_DTYPE_BYTES, 1, 1, 1, 1, cc.cell, sizeof cc.cell);
-        chunks[2] = typed_chunk(MESO_CHUNK_TILE, REQ, cc.tile_dtype, 1, R, R, R, cc.tile, cc.tile_size);
-        chunks[3] = typed_chunk(MESO_CHUNK_SPLT, REQ, MESO_DTYPE_U32, MESO_SPLT_COMPONENTS, S, 1, 1, cc.splt,
-                                cc.splt_size);
-        chunks[4] = typed_chunk(MESO_CHUNK_MEMB, REQ, MESO_DTYPE_U32, 1, (uint32_t)(cc.memb_size / 4), 1, 1, cc.memb,
-                                cc.memb_size);
-        chunks[5] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, R, R, R, cc.nrmm, cc.nrmm_size);
-        chunks[6] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, R, R, R, cc.colr, cc.colr_size);
-        if (r == MESO_OK)
-            r = write_meso(a.out, meta, rep, &rec, chunks, 7, &file_size, &err);
-    }
-    const int code = finish_bake(r, &err, a.out, a.report, rep, file_size, t0);
-    cJSON_Delete(meta);
-    cJSON_Delete(rep);
-    free(mesh_chunk.data);
-    meso_cells_chunks_free(&cc);
-    meso_membership_free(&mb);
-    meso_split_cells_free(&sc);
-    meso_tile_map_free(&tm);
-    meso_mesh_free(&m);
-    return code;
+    meso_bake_output* baked = NULL;
+    const meso_result r = meso_bake_cells(&a.o, &baked, NULL, &err);
+    return finish_bake(r, &err, baked, a.out, a.report, t0, NULL);
 }

@@ -1,12 +1,8 @@
 /* cmd_mesh.c — `mesobake mesh`: import a mesh as a MESH object. */
-#include <cjson/cJSON.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "cli_util.h"
-#include "memory_budget.h"
-#include "mesh_chunk.h"
 
 static const char* const usage_mesh =
     "Usage: mesobake mesh -i MESH -o OUT.meso [options]\n"
@@ -34,7 +30,7 @@ static const char* const usage_mesh =
 
 /* "P,N,T": integers in 1..30, N in 2..30 (Draco refuses one-bit normals),
  * overflow-checked by parse_int. */
-static int parse_bits(const char* s, meso_draco_options* o)
+static int parse_bits(const char* s, meso_bake_mesh_options* o)
 {
     long bits[3];
     char buf[64];
@@ -48,24 +44,21 @@ static int parse_bits(const char* s, meso_draco_options* o)
             return 0;
         if (comma)
             *comma = 0;
-        if (!parse_int(field, k == 1 ? 2 : 1, 30, &bits[k]))
+        if (!meso_bake_parse_long(field, k == 1 ? 2 : 1, 30, &bits[k]))
             return 0;
         field = comma + 1;
     }
-    o->position_bits = (int)bits[0];
-    o->normal_bits = (int)bits[1];
-    o->uv_bits = (int)bits[2];
+    o->draco_position_bits = (int)bits[0];
+    o->draco_normal_bits = (int)bits[1];
+    o->draco_uv_bits = (int)bits[2];
     return 1;
 }
 
 int cmd_mesh(int argc, char** argv)
 {
-    const char *in = NULL, *out = NULL, *name = NULL, *report = NULL;
-    int use_draco = 0;
-    meso_draco_options dopt = {14, 10, 12, 7};
-    /* --max-memory: parsed like every bake command's; the mesh readers'
-     * limits (the mesh guard) take their byte budget from it. */
-    uint64_t max_memory = 0;
+    const char *out = NULL, *report = NULL;
+    meso_bake_mesh_options o = meso_bake_mesh_defaults();
+    o.common.progress = cli_progress;
     for (int i = 0; i < argc; ++i) {
         const char* a = argv[i];
         const int has_val = i + 1 < argc;
@@ -73,24 +66,25 @@ int cmd_mesh(int argc, char** argv)
             print_help(usage_mesh);
             return MESO_EXIT_OK;
         } else if ((!strcmp(a, "-i") || !strcmp(a, "--input")) && has_val) {
-            in = argv[++i];
+            o.input = argv[++i];
         } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_val) {
             out = argv[++i];
         } else if (!strcmp(a, "--name") && has_val) {
-            name = argv[++i];
+            o.name = argv[++i];
         } else if (!strcmp(a, "--report") && has_val) {
             report = argv[++i];
         } else if (!strcmp(a, "--max-memory") && has_val) {
+            /* the mesh readers' limits (the mesh guard) take their byte budget from it */
             int bad = 0;
-            memory_option(a, argv[++i], &max_memory, &bad);
+            memory_option(a, argv[++i], &o.common.max_memory, &bad);
             if (bad)
                 return bad;
         } else if (!strcmp(a, "--draco")) {
-            use_draco = 1;
+            o.draco = 1;
         } else if (!strcmp(a, "--draco-bits") && has_val) {
-            if (!parse_bits(argv[++i], &dopt))
+            if (!parse_bits(argv[++i], &o))
                 return usage_error("--draco-bits expects P,N,T in 1..30 (N in 2..30), got '%s'", argv[i]);
-            use_draco = 1;
+            o.draco = 1;
         } else if (!strcmp(a, "-v") || !strcmp(a, "--verbose")) {
             verbose = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
@@ -102,7 +96,7 @@ int cmd_mesh(int argc, char** argv)
             return usage_error("unexpected argument '%s'", a);
         }
     }
-    if (!in || !out) {
+    if (!o.input || !out) {
         fputs(usage_mesh, stderr);
         return MESO_EXIT_USAGE;
     }
@@ -111,77 +105,7 @@ int cmd_mesh(int argc, char** argv)
         return checked;
     const double t0 = meso_seconds();
     meso_error err = {0};
-    meso_mesh m;
-    if (!max_memory)
-        max_memory = meso_memory_default_budget();
-    meso_result r = load_mesh(in, max_memory, &m, &err);
-    if (r != MESO_OK) {
-        err_print(&err);
-        return meso_exit_for(r);
-    }
-    if (verbose)
-        fprintf(stderr, "mesobake: read %s: %u vertices, %u triangles%s%s (%.0f ms)\n", base_name(in), m.vertex_count,
-                m.triangle_count, m.normals ? ", normals" : "", m.uvs ? ", uvs" : "", 1e3 * (meso_seconds() - t0));
-
-    meso_mesh_chunk chunk;
-    r = meso_bake_mesh_chunk(&m, use_draco ? &dopt : NULL, &chunk, &err);
-    if (r != MESO_OK) {
-        meso_mesh_free(&m);
-        err_print(&err);
-        return meso_exit_for(r);
-    }
-    double lo[3], hi[3];
-    const double diag = meso_mesh_bounds(&m, lo, hi);
-    meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_MESH};
-    for (int k = 0; k < 3; ++k) {
-        rec.bbox_min[k] = (float)lo[k];
-        rec.bbox_max[k] = (float)hi[k];
-    }
-    snprintf(rec.name, sizeof(rec.name), "%s", name ? name : base_name(in));
-
-    cJSON* meta = cJSON_CreateObject();
-    cJSON_AddStringToObject(meta, "generator", "mesobake " MESO_VERSION_STRING);
-    cJSON_AddStringToObject(meta, "command", "mesh");
-    cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
-    cJSON_AddStringToObject(params, "encoding", use_draco ? "draco" : "raw");
-    if (use_draco) {
-        cJSON_AddNumberToObject(params, "draco_position_bits", dopt.position_bits);
-        cJSON_AddNumberToObject(params, "draco_normal_bits", dopt.normal_bits);
-        cJSON_AddNumberToObject(params, "draco_uv_bits", dopt.uv_bits);
-    }
-    r = add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), in, &err);
-
-    cJSON* rep = cJSON_CreateObject();
-    report_mesh_warnings(rep);
-    cJSON_AddNumberToObject(rep, "vertices", m.vertex_count);
-    cJSON_AddNumberToObject(rep, "triangles", m.triangle_count);
-    cJSON_AddNumberToObject(rep, "bbox_diagonal", diag);
-    cJSON_AddStringToObject(rep, "encoding", use_draco ? "draco" : "raw");
-    cJSON_AddNumberToObject(rep, "mesh_bytes", (double)chunk.size);
-
-    const bake_chunk chunks[1] = {{.desc = {.type = MESO_CHUNK_MESH,
-                                            .flags = MESO_CHUNK_FLAG_REQUIRED,
-                                            .object = 1,
-                                            .encoding = chunk.encoding,
-                                            .decoded_size = chunk.decoded_size},
-                                   .data = chunk.data,
-                                   .size = chunk.size}};
-    size_t file_size = 0;
-    if (r == MESO_OK)
-        r = write_meso(out, meta, rep, &rec, chunks, 1, &file_size, &err);
-    free(chunk.data);
-    cJSON_Delete(meta);
-    meso_mesh_free(&m);
-    if (r != MESO_OK) {
-        cJSON_Delete(rep);
-        err_print(&err);
-        return meso_exit_for(r);
-    }
-    const double t_end = meso_seconds();
-    const int code = publish_outputs(report, rep, file_size, t_end - t0);
-    if (verbose && code == MESO_EXIT_OK)
-        fprintf(stderr, "mesobake: wrote %s: %zu bytes, mesh %s (%.0f ms total)\n", out, file_size,
-                use_draco ? "draco" : "raw", 1e3 * (t_end - t0));
-    cJSON_Delete(rep);
-    return code;
+    meso_bake_output* baked = NULL;
+    const meso_result r = meso_bake_mesh(&o, &baked, NULL, &err);
+    return finish_bake(r, &err, baked, out, report, t0, o.draco ? ", mesh draco" : ", mesh raw");
 }

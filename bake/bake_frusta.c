@@ -1,0 +1,340 @@
+/*
+ * bake_frusta.c — meso_bake_frusta (`mesobake frusta`) and
+ * meso_bake_skeleton_load: a skeleton (SWC, the text format of
+ * skeleton_swc.h, or one extracted from a closed mesh) skinned with conical
+ * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
+ * optional relief map (§3), as one .meso frusta object: SKEL, FRUS, FSEG,
+ * BALL and RELF (FORMAT.md §7.2 kind 4).
+ */
+#include "bake_internal.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "frusta_chunks.h"
+#include "frustum_model.h"
+#include "memory_budget.h"
+#include "skeleton_swc.h"
+#include "texture_function.h"
+#if MESO_HAVE_CGAL
+#include "skeleton_from_mesh.h"
+#endif
+
+struct meso_bake_skeleton {
+    meso_skeleton sk;
+};
+
+meso_bake_frusta_options meso_bake_frusta_defaults(void)
+{
+    return (meso_bake_frusta_options){.max_joint_angle = 150, .relief_repeat = 1};
+}
+
+static int is_mesh_path(const char* p)
+{
+    static const char* const ext[] = {".obj", ".off", ".ply", ".stl", ".om", ".drc"};
+    for (size_t i = 0; i < sizeof(ext) / sizeof(ext[0]); ++i)
+        if (mesoi_has_suffix(p, ext[i]))
+            return 1;
+    return 0;
+}
+
+/* Limits up front: a skeleton file's nodes (at most its lines) against the
+ * budget before it is read and parsed (memory_budget.h). */
+static meso_result check_skeleton_size(const mesoi_bake_run* run, const char* path, meso_error* err)
+{
+    uint64_t bytes = 0, lines = 0;
+    meso_error ignored = {0};
+    if (meso_count_lines(path, &bytes, &lines, &ignored) != MESO_OK)
+        return MESO_OK; /* the reader reports an unreadable file in its own words */
+    return meso_budget_check(meso_skeleton_estimate(bytes, lines), run->common.max_memory, MESO_LIMIT_ISSUE_SKELETON,
+                             err, "skeleton %s (%llu bytes, up to %llu nodes)", path, (unsigned long long)bytes,
+                             (unsigned long long)lines);
+}
+
+static meso_result load_skeleton(mesoi_bake_run* run, const char* path, double tolerance, meso_skeleton* sk,
+                                 meso_bake_skeleton_info* src, meso_error* err)
+{
+    if (!path)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "no input skeleton given");
+    if (!is_mesh_path(path)) {
+        const meso_result r = check_skeleton_size(run, path, err);
+        if (r != MESO_OK)
+            return r;
+    }
+    if (mesoi_has_suffix(path, ".swc")) {
+        src->input = "swc";
+        return meso_skeleton_load(path, MESO_SKELETON_SWC, sk, err);
+    }
+    if (!is_mesh_path(path)) {
+        src->input = "text";
+        return meso_skeleton_load(path, MESO_SKELETON_TEXT, sk, err);
+    }
+    src->input = "mesh";
+#if MESO_HAVE_CGAL
+    meso_mesh m;
+    meso_result r = mesoi_load_mesh(run, path, &m, &src->fixes, err);
+    if (r != MESO_OK)
+        return r;
+    meso_skeleton_fit_options o = {.tolerance = tolerance};
+    meso_skeleton_fit_stats st;
+    r = meso_skeleton_from_mesh(&m, &o, sk, &st, err);
+    if (r == MESO_OK) {
+        /* Two-sided: the mesh's vertices to the frusta and sampled frusta
+         * surface back to the mesh. */
+        src->fit_error_max = st.hausdorff;
+        src->fit_error_mean = st.fit_error_mean;
+        src->mesh_to_frusta_max = st.fit_error_max;
+        src->frusta_to_mesh_max = st.model_to_mesh_max;
+        src->bbox_diagonal = st.bbox_diagonal;
+        src->tolerance = st.tolerance;
+        src->skeleton_nodes_extracted = st.cgal_nodes;
+        src->mesh_triangles = st.mesh_triangles;
+        mesoi_run_stage(run, "skeleton", 0.4, 0.4,
+                        "skeleton: CGAL %u nodes (%.2f s), %u cycles cut, fitted %u nodes / %u segments; fit error "
+                        "max %.4g (%.2f %% of the diagonal), mean %.4g",
+                        st.cgal_nodes, st.seconds_cgal, st.cycles_broken, st.nodes, st.segments, st.hausdorff,
+                        100 * st.hausdorff / st.bbox_diagonal, st.fit_error_mean);
+    }
+    meso_mesh_free(&m);
+    return r;
+#else
+    (void)tolerance;
+    return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0,
+                          "%s: skeletons from meshes need CGAL, which this build does not have", path);
+#endif
+}
+
+meso_result meso_bake_skeleton_load(const char* path, double tolerance, const meso_bake_common* c,
+                                    meso_bake_skeleton** out, meso_bake_skeleton_info* info, meso_error* err)
+{
+    *out = NULL;
+    meso_bake_skeleton_info local;
+    if (!info)
+        info = &local;
+    memset(info, 0, sizeof(*info));
+    mesoi_bake_run run;
+    mesoi_run_begin(&run, c);
+    meso_bake_skeleton* s = calloc(1, sizeof(*s));
+    if (!s)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    meso_result r = load_skeleton(&run, path, tolerance, &s->sk, info, err);
+    if (r != MESO_OK) {
+        meso_bake_skeleton_free(s);
+        return r;
+    }
+    info->node_count = s->sk.node_count;
+    info->root_count = s->sk.root_count;
+    *out = s;
+    return MESO_OK;
+}
+
+void meso_bake_skeleton_free(meso_bake_skeleton* s)
+{
+    if (!s)
+        return;
+    meso_skeleton_free(&s->sk);
+    free(s);
+}
+
+static void report_json(cJSON* rep, const meso_bake_frusta_report* s)
+{
+    const meso_bake_skeleton_info* src = &s->skeleton;
+    cJSON_AddNumberToObject(rep, "segments", s->segments);
+    cJSON_AddNumberToObject(rep, "joints", s->joints);
+    cJSON_AddNumberToObject(rep, "branch_points", s->branch_points);
+    cJSON_AddNumberToObject(rep, "cap_intersections_found", s->cap_intersections_found);
+    cJSON_AddNumberToObject(rep, "cap_intersections_unhandled", s->cap_intersections_unhandled);
+    cJSON_AddNumberToObject(rep, "fit_error_max", s->fit_error_max);
+    cJSON_AddNumberToObject(rep, "fit_error_mean", s->fit_error_mean);
+    cJSON_AddStringToObject(rep, "input", src->input);
+    cJSON_AddNumberToObject(rep, "tips", s->tips);
+    cJSON_AddNumberToObject(rep, "balls", s->balls);
+    cJSON_AddNumberToObject(rep, "ball_joints", s->ball_joints);
+    cJSON_AddNumberToObject(rep, "sharp_joints", s->sharp_joints);
+    cJSON_AddNumberToObject(rep, "unfitted_joints", s->unfitted_joints);
+    cJSON_AddNumberToObject(rep, "degenerate_segments", s->degenerate_segments);
+    cJSON_AddNumberToObject(rep, "seam_gap_max", s->seam_gap_max);
+    cJSON_AddNumberToObject(rep, "seam_gap_mean", s->seam_gap_mean);
+    cJSON_AddNumberToObject(rep, "radius_change_max", s->radius_change_max);
+    if (!strcmp(src->input, "mesh")) {
+        cJSON_AddNumberToObject(rep, "tolerance", src->tolerance);
+        cJSON_AddNumberToObject(rep, "bbox_diagonal", src->bbox_diagonal);
+        cJSON_AddNumberToObject(rep, "mesh_to_frusta_max", src->mesh_to_frusta_max);
+        cJSON_AddNumberToObject(rep, "frusta_to_mesh_max", src->frusta_to_mesh_max);
+        cJSON_AddNumberToObject(rep, "mesh_triangles", src->mesh_triangles);
+        cJSON_AddNumberToObject(rep, "skeleton_nodes_extracted", src->skeleton_nodes_extracted);
+    }
+    mesoi_report_fixes(rep, &src->fixes);
+}
+
+/* The file: META, RPRT, OBJT, SKEL, FRUS, FSEG, BALL (when there are balls),
+ * RELF (with a relief). */
+static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
+                            const meso_texfn* relief, const meso_bake_frusta_report* s, meso_bake_output** out,
+                            meso_error* err)
+{
+    uint8_t *frus = NULL, *fseg = NULL, *ball = NULL;
+    meso_result r = meso_frusta_object_encode(obj, &frus, &fseg, &ball, err);
+    if (r != MESO_OK)
+        return r;
+    meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_FRUSTA};
+    memcpy(rec.bbox_min, obj->bbox_min, sizeof(rec.bbox_min));
+    memcpy(rec.bbox_max, obj->bbox_max, sizeof(rec.bbox_max));
+    snprintf(rec.name, sizeof(rec.name), "%s", mesoi_base_name(a->input));
+    const meso_bake_skeleton_info* src = &s->skeleton;
+    cJSON* meta = mesoi_meta_new("frusta");
+    cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
+    cJSON_AddStringToObject(params, "input", src->input);
+    if (!strcmp(src->input, "mesh"))
+        cJSON_AddNumberToObject(params, "tolerance", src->tolerance);
+    cJSON_AddNumberToObject(params, "max_joint_angle", a->max_joint_angle);
+    cJSON_AddBoolToObject(params, "minor_axis_fit", !a->no_fit);
+    cJSON_AddBoolToObject(params, "keep_cap_intersections", a->keep_cap_intersections);
+    if (a->relief) {
+        cJSON* rl = cJSON_AddObjectToObject(params, "relief");
+        cJSON_AddStringToObject(rl, "spec", a->relief);
+        cJSON_AddNumberToObject(rl, "depth", s->relief_depth);
+        cJSON_AddNumberToObject(rl, "repeat", a->relief_repeat);
+    }
+    r = mesoi_add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, err);
+    cJSON* rep = cJSON_CreateObject();
+    report_json(rep, s);
+    mesoi_chunk chunks[5];
+    int count = 0;
+    chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
+                                    .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};
+    chunks[count++] = (mesoi_chunk){
+        .desc = {.type = MESO_CHUNK_FRUS, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1, .dims = {obj->count, 1, 1}},
+        .data = frus, .size = (size_t)obj->count * MESO_FRUS_RECORD_SIZE};
+    chunks[count++] = (mesoi_chunk){
+        .desc = {.type = MESO_CHUNK_FSEG, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1, .dims = {obj->count, 1, 1}},
+        .data = fseg, .size = (size_t)obj->count * MESO_FSEG_RECORD_SIZE};
+    if (obj->ball_count)
+        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_BALL, .flags = MESO_CHUNK_FLAG_REQUIRED,
+                                                 .object = 1, .dims = {obj->ball_count, 1, 1}},
+                                        .data = ball, .size = (size_t)obj->ball_count * MESO_BALL_RECORD_SIZE};
+    if (a->relief)
+        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_RELF, .object = 1, .dtype = relief->dtype,
+                                                 .components = 1, .dims = {relief->dims[0], relief->dims[1], 1}},
+                                        .data = relief->encoded, .size = relief->encoded_size};
+    if (r == MESO_OK)
+        r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
+    cJSON_Delete(meta);
+    cJSON_Delete(rep);
+    free(frus);
+    free(fseg);
+    free(ball);
+    return r;
+}
+
+static void fill_report(const meso_frustum_model* m, const meso_frusta_object* obj, meso_bake_frusta_report* s)
+{
+    const meso_frustum_stats* st = &m->stats;
+    s->segments = st->segments;
+    s->joints = st->joints;
+    s->branch_points = st->branch_points;
+    s->tips = st->tips;
+    s->balls = obj->ball_count;
+    s->ball_joints = st->ball_joints;
+    s->sharp_joints = st->sharp_joints;
+    s->unfitted_joints = st->unfitted_joints;
+    s->degenerate_segments = st->degenerate_segments;
+    s->cap_intersections_found = st->cap_intersections_found;
+    s->cap_intersections_unhandled = st->cap_intersections_unhandled;
+    s->seam_gap_max = st->seam_gap_max;
+    s->seam_gap_mean = st->seam_gap_mean;
+    s->radius_change_max = st->radius_change_max;
+    /* fit_error for skeleton input: how far the §2.2 fit moved the cone
+     * radii at the nodes from the input's. */
+    const int mesh_in = !strcmp(s->skeleton.input, "mesh");
+    s->fit_error_max = mesh_in ? s->skeleton.fit_error_max : st->radius_change_max;
+    s->fit_error_mean = mesh_in ? s->skeleton.fit_error_mean : st->radius_change_mean;
+}
+
+meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output** out,
+                             meso_bake_frusta_report* report, meso_error* err)
+{
+    if (!o || !out)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "meso_bake_frusta: NULL options or output");
+    *out = NULL;
+    meso_bake_frusta_options a = *o;
+    if (!a.relief_repeat)
+        a.relief_repeat = 1;
+    if (!(a.max_joint_angle >= 0 && a.max_joint_angle <= 180) || !(a.relief_repeat > 0 && a.relief_repeat <= 1e4) ||
+        !(a.relief_depth >= 0) || !(a.tolerance >= 0))
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
+                              "frusta options: max_joint_angle in [0, 180], relief_repeat in (0, 10000], "
+                              "relief_depth and tolerance >= 0");
+    if (a.relief_depth > 0 && !a.relief)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "frusta options: relief_depth needs a relief");
+    meso_bake_frusta_report rep_local;
+    meso_bake_frusta_report* s = report ? report : &rep_local;
+    memset(s, 0, sizeof(*s));
+    mesoi_bake_run run;
+    mesoi_run_begin(&run, &a.common);
+    meso_skeleton sk = {0};
+    meso_frustum_model m = {0};
+    meso_frusta_object obj = {0};
+    meso_texfn relief = {0};
+
+    meso_result r = load_skeleton(&run, a.input, a.tolerance, &sk, &s->skeleton, err);
+    s->skeleton.node_count = sk.node_count;
+    s->skeleton.root_count = sk.root_count;
+    if (r == MESO_OK && strcmp(s->skeleton.input, "mesh") != 0) /* nothing to draw is an invalid input, not a bake */
+        r = meso_skeleton_require_drawable(&sk, err);
+    if (r == MESO_OK)
+        mesoi_run_stage(&run, "skeleton", 0.5, 0.5, "%s: %u nodes, %u roots (%s input)", a.input, sk.node_count,
+                        sk.root_count, s->skeleton.input);
+    if (r == MESO_OK && a.relief) {
+        r = meso_texfn_from_spec_max(a.relief, run.common.max_memory, &relief, err);
+        if (r == MESO_OK && relief.kind != MESO_TEXFN_HEIGHT)
+            r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
+                               "--relief '%s' is a volume; frusta take height fields (height:FILE.png, bricks, "
+                               "cobble, ribs)",
+                               a.relief);
+    }
+    if (r == MESO_OK) {
+        meso_frustum_options fo = {.keep_cap_intersections = a.keep_cap_intersections,
+                                   .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle};
+        r = meso_frustum_model_build(&sk, &fo, &m, err);
+    }
+    if (r == MESO_OK)
+        mesoi_run_stage(&run, "frusta", 0.8, 0.8,
+                        "%u frusta, %u joints (%u ball joints: %u sharp, %u unfitted, cap intersections %u found, %u "
+                        "unhandled), %u branch points, seam gap max %.3g",
+                        m.stats.segments, m.stats.joints, m.stats.ball_joints, m.stats.sharp_joints,
+                        m.stats.unfitted_joints, m.stats.cap_intersections_found,
+                        m.stats.cap_intersections_unhandled, m.stats.branch_points, m.stats.seam_gap_max);
+    double depth = 0;
+    if (r == MESO_OK && a.relief) {
+        depth = a.relief_depth;
+        if (depth <= 0) {
+            double sum = 0;
+            for (uint32_t i = 0; i < m.segment_count; ++i)
+                sum += 0.5 * (m.segments[i].r0 + m.segments[i].r1);
+            depth = 0.25 * sum / m.segment_count;
+        }
+        if (!(depth > 0))
+            r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
+                               "--relief needs --relief-depth: every radius is 0, so no default depth");
+    }
+    s->relief_depth = depth;
+    if (r == MESO_OK) {
+        meso_frusta_relief_params rp = {.depth = depth, .u_repeat = a.relief_repeat};
+        r = meso_frusta_object_build(&sk, &m, &rp, &obj, err);
+    }
+    if (r == MESO_OK) {
+        fill_report(&m, &obj, s);
+        r = assemble(&a, &obj, &relief, s, out, err);
+    }
+    meso_texfn_free(&relief);
+    meso_frusta_object_free(&obj);
+    meso_frustum_model_free(&m);
+    meso_skeleton_free(&sk);
+    if (r == MESO_OK)
+        mesoi_run_done(&run);
+    return r;
+}

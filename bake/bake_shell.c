@@ -1,0 +1,444 @@
+/*
+ * bake_shell.c — meso_bake_shell (`mesobake shell`): a base mesh plus
+ * fold-free directors (volume-textures-lp-averaged-shells.md §4), validated
+ * exactly, in one .meso SHELL object: MESH (the base), SDIR (directors),
+ * STHK (thickness), and optionally a texture function (TX2D height field or
+ * TX3D density) with its distance map (DIST) and texture coordinates in the
+ * MESH (FORMAT.md §7.2, "Shell prisms and texture space"; the texture part
+ * is bake_shell_texture.c).
+ */
+#include "bake_shell.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "adapters.h"
+#include "lp_distance.h"
+#include "mesh_check.h"
+#include "mesh_chunk.h"
+#include "shell_hybrid.h"
+#include "shell_validate.h"
+
+meso_bake_shell_options meso_bake_shell_defaults(void)
+{
+    return (meso_bake_shell_options){.thickness_rel = 0.05, .p = 3.0, .theta = 0.5, .angle_tol_deg = 5.0,
+                                     .tiling = {1.0, 1.0}, .dist_dtype = MESO_DTYPE_U8};
+}
+
+/* Zeroes to their defaults (theta excepted: 0 is exact summation), then the
+ * ranges mesobake shell's options have. */
+static meso_result normalise(const meso_bake_shell_options* o, meso_bake_shell_options* a, meso_error* err)
+{
+    *a = *o;
+    if (!a->thickness_rel)
+        a->thickness_rel = 0.05;
+    if (!a->p)
+        a->p = 3.0;
+    if (!a->angle_tol_deg)
+        a->angle_tol_deg = 5.0;
+    for (int k = 0; k < 2; ++k)
+        if (!a->tiling[k])
+            a->tiling[k] = 1.0;
+    if (!a->dist_dtype)
+        a->dist_dtype = MESO_DTYPE_U8;
+    const char* bad = !a->input                                                   ? "no input mesh given"
+                      : (unsigned)a->kind >= MESO_SHELL_KIND_COUNT                ? "kind out of range"
+                      : (unsigned)a->directors >= MESO_DIRECTORS_COUNT            ? "directors out of range"
+                      : !(a->thickness >= 0 && a->thickness < 1e30)               ? "thickness must be >= 0"
+                      : !(a->thickness_rel > 0 && a->thickness_rel <= 10)         ? "thickness_rel must be in (0, 10]"
+                      : !(a->p > 2.0 && a->p <= MESO_BAKE_MAX_P)                  ? "p must be in (2, 16]"
+                      : !(a->theta >= 0 && a->theta <= 1.5)                       ? "theta must be in [0, 1.5]"
+                      : !(a->angle_tol_deg > 0 && a->angle_tol_deg <= 90)         ? "angle_tol_deg must be in (0, 90]"
+                      : a->smooth < 0 || a->smooth > 1000                         ? "smooth must be in 0..1000"
+                      : !(a->tiling[0] > 0 && a->tiling[0] <= 1e6 && a->tiling[1] > 0 && a->tiling[1] <= 1e6)
+                          ? "tiling must be in (0, 1e6]"
+                      : a->dist_dtype != MESO_DTYPE_U8 && a->dist_dtype != MESO_DTYPE_U16 &&
+                              a->dist_dtype != MESO_DTYPE_F32
+                          ? "dist_dtype must be U8, U16 or F32"
+                          : NULL;
+    for (int k = 0; !bad && k < 3; ++k)
+        if (a->dist_res[k] > MESO_BAKE_MAX_DIST_RES || (!a->dist_res[k]) != (!a->dist_res[0]))
+            bad = "dist_res must be 0, 0, 0 or each in 1..512";
+    if (!bad && !a->texture &&
+        (a->dist_res[0] || a->dist_dtype != MESO_DTYPE_U8 || a->tiling[0] != 1.0 || a->tiling[1] != 1.0))
+        bad = "tiling, dist_res and dist_dtype need a texture";
+    return bad ? meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "shell options: %s", bad) : MESO_OK;
+}
+
+static void report_json(cJSON* rep, const meso_bake_shell_report* s)
+{
+    cJSON_AddNumberToObject(rep, "prisms", s->prisms);
+    cJSON_AddNumberToObject(rep, "inverted_prisms", s->inverted_prisms);
+    cJSON_AddNumberToObject(rep, "undecided_prisms", s->undecided_prisms);
+    cJSON_AddNumberToObject(rep, "offset_self_intersections", (double)s->offset_self_intersections);
+    cJSON_AddNumberToObject(rep, "offset_base_intersections", (double)s->offset_base_intersections);
+    cJSON_AddNumberToObject(rep, "thickness_ratio_min", s->thickness_ratio_min);
+    cJSON_AddNumberToObject(rep, "thickness_ratio_mean", s->thickness_ratio_mean);
+    cJSON_AddNumberToObject(rep, "vertices_lp", s->vertices_lp);
+    cJSON_AddNumberToObject(rep, "vertices_normal", s->vertices_normal);
+    cJSON_AddNumberToObject(rep, "hybrid_rounds", s->hybrid_rounds);
+    cJSON_AddNumberToObject(rep, "vertices_shortened", s->vertices_shortened);
+    cJSON_AddNumberToObject(rep, "field_evaluations", (double)s->field_evaluations);
+    cJSON_AddNumberToObject(rep, "artificial_faces", s->artificial_faces);
+}
+
+/* Refuse what no shell can be built on, before any work: the topology
+ * (mesh_check.h) and, with CGAL, a surface that intersects itself. */
+static meso_result require_shellable(const meso_mesh* m, const char* path, double diag, meso_mesh_topology* topo,
+                                     meso_error* err)
+{
+    meso_result r = meso_mesh_topology_compute(m, 1e-14 * diag * diag, topo, err);
+    if (r == MESO_OK)
+        r = meso_mesh_topology_require_shellable(topo, path, err);
+#if MESO_HAVE_CGAL
+    if (r == MESO_OK) {
+        const uint32_t nv = m->vertex_count;
+        double* xyz = malloc(sizeof(double) * 3 * (size_t)nv);
+        meso_cgal_intersection_count c = {0, 0, 0};
+        r = xyz ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        for (size_t i = 0; xyz && i < 3 * (size_t)nv; ++i)
+            xyz[i] = m->positions[i];
+        if (r == MESO_OK)
+            r = meso_cgal_self_intersections(xyz, nv, m->indices, m->triangle_count, &c, err);
+        free(xyz);
+        if (r == MESO_OK && c.pairs)
+            r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3114,
+                               "%s: the surface intersects itself (%llu triangle pairs); no shell over it can be "
+                               "valid — repair the mesh first",
+                               path, (unsigned long long)c.pairs);
+    }
+#endif
+    return r;
+}
+
+/* The output's per-vertex floats from the mesh's: `layers` stacked arrays
+ * of 3 floats per vertex, output vertex o taking mesh vertex source[o].
+ * Returns NULL when out of memory. */
+static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint32_t n, int layers)
+{
+    float* out = malloc(sizeof(float) * 3 * (size_t)n * (size_t)layers);
+    for (size_t l = 0; out && l < (size_t)layers; ++l)
+        for (size_t o = 0; o < n; ++o)
+            memcpy(out + 3 * (l * n + o), in + 3 * (l * nv + source[o]), 3 * sizeof(float));
+    return out;
+}
+
+/* One shell bake's buffers, freed together by shell_free. */
+typedef struct shell_bake {
+    meso_bake_shell_options a; /* the options, defaults filled in */
+    mesoi_bake_run run;
+    meso_bake_shell_report* rep;
+    mesoi_shell_texture tx;
+    meso_mesh m;
+    meso_mesh_topology topo;
+    double lo[3], hi[3], h;
+    float* normals;
+    float* d;         /* directors: layers x 3 nv (envelope: top, then bottom) */
+    uint8_t *lp_mask, *lp_side;
+    meso_field_surface fs;
+    meso_lp_field* field;
+} shell_bake;
+
+static void shell_free(shell_bake* s)
+{
+    mesoi_shell_texture_free(&s->tx);
+    meso_lp_field_destroy(s->field);
+    meso_field_surface_free(&s->fs);
+    free(s->normals);
+    free(s->d);
+    free(s->lp_mask);
+    free(s->lp_side);
+    free(s->topo.boundary);
+    meso_mesh_free(&s->m);
+}
+
+/* Directors for each side (the Lp field, hybrid or normal), repaired unless
+ * asked not to. Exterior: layer 0 along +n. Interior: layer 0 along -n.
+ * Envelope: layer 0 (top) along +n, layer 1 (bottom) along -n. */
+static meso_result directors(shell_bake* s, meso_error* err)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const meso_mesh* m = &s->m;
+    const uint32_t nv = m->vertex_count;
+    const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    const double h_side = a->kind == MESO_SHELL_ENVELOPE ? 0.5 * s->h : s->h;
+    s->normals = malloc(sizeof(float) * 3 * (size_t)nv);
+    s->d = calloc(3 * (size_t)nv * (size_t)layers, sizeof(float));
+    s->lp_mask = calloc(nv, 1);
+    s->lp_side = calloc(nv, 1);
+    meso_result r = s->normals && s->d && s->lp_mask && s->lp_side ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    if (r == MESO_OK)
+        r = meso_vertex_normals(m, s->normals, err);
+    if (r == MESO_OK)
+        r = meso_field_surface_build(m, s->normals, s->topo.boundary, s->topo.boundary_edges, h_side, &s->fs, err);
+    if (r == MESO_OK && a->directors != MESO_DIRECTORS_NORMAL) {
+        const meso_lp_options lo_opt = {.p = a->p, .theta = a->theta, .near_radius = 2.0 * h_side};
+        r = meso_lp_field_create(s->fs.positions, s->fs.vertex_count, s->fs.indices, s->fs.triangle_count, &lo_opt,
+                                 &s->field, err);
+    }
+    const meso_trace_options topt = {.thickness = h_side, .angle_tol = a->angle_tol_deg * M_PI / 180.0,
+                                     .theta = a->theta, .smooth_iterations = a->smooth,
+                                     .progress = s->run.common.progress ? mesoi_run_tick : NULL,
+                                     .progress_user = &s->run};
+    meso_trace_stats ts = {0, 0, 0};
+    for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
+        const int sign = (a->kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
+        const double f0 = 0.2 + 0.6 * layer / layers, f1 = 0.2 + 0.6 * (layer + 1) / layers;
+        mesoi_run_stage(&s->run, "directors", f0, f1 - 0.05, NULL);
+        meso_hybrid_stats hs;
+        float* dl = s->d + 3 * (size_t)nv * (size_t)layer;
+        r = meso_shell_side_directors(s->field, m, s->normals, sign, &topt, a->directors, s->run.common.threads, dl,
+                                      s->lp_side, &hs, &ts, err);
+        for (uint32_t v = 0; v < nv; ++v)
+            s->lp_mask[v] |= s->lp_side[v];
+        s->rep->hybrid_rounds += hs.rounds;
+        if (r == MESO_OK)
+            mesoi_run_stage(&s->run, "directors", f1 - 0.05, f1,
+                            "directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations (%.0f ms)",
+                            sign > 0 ? "outer" : "inner", meso_bake_directors_name(a->directors), hs.vertices_lp,
+                            hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations, mesoi_run_ms(&s->run));
+        if (r == MESO_OK && !a->no_repair) {
+            uint32_t shortened = 0, rounds = 0, left = 0;
+            r = meso_shell_repair(m, dl, sign, 30, &shortened, &rounds, &left, err);
+            s->rep->vertices_shortened += shortened;
+            if (r == MESO_OK)
+                mesoi_run_stage(&s->run, "repair", f1, f1,
+                                "repair: %u vertices shortened in %u rounds, %u faces still bad",
+                                shortened, rounds, left);
+        }
+    }
+    uint32_t lp_count = 0;
+    for (uint32_t v = 0; s->lp_mask && v < nv; ++v)
+        lp_count += s->lp_mask[v];
+    s->rep->vertices_lp = lp_count;
+    s->rep->vertices_normal = nv - lp_count;
+    s->rep->field_evaluations = ts.evaluations;
+    s->rep->artificial_faces = s->fs.artificial_faces;
+    return r;
+}
+
+/* Validate the shell as it will be rendered: prisms from bottom to top. */
+static meso_result validate(shell_bake* s, meso_error* err)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const uint32_t nv = s->m.vertex_count;
+    meso_shell_report val;
+    memset(&val, 0, sizeof(val));
+    meso_result r;
+    if (a->kind == MESO_SHELL_ENVELOPE) {
+        meso_mesh bottom = s->m;
+        float* pos = malloc(sizeof(float) * 3 * (size_t)nv);
+        float* span = malloc(sizeof(float) * 3 * (size_t)nv);
+        r = pos && span ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        for (size_t i = 0; r == MESO_OK && i < 3 * (size_t)nv; ++i) {
+            pos[i] = s->m.positions[i] + s->d[3 * (size_t)nv + i];
+            span[i] = s->d[i] - s->d[3 * (size_t)nv + i];
+        }
+        bottom.positions = pos;
+        if (r == MESO_OK)
+            r = meso_shell_validate(&bottom, span, NULL, s->h, 1, NULL, &val, err);
+        free(pos);
+        free(span);
+    } else {
+        r = meso_shell_validate(&s->m, s->d, NULL, s->h, a->kind == MESO_SHELL_INTERIOR ? -1 : 1, NULL, &val, err);
+    }
+    meso_bake_shell_report* rep = s->rep;
+    rep->prisms = val.prisms;
+    rep->inverted_prisms = val.inverted_prisms;
+    rep->undecided_prisms = val.undecided_prisms;
+    rep->offset_self_intersections = val.offset_self_intersections;
+    rep->offset_base_intersections = val.offset_base_intersections;
+    rep->thickness_ratio_min = val.thickness_ratio_min;
+    rep->thickness_ratio_mean = val.thickness_ratio_mean;
+    if (r == MESO_OK)
+        mesoi_run_stage(&s->run, "validate", 0.9, 0.9,
+                        "validated: %u/%u prisms inverted (%u undecided), %llu offset self-intersections, %llu "
+                        "offset/base intersections, thickness ratio min %.3f mean %.3f (%.0f ms)",
+                        val.inverted_prisms, val.prisms, val.undecided_prisms,
+                        (unsigned long long)val.offset_self_intersections,
+                        (unsigned long long)val.offset_base_intersections, val.thickness_ratio_min,
+                        val.thickness_ratio_mean, mesoi_run_ms(&s->run));
+    return r;
+}
+
+/* The file: base mesh with the normals the directors started from (and the
+ * texture coordinates of the texture function), SDIR, STHK, the texture
+ * function and its distance map. Everything per vertex is written for the
+ * output vertices: the mesh's, plus the copies split off at uv seams. */
+static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* err)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const mesoi_shell_texture* tx = &s->tx;
+    const meso_mesh* m = &s->m;
+    const uint32_t nv = m->vertex_count, nv_out = nv + tx->seam_vertices;
+    const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    float *pos_out = NULL, *normals_out = NULL, *sdir_out = NULL, *thick = NULL;
+    meso_mesh_chunk chunk = {0};
+    meso_mesh base = *m;
+    base.normals = s->normals;
+    if (tx->uvs)
+        base.uvs = tx->uvs;
+    if (tx->source) {
+        pos_out = gather3(m->positions, nv, tx->source, nv_out, 1);
+        normals_out = gather3(s->normals, nv, tx->source, nv_out, 1);
+        base.vertex_count = nv_out;
+        base.positions = pos_out;
+        base.normals = normals_out;
+        base.indices = tx->indices;
+        base.corner_uvs = NULL;
+    }
+    meso_result r = !tx->source || (pos_out && normals_out)
+                        ? meso_bake_mesh_chunk(&base, NULL, &chunk, err)
+                        : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    /* SDIR as FORMAT.md §7.2 has it: L = 1 for exterior shells; L = 2 for
+     * envelopes (top, bottom) and for interior shells, whose layer 0 is zero
+     * (top = the base surface) and layer 1 the inward director (bottom). */
+    const int sdir_layers = a->kind == MESO_SHELL_EXTERIOR ? 1 : 2;
+    float* sdir = s->d;
+    if (r == MESO_OK && a->kind == MESO_SHELL_INTERIOR) {
+        sdir = calloc(3 * (size_t)nv * 2, sizeof(float));
+        r = sdir ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        if (sdir)
+            memcpy(sdir + 3 * (size_t)nv, s->d, sizeof(float) * 3 * (size_t)nv);
+    }
+    if (r == MESO_OK && tx->source) {
+        sdir_out = gather3(sdir, nv, tx->source, nv_out, sdir_layers);
+        r = sdir_out ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    }
+    if (r == MESO_OK) {
+        thick = malloc(sizeof(float) * (size_t)nv_out);
+        r = thick ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        for (uint32_t v = 0; thick && v < nv_out; ++v)
+            thick[v] = (float)s->h;
+    }
+    cJSON *meta = NULL, *rep = NULL;
+    if (r == MESO_OK) {
+        meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_SHELL};
+        for (int k = 0; k < 3; ++k) {
+            rec.bbox_min[k] = (float)s->lo[k];
+            rec.bbox_max[k] = (float)s->hi[k];
+        }
+        for (size_t i = 0; i < (size_t)nv * (size_t)layers; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const float x = m->positions[3 * (i % nv) + (size_t)k] + s->d[3 * i + (size_t)k];
+                rec.bbox_min[k] = fminf(rec.bbox_min[k], x);
+                rec.bbox_max[k] = fmaxf(rec.bbox_max[k], x);
+            }
+        snprintf(rec.name, sizeof(rec.name), "%s", mesoi_base_name(a->input));
+
+        meta = mesoi_meta_new("shell");
+        cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
+        cJSON_AddNumberToObject(params, "thickness", s->h);
+        cJSON_AddStringToObject(params, "kind", meso_bake_shell_kind_name(a->kind));
+        cJSON_AddStringToObject(params, "directors", meso_bake_directors_name(a->directors));
+        cJSON_AddNumberToObject(params, "p", a->p);
+        cJSON_AddNumberToObject(params, "theta", a->theta);
+        cJSON_AddNumberToObject(params, "angle_tol_deg", a->angle_tol_deg);
+        cJSON_AddNumberToObject(params, "smooth", (double)a->smooth);
+        cJSON_AddBoolToObject(params, "repair", !a->no_repair);
+        if (a->texture)
+            mesoi_shell_texture_json(params, a, tx, 0);
+        r = mesoi_add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, err);
+        rep = cJSON_CreateObject();
+        report_json(rep, s->rep);
+        mesoi_report_fixes(rep, &s->rep->fixes);
+        if (a->texture)
+            mesoi_shell_texture_json(rep, a, tx, 1);
+        const int height = tx->fn.kind == MESO_TEXFN_HEIGHT;
+        const mesoi_chunk chunks[5] = {
+            {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
+                      .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
+             .data = chunk.data, .size = chunk.size},
+            {.desc = {.type = MESO_CHUNK_SDIR, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
+                      .dtype = MESO_DTYPE_F32, .components = 3, .dims = {nv_out, (uint32_t)sdir_layers, 1}},
+             .data = sdir_out ? sdir_out : sdir, .size = sizeof(float) * 3 * (size_t)nv_out * (size_t)sdir_layers},
+            {.desc = {.type = MESO_CHUNK_STHK, .object = 1, .dtype = MESO_DTYPE_F32, .components = 1,
+                      .dims = {nv_out, 1, 1}},
+             .data = thick, .size = sizeof(float) * (size_t)nv_out},
+            /* The texture function and its distance map (object 1, lod 0). */
+            {.desc = {.type = height ? MESO_CHUNK_TX2D : MESO_CHUNK_TX3D, .object = 1, .dtype = tx->fn.dtype,
+                      .components = 1, .dims = {tx->fn.dims[0], tx->fn.dims[1], tx->fn.dims[2]}},
+             .data = tx->fn.encoded, .size = tx->fn.encoded_size},
+            {.desc = {.type = MESO_CHUNK_DIST, .object = 1, .dtype = tx->dist.dtype, .components = 1,
+                      .dims = {tx->dist.dims[0], tx->dist.dims[1], tx->dist.dims[2]}},
+             .data = tx->dist.encoded, .size = tx->dist.encoded_size},
+        };
+        if (r == MESO_OK)
+            r = mesoi_output_build(meta, rep, &rec, chunks, a->texture ? 5 : 3, out, err);
+    }
+    cJSON_Delete(meta);
+    cJSON_Delete(rep);
+    free(chunk.data);
+    free(thick);
+    free(pos_out);
+    free(normals_out);
+    free(sdir_out);
+    if (sdir != s->d)
+        free(sdir);
+    return r;
+}
+
+meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output** out, meso_bake_shell_report* report,
+                            meso_error* err)
+{
+    if (!o || !out)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "meso_bake_shell: NULL options or output");
+    *out = NULL;
+    meso_bake_shell_report rep_local;
+    shell_bake s;
+    memset(&s, 0, sizeof(s));
+    s.rep = report ? report : &rep_local;
+    memset(s.rep, 0, sizeof(*s.rep));
+    meso_result r = normalise(o, &s.a, err);
+    if (r != MESO_OK)
+        return r;
+    const meso_bake_shell_options* a = &s.a;
+    mesoi_run_begin(&s.run, &a->common);
+    /* The texture first: a bad spec fails before any mesh work. */
+    if (a->texture)
+        r = mesoi_shell_texture_prepare(&s.run, a, &s.tx, err);
+    if (r == MESO_OK)
+        r = mesoi_load_mesh(&s.run, a->input, &s.m, &s.rep->fixes, err);
+    const double diag = r == MESO_OK ? meso_mesh_bounds(&s.m, s.lo, s.hi) : 0;
+    s.h = a->thickness > 0 ? a->thickness : a->thickness_rel * diag;
+    if (r == MESO_OK)
+        r = require_shellable(&s.m, a->input, diag, &s.topo, err);
+    if (r == MESO_OK && a->texture)
+        r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
+    meso_bake_shell_report* rep = s.rep;
+    rep->vertices = s.m.vertex_count;
+    rep->triangles = s.m.triangle_count;
+    rep->boundary_edges = s.topo.boundary_edges;
+    rep->thickness = s.h;
+    rep->bbox_diagonal = diag;
+    rep->density = s.tx.fn.kind == MESO_TEXFN_DENSITY;
+    memcpy(rep->texture_res, s.tx.fn.dims, sizeof(rep->texture_res));
+    memcpy(rep->dist_res, s.tx.dist.dims, sizeof(rep->dist_res));
+    rep->dist_solid_cells = s.tx.dist.solid_cells;
+    rep->seam_vertices = s.tx.seam_vertices;
+    rep->planar_uvs = s.tx.plane[0] != 0;
+    if (r == MESO_OK)
+        mesoi_run_stage(&s.run, "load", 0.15, 0.15,
+                        "%s: %u vertices, %u triangles, %u boundary edges; thickness %g (%.3g of the diagonal) "
+                        "(%.0f ms)",
+                        mesoi_base_name(a->input), s.m.vertex_count, s.m.triangle_count, s.topo.boundary_edges, s.h,
+                        s.h / diag, mesoi_run_ms(&s.run));
+    if (r == MESO_OK && a->texture)
+        mesoi_run_stage(&s.run, "texture coordinates", 0.2, 0.2,
+                        "texture coordinates (%s): %u seam vertices added, %u output vertices", s.tx.uv_source,
+                        s.tx.seam_vertices, s.m.vertex_count + s.tx.seam_vertices);
+    if (r == MESO_OK)
+        r = directors(&s, err);
+    if (r == MESO_OK)
+        r = validate(&s, err);
+    if (r == MESO_OK)
+        r = assemble(&s, out, err);
+    shell_free(&s);
+    if (r == MESO_OK)
+        mesoi_run_done(&s.run);
+    return r;
+}

@@ -1,0 +1,188 @@
+/*
+ * bake_shell_texture.c — the texture function of a shell bake
+ * (meso_bake_shell --texture): the SPEC sampled (texture_function.h), its
+ * distance map (distance_map.h), and texture coordinates per vertex, split
+ * at uv seams (FORMAT.md §7.2, "Shell prisms and texture space").
+ */
+#include "bake_shell.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "memory_budget.h"
+#include "meso_clock.h"
+
+void mesoi_shell_texture_free(mesoi_shell_texture* tx)
+{
+    meso_texfn_free(&tx->fn);
+    meso_distmap_free(&tx->dist);
+    free(tx->uvs);
+    free(tx->source);
+    free(tx->indices);
+}
+
+/* Parse the spec, sample the function, bake its distance map. */
+meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_shell_options* a, mesoi_shell_texture* tx,
+                                        meso_error* err)
+{
+    double t = meso_seconds();
+    meso_result r = meso_texfn_from_spec_max(a->texture, run->common.max_memory, &tx->fn, err);
+    if (r != MESO_OK)
+        return r;
+    const uint32_t* td = tx->fn.dims;
+    mesoi_run_stage(run, "texture", 0.05, 0.05, "texture %s: %s %ux%ux%u %s (%.0f ms)", a->texture,
+                    tx->fn.kind == MESO_TEXFN_HEIGHT ? "height field" : "density volume", td[0], td[1], td[2],
+                    tx->fn.dtype == MESO_DTYPE_U8 ? "u8" : "u16", 1e3 * (meso_seconds() - t));
+    uint32_t res[3] = {a->dist_res[0], a->dist_res[1], a->dist_res[2]};
+    if (!res[0])
+        meso_distmap_default_res(&tx->fn, res);
+    /* Limits up front: the texture is held, the distance map not yet made. */
+    const uint64_t cells = (uint64_t)res[0] * res[1] * res[2];
+    const uint64_t texels = (uint64_t)td[0] * td[1] * td[2];
+    r = meso_budget_check(meso_size_add(meso_texture_estimate(texels), meso_distmap_estimate(cells)),
+                          run->common.max_memory, MESO_LIMIT_ISSUE_REQUEST, err,
+                          "distance map %ux%ux%u (%s) of a %ux%ux%u texture", res[0], res[1], res[2],
+                          a->dist_res[0] ? "--dist-res" : "default", td[0], td[1], td[2]);
+    if (r != MESO_OK)
+        return r;
+    t = meso_seconds();
+    tx->dist_type = a->dist_dtype == MESO_DTYPE_F32 ? "f32" : a->dist_dtype == MESO_DTYPE_U16 ? "u16" : "u8";
+    r = meso_distmap_build(&tx->fn, res, a->dist_dtype, run->common.threads, &tx->dist, err);
+    if (r == MESO_OK)
+        mesoi_run_stage(run, "distance map", 0.1, 0.1,
+                        "distance map %ux%ux%u %s (%s): %llu of %llu cells touch the solid (%.0f ms)", res[0], res[1],
+                        res[2], tx->dist_type, a->dist_res[0] ? "--dist-res" : "default",
+                        (unsigned long long)tx->dist.solid_cells, (unsigned long long)res[0] * res[1] * res[2],
+                        1e3 * (meso_seconds() - t));
+    return r;
+}
+
+/* Per-corner uvs into one uv per vertex: each distinct (vertex, corner uv)
+ * pair (exact float bits) becomes one output vertex. Vertex v keeps index v
+ * and the uv of its first corner (faces in order, corners in order); every
+ * further uv it has appends a copy, numbered from nv in order of first
+ * appearance. A vertex no face uses keeps its per-vertex uv. Copies share
+ * position and director, so the shell stays closed across the seam. */
+static meso_result split_seams(const meso_bake_shell_options* a, const meso_mesh* m, mesoi_shell_texture* tx,
+                               meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, none = UINT32_MAX;
+    const size_t nc = 3 * (size_t)m->triangle_count, cap = (size_t)nv + nc; /* < 2^32: the reader's limits */
+    uint32_t* next = malloc(sizeof(uint32_t) * cap); /* next copy of the same vertex, or `none` */
+    float* uv = malloc(sizeof(float) * 2 * cap);
+    uint8_t* used = calloc(nv ? nv : 1, 1);
+    tx->source = malloc(sizeof(uint32_t) * cap);
+    tx->indices = malloc(sizeof(uint32_t) * (nc ? nc : 1));
+    meso_result r = next && uv && used && tx->source && tx->indices ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    uint32_t n = nv;
+    for (uint32_t v = 0; r == MESO_OK && v < nv; ++v) {
+        next[v] = none;
+        tx->source[v] = v;
+        memcpy(uv + 2 * (size_t)v, m->uvs + 2 * (size_t)v, 2 * sizeof(float));
+    }
+    for (size_t c = 0; r == MESO_OK && c < nc; ++c) {
+        const uint32_t v = m->indices[c];
+        const float* cu = m->corner_uvs + 2 * c;
+        uint32_t o = v, last = v;
+        if (!used[v]) {
+            used[v] = 1;
+            memcpy(uv + 2 * (size_t)v, cu, 2 * sizeof(float));
+        }
+        while (o != none && memcmp(uv + 2 * (size_t)o, cu, 2 * sizeof(float)) != 0) {
+            last = o;
+            o = next[o];
+        }
+        if (o == none) {
+            o = n++;
+            next[last] = o;
+            next[o] = none;
+            tx->source[o] = v;
+            memcpy(uv + 2 * (size_t)o, cu, 2 * sizeof(float));
+        }
+        tx->indices[c] = o;
+    }
+    if (r == MESO_OK) {
+        tx->uvs = malloc(sizeof(float) * 2 * (size_t)n);
+        r = tx->uvs ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    }
+    for (size_t o = 0; r == MESO_OK && o < n; ++o) {
+        tx->uvs[2 * o] = (float)(uv[2 * o] * a->tiling[0]);
+        tx->uvs[2 * o + 1] = (float)(uv[2 * o + 1] * a->tiling[1]);
+    }
+    tx->seam_vertices = n - nv;
+    free(next);
+    free(uv);
+    free(used);
+    return r == MESO_OK ? MESO_OK : meso_bake_fail(err, r, 0, "out of memory");
+}
+
+/* Texture coordinates: the mesh's own times the tiling (split at seams when
+ * the mesh has per-corner uvs), or (documented fallback) a planar projection
+ * onto the two largest bounding-box extents, the longest spanning U tiles and
+ * the other V/U as densely. */
+meso_result mesoi_shell_texture_uvs(mesoi_bake_run* run, const meso_bake_shell_options* a, const meso_mesh* m,
+                                    const double lo[3], const double hi[3], mesoi_shell_texture* tx, meso_error* err)
+{
+    const uint32_t nv = m->vertex_count;
+    tx->uv_source = "mesh";
+    if (m->corner_uvs)
+        return split_seams(a, m, tx, err);
+    tx->uvs = malloc(sizeof(float) * 2 * (size_t)nv);
+    if (!tx->uvs)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    if (m->uvs) {
+        for (size_t v = 0; v < nv; ++v) {
+            tx->uvs[2 * v] = (float)(m->uvs[2 * v] * a->tiling[0]);
+            tx->uvs[2 * v + 1] = (float)(m->uvs[2 * v + 1] * a->tiling[1]);
+        }
+        return MESO_OK;
+    }
+    int ax[3] = {0, 1, 2}; /* by decreasing extent; ties keep x, y, z order */
+    for (int i = 0; i < 3; ++i)
+        for (int j = i + 1; j < 3; ++j)
+            if (hi[ax[j]] - lo[ax[j]] > hi[ax[i]] - lo[ax[i]]) {
+                const int k = ax[i];
+                ax[i] = ax[j];
+                ax[j] = k;
+            }
+    const double ext = hi[ax[0]] - lo[ax[0]] > 0 ? hi[ax[0]] - lo[ax[0]] : 1.0;
+    for (size_t v = 0; v < nv; ++v) {
+        tx->uvs[2 * v] = (float)((m->positions[3 * v + (size_t)ax[0]] - lo[ax[0]]) / ext * a->tiling[0]);
+        tx->uvs[2 * v + 1] = (float)((m->positions[3 * v + (size_t)ax[1]] - lo[ax[1]]) / ext * a->tiling[1]);
+    }
+    tx->uv_source = "planar";
+    tx->plane[0] = (char)('x' + ax[0]);
+    tx->plane[1] = (char)('x' + ax[1]);
+    tx->plane[2] = 0;
+    mesoi_run_warning(run, 0,
+                      "%s has no texture coordinates; projecting it onto its %s plane (the two largest bounding-box "
+                      "extents), %c spanning %g tiles",
+                      mesoi_base_name(a->input), tx->plane, tx->plane[0], a->tiling[0]);
+    return MESO_OK;
+}
+
+/* META.parameters.texture and the report's "texture". */
+void mesoi_shell_texture_json(cJSON* parent, const meso_bake_shell_options* a, const mesoi_shell_texture* tx,
+                              int report)
+{
+    cJSON* o = cJSON_AddObjectToObject(parent, "texture");
+    cJSON_AddStringToObject(o, "spec", a->texture);
+    cJSON_AddStringToObject(o, "kind", tx->fn.kind == MESO_TEXFN_HEIGHT ? "height" : "density");
+    const double tex_dims[3] = {tx->fn.dims[0], tx->fn.dims[1], tx->fn.dims[2]};
+    cJSON_AddItemToObject(o, "texture_res",
+                          cJSON_CreateDoubleArray(tex_dims, tx->fn.kind == MESO_TEXFN_HEIGHT ? 2 : 3));
+    cJSON_AddItemToObject(o, "tiling", cJSON_CreateDoubleArray(a->tiling, 2));
+    const double dd[3] = {tx->dist.dims[0], tx->dist.dims[1], tx->dist.dims[2]};
+    cJSON_AddItemToObject(o, "dist_res", cJSON_CreateDoubleArray(dd, 3));
+    cJSON_AddStringToObject(o, "dist_type", tx->dist_type);
+    cJSON_AddStringToObject(o, "uv_source", tx->uv_source);
+    if (tx->plane[0])
+        cJSON_AddStringToObject(o, "uv_plane", tx->plane);
+    if (report) {
+        cJSON_AddNumberToObject(o, "dist_solid_cells", (double)tx->dist.solid_cells);
+        cJSON_AddNumberToObject(o, "seam_vertices", tx->seam_vertices);
+    }
+}
