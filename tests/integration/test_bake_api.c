@@ -255,6 +255,7 @@ static void shell_bakes_match_the_cli(void)
         assert(log.warnings == cases[c].warnings && rep.planar_uvs == cases[c].warnings);
         assert(rep.prisms == rep.triangles && rep.thickness > 0 && rep.dist_res[0] > 0);
         assert(rep.vertices_lp + rep.vertices_normal == rep.vertices);
+        assert(cases[c].directors != MESO_DIRECTORS_LP || log.ticks > 0); /* tracing reports progress */
         same_as_cli(out, cases[c].name, cases[c].args);
         meso_bake_output_free(out);
     }
