@@ -15,6 +15,7 @@
 
 #include "meso_layout.h"
 
+#if MESO_HAVE_DRACO /* only the Draco header check reads stored fields */
 static uint32_t rd32(const uint8_t* p)
 {
     return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
@@ -24,6 +25,7 @@ static uint64_t rd64(const uint8_t* p)
 {
     return (uint64_t)rd32(p) | ((uint64_t)rd32(p + 4) << 32);
 }
+#endif
 
 static uint32_t mesh_attributes(const meso_mesh* m)
 {

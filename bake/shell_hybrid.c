@@ -27,13 +27,14 @@
 meso_result meso_shell_bad_faces(const meso_mesh* m, const float* d, int sign, uint8_t* bad, uint32_t* count,
                                  meso_error* err)
 {
-    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    const uint32_t nt = m->triangle_count;
     meso_result r = meso_shell_count_inverted(m, d, sign, bad, NULL, NULL, err);
     if (r != MESO_OK)
         return r;
     for (uint32_t f = 0; f < nt; ++f)
         bad[f] = bad[f] ? 1 : 0;
 #if MESO_HAVE_CGAL
+    const uint32_t nv = m->vertex_count;
     double* base = malloc(sizeof(double) * 3 * (size_t)nv);
     double* top = malloc(sizeof(double) * 3 * (size_t)nv);
     uint8_t* flags_top = calloc(nt ? nt : 1, 1);

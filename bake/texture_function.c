@@ -397,6 +397,7 @@ static meso_result spec_error(meso_error* err, const char* spec, const char* wha
                           spec, what);
 }
 
+#if MESO_HAVE_OPENVDB /* the .vdb reader is the only user */
 static meso_result check_readable(const char* path, meso_error* err)
 {
     FILE* fp = fopen(path, "rb");
@@ -405,6 +406,7 @@ static meso_result check_readable(const char* path, meso_error* err)
     fclose(fp);
     return MESO_OK;
 }
+#endif
 
 /* Bytes a pixel that load_png_height holds beside the reader's: the floats
  * (4 B), then the function's values (4 B) and payload (2 B). */
