@@ -57,4 +57,10 @@ C
 flags=$(pkg-config --cflags --libs meso-bake)
 $cc -std=c99 -Wall -Werror $sanflags "$dest/use_bake.c" $flags -o "$dest/use_bake"
 LD_LIBRARY_PATH="$(pkg-config --variable=libdir meso-bake)" "$dest/use_bake" | grep -qx "ok lp"
-echo "installed meso-bake.pc builds and runs a C program"
+# Statically: libmeso_bake.a carries the format library and the adapters;
+# `pkg-config --static` must name everything else, the C++ runtime included.
+libdir=$(pkg-config --variable=libdir meso-bake)
+static_flags=$(pkg-config --static --cflags --libs meso-bake | sed "s|-lmeso_bake|$libdir/libmeso_bake.a|")
+$cc -std=c99 -Wall -Werror $sanflags "$dest/use_bake.c" $static_flags -o "$dest/use_bake_static"
+"$dest/use_bake_static" | grep -qx "ok lp"
+echo "installed meso-bake.pc builds and runs a C program, shared and static"
