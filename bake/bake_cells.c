@@ -247,7 +247,7 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
         rec.bbox_min[k] = (float)g->origin[k];
         rec.bbox_max[k] = (float)(g->origin[k] + (double)g->tiles[k] * R * g->voxel_size);
     }
-    snprintf(rec.name, sizeof(rec.name), "%s", mesoi_base_name(a->input));
+    snprintf(rec.name, sizeof(rec.name), "%s", mesoi_input_label(a->input));
     cJSON* meta = mesoi_meta_new("cells");
     cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
     cJSON_AddStringToObject(params, "tile_map", a->tile_map);
@@ -255,7 +255,7 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     cJSON_AddNumberToObject(params, "tiles", g->tiles[0]);
     cJSON_AddStringToObject(params, "colour", a->colour);
     cJSON_AddStringToObject(params, "voxelizer", a->voxelizer);
-    r = mesoi_add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, err);
+    r = mesoi_add_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, a->mesh, err);
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
 
@@ -318,9 +318,9 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
     const meso_voxelizer method = !strcmp(a->voxelizer, "winding") ? MESO_VOXELIZE_WINDING
                                   : !strcmp(a->voxelizer, "auto")  ? MESO_VOXELIZE_AUTO
                                                                    : MESO_VOXELIZE_PARITY;
-    meso_result r = mesoi_load_mesh(&run, a->input, &m, &s->fixes, err);
+    meso_result r = mesoi_load_input(&run, a->input, a->mesh, &m, &s->fixes, err);
     if (r == MESO_OK && method == MESO_VOXELIZE_PARITY)
-        r = require_closed(&m, a->input, err);
+        r = require_closed(&m, a->input ? a->input : MESOI_MEMORY_INPUT, err);
     if (r == MESO_OK)
         r = make_grid(a, &m, planned_res(a), &g, err);
     if (r == MESO_OK)

@@ -23,8 +23,12 @@
 #include "skeleton_from_mesh.h"
 #endif
 
+/* A loaded skeleton keeps what a bake of it reports and records: where it
+ * came from (the path, for names and META provenance) and the load's info. */
 struct meso_bake_skeleton {
     meso_skeleton sk;
+    meso_bake_skeleton_info info;
+    char* path;
 };
 
 meso_bake_frusta_options meso_bake_frusta_defaults(void)
@@ -118,8 +122,10 @@ meso_result meso_bake_skeleton_load(const char* path, double tolerance, const me
     mesoi_bake_run run;
     mesoi_run_begin(&run, c);
     meso_bake_skeleton* s = calloc(1, sizeof(*s));
-    if (!s)
+    if (!s || (path && !(s->path = strdup(path)))) {
+        free(s);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    }
     meso_result r = load_skeleton(&run, path, tolerance, &s->sk, info, err);
     if (r != MESO_OK) {
         meso_bake_skeleton_free(s);
@@ -127,6 +133,7 @@ meso_result meso_bake_skeleton_load(const char* path, double tolerance, const me
     }
     info->node_count = s->sk.node_count;
     info->root_count = s->sk.root_count;
+    s->info = *info;
     *out = s;
     return MESO_OK;
 }
@@ -136,6 +143,7 @@ void meso_bake_skeleton_free(meso_bake_skeleton* s)
     if (!s)
         return;
     meso_skeleton_free(&s->sk);
+    free(s->path);
     free(s);
 }
 
@@ -280,14 +288,25 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     meso_frusta_object obj = {0};
     meso_texfn relief = {0};
 
-    meso_result r = load_skeleton(&run, a.input, a.tolerance, &sk, &s->skeleton, err);
-    s->skeleton.node_count = sk.node_count;
-    s->skeleton.root_count = sk.root_count;
+    /* A skeleton loaded before (meso_bake_skeleton_load) is used as it is. */
+    const meso_skeleton* skel = &sk;
+    meso_result r = MESO_OK;
+    if (a.skeleton && a.input)
+        r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "both an input path and a loaded skeleton given");
+    else if (a.skeleton) {
+        skel = &a.skeleton->sk;
+        s->skeleton = a.skeleton->info;
+        a.input = a.skeleton->path;
+    } else {
+        r = load_skeleton(&run, a.input, a.tolerance, &sk, &s->skeleton, err);
+    }
+    s->skeleton.node_count = skel->node_count;
+    s->skeleton.root_count = skel->root_count;
     if (r == MESO_OK && strcmp(s->skeleton.input, "mesh") != 0) /* nothing to draw is an invalid input, not a bake */
-        r = meso_skeleton_require_drawable(&sk, err);
+        r = meso_skeleton_require_drawable(skel, err);
     if (r == MESO_OK)
-        mesoi_run_stage(&run, "skeleton", 0.5, 0.5, "%s: %u nodes, %u roots (%s input)", a.input, sk.node_count,
-                        sk.root_count, s->skeleton.input);
+        mesoi_run_stage(&run, "skeleton", 0.5, 0.5, "%s: %u nodes, %u roots (%s input)", a.input, skel->node_count,
+                        skel->root_count, s->skeleton.input);
     if (r == MESO_OK && a.relief) {
         r = meso_texfn_from_spec_max(a.relief, run.common.max_memory, &relief, err);
         if (r == MESO_OK && relief.kind != MESO_TEXFN_HEIGHT)
@@ -299,7 +318,7 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     if (r == MESO_OK) {
         meso_frustum_options fo = {.keep_cap_intersections = a.keep_cap_intersections,
                                    .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle};
-        r = meso_frustum_model_build(&sk, &fo, &m, err);
+        r = meso_frustum_model_build(skel, &fo, &m, err);
     }
     if (r == MESO_OK)
         mesoi_run_stage(&run, "frusta", 0.8, 0.8,
@@ -324,7 +343,7 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     s->relief_depth = depth;
     if (r == MESO_OK) {
         meso_frusta_relief_params rp = {.depth = depth, .u_repeat = a.relief_repeat};
-        r = meso_frusta_object_build(&sk, &m, &rp, &obj, err);
+        r = meso_frusta_object_build(skel, &m, &rp, &obj, err);
     }
     if (r == MESO_OK) {
         fill_report(&m, &obj, s);

@@ -76,6 +76,17 @@ const char* mesoi_base_name(const char* path);
 int mesoi_has_suffix(const char* s, const char* suffix); /* ASCII case-insensitive */
 /* Read a whole file (provenance checksums, .drc input). */
 meso_result mesoi_slurp(const char* path, uint8_t** data, size_t* size, meso_error* err);
+/* How messages and META name an input mesh the host passed in memory. */
+#define MESOI_MEMORY_INPUT "(memory)"
+/* A bake's input mesh: the file at `path`, or (path NULL) a copy of `mem`,
+ * checked as a loaded file is. Exactly one of the two. */
+meso_result mesoi_load_input(mesoi_bake_run* run, const char* path, const meso_mesh* mem, meso_mesh* m,
+                             meso_bake_mesh_fixes* fixes, meso_error* err);
+/* The object's default name: the input's base name, or "mesh" in memory. */
+const char* mesoi_input_label(const char* path);
+/* META "inputs": the file's provenance, or for a mesh in memory its name
+ * "(memory)", the bytes of its positions and indices and their crc32c. */
+meso_result mesoi_add_provenance(cJSON* inputs, const char* path, const meso_mesh* mem, meso_error* err);
 /* meso_bake_load_mesh within a bake (warnings through `run`). */
 meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_bake_mesh_fixes* fixes,
                             meso_error* err);

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "adapters.h"
+#include "mesh_check.h"
 #include "mesh_guard.h"
 #include "mesh_orient.h"
 #include "texture_function.h"
@@ -188,6 +189,93 @@ meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m,
     if (r != MESO_OK)
         meso_mesh_free(m);
     return r;
+}
+
+/* A copy of `src`'s arrays into *m (zeroed first); 0 when out of memory. */
+static int copy_mesh(const meso_mesh* src, meso_mesh* m)
+{
+    const size_t nv = src->vertex_count, nt = src->triangle_count;
+    memset(m, 0, sizeof(*m));
+    m->vertex_count = src->vertex_count;
+    m->triangle_count = src->triangle_count;
+    m->positions = malloc(sizeof(float) * 3 * (nv ? nv : 1));
+    m->indices = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
+    m->normals = src->normals ? malloc(sizeof(float) * 3 * (nv ? nv : 1)) : NULL;
+    m->uvs = src->uvs ? malloc(sizeof(float) * 2 * (nv ? nv : 1)) : NULL;
+    m->corner_uvs = src->corner_uvs ? malloc(sizeof(float) * 6 * (nt ? nt : 1)) : NULL;
+    if (!m->positions || !m->indices || (src->normals && !m->normals) || (src->uvs && !m->uvs) ||
+        (src->corner_uvs && !m->corner_uvs)) {
+        meso_mesh_free(m);
+        return 0;
+    }
+    memcpy(m->positions, src->positions, sizeof(float) * 3 * nv);
+    memcpy(m->indices, src->indices, sizeof(uint32_t) * 3 * nt);
+    if (src->normals)
+        memcpy(m->normals, src->normals, sizeof(float) * 3 * nv);
+    if (src->uvs)
+        memcpy(m->uvs, src->uvs, sizeof(float) * 2 * nv);
+    if (src->corner_uvs)
+        memcpy(m->corner_uvs, src->corner_uvs, sizeof(float) * 6 * nt);
+    return 1;
+}
+
+/* A mesh the host holds in memory gets what a file gets after its reader:
+ * the same element checks, and the structure a reader would have refused
+ * (faces on non-manifold or misoriented edges: OpenMesh drops them, the
+ * guard refuses the directed edge used twice), then orientation. */
+static meso_result load_memory(mesoi_bake_run* run, const meso_mesh* src, meso_mesh* m, meso_bake_mesh_fixes* fixes,
+                               meso_error* err)
+{
+    const char* what = MESOI_MEMORY_INPUT;
+    if ((src->vertex_count && !src->positions) || (src->triangle_count && !src->indices))
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "%s: NULL positions or indices", what);
+    if (src->triangle_count == 0)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 3252, "%s: no triangles", what);
+    if (src->vertex_count > UINT32_MAX / 3 || src->triangle_count > UINT32_MAX / 6)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "%s: %u vertices, %u triangles: too many", what,
+                              src->vertex_count, src->triangle_count);
+    meso_result r = check_mesh(what, src, err);
+    if (r != MESO_OK)
+        return r;
+    if (!copy_mesh(src, m))
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", what);
+    meso_mesh_topology topo;
+    memset(&topo, 0, sizeof(topo));
+    r = meso_mesh_topology_compute(m, 0.0, &topo, err);
+    free(topo.boundary);
+    if (r == MESO_OK && topo.nonmanifold_edges)
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3110, "%s: %u non-manifold edges (face %u is on one)", what,
+                           topo.nonmanifold_edges, topo.first_bad_face);
+    else if (r == MESO_OK && topo.misoriented_edges)
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3111,
+                           "%s: %u edges are traversed the same way by both faces (face %u is on one)", what,
+                           topo.misoriented_edges, topo.first_bad_face);
+    if (r == MESO_OK)
+        r = orient_mesh(run, what, m, fixes, err);
+    return r;
+}
+
+meso_result mesoi_load_input(mesoi_bake_run* run, const char* path, const meso_mesh* mem, meso_mesh* m,
+                             meso_bake_mesh_fixes* fixes, meso_error* err)
+{
+    if (!mem)
+        return mesoi_load_mesh(run, path, m, fixes, err);
+    meso_bake_mesh_fixes ignored;
+    if (!fixes)
+        fixes = &ignored;
+    memset(fixes, 0, sizeof(*fixes));
+    memset(m, 0, sizeof(*m));
+    if (path)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "both an input path and an in-memory mesh given");
+    const meso_result r = load_memory(run, mem, m, fixes, err);
+    if (r != MESO_OK)
+        meso_mesh_free(m);
+    return r;
+}
+
+const char* mesoi_input_label(const char* path)
+{
+    return path ? mesoi_base_name(path) : "mesh";
 }
 
 meso_result meso_bake_load_mesh(const char* path, const meso_bake_common* c, meso_mesh* m,

@@ -35,7 +35,7 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
     mesoi_bake_run run;
     mesoi_run_begin(&run, &o->common);
     meso_mesh m;
-    meso_result r = mesoi_load_mesh(&run, o->input, &m, &rp->fixes, err);
+    meso_result r = mesoi_load_input(&run, o->input, o->mesh, &m, &rp->fixes, err);
     if (r != MESO_OK)
         return r;
     rp->vertices = m.vertex_count;
@@ -44,7 +44,7 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
     rp->has_uvs = m.uvs != NULL;
     rp->draco = o->draco != 0;
     mesoi_run_stage(&run, "load", 0.5, 0.5, "read %s: %u vertices, %u triangles%s%s (%.0f ms)",
-                    mesoi_base_name(o->input), m.vertex_count, m.triangle_count, m.normals ? ", normals" : "",
+                    mesoi_input_label(o->input), m.vertex_count, m.triangle_count, m.normals ? ", normals" : "",
                     m.uvs ? ", uvs" : "", mesoi_run_ms(&run));
 
     meso_mesh_chunk chunk;
@@ -62,7 +62,7 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
         rec.bbox_min[k] = (float)lo[k];
         rec.bbox_max[k] = (float)hi[k];
     }
-    snprintf(rec.name, sizeof(rec.name), "%s", o->name ? o->name : mesoi_base_name(o->input));
+    snprintf(rec.name, sizeof(rec.name), "%s", o->name ? o->name : mesoi_input_label(o->input));
 
     cJSON* meta = mesoi_meta_new("mesh");
     cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
@@ -72,7 +72,7 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
         cJSON_AddNumberToObject(params, "draco_normal_bits", dopt.normal_bits);
         cJSON_AddNumberToObject(params, "draco_uv_bits", dopt.uv_bits);
     }
-    r = mesoi_add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), o->input, err);
+    r = mesoi_add_provenance(cJSON_AddArrayToObject(meta, "inputs"), o->input, o->mesh, err);
 
     cJSON* rep = cJSON_CreateObject();
     mesoi_report_fixes(rep, &rp->fixes);

@@ -160,6 +160,22 @@ meso_result mesoi_add_input_provenance(cJSON* inputs, const char* path, meso_err
     return MESO_OK;
 }
 
+meso_result mesoi_add_provenance(cJSON* inputs, const char* path, const meso_mesh* mem, meso_error* err)
+{
+    if (!mem)
+        return mesoi_add_input_provenance(inputs, path, err);
+    const size_t pb = sizeof(float) * 3 * (size_t)mem->vertex_count;
+    const size_t ib = sizeof(uint32_t) * 3 * (size_t)mem->triangle_count;
+    char crc_hex[16];
+    snprintf(crc_hex, sizeof(crc_hex), "%08x", meso_crc32c(meso_crc32c(0, mem->positions, pb), mem->indices, ib));
+    cJSON* inp = cJSON_CreateObject();
+    cJSON_AddStringToObject(inp, "name", MESOI_MEMORY_INPUT);
+    cJSON_AddNumberToObject(inp, "bytes", (double)(pb + ib));
+    cJSON_AddStringToObject(inp, "crc32c", crc_hex);
+    cJSON_AddItemToArray(inputs, inp);
+    return MESO_OK;
+}
+
 void mesoi_report_fixes(cJSON* report, const meso_bake_mesh_fixes* o)
 {
     if (o->orientation_unchecked)

@@ -45,7 +45,7 @@ static meso_result normalise(const meso_bake_shell_options* o, meso_bake_shell_o
             a->tiling[k] = 1.0;
     if (!a->dist_dtype)
         a->dist_dtype = MESO_DTYPE_U8;
-    const char* bad = !a->input                                                   ? "no input mesh given"
+    const char* bad = !a->input && !a->mesh                                       ? "no input mesh given"
                       : (unsigned)a->kind >= MESO_SHELL_KIND_COUNT                ? "kind out of range"
                       : (unsigned)a->directors >= MESO_DIRECTORS_COUNT            ? "directors out of range"
                       : !(a->thickness >= 0 && a->thickness < 1e30)               ? "thickness must be >= 0"
@@ -328,7 +328,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                 rec.bbox_min[k] = fminf(rec.bbox_min[k], x);
                 rec.bbox_max[k] = fmaxf(rec.bbox_max[k], x);
             }
-        snprintf(rec.name, sizeof(rec.name), "%s", mesoi_base_name(a->input));
+        snprintf(rec.name, sizeof(rec.name), "%s", mesoi_input_label(a->input));
 
         meta = mesoi_meta_new("shell");
         cJSON* params = cJSON_AddObjectToObject(meta, "parameters");
@@ -342,7 +342,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         cJSON_AddBoolToObject(params, "repair", !a->no_repair);
         if (a->texture)
             mesoi_shell_texture_json(params, a, tx, 0);
-        r = mesoi_add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, err);
+        r = mesoi_add_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, a->mesh, err);
         rep = cJSON_CreateObject();
         report_json(rep, s->rep);
         mesoi_report_fixes(rep, &s->rep->fixes);
@@ -402,11 +402,11 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     if (a->texture)
         r = mesoi_shell_texture_prepare(&s.run, a, &s.tx, err);
     if (r == MESO_OK)
-        r = mesoi_load_mesh(&s.run, a->input, &s.m, &s.rep->fixes, err);
+        r = mesoi_load_input(&s.run, a->input, a->mesh, &s.m, &s.rep->fixes, err);
     const double diag = r == MESO_OK ? meso_mesh_bounds(&s.m, s.lo, s.hi) : 0;
     s.h = a->thickness > 0 ? a->thickness : a->thickness_rel * diag;
     if (r == MESO_OK)
-        r = require_shellable(&s.m, a->input, diag, &s.topo, err);
+        r = require_shellable(&s.m, a->input ? a->input : MESOI_MEMORY_INPUT, diag, &s.topo, err);
     if (r == MESO_OK && a->texture)
         r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
     meso_bake_shell_report* rep = s.rep;
@@ -425,7 +425,7 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         mesoi_run_stage(&s.run, "load", 0.15, 0.15,
                         "%s: %u vertices, %u triangles, %u boundary edges; thickness %g (%.3g of the diagonal) "
                         "(%.0f ms)",
-                        mesoi_base_name(a->input), s.m.vertex_count, s.m.triangle_count, s.topo.boundary_edges, s.h,
+                        mesoi_input_label(a->input), s.m.vertex_count, s.m.triangle_count, s.topo.boundary_edges, s.h,
                         s.h / diag, mesoi_run_ms(&s.run));
     if (r == MESO_OK && a->texture)
         mesoi_run_stage(&s.run, "texture coordinates", 0.2, 0.2,

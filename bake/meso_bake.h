@@ -270,8 +270,11 @@ MESO_BAKE_API void meso_bake_output_free(meso_bake_output* o);
 
 typedef struct meso_bake_mesh_options {
     meso_bake_common common;
-    const char* input;       /* mesh path (required) */
-    const char* name;        /* object name; NULL = the input's base name (31 bytes kept) */
+    const char* input;       /* mesh path, or NULL with `mesh` */
+    const meso_mesh* mesh;   /* or, with input NULL: a mesh in memory, copied and checked as a loaded
+                                file is (elements, manifold, oriented edges; orientation fixed); META
+                                names it "(memory)" with the crc32c of its positions and indices */
+    const char* name;        /* object name; NULL = the input's base name, or "mesh" (31 bytes kept) */
     int draco;               /* 1: store the mesh Draco-compressed (quantised) */
     int draco_position_bits; /* 1..30; 0 = 14 */
     int draco_normal_bits;   /* 2..30; 0 = 10 */
@@ -324,7 +327,10 @@ MESO_BAKE_API const char* meso_bake_directors_name(meso_shell_directors d);
 
 typedef struct meso_bake_shell_options {
     meso_bake_common common;
-    const char* input;           /* mesh path (required) */
+    const char* input;           /* mesh path, or NULL with `mesh` */
+    const meso_mesh* mesh;   /* or, with input NULL: a mesh in memory, copied and checked as a loaded
+                                file is (elements, manifold, oriented edges; orientation fixed); META
+                                names it "(memory)" with the crc32c of its positions and indices */
     double thickness;            /* mesh units; 0 = thickness_rel of the bbox diagonal */
     double thickness_rel;        /* default 0.05 */
     meso_shell_kind kind;        /* default exterior */
@@ -379,7 +385,10 @@ MESO_BAKE_API meso_result meso_bake_shell(const meso_bake_shell_options* o, meso
 
 typedef struct meso_bake_cells_options {
     meso_bake_common common;
-    const char* input;     /* mesh path (required) */
+    const char* input;     /* mesh path, or NULL with `mesh` */
+    const meso_mesh* mesh;   /* or, with input NULL: a mesh in memory, copied and checked as a loaded
+                                file is (elements, manifold, oriented edges; orientation fixed); META
+                                names it "(memory)" with the crc32c of its positions and indices */
     uint32_t tiles;        /* tiles along the longest axis; 0 = 8 (unless cell_size) */
     double cell_size;      /* or: a tile's edge in mesh units (tiles must be 0) */
     uint32_t tile_res;     /* voxels per tile edge; 0 = the tile map's (32 for generators) */
@@ -413,7 +422,10 @@ MESO_BAKE_API meso_result meso_bake_cells(const meso_bake_cells_options* o, meso
 
 typedef struct meso_bake_frusta_options {
     meso_bake_common common;
-    const char* input;          /* skeleton or mesh path (required; see meso_bake_skeleton_load) */
+    const char* input;          /* skeleton or mesh path (see meso_bake_skeleton_load), or NULL with: */
+    const meso_bake_skeleton* skeleton; /* one loaded before, used as it is (not copied; keep it alive
+                                           through the call): its file's bytes, name and fit, so the
+                                           bake equals one of its path; `tolerance` is the load's */
     double tolerance;           /* mesh input: simplification tolerance; 0 = 1 % of the diagonal */
     double max_joint_angle;     /* degrees; sharper joints become balls; default 150, 0 = no limit */
     int no_fit;                 /* 1: keep node radii at joints (skip the minor-axis fit) */

@@ -5,13 +5,16 @@
  * options (the program is argv[1]); progress fractions never decrease and
  * end at 1; -v lines and warnings arrive through the callback (E3250 also in
  * the report); the library writes nothing to stdout or stderr; malformed
- * inputs are errors with a code and a message, and the process goes on.
+ * inputs are errors with a code and a message, and the process goes on; a
+ * mesh in memory bakes to the file's chunks (all but META's provenance and
+ * OBJT's name), and a broken one is refused as a broken file is.
  *
  * usage: test_bake_api MESOBAKE
  */
 #undef NDEBUG
 #include <assert.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +23,7 @@
 #include <unistd.h>
 
 #include "meso_bake.h"
+#include "meso_file.h"
 
 #include "defective_meshes.h"
 
@@ -301,13 +305,26 @@ static void frusta_bakes_match_the_cli(void)
         same_as_cli(out, relief ? "frusta_relief" : "frusta", relief ? rel : plain);
         meso_bake_output_free(out);
     }
-    /* The skeleton alone. */
-    meso_bake_skeleton* sk = NULL;
-    meso_bake_skeleton_info info;
-    meso_error err = {0};
-    assert(meso_bake_skeleton_load(DATA("neurom_simple.swc"), 0, NULL, &sk, &info, &err) == MESO_OK);
-    assert(sk && info.node_count > 1 && info.root_count >= 1 && !strcmp(info.input, "swc"));
-    meso_bake_skeleton_free(sk);
+    /* The skeleton alone, then baked as it is: the bytes of a bake of its
+     * file (an SWC, and one extracted from a mesh with its fit). */
+    const char* inputs[] = {DATA("neurom_simple.swc"), DATA("torus.obj")};
+    for (int k = 0; k < 2; ++k) {
+        meso_bake_skeleton* sk = NULL;
+        meso_bake_skeleton_info info;
+        meso_error err = {0};
+        assert(QUIET("skeleton", meso_bake_skeleton_load(inputs[k], 0, NULL, &sk, &info, &err)) == MESO_OK);
+        assert(sk && info.node_count > 1 && info.root_count >= 1 && !strcmp(info.input, k ? "mesh" : "swc"));
+        meso_bake_frusta_options o = meso_bake_frusta_defaults();
+        o.skeleton = sk;
+        meso_bake_output* out = NULL;
+        assert(QUIET("frusta from a loaded skeleton", meso_bake_frusta(&o, &out, NULL, &err)) == MESO_OK);
+        const char* args[] = {"frusta", "-i", inputs[k], NULL};
+        same_as_cli(out, k ? "frusta_loaded_mesh" : "frusta_loaded_swc", args);
+        meso_bake_output_free(out);
+        o.input = inputs[k]; /* both at once is an argument error */
+        assert(meso_bake_frusta(&o, &out, NULL, &err) == MESO_ERR_INVALID_ARG && !out);
+        meso_bake_skeleton_free(sk);
+    }
 }
 
 /* A closed cube whose faces all point inward: turned outward with warning
@@ -344,6 +361,129 @@ static void inside_out_mesh_is_a_warning(void)
 
 /* Malformed inputs: an error code and a message naming the file; the
  * process goes on (no exit). */
+/* >>meshes in memory ---------------------------------------------------------- */
+
+/* Every chunk of `a` equals `b`'s but META (provenance) and OBJT (the name);
+ * returns the number of chunks compared. */
+static uint32_t same_chunks_but_provenance(meso_bake_output* a, meso_bake_output* b)
+{
+    size_t na = 0, nb = 0;
+    assert(meso_bake_output_copy(a, NULL, 0, &na) == MESO_OK && meso_bake_output_copy(b, NULL, 0, &nb) == MESO_OK);
+    uint8_t *ba = malloc(na), *bb = malloc(nb);
+    assert(ba && bb && meso_bake_output_copy(a, ba, na, &na) == MESO_OK && meso_bake_output_copy(b, bb, nb, &nb) == MESO_OK);
+    meso_file *fa = NULL, *fb = NULL;
+    meso_error err = {0};
+    assert(meso_file_open_memory(ba, na, NULL, &fa, &err) == MESO_OK);
+    assert(meso_file_open_memory(bb, nb, NULL, &fb, &err) == MESO_OK);
+    assert(meso_file_chunk_count(fa) == meso_file_chunk_count(fb));
+    uint32_t compared = 0;
+    for (uint32_t i = 0; i < meso_file_chunk_count(fa); ++i) {
+        const meso_chunk_info *ca = meso_file_chunk(fa, i), *cb = meso_file_chunk(fb, i);
+        assert(ca->type == cb->type && ca->object == cb->object);
+        if (ca->type == MESO_CHUNK_META || ca->type == MESO_CHUNK_OBJT)
+            continue;
+        const void *da = NULL, *db = NULL;
+        assert(ca->stored_size == cb->stored_size);
+        assert(meso_file_chunk_view(fa, i, &da, &err) == MESO_OK && meso_file_chunk_view(fb, i, &db, &err) == MESO_OK);
+        assert(memcmp(da, db, (size_t)ca->stored_size) == 0);
+        compared++;
+    }
+    int32_t meta = meso_file_find(fa, MESO_CHUNK_META, 0, 0);
+    const void* md = NULL;
+    assert(meta >= 0 && meso_file_chunk_view(fa, (uint32_t)meta, &md, &err) == MESO_OK);
+    const size_t ml = (size_t)meso_file_chunk(fa, (uint32_t)meta)->stored_size;
+    char* mtext = malloc(ml + 1);
+    assert(mtext);
+    memcpy(mtext, md, ml);
+    mtext[ml] = 0;
+    assert(strstr(mtext, "\"name\":\"(memory)\""));
+    free(mtext);
+    meso_file_close(fa);
+    meso_file_close(fb);
+    free(ba);
+    free(bb);
+    return compared;
+}
+
+/* A host's mesh in memory bakes to the same chunks as the file it came from,
+ * for every command that takes a mesh; and a broken one is refused as a
+ * broken file is, with a code naming "(memory)". */
+static void memory_meshes_bake_as_files(void)
+{
+    meso_mesh m;
+    meso_error err = {0};
+    assert(meso_bake_load_mesh(DATA("spot_uv.obj"), NULL, &m, NULL, &err) == MESO_OK);
+    meso_bake_output *from_file = NULL, *from_memory = NULL;
+
+    meso_bake_mesh_options mo = meso_bake_mesh_defaults();
+    mo.input = DATA("spot_uv.obj");
+    assert(QUIET("mesh file", meso_bake_mesh(&mo, &from_file, NULL, &err)) == MESO_OK);
+    mo.input = NULL;
+    mo.mesh = &m;
+    assert(QUIET("mesh memory", meso_bake_mesh(&mo, &from_memory, NULL, &err)) == MESO_OK);
+    assert(same_chunks_but_provenance(from_memory, from_file) >= 2);
+    meso_bake_output_free(from_file);
+    meso_bake_output_free(from_memory);
+
+    meso_bake_shell_options so = meso_bake_shell_defaults();
+    so.input = DATA("spot_uv.obj");
+    so.texture = "bricks:64";
+    so.tiling[0] = so.tiling[1] = 4;
+    so.common.threads = 2;
+    assert(QUIET("shell file", meso_bake_shell(&so, &from_file, NULL, &err)) == MESO_OK);
+    so.input = NULL;
+    so.mesh = &m;
+    assert(QUIET("shell memory", meso_bake_shell(&so, &from_memory, NULL, &err)) == MESO_OK);
+    assert(same_chunks_but_provenance(from_memory, from_file) >= 6); /* RPRT MESH SDIR STHK TX2D DIST */
+    meso_bake_output_free(from_file);
+    meso_bake_output_free(from_memory);
+    so.input = DATA("spot_uv.obj"); /* both at once is an argument error */
+    assert(meso_bake_shell(&so, &from_memory, NULL, &err) == MESO_ERR_INVALID_ARG && !from_memory);
+    meso_mesh_free(&m);
+
+    assert(meso_bake_load_mesh(DATA("torus.obj"), NULL, &m, NULL, &err) == MESO_OK);
+    meso_bake_cells_options co = meso_bake_cells_defaults();
+    co.input = DATA("torus.obj");
+    co.tiles = 3;
+    co.tile_res = 8;
+    assert(QUIET("cells file", meso_bake_cells(&co, &from_file, NULL, &err)) == MESO_OK);
+    co.input = NULL;
+    co.mesh = &m;
+    assert(QUIET("cells memory", meso_bake_cells(&co, &from_memory, NULL, &err)) == MESO_OK);
+    assert(same_chunks_but_provenance(from_memory, from_file) >= 7);
+    meso_bake_output_free(from_file);
+    meso_bake_output_free(from_memory);
+
+    /* Broken in memory: what the readers and the guard refuse in a file. */
+    float nan_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    nan_pos[4] = NAN;
+    uint32_t tri[3] = {0, 1, 2}, missing[3] = {0, 1, 7};
+    const meso_mesh bad[] = {
+        {.vertex_count = 3, .triangle_count = 1, .positions = nan_pos, .indices = tri},
+        {.vertex_count = 3, .triangle_count = 1, .positions = m.positions, .indices = missing},
+        {.vertex_count = 3, .triangle_count = 0, .positions = m.positions, .indices = tri},
+    };
+    const uint32_t codes[] = {3101, 3102, 3252};
+    for (int k = 0; k < 3; ++k) {
+        mo = meso_bake_mesh_defaults();
+        mo.mesh = &bad[k];
+        memset(&err, 0, sizeof err);
+        from_memory = NULL;
+        assert(QUIET("broken memory mesh", meso_bake_mesh(&mo, &from_memory, NULL, &err)) == MESO_ERR_CORRUPT);
+        printf("  memory mesh %d: E%u %s\n", k, err.code, err.message);
+        assert(!from_memory && err.code == codes[k] && strstr(err.message, "(memory)"));
+    }
+    /* Two faces sharing an edge the same way (a flipped neighbour). */
+    const float quad[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const uint32_t flipped[6] = {0, 1, 2, 0, 1, 3};
+    const meso_mesh mis = {.vertex_count = 4, .triangle_count = 2, .positions = (float*)quad, .indices = (uint32_t*)flipped};
+    mo = meso_bake_mesh_defaults();
+    mo.mesh = &mis;
+    assert(QUIET("misoriented memory mesh", meso_bake_mesh(&mo, &from_memory, NULL, &err)) == MESO_ERR_CORRUPT);
+    assert(err.code == 3111);
+    meso_mesh_free(&m);
+}
+
 static void malformed_inputs_are_errors(void)
 {
     char bad[512], doubled[512];
@@ -409,6 +549,7 @@ int main(int argc, char** argv)
     frusta_bakes_match_the_cli();
     inside_out_mesh_is_a_warning();
     malformed_inputs_are_errors();
+    memory_meshes_bake_as_files();
     char cmd[600];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     assert(system(cmd) == 0);
