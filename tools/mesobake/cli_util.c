@@ -131,6 +131,17 @@ int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad
     return 1;
 }
 
+int bake_option(const char* opt, const char* value, const char* const* valued, size_t count, const char** in,
+                const char** out, const char** report, uint64_t* max_memory, int* handled, int* code)
+{
+    *handled = 0;
+    if ((*code = option_value(opt, value, valued, count)) != 0)
+        return 0;
+    if (path_option(opt, value, in, out, report) || memory_option(opt, value, max_memory, code))
+        *handled = 1;
+    return *code == 0;
+}
+
 /* A one-line progress bar on a terminal (-v): redrawn in place with \r. */
 static void progress_bar(const char* what, uint64_t done, uint64_t total)
 {

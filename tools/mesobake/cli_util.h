@@ -66,6 +66,12 @@ int path_option(const char* opt, const char* value, const char** in, const char*
  * `value` parsed into *budget, or *bad set to the usage error's exit code
  * when it does not parse; else 0. */
 int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad);
+/* The start of every valued option of shell, frusta and cells: 0 after a
+ * usage error's exit code in *code (unknown option, missing value); else 1,
+ * with *code 0, and *handled 1 when `opt` was a path (-i, -o, --report) or
+ * --max-memory and was stored, or 0 when the command parses it. */
+int bake_option(const char* opt, const char* value, const char* const* valued, size_t count, const char** in,
+                const char** out, const char** report, uint64_t* max_memory, int* handled, int* code);
 /* The --help line of --max-memory, shared by every bake command. */
 #define MEMORY_OPTION_HELP \
     "      --max-memory SIZE   refuse, before allocating, a bake whose memory estimate is larger\n" \

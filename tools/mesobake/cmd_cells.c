@@ -73,18 +73,13 @@ static int parse_args(int argc, char** argv, cells_args* a)
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tiles", "--cell-size",
             "--tile-res", "--tile-map", "--colour", "--voxelizer", "-j", "--threads"};
-        const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
-        if (bad)
-            return bad;
+        int handled, code;
+        if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
+                         &o->common.max_memory, &handled, &code))
+            return code;
         ++i;
-        if (path_option(s, v, &o->input, &a->out, &a->report))
+        if (handled)
             continue;
-        int bad_size = 0;
-        if (memory_option(s, v, &o->common.max_memory, &bad_size)) {
-            if (bad_size)
-                return bad_size;
-            continue;
-        }
         if (!strcmp(s, "--tile-map"))
             o->tile_map = v;
         else if (!strcmp(s, "--colour"))

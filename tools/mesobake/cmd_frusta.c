@@ -85,18 +85,13 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tolerance",
             "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat"};
-        const int bad = option_value(s, v, valued, sizeof valued / sizeof valued[0]);
-        if (bad)
-            return bad;
+        int handled, code;
+        if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
+                         &o->common.max_memory, &handled, &code))
+            return code;
         ++i;
-        if (path_option(s, v, &o->input, &a->out, &a->report))
+        if (handled)
             continue;
-        int bad_size = 0;
-        if (memory_option(s, v, &o->common.max_memory, &bad_size)) {
-            if (bad_size)
-                return bad_size;
-            continue;
-        }
         if (!strcmp(s, "--relief"))
             o->relief = v;
         else if (!strcmp(s, "--tolerance")) {
