@@ -83,5 +83,6 @@ int cmd_mesh(int argc, char** argv);
 int cmd_shell(int argc, char** argv);
 int cmd_frusta(int argc, char** argv);
 int cmd_cells(int argc, char** argv);
+int cmd_batch(int argc, char** argv);
 
 #endif

@@ -66,6 +66,8 @@ int main(int argc, char** argv)
         return cmd_frusta(argc - 2, argv + 2);
     if (!strcmp(cmd, "cells"))
         return cmd_cells(argc - 2, argv + 2);
+    if (!strcmp(cmd, "batch"))
+        return cmd_batch(argc - 2, argv + 2);
     if (cmd[0] == '-')
         return usage_error("unrecognized option '%s'", cmd);
     return usage_error("unknown command '%s'", cmd);

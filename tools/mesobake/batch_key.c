@@ -1,0 +1,147 @@
+/* batch_key.c — the cache key of a batch job (batch.h): SHA-256 (nettle)
+ * over a plain-text description of everything that decides the job's bytes.
+ *
+ *   meso-batch-key 1
+ *   mesobake 0.1.0 format 1.0 cache 1
+ *   command shell
+ *   input 7:bunny.obj
+ *   arg 15:--thickness-rel
+ *   arg 4:0.05
+ *   file 7:bunny.obj 3f5c...      (SHA-256 of the contents)
+ *
+ * Every string is length-prefixed, so no two job descriptions run together
+ * into the same text. Paths enter as written (the file records the input's
+ * base name, so the name is part of the output), never as absolute paths:
+ * two machines with the project at different places share keys.
+ *
+ * Why SHA-256 and nettle: a key shared by machines over a file system must
+ * not collide by accident across millions of entries (a 64-bit hash would
+ * be a birthday risk at farm scale), and Debian's nettle is small, well-kept
+ * and already beside GnuTLS on most systems.
+ */
+#include "batch.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <nettle/sha2.h>
+
+#include "cli_util.h"
+
+static void put_str(struct sha256_ctx* h, const char* tag, const char* s)
+{
+    char head[64];
+    int n = snprintf(head, sizeof head, "%s %zu:", tag, strlen(s));
+    sha256_update(h, (size_t)n, (const uint8_t*)head);
+    sha256_update(h, strlen(s), (const uint8_t*)s);
+    sha256_update(h, 1, (const uint8_t*)"\n");
+}
+
+static void hex(const uint8_t* d, size_t n, char* out)
+{
+    static const char digits[] = "0123456789abcdef";
+    for (size_t i = 0; i < n; ++i) {
+        out[2 * i] = digits[d[i] >> 4];
+        out[2 * i + 1] = digits[d[i] & 15];
+    }
+    out[2 * n] = 0;
+}
+
+/* SHA-256 of a file's contents, as hex; 0 when it cannot be read. */
+static int hash_file(int dirfd, const char* path, char out[65])
+{
+    int fd = openat(dirfd, path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return 0;
+    struct sha256_ctx h;
+    sha256_init(&h);
+    static uint8_t buf[1 << 16];
+    ssize_t n;
+    while ((n = read(fd, buf, sizeof buf)) > 0)
+        sha256_update(&h, (size_t)n, buf);
+    close(fd);
+    if (n < 0)
+        return 0;
+    uint8_t d[SHA256_DIGEST_SIZE];
+    sha256_digest(&h, sizeof d, d);
+    hex(d, sizeof d, out);
+    return 1;
+}
+
+static int is_regular(int dirfd, const char* path)
+{
+    struct stat st;
+    return path[0] && fstatat(dirfd, path, &st, 0) == 0 && S_ISREG(st.st_mode);
+}
+
+/* `path` as a file the job reads: its name and the hash of its contents. */
+static int put_file(struct sha256_ctx* h, int dirfd, const char* path)
+{
+    char digest[65];
+    if (!hash_file(dirfd, path, digest))
+        return 0;
+    put_str(h, "file", path);
+    put_str(h, "sha256", digest);
+    return 1;
+}
+
+/* An argument, and each ':'-separated part of it, that names a regular
+ * file (e.g. --texture height:bricks.png, volume:rock.vdb:density). */
+static int put_arg_files(struct sha256_ctx* h, int dirfd, const char* arg)
+{
+    if (is_regular(dirfd, arg))
+        return put_file(h, dirfd, arg);
+    if (!strchr(arg, ':'))
+        return 1;
+    char* copy = strdup(arg);
+    if (!copy)
+        return 0;
+    int ok = 1;
+    char* save = NULL;
+    for (char* part = strtok_r(copy, ":", &save); part && ok; part = strtok_r(NULL, ":", &save))
+        if (is_regular(dirfd, part))
+            ok = put_file(h, dirfd, part);
+    free(copy);
+    return ok;
+}
+
+meso_result batch_job_key(const batch_manifest* m, batch_job* job, meso_error* err)
+{
+    job->key[0] = 0;
+    int dirfd = open(m->dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dirfd < 0)
+        return meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot open: %s", m->dir, strerror(errno));
+    struct sha256_ctx h;
+    sha256_init(&h);
+    char line[128];
+    int n = snprintf(line, sizeof line, "meso-batch-key 1\nmesobake %s format %d.%d cache %d\n", MESO_VERSION_STRING,
+                     MESO_FORMAT_MAJOR, MESO_FORMAT_MINOR, MESO_BATCH_CACHE_VERSION);
+    sha256_update(&h, (size_t)n, (const uint8_t*)line);
+    put_str(&h, "command", job->command);
+    put_str(&h, "input", job->input);
+    for (size_t a = 0; a < job->arg_count; ++a) {
+        const char* s = job->args[a];
+        if (!strcmp(s, "-v") || !strcmp(s, "--verbose"))
+            continue; /* what is printed, not what is baked */
+        if (!strcmp(s, "--max-memory")) {
+            ++a; /* a limit refuses a bake or not; it never changes its bytes */
+            continue;
+        }
+        put_str(&h, "arg", s);
+    }
+    int ok = put_file(&h, dirfd, job->input);
+    for (size_t a = 0; a < job->arg_count && ok; ++a)
+        ok = put_arg_files(&h, dirfd, job->args[a]);
+    close(dirfd);
+    if (!ok)
+        return MESO_OK; /* no key: the bake runs (uncached) and reports the missing file itself */
+    uint8_t d[SHA256_DIGEST_SIZE];
+    sha256_digest(&h, sizeof d, d);
+    hex(d, sizeof d, job->key);
+    return MESO_OK;
+}
