@@ -126,6 +126,8 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  * Skeletons, continued (bake/skeleton_swc.h): 3300..3349, listed there.
  * Limits up front, --max-memory (bake/memory_budget.h): 3400..3449, listed
  *   there (3400 a request from the options, 3401.. sizes input files dictate).
+ * Batch manifests (mesobake batch, tools/mesobake/batch.h): 3450..3469,
+ *   listed there.
  * (The bake/ headers named are the library's sources, not installed.) */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 #define MESO_BAKE_ISSUE_REORIENTED 3250u /* a warning */

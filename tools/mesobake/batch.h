@@ -92,7 +92,7 @@ int batch_command_threaded(const char* command);
 
 /* The cache key of a job, hex SHA-256 into job->key, over: the cache format,
  * mesobake's version, the format version, MESO_BATCH_CACHE_VERSION, the
- * command, the input as written, every argument except those that cannot
+ * machine architecture, the command, the input as written, every argument except those that cannot
  * change the bytes (-v, --verbose, --max-memory N), and the SHA-256 of the
  * contents of the input and of every file an argument names (an argument, or
  * a ':'-separated part of one such as height:FILE.png, that is a regular

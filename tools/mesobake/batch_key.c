@@ -2,7 +2,7 @@
  * over a plain-text description of everything that decides the job's bytes.
  *
  *   meso-batch-key 1
- *   mesobake 0.1.0 format 1.0 cache 1
+ *   mesobake 0.1.0 format 1.0 cache 1 arch x86_64
  *   command shell
  *   input 7:bunny.obj
  *   arg 15:--thickness-rel
@@ -32,6 +32,20 @@
 #include <nettle/sha2.h>
 
 #include "cli_util.h"
+
+/* The machine the bytes were computed on: floating point is deterministic
+ * for one build on one architecture (rule 7), but e.g. aarch64 compilers
+ * contract a*b+c into fused multiply-adds that round differently, so a
+ * cache shared by x86-64 and arm64 machines keeps their bakes apart. */
+#if defined(__x86_64__)
+#define BATCH_ARCH "x86_64"
+#elif defined(__aarch64__)
+#define BATCH_ARCH "aarch64"
+#elif defined(__i386__)
+#define BATCH_ARCH "i386"
+#else
+#define BATCH_ARCH "other"
+#endif
 
 static void put_str(struct sha256_ctx* h, const char* tag, const char* s)
 {
@@ -119,8 +133,8 @@ meso_result batch_job_key(const batch_manifest* m, batch_job* job, meso_error* e
     struct sha256_ctx h;
     sha256_init(&h);
     char line[128];
-    int n = snprintf(line, sizeof line, "meso-batch-key 1\nmesobake %s format %d.%d cache %d\n", MESO_VERSION_STRING,
-                     MESO_FORMAT_MAJOR, MESO_FORMAT_MINOR, MESO_BATCH_CACHE_VERSION);
+    int n = snprintf(line, sizeof line, "meso-batch-key 1\nmesobake %s format %d.%d cache %d arch %s\n",
+                     MESO_VERSION_STRING, MESO_FORMAT_MAJOR, MESO_FORMAT_MINOR, MESO_BATCH_CACHE_VERSION, BATCH_ARCH);
     sha256_update(&h, (size_t)n, (const uint8_t*)line);
     put_str(&h, "command", job->command);
     put_str(&h, "input", job->input);
