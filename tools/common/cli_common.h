@@ -12,6 +12,7 @@ enum {
     MESO_EXIT_INVALID = 3,     /* invalid input file */
     MESO_EXIT_INTERNAL = 4,    /* runtime/internal error */
     MESO_EXIT_UNSUPPORTED = 5, /* not supported in this build */
+    MESO_EXIT_JOBS_FAILED = 6, /* mesobake batch: at least one job failed */
     MESO_EXIT_DIFFERENT = 7,   /* diff found a difference */
 };
 

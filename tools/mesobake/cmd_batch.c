@@ -59,8 +59,6 @@ static const char* const usage_batch =
     "command-line error, 2 I/O failure, 3 invalid manifest (E3450..E3456), 4 internal\n"
     "error, 5 --engine slurm without sbatch.\n";
 
-#define MESO_EXIT_JOBS_FAILED 6
-
 static int verbose_jobs;
 
 static const char* status_word(batch_status s)
