@@ -28,7 +28,7 @@ expect_rc 0 "mesh --help"
 expect_out '^Usage: mesobake mesh' "mesh --help usage"
 run "$MB" --version
 expect_rc 0 "--version"
-expect_out '^mesobake [0-9]+\.[0-9]+\.[0-9]+ \(format [0-9]+\.[0-9]+\)$' "--version format"
+expect_out '^mesobake [0-9]+\.[0-9]+\.[0-9]+ \(format [0-9]+\.[0-9]+, batch cache [0-9]+\)$' "--version format"
 
 # ---------------------------------------------------------- usage errors
 run "$MB"

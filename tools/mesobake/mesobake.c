@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "batch.h"
 #include "cli_util.h"
 
 static const char* const usage_short =
@@ -55,7 +56,8 @@ int main(int argc, char** argv)
         return MESO_EXIT_OK;
     }
     if (!strcmp(cmd, "--version")) {
-        printf("mesobake %s (format %d.%d)\n", MESO_VERSION_STRING, MESO_FORMAT_MAJOR, MESO_FORMAT_MINOR);
+        printf("mesobake %s (format %d.%d, batch cache %d)\n", MESO_VERSION_STRING, MESO_FORMAT_MAJOR,
+               MESO_FORMAT_MINOR, MESO_BATCH_CACHE_VERSION);
         return MESO_EXIT_OK;
     }
     if (!strcmp(cmd, "mesh"))
