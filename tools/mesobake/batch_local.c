@@ -256,17 +256,28 @@ int batch_run_one(batch_manifest* m, const batch_cache* c, size_t index, int thr
     batch_job* job = &m->jobs[index];
     const double t0 = meso_seconds();
     int code = MESO_EXIT_OK;
-    if (!job->key[0]) {
-        fprintf(stderr, "mesobake error: jobs[%zu]: its input cannot be read, so it has no cache key\n", index);
-        code = MESO_EXIT_INVALID;
-    } else if (!batch_cache_has(c, job->key)) {
-        char* dest = batch_cache_entry(c, job->key, ".meso", 1);
-        char* report = batch_cache_entry(c, job->key, ".json", 1);
+    if (!batch_cache_has(c, job->key)) {
+        /* Without a key (an input that cannot be read) the bake still runs,
+         * into a scratch entry, so that its own error and exit code tell the
+         * batch what is wrong; whatever it writes is not kept. */
+        char scratch[32];
+        snprintf(scratch, sizeof scratch, "unkeyed-%ld", (long)getpid());
+        const char* key = job->key[0] ? job->key : scratch;
+        char* dest = batch_cache_entry(c, key, ".meso", 1);
+        char* report = batch_cache_entry(c, key, ".json", 1);
         const pid_t pid = dest && report ? batch_spawn(m, job, dest, report, threads, NULL) : -1;
         int status = 0;
         while (pid > 0 && waitpid(pid, &status, 0) < 0 && errno == EINTR) {
         }
         code = pid > 0 ? exit_code_of(status) : MESO_EXIT_INTERNAL;
+        if (!job->key[0] && dest && report) {
+            unlink(dest);
+            unlink(report);
+            if (code == MESO_EXIT_OK) {
+                fprintf(stderr, "mesobake error: jobs[%zu]: an input could not be read to make the cache key\n", index);
+                code = MESO_EXIT_IO;
+            }
+        }
         free(dest);
         free(report);
     }

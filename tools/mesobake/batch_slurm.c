@@ -218,6 +218,11 @@ static meso_result submit(batch_manifest* m, const batch_cache* c, const batch_o
 meso_result batch_run_slurm(batch_manifest* m, const batch_cache* c, const batch_options* o, batch_progress* p,
                             meso_error* err)
 {
+    size_t todo = 0;
+    for (size_t i = 0; i < m->count; ++i)
+        todo += m->jobs[i].status == BATCH_PENDING && m->jobs[i].same_as == (size_t)-1;
+    if (todo == 0)
+        return MESO_OK; /* all cached: nothing to submit, no Slurm needed */
     if (!on_path("sbatch"))
         return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0,
                               "--engine slurm needs Slurm's sbatch on PATH (Debian: slurm-client) and a cluster to "
@@ -267,7 +272,8 @@ meso_result batch_run_slurm(batch_manifest* m, const batch_cache* c, const batch
         }
     }
     for (size_t i = 0; i < m->count; ++i)
-        if (m->jobs[i].status == BATCH_PENDING || m->jobs[i].status == BATCH_RUNNING) {
+        if (m->jobs[i].same_as == (size_t)-1 &&
+            (m->jobs[i].status == BATCH_PENDING || m->jobs[i].status == BATCH_RUNNING)) {
             m->jobs[i].status = BATCH_FAILED;
             snprintf(m->jobs[i].error, sizeof m->jobs[i].error, "%s", err && err->message[0] ? err->message : "not run");
             batch_progress_job(p, &m->jobs[i]);
