@@ -44,20 +44,11 @@ static meso_result fail(meso_error* err, const char* path, uint32_t code, const 
                           msg);
 }
 
-static char* dup_str(const char* s)
-{
-    size_t n = strlen(s) + 1;
-    char* d = malloc(n);
-    if (d)
-        memcpy(d, s, n);
-    return d;
-}
-
 /* "prefix" "/" "rest", or a copy of `rest` when it is absolute. */
 static char* join_path(const char* dir, const char* rest)
 {
     if (rest[0] == '/')
-        return dup_str(rest);
+        return strdup(rest);
     size_t a = strlen(dir), b = strlen(rest);
     char* s = malloc(a + b + 2);
     if (s) {
@@ -122,7 +113,7 @@ static int append_args(batch_job* job, const cJSON* args)
         if (!grown)
             return 0;
         job->args = grown;
-        if (!(job->args[job->arg_count] = dup_str(a->valuestring)))
+        if (!(job->args[job->arg_count] = strdup(a->valuestring)))
             return 0;
         job->arg_count++;
     }
@@ -167,10 +158,10 @@ static meso_result load_job(batch_manifest* m, batch_job* job, const cJSON* j, c
         return fail(err, m->path, BATCH_ISSUE_FIELD, "%s: missing \"input\"", where);
     if (!output)
         return fail(err, m->path, BATCH_ISSUE_FIELD, "%s: missing \"output\"", where);
-    job->name = dup_str(name ? name : output);
-    job->command = dup_str(command);
-    job->input = dup_str(input);
-    job->output = dup_str(output);
+    job->name = strdup(name ? name : output);
+    job->command = strdup(command);
+    job->input = strdup(input);
+    job->output = strdup(output);
     job->output_path = join_path(m->dir, output);
     job->same_as = (size_t)-1;
     job->exit_code = -1;
@@ -243,10 +234,10 @@ meso_result batch_manifest_load(const char* path, batch_manifest* m, meso_error*
     char* text = batch_read_file(path, &size);
     if (!text)
         return fail(err, path, BATCH_ISSUE_UNREADABLE, "cannot read the manifest: %s", strerror(errno));
-    m->path = dup_str(path);
+    m->path = strdup(path);
     /* The directory every relative path of the manifest starts from. */
     char* slash = strrchr(m->path ? m->path : "", '/');
-    char* dir = slash ? malloc((size_t)(slash - m->path) + 2) : dup_str(".");
+    char* dir = slash ? malloc((size_t)(slash - m->path) + 2) : strdup(".");
     if (dir && slash) {
         memcpy(dir, m->path, (size_t)(slash - m->path));
         dir[slash - m->path] = 0;
