@@ -7,10 +7,11 @@
  * The schema is tools/mesobake/schema/manifest.schema.json; this file checks
  * the same rules, so a manifest is refused before any job runs, with the
  * JSON path of the problem. Decided where a person would have to guess:
- * unknown fields are errors (a misspelt "ouput" must not bake to nowhere);
- * a job's args follow the defaults' args (a later option wins in every
- * command); paths are relative to the manifest's directory; the options the
- * batch sets itself are refused in args rather than silently overridden.
+ * unknown and repeated fields are errors (a misspelt "ouput" must not bake
+ * to nowhere, a second "output" must not be ignored); a job's args follow
+ * the defaults' args (a later option wins in every command); paths are
+ * relative to the manifest's directory; the options the batch sets itself
+ * are refused in args rather than silently overridden.
  */
 #include "batch.h"
 
@@ -128,7 +129,8 @@ static meso_result check_outputs_distinct(const batch_manifest* m, meso_error* e
     return r;
 }
 
-/* Only the keys in `known` may appear in `obj`. */
+/* Only the keys in `known` may appear in `obj`, each once (cJSON keeps a
+ * repeated key and finds the first, so a second "output" would be ignored). */
 static meso_result check_keys(const cJSON* obj, const char* const* known, size_t n, const char* mpath,
                               const char* where, meso_error* err)
 {
@@ -138,6 +140,9 @@ static meso_result check_keys(const cJSON* obj, const char* const* known, size_t
             ++k;
         if (k == n)
             return fail(err, mpath, BATCH_ISSUE_FIELD, "%s: unknown field \"%s\"", where, it->string);
+        for (const cJSON* before = obj->child; before != it; before = before->next)
+            if (!strcmp(before->string, it->string))
+                return fail(err, mpath, BATCH_ISSUE_FIELD, "%s: field \"%s\" given twice", where, it->string);
     }
     return MESO_OK;
 }
