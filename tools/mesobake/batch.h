@@ -35,7 +35,8 @@
  *   3451 not JSON (the message gives line and column)
  *   3452 a field is missing, of the wrong type, or not known
  *   3453 an unknown command
- *   3454 an option the batch sets itself (-i, -o, --report, -j, --threads)
+ *   3454 an option the batch sets itself (-i, -o, --report, -j, --threads),
+ *        or -h/--help (a job that would bake nothing)
  *   3455 two jobs write the same output
  *   3456 no jobs */
 #define BATCH_ISSUE_UNREADABLE 3450u

@@ -11,7 +11,8 @@
  * to nowhere, a second "output" must not be ignored); a job's args follow
  * the defaults' args (a later option wins in every command); paths are
  * relative to the manifest's directory; the options the batch sets itself
- * are refused in args rather than silently overridden.
+ * are refused in args rather than silently overridden, and so is --help
+ * (a job that bakes nothing).
  */
 #include "batch.h"
 
@@ -27,6 +28,9 @@
 
 static const char* const commands[] = {"mesh", "shell", "cells", "frusta"};
 static const char* const owned_options[] = {"-i", "--input", "-o", "--output", "--report", "-j", "--threads"};
+/* A job is a bake: with these the command prints its help, exits 0 and
+ * writes nothing, which --no-cache would report as baked. */
+static const char* const no_bake_options[] = {"-h", "--help"};
 
 int batch_command_threaded(const char* command)
 {
@@ -176,6 +180,10 @@ static meso_result check_args(const cJSON* args, const char* mpath, const char* 
                 return fail(err, mpath, BATCH_ISSUE_OWNED_OPTION,
                             "%s.args[%d]: '%s' is set by the batch (use \"input\"/\"output\"; threads follow -j)",
                             where, i, a->valuestring);
+        for (size_t k = 0; k < sizeof no_bake_options / sizeof no_bake_options[0]; ++k)
+            if (!strcmp(a->valuestring, no_bake_options[k]))
+                return fail(err, mpath, BATCH_ISSUE_OWNED_OPTION, "%s.args[%d]: '%s' bakes nothing", where, i,
+                            a->valuestring);
     }
     return MESO_OK;
 }
