@@ -51,7 +51,8 @@ pid_t batch_spawn(const batch_manifest* m, const batch_job* job, const char* des
     }
     char tbuf[16];
     snprintf(tbuf, sizeof tbuf, "%d", threads);
-    const size_t n = 10 + job->arg_count;
+    /* mesobake COMMAND -i IN -o OUT --report R ARGS --threads T, and NULL */
+    const size_t n = 11 + job->arg_count;
     const char** argv = calloc(n, sizeof *argv);
     if (!argv)
         return -1;
