@@ -10,7 +10,8 @@
 # refused (exit 5) while a fully cached batch still needs no Slurm.
 # Fails (not skips) unless root with slurmctld slurmd slurm-client munge.
 set -u
-B=$1 CL=$2 DATA=$3
+abs() { case $1 in /*) echo "$1" ;; *) echo "$PWD/$1" ;; esac; }
+B=$(abs "$1") CL=$(abs "$2") DATA=$(abs "$3")
 
 . "$(dirname "$0")/check_lib.sh" # $T, run, expect_*, fail, ok
 

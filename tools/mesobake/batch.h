@@ -25,7 +25,7 @@
 
 /* Bump whenever a change to the baker can change the bytes of any bake (an
  * algorithm, a default, the format writer): the cache key includes it, so
- * entries of an older baker are never served. tests/integration/batch.sh
+ * entries of an older baker are never served. tests/integration/batch_cache_version.sh
  * holds known-answer digests of bakes under this number and fails when the
  * bytes change but the number did not. */
 #define MESO_BATCH_CACHE_VERSION 1
@@ -35,7 +35,8 @@
  *   3451 not JSON (the message gives line and column)
  *   3452 a field is missing, of the wrong type, or not known
  *   3453 an unknown command
- *   3454 an option the batch sets itself (-i, -o, --report, -j, --threads)
+ *   3454 an option the batch sets itself (-i, -o, --report, -j, --threads),
+ *        or -h/--help (a job that would bake nothing)
  *   3455 two jobs write the same output
  *   3456 no jobs */
 #define BATCH_ISSUE_UNREADABLE 3450u

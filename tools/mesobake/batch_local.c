@@ -51,7 +51,8 @@ pid_t batch_spawn(const batch_manifest* m, const batch_job* job, const char* des
     }
     char tbuf[16];
     snprintf(tbuf, sizeof tbuf, "%d", threads);
-    const size_t n = 10 + job->arg_count;
+    /* mesobake COMMAND -i IN -o OUT --report R ARGS --threads T, and NULL */
+    const size_t n = 11 + job->arg_count;
     const char** argv = calloc(n, sizeof *argv);
     if (!argv)
         return -1;
@@ -120,12 +121,16 @@ static int exit_code_of(int status)
     return WIFEXITED(status) ? WEXITSTATUS(status) : WIFSIGNALED(status) ? 128 + WTERMSIG(status) : MESO_EXIT_INTERNAL;
 }
 
+/* The directory of the bakes' logs: $TMPDIR (when absolute and shorter
+ * than this) or /tmp, then "/mesobake-batch-XXXXXX". */
+#define BATCH_TMP_MAX 1024
+
 typedef struct slot {
     pid_t pid;
     size_t job;
     double t0;
-    char log[64];
-    char report[80]; /* the --report path when not in the cache */
+    char log[BATCH_TMP_MAX + 32];
+    char report[BATCH_TMP_MAX + 32]; /* the --report path when not in the cache */
 } slot;
 
 static void start_job(batch_manifest* m, const batch_cache* c, size_t i, int threads, slot* s, const char* tmp,
@@ -136,8 +141,8 @@ static void start_job(batch_manifest* m, const batch_cache* c, size_t i, int thr
     char *dest = NULL, *report = NULL;
     meso_error e = {0};
     s->job = i;
-    snprintf(s->log, sizeof s->log, "%.40s/%zu.log", tmp, i);
-    snprintf(s->report, sizeof s->report, "%.40s/%zu.json", tmp, i);
+    snprintf(s->log, sizeof s->log, "%s/%zu.log", tmp, i);
+    snprintf(s->report, sizeof s->report, "%s/%zu.json", tmp, i);
     if (cached) {
         dest = batch_cache_entry(c, job->key, ".meso", 1);
         report = batch_cache_entry(c, job->key, ".json", 1);
@@ -198,8 +203,10 @@ meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch
                             meso_error* err)
 {
     const char* tmpdir = getenv("TMPDIR");
-    char tmp[64];
-    snprintf(tmp, sizeof tmp, "%.30s/mesobake-batch-XXXXXX", tmpdir && tmpdir[0] == '/' && strlen(tmpdir) < 30 ? tmpdir : "/tmp");
+    static const char name[] = "/mesobake-batch-XXXXXX";
+    char tmp[BATCH_TMP_MAX];
+    snprintf(tmp, sizeof tmp, "%s%s",
+             tmpdir && tmpdir[0] == '/' && strlen(tmpdir) + sizeof name <= sizeof tmp ? tmpdir : "/tmp", name);
     if (!mkdtemp(tmp))
         return meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot create a directory for the logs: %s", tmp,
                               strerror(errno));

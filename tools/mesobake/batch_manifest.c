@@ -7,10 +7,12 @@
  * The schema is tools/mesobake/schema/manifest.schema.json; this file checks
  * the same rules, so a manifest is refused before any job runs, with the
  * JSON path of the problem. Decided where a person would have to guess:
- * unknown fields are errors (a misspelt "ouput" must not bake to nowhere);
- * a job's args follow the defaults' args (a later option wins in every
- * command); paths are relative to the manifest's directory; the options the
- * batch sets itself are refused in args rather than silently overridden.
+ * unknown and repeated fields are errors (a misspelt "ouput" must not bake
+ * to nowhere, a second "output" must not be ignored); a job's args follow
+ * the defaults' args (a later option wins in every command); paths are
+ * relative to the manifest's directory; the options the batch sets itself
+ * are refused in args rather than silently overridden, and so is --help
+ * (a job that bakes nothing).
  */
 #include "batch.h"
 
@@ -26,6 +28,9 @@
 
 static const char* const commands[] = {"mesh", "shell", "cells", "frusta"};
 static const char* const owned_options[] = {"-i", "--input", "-o", "--output", "--report", "-j", "--threads"};
+/* A job is a bake: with these the command prints its help, exits 0 and
+ * writes nothing, which --no-cache would report as baked. */
+static const char* const no_bake_options[] = {"-h", "--help"};
 
 int batch_command_threaded(const char* command)
 {
@@ -59,7 +64,68 @@ static char* join_path(const char* dir, const char* rest)
     return s;
 }
 
-/* Only the keys in `known` may appear in `obj`. */
+/* A copy of the absolute `path` spelt one way: "." and empty components
+ * dropped, "dir/.." folded (lexically: a symbolic link before ".." is not
+ * followed). So "out/a.meso", "out/./a.meso" and "out//a.meso" are one
+ * output. NULL when out of memory. */
+static char* plain_path(const char* path)
+{
+    char* s = strdup(path);
+    if (!s)
+        return NULL;
+    size_t n = 0; /* s[0..n) is the result; it never overtakes the reading */
+    for (const char* in = path; *in;) {
+        while (*in == '/')
+            ++in;
+        const char* end = in;
+        while (*end && *end != '/')
+            ++end;
+        const size_t len = (size_t)(end - in);
+        if (len == 2 && in[0] == '.' && in[1] == '.') {
+            while (n > 0 && s[n - 1] != '/')
+                --n;
+            n -= n > 0; /* and its slash */
+        } else if (len > 0 && !(len == 1 && in[0] == '.')) {
+            s[n++] = '/';
+            memmove(s + n, in, len);
+            n += len;
+        }
+        in = end;
+    }
+    if (n == 0)
+        s[n++] = '/';
+    s[n] = 0;
+    return s;
+}
+
+/* Two jobs writing one file, however its path is spelt: MESO_OK or E3455. */
+static meso_result check_outputs_distinct(const batch_manifest* m, meso_error* err)
+{
+    char** plain = calloc(m->count, sizeof *plain);
+    meso_result r = plain ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", m->path);
+    for (size_t a = 0; a < m->count && r == MESO_OK; ++a)
+        if (!(plain[a] = plain_path(m->jobs[a].output_path)))
+            r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", m->path);
+    for (size_t a = 0; a < m->count && r == MESO_OK; ++a)
+        for (size_t b = 0; b < a && r == MESO_OK; ++b) {
+            if (strcmp(plain[a], plain[b]))
+                continue;
+            const char *first = m->jobs[b].output, *second = m->jobs[a].output;
+            if (strcmp(first, second))
+                r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT,
+                         "jobs[%zu] and jobs[%zu] both write \"%s\" (as \"%s\")", b, a, first, second);
+            else
+                r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT, "jobs[%zu] and jobs[%zu] both write \"%s\"", b,
+                         a, first);
+        }
+    for (size_t a = 0; plain && a < m->count; ++a)
+        free(plain[a]);
+    free(plain);
+    return r;
+}
+
+/* Only the keys in `known` may appear in `obj`, each once (cJSON keeps a
+ * repeated key and finds the first, so a second "output" would be ignored). */
 static meso_result check_keys(const cJSON* obj, const char* const* known, size_t n, const char* mpath,
                               const char* where, meso_error* err)
 {
@@ -69,6 +135,9 @@ static meso_result check_keys(const cJSON* obj, const char* const* known, size_t
             ++k;
         if (k == n)
             return fail(err, mpath, BATCH_ISSUE_FIELD, "%s: unknown field \"%s\"", where, it->string);
+        for (const cJSON* before = obj->child; before != it; before = before->next)
+            if (!strcmp(before->string, it->string))
+                return fail(err, mpath, BATCH_ISSUE_FIELD, "%s: field \"%s\" given twice", where, it->string);
     }
     return MESO_OK;
 }
@@ -102,6 +171,10 @@ static meso_result check_args(const cJSON* args, const char* mpath, const char* 
                 return fail(err, mpath, BATCH_ISSUE_OWNED_OPTION,
                             "%s.args[%d]: '%s' is set by the batch (use \"input\"/\"output\"; threads follow -j)",
                             where, i, a->valuestring);
+        for (size_t k = 0; k < sizeof no_bake_options / sizeof no_bake_options[0]; ++k)
+            if (!strcmp(a->valuestring, no_bake_options[k]))
+                return fail(err, mpath, BATCH_ISSUE_OWNED_OPTION, "%s.args[%d]: '%s' bakes nothing", where, i,
+                            a->valuestring);
     }
     return MESO_OK;
 }
@@ -219,12 +292,7 @@ static meso_result load_root(batch_manifest* m, const cJSON* root, meso_error* e
     int i = 0;
     for (const cJSON* j = jobs->child; j && r == MESO_OK; j = j->next, ++i)
         r = load_job(m, &m->jobs[i], j, defaults, i, err);
-    for (size_t a = 0; a < m->count && r == MESO_OK; ++a)
-        for (size_t b = 0; b < a && r == MESO_OK; ++b)
-            if (!strcmp(m->jobs[a].output_path, m->jobs[b].output_path))
-                r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT, "jobs[%zu] and jobs[%zu] both write \"%s\"", b, a,
-                         m->jobs[a].output);
-    return r;
+    return r == MESO_OK ? check_outputs_distinct(m, err) : r;
 }
 
 meso_result batch_manifest_load(const char* path, batch_manifest* m, meso_error* err)
