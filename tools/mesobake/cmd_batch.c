@@ -185,7 +185,7 @@ static void finish_duplicates(batch_manifest* m, const batch_cache* c, batch_pro
             continue;
         const batch_job* first = &m->jobs[j->same_as];
         meso_error e = {0};
-        if (first->status == BATCH_FAILED)
+        if (!batch_cache_has(c, j->key)) /* (the first may have failed only in its own copy-out) */
             snprintf(j->error, sizeof j->error, "the same bake as %s, which failed", first->name);
         else if (batch_cache_copy_out(c, j, &e) != MESO_OK)
             snprintf(j->error, sizeof j->error, "%s", e.message);
