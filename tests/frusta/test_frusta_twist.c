@@ -34,22 +34,11 @@
 #include "meso_bake.h"
 #include "meso_file.h"
 #include "test_util.h"
+#include "vec3d.h"
 
 #define TAU 6.283185307179586
 
 static char tmp_dir[256];
-
-static double dot(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 static double wrap(double x) /* to [-1/2, 1/2) */
 {
@@ -133,9 +122,9 @@ static double u_at(const meso_ref_frusta* m, const double p[3])
     for (uint32_t i = 0; i < m->seg_count; ++i) {
         const meso_ref_frustum* f = &m->segs[i];
         double a[3] = {f->c1[0] - f->c0[0], f->c1[1] - f->c0[1], f->c1[2] - f->c0[2]};
-        const double h = sqrt(dot(a, a));
+        const double h = sqrt(dot3(a, a));
         const double d[3] = {p[0] - f->c0[0], p[1] - f->c0[1], p[2] - f->c0[2]};
-        const double y = dot(d, a) / h;
+        const double y = dot3(d, a) / h;
         if (y >= -1e-9 * h && y <= h * (1 + 1e-9)) {
             double u, v;
             meso_ref_frustum_uv(f, p, &u, &v, NULL);
@@ -149,7 +138,7 @@ static double u_at(const meso_ref_frusta* m, const double p[3])
 static double helix_case(const char* what, double rate, int special, double special_deg)
 {
     double a[3] = {0.3, 1.0, 0.2};
-    const double l = sqrt(dot(a, a));
+    const double l = sqrt(dot3(a, a));
     for (int k = 0; k < 3; ++k)
         a[k] /= l;
     char skel[1024];
@@ -173,11 +162,11 @@ static double helix_case(const char* what, double rate, int special, double spec
     /* A fixed frame of our own: φ right-handed about a. */
     double e[3], z[3];
     const double ex[3] = {1, 0, 0};
-    cross(a, ex, e);
-    const double el = sqrt(dot(e, e));
+    cross3(a, ex, e);
+    const double el = sqrt(dot3(e, e));
     for (int k = 0; k < 3; ++k)
         e[k] /= el;
-    cross(e, a, z);
+    cross3(e, a, z);
     const double s_ref = 0.35, phi_ref = 0;
     double p[3];
     for (int k = 0; k < 3; ++k)
@@ -209,11 +198,11 @@ static double helix_case(const char* what, double rate, int special, double spec
             hit.part != MESO_REF_PART_LATERAL)
             continue;
         const double q[3] = {hit.p[0] - chain_o[0], hit.p[1] - chain_o[1], hit.p[2] - chain_o[2]};
-        const double hs = dot(q, a);
+        const double hs = dot3(q, a);
         double qr[3];
         for (int k = 0; k < 3; ++k)
             qr[k] = q[k] - hs * a[k];
-        const double hphi = atan2(dot(qr, e), dot(qr, z));
+        const double hphi = atan2(dot3(qr, e), dot3(qr, z));
         const double hwant = (hphi - phi_ref + theta(hs, rate, special, special_deg) -
                               theta(s_ref, rate, special, special_deg)) / TAU;
         worst_hit = fmax(worst_hit, fabs(wrap(hit.u - u_ref - hwant)));
@@ -242,15 +231,15 @@ static void test_analytic_helix(void)
 static void seam_point(const meso_ref_frustum* f, int end, double phi, double X[3])
 {
     double a[3] = {f->c1[0] - f->c0[0], f->c1[1] - f->c0[1], f->c1[2] - f->c0[2]}, z[3], w[3];
-    const double h = sqrt(dot(a, a));
+    const double h = sqrt(dot3(a, a));
     for (int k = 0; k < 3; ++k)
         a[k] /= h;
-    cross(f->frame_x, a, z);
+    cross3(f->frame_x, a, z);
     for (int k = 0; k < 3; ++k)
         w[k] = sin(TAU * phi) * f->frame_x[k] + cos(TAU * phi) * z[k];
     const double kk = (f->r1 - f->r0) / h;
     const double* n = f->plane_n[end];
-    const double y = (f->plane_d[end] - dot(n, f->c0) - f->r0 * dot(n, w)) / (dot(n, a) + kk * dot(n, w));
+    const double y = (f->plane_d[end] - dot3(n, f->c0) - f->r0 * dot3(n, w)) / (dot3(n, a) + kk * dot3(n, w));
     for (int k = 0; k < 3; ++k)
         X[k] = f->c0[k] + y * a[k] + (f->r0 + kk * y) * w[k];
 }
