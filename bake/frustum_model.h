@@ -63,9 +63,14 @@
  *    v = 1 (formats/FORMAT.md, frusta: u = atan2(q·x, q·z)/2π − u_offset +
  *    v·twist/2π); the alignment above takes it into account on both sides
  *    of a joint, so a twisted segment still meets its neighbour's u at the
- *    aligned point. On a joint plane v is exactly 1 (or 0) on the whole
- *    cut, so twist adds a constant there and leaves the rest of the seam's
- *    u as it is without twist (tests/frusta/test_frusta_twist.c).
+ *    aligned point. Elsewhere on the seam u matches only where the two
+ *    segments' angles about their axes differ by a constant (straight
+ *    chains; a mitred bend whose frame_x is normal to the bend's plane);
+ *    elsewhere the one-point alignment leaves a jump, up to ~2e-2 turns on
+ *    the tapered chain and the saguaro of tests/frusta/test_frusta_twist.c. On a joint plane v is
+ *    exactly 1 (or 0) on the whole cut, so twist only adds constants
+ *    there: it moves the aligned point, which shifts that jump by one
+ *    constant per joint, and never changes its spread.
  *  - Twist (§2.3's "adding vθ to the u coordinate", θ per segment; the
  *    paper gives no way to choose θ). Each segment's twist is its child
  *    node's `twist_deg` when the skeleton gives one (the .skel `twist=`
@@ -93,7 +98,8 @@
  *    after the fit is still above 1e-6 of the joint radius, the joint
  *    becomes a ball joint (`unfitted_joints`): a knob, never a crack.
  *    The seam gap below is measured after the fit.
- * What remains: u running in opposite senses across
+ * What remains: u matched along the whole seam (not only at one point), u
+ * running in opposite senses across
  * a joint where both segments point away from it (a root with two children),
  * §2.4 normals across ball joints, bounding pyramids (§2.6).
  */
