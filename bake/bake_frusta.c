@@ -8,6 +8,7 @@
  */
 #include "bake_internal.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -201,6 +202,8 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     cJSON_AddNumberToObject(params, "max_joint_angle", a->max_joint_angle);
     cJSON_AddBoolToObject(params, "minor_axis_fit", !a->no_fit);
     cJSON_AddBoolToObject(params, "keep_cap_intersections", a->keep_cap_intersections);
+    if (a->twist != 0) /* absent when 0, so untwisted bakes keep their bytes */
+        cJSON_AddNumberToObject(params, "twist", a->twist);
     if (a->relief) {
         cJSON* rl = cJSON_AddObjectToObject(params, "relief");
         cJSON_AddStringToObject(rl, "spec", a->relief);
@@ -238,6 +241,25 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     return r;
 }
 
+/* A rate times a long segment can exceed what a float u resolves: refuse a
+ * segment over MESO_SKEL_MAX_TWIST_DEG (a .skel twist= beyond it never
+ * parses). */
+static meso_result check_twists(const meso_skeleton* sk, const meso_frustum_model* m, double rate, meso_error* err)
+{
+    for (uint32_t i = 0; i < m->segment_count; ++i) {
+        const meso_frustum_segment* s = &m->segments[i];
+        const double deg = fabs(s->twist) * (180 / M_PI);
+        const uint32_t line = sk->nodes[s->node[1]].line;
+        if (deg > MESO_SKEL_MAX_TWIST_DEG)
+            return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
+                                  "--twist %g degrees per unit length twists the segment ending at %s %u by %.6g "
+                                  "degrees, more than %g (1000 turns): use a smaller rate",
+                                  rate, line ? "line" : "node", line ? line : s->node[1] + 1, deg,
+                                  MESO_SKEL_MAX_TWIST_DEG);
+    }
+    return MESO_OK;
+}
+
 static void fill_report(const meso_frustum_model* m, const meso_frusta_object* obj, meso_bake_frusta_report* s)
 {
     const meso_frustum_stats* st = &m->stats;
@@ -272,10 +294,11 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     if (!a.relief_repeat)
         a.relief_repeat = 1;
     if (!(a.max_joint_angle >= 0 && a.max_joint_angle <= 180) || !(a.relief_repeat > 0 && a.relief_repeat <= 1e4) ||
-        !(a.relief_depth >= 0) || !(a.tolerance >= 0))
+        !(a.relief_depth >= 0) || !(a.tolerance >= 0) || !(fabs(a.twist) <= MESO_BAKE_MAX_TWIST))
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
                               "frusta options: max_joint_angle in [0, 180], relief_repeat in (0, 10000], "
-                              "relief_depth and tolerance >= 0");
+                              "relief_depth and tolerance >= 0, |twist| <= %g degrees per unit length",
+                              MESO_BAKE_MAX_TWIST);
     if (a.relief_depth > 0 && !a.relief)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "frusta options: relief_depth needs a relief");
     meso_bake_frusta_report rep_local;
@@ -317,9 +340,12 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     }
     if (r == MESO_OK) {
         meso_frustum_options fo = {.keep_cap_intersections = a.keep_cap_intersections,
-                                   .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle};
+                                   .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle,
+                                   .twist_per_length = a.twist * (M_PI / 180)};
         r = meso_frustum_model_build(skel, &fo, &m, err);
     }
+    if (r == MESO_OK)
+        r = check_twists(skel, &m, a.twist, err);
     if (r == MESO_OK)
         mesoi_run_stage(&run, "frusta", 0.8, 0.8,
                         "%u frusta, %u joints (%u ball joints: %u sharp, %u unfitted, cap intersections %u found, %u "

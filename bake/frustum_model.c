@@ -374,9 +374,10 @@ typedef struct incidence {
     uint32_t* queue;  /* n + 1: scratch (fill counters, then the breadth-first queue) */
 } incidence;
 
-/* Segments of non-zero length, with perpendicular planes and tip ends;
+/* Segments of non-zero length, with perpendicular planes, tip ends and
+ * their twist (a node's own, else `twist_rate` times the length);
  * zero-length ones merge their nodes. Returns the bounding-box diagonal. */
-static double make_segments(const meso_skeleton* sk, incidence* g, meso_frustum_model* m)
+static double make_segments(const meso_skeleton* sk, double twist_rate, incidence* g, meso_frustum_model* m)
 {
     const uint32_t n = g->n;
     double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
@@ -416,6 +417,7 @@ static double make_segments(const meso_skeleton* sk, incidence* g, meso_frustum_
         s->cap[0] = s->r0 > 0;
         s->cap[1] = s->r1 > 0;
         s->end_kind[0] = s->end_kind[1] = MESO_FRUSTUM_END_TIP;
+        s->twist = b->has_twist ? b->twist_deg * (TAU / 360) : twist_rate * dist3(b->pos, a->pos);
     }
     return diag;
 }
@@ -705,7 +707,7 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frusta: out of memory (%u nodes)", n);
         goto done;
     }
-    const double diag = make_segments(sk, &g, &m);
+    const double diag = make_segments(sk, o.twist_per_length, &g, &m);
     if (m.segment_count == 0) {
         r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3149u, "frusta: the skeleton has no segment of non-zero length");
         goto done;

@@ -62,9 +62,28 @@
  *    twist turns the u = 0 generator by `twist` radians from v = 0 to
  *    v = 1 (formats/FORMAT.md, frusta: u = atan2(q·x, q·z)/2π − u_offset +
  *    v·twist/2π); the alignment above takes it into account on both sides
- *    of a joint, so a twisted segment still meets its neighbour's u. The
- *    builder sets twist = 0 on every segment (the paper's per-segment
- *    artist parameter; no option sets it yet).
+ *    of a joint, so a twisted segment still meets its neighbour's u at the
+ *    aligned point. Elsewhere on the seam u matches only where the two
+ *    segments' angles about their axes differ by a constant (straight
+ *    chains; a mitred bend whose frame_x is normal to the bend's plane);
+ *    elsewhere the one-point alignment leaves a jump, up to ~2e-2 turns on
+ *    the tapered chain and the saguaro of tests/frusta/test_frusta_twist.c. On a joint plane v is
+ *    exactly 1 (or 0) on the whole cut, so twist only adds constants
+ *    there: it moves the aligned point, which shifts that jump by one
+ *    constant per joint, and never changes its spread.
+ *  - Twist (§2.3's "adding vθ to the u coordinate", θ per segment; the
+ *    paper gives no way to choose θ). Each segment's twist is its child
+ *    node's `twist_deg` when the skeleton gives one (the .skel `twist=`
+ *    field), else `twist_per_length` times the segment's length |child −
+ *    parent| (the length v_scale uses, frusta_chunks.h), so a rate makes
+ *    the texture turn uniformly along the skeleton whatever its
+ *    segmentation (uniform in v; with an oblique cut, v is not exactly
+ *    proportional to length along every generator). Sign: positive twist
+ *    turns the texture by −θ about the axis a from v = 0 to 1 (u = const
+ *    is φ = const − vθ, φ the right-handed angle about a), so a line of
+ *    constant u is a left-handed helix; with the same rate everywhere
+ *    every segment's helix has the same handedness, whichever way its axis
+ *    points. Without either, twist = 0 (the paper's untwisted frusta).
  *  - Minor-axis fit (§2.2): at each joint the radius of segment 2 (the one
  *    leaving the joint) at the joint is adjusted until the minor semi-axes
  *    of the two cut ellipses agree (bisection on [r/4, 4r] around the node
@@ -79,7 +98,8 @@
  *    after the fit is still above 1e-6 of the joint radius, the joint
  *    becomes a ball joint (`unfitted_joints`): a knob, never a crack.
  *    The seam gap below is measured after the fit.
- * What remains: u running in opposite senses across
+ * What remains: u matched along the whole seam (not only at one point), u
+ * running in opposite senses across
  * a joint where both segments point away from it (a root with two children),
  * §2.4 normals across ball joints, bounding pyramids (§2.6).
  */
@@ -114,7 +134,7 @@ typedef struct meso_frustum_segment {
     int32_t ball[2];          /* index into balls[] at each end, or -1 */
     double frame_x[3];        /* u = 0 direction (unit, ⟂ axis) */
     double u_offset;          /* turns, subtracted from u */
-    double twist;             /* radians over v in [0, 1] (0) */
+    double twist;             /* radians over v in [0, 1] (see "Twist" above) */
     double cut_margin;        /* min over generators of (y1 − y0) in world units; <= 0: caps cross */
     int32_t align_from;       /* segment whose frame this one's is carried from (breadth-first), or -1 */
     int align_end;            /* end of this segment at the node shared with align_from */
@@ -142,6 +162,8 @@ typedef struct meso_frustum_options {
     int keep_cap_intersections; /* 1: report them but keep the paper's planes (default 0: ball joints) */
     int no_minor_axis_fit;      /* 1: skip the §2.2 minor-axis fit (default 0: fit) */
     double max_joint_angle_deg; /* joints bending more than this become ball joints; <= 0: no limit */
+    double twist_per_length;    /* radians of twist per unit of segment length (default 0); a node's
+                                   twist_deg replaces it for the segment ending there */
 } meso_frustum_options;
 
 typedef struct meso_frustum_stats {

@@ -435,7 +435,14 @@ typedef struct meso_bake_frusta_options {
     const char* relief;         /* a height-field SPEC, or NULL */
     double relief_depth;        /* skeleton units; 0 = a quarter of the mean radius */
     double relief_repeat;       /* tiles around the circumference; default 1 */
+    double twist;               /* degrees of texture twist per unit of skeleton length (default 0):
+                                   each segment's twist is twist x its length (a .skel node's
+                                   twist=DEG replaces it for its segment); finite, |twist| <=
+                                   MESO_BAKE_MAX_TWIST, and no segment over 1000 turns */
 } meso_bake_frusta_options;
+
+/* Largest |meso_bake_frusta_options.twist|: 1000 turns per unit length. */
+#define MESO_BAKE_MAX_TWIST 360000.0
 
 typedef struct meso_bake_frusta_report {
     meso_bake_skeleton_info skeleton;

@@ -174,16 +174,60 @@ static meso_result parse_node(const token* tok, uint32_t ntok, uint32_t line, me
     return MESO_OK;
 }
 
+/* The `twist=` token of a text-format line, if any: removed from tok[]
+ * (the rest keep their order), its value in degrees in *deg. */
+static meso_result take_twist(token* tok, uint32_t* ntok, uint32_t line, int* has, double* deg, meso_error* err)
+{
+    static const char key[] = "twist=";
+    const size_t kn = sizeof(key) - 1;
+    char show[32];
+    uint32_t kept = 0;
+    *has = 0;
+    for (uint32_t k = 0; k < *ntok; ++k) {
+        token t = tok[k];
+        if (t.n < kn || memcmp(t.p, key, kn) != 0) {
+            tok[kept++] = t;
+            continue;
+        }
+        token v = {t.p + kn, t.n - kn};
+        token_show(t, show, sizeof(show));
+        if (*has)
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_TWIST,
+                "skeleton line %u: a second twist field '%s' (one per line)", line, show);
+        if (!parse_double(v, deg))
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_TWIST,
+                "skeleton line %u: '%s' is not twist=DEG (DEG a number of degrees)", line, show);
+        if (!isfinite(*deg) || fabs(*deg) > MESO_SKEL_MAX_TWIST_DEG)
+            return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_TWIST,
+                "skeleton line %u: twist '%s' is not a finite angle within +-%g degrees (1000 turns)", line, show,
+                MESO_SKEL_MAX_TWIST_DEG);
+        *has = 1;
+    }
+    *ntok = kept;
+    return MESO_OK;
+}
+
 /* One line of the text skeleton format (skeleton_swc.h): x y z radius
- * [parent]. `index` is the node's 0-based index; ids are index + 1. */
-static meso_result parse_text_node(const token* tok, uint32_t ntok, uint32_t line, uint32_t index,
-    meso_skeleton_node* nd, int64_t* parent_id, meso_error* err)
+ * [parent] [twist=DEG]. `index` is the node's 0-based index; ids are
+ * index + 1. `tok` may be reordered. */
+static meso_result parse_text_node(token* tok, uint32_t ntok, uint32_t line, uint32_t index, meso_skeleton_node* nd,
+    int64_t* parent_id, meso_error* err)
 {
     static const char* const names[4] = {"x", "y", "z", "radius"};
     char show[32];
+    int has_twist = 0;
+    double twist = 0;
+    if (ntok > SWC_FIELDS + 1) /* more than tok[] holds: too many whatever they are */
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_FIELD_COUNT,
+            "skeleton line %u: %u fields, expected 4 or 5 (x y z radius [parent], and optionally twist=DEG)", line,
+            ntok);
+    meso_result r = take_twist(tok, &ntok, line, &has_twist, &twist, err);
+    if (r != MESO_OK)
+        return r;
     if (ntok != 4 && ntok != 5)
         return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_FIELD_COUNT,
-            "skeleton line %u: %u fields, expected 4 or 5 (x y z radius [parent])", line, ntok);
+            "skeleton line %u: %u fields, expected 4 or 5 (x y z radius [parent], and optionally twist=DEG)", line,
+            ntok);
     double dv[4];
     for (int k = 0; k < 4; ++k) {
         if (!parse_double(tok[k], &dv[k])) {
@@ -213,12 +257,17 @@ static meso_result parse_text_node(const token* tok, uint32_t ntok, uint32_t lin
             return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_UNKNOWN_PARENT,
                 "skeleton line %u: parent %lld (0 starts a new tree, k > 0 is the k-th node)", line, (long long)parent);
     }
+    if (has_twist && parent == 0)
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_SKEL_ISSUE_TWIST,
+            "skeleton line %u: twist on a root node (a twist belongs to the segment from the node's parent)", line);
     memset(nd, 0, sizeof(*nd));
     nd->id = (int64_t)index + 1;
     nd->line = line;
     for (int k = 0; k < 3; ++k)
         nd->pos[k] = dv[k];
     nd->radius = dv[3];
+    nd->twist_deg = twist;
+    nd->has_twist = has_twist;
     nd->parent = -1;
     *parent_id = parent == 0 ? -1 : parent;
     return MESO_OK;

@@ -35,20 +35,33 @@
  *   3301 no segment: every tree is a single node (e.g. a one-node file)
  *   3302 every radius is zero: the skin has no surface
  *   3303 no segment has both a length and a radius at one of its ends
+ *   3304 (text format) a `twist=` field that is not a number, not finite,
+ *        beyond +-MESO_SKEL_MAX_TWIST_DEG, given twice on one line, or on
+ *        a root (no segment ends there)
  *
  * The text skeleton format (mesobake's `.skel`, for hand-written and
- * generated skeletons) is one node per line, four or five fields:
- *     x y z radius [parent]
+ * generated skeletons) is one node per line, four or five fields, plus an
+ * optional `twist=DEG`:
+ *     x y z radius [parent] [twist=DEG]
  * `parent` is the 1-based number of another node line (any order), or 0
  * for a root; without it the node's parent is the node on the previous
  * node line (the first node is a root), so a chain is just its points:
  *     # a bent tube
  *     0 0 0 0.2
  *     0 1 0 0.2
- *     1 2 0 0.15
+ *     1 2 0 0.15 twist=90   # the segment from node 2 to here twists 90°
  *     -1 2 0 0.1 2    # a branch from node 2
+ * `twist=DEG` (one token, no spaces, anywhere on the line) sets the twist
+ * of the segment from the node's parent to the node: the relief texture
+ * turns by DEG degrees around the segment's axis from the parent's end to
+ * this end (relief-mapped-conical-frusta.md §2.3, "adding vθ to the u
+ * coordinate"; FORMAT.md's FSEG `twist`, in radians). It replaces, for that
+ * segment, what `mesobake frusta --twist` gives by length (frustum_model.h
+ * says which sign turns which way). A twist on a zero-length segment is
+ * dropped with the segment.
  * Comments, blank lines, line ends and the issue codes are as for SWC
- * (3141: not 4 or 5 fields); node ids are the 1-based node numbers.
+ * (3141: not 4 or 5 fields besides the twist); node ids are the 1-based
+ * node numbers.
  */
 #ifndef MESO_SKELETON_SWC_H
 #define MESO_SKELETON_SWC_H
@@ -75,6 +88,11 @@ extern "C" {
 #define MESO_SKEL_ISSUE_NO_SEGMENT 3301u
 #define MESO_SKEL_ISSUE_NO_RADIUS 3302u
 #define MESO_SKEL_ISSUE_NO_SURFACE 3303u
+#define MESO_SKEL_ISSUE_TWIST 3304u
+
+/* Largest |twist| of one segment, in degrees (1000 turns: beyond it the
+ * runtime's float u loses the texture's precision). */
+#define MESO_SKEL_MAX_TWIST_DEG 360000.0
 
 /* Largest magnitude of a coordinate or radius accepted. */
 #define MESO_SKEL_MAX_COORD 1e15
@@ -88,6 +106,8 @@ typedef struct meso_skeleton_node {
     uint32_t line;        /* 1-based line in the input */
     double pos[3];        /* position (the file's units) */
     double radius;        /* >= 0 (0: the surface pinches to a point here) */
+    double twist_deg;     /* text format's `twist=`: degrees over the segment from the parent (0) */
+    int has_twist;        /* 1: twist_deg was given (SWC and extracted skeletons: 0) */
     int32_t parent;       /* index into nodes[], -1 for a root */
     uint32_t first_child; /* children of node i: children[first_child .. +child_count) */
     uint32_t child_count;
@@ -104,7 +124,7 @@ typedef struct meso_skeleton {
 
 typedef enum meso_skeleton_format {
     MESO_SKELETON_SWC = 0, /* id type x y z radius parent */
-    MESO_SKELETON_TEXT,    /* x y z radius [parent] (above) */
+    MESO_SKELETON_TEXT,    /* x y z radius [parent] [twist=DEG] (above) */
 } meso_skeleton_format;
 
 /* Parses SWC text (`len` bytes, need not be NUL-terminated; a NUL byte is

@@ -659,7 +659,9 @@ static void relief_hit(const relief_ray* rr, double t, meso_ref_frustum_part par
     const double lu = TAU * rho, lv = fabs(dy) * sk;
     for (int i = 0; i < 3; ++i) {
         const double tv = (dy >= 0 ? 1.0 : -1.0) * (g->a[i] + g->k * c.w[i]) / sk;
-        hit->shading_normal[i] = n8[i] - D * (hs * f->u_scale * tu[i] / lu + (lv > 0 ? ht * f->v_scale * tv / lv : 0));
+        /* ∇u = T_u/L_u + (twist/2π) ∇v: ∂h/∂s also tilts along T_v. */
+        const double gv_share = ht * f->v_scale + hs * f->u_scale * f->twist / TAU;
+        hit->shading_normal[i] = n8[i] - D * (hs * f->u_scale * tu[i] / lu + (lv > 0 ? gv_share * tv / lv : 0));
     }
     if (normalize3(hit->shading_normal) == 0)
         memcpy(hit->shading_normal, hit->normal, sizeof(hit->normal));

@@ -99,10 +99,11 @@
  * ∇v by central differences (δ = 1e-6 · segment size), and ∂h/∂s, ∂h/∂t
  * the exact derivatives of the bilinear interpolant (one-sided within the
  * cell that holds (s, t)). `shading_normal` is FORMAT.md's relief shading
- * normal: normalize(N − D (∂h/∂s · u_scale · T_u / L_u + ∂h/∂t · v_scale ·
- * T_v / L_v)), N the eq. 8 normal above, T_u = a × q̂, T_v =
- * normalize(P1 − P0), L_u = 2π|q|, L_v = |P1 − P0| (with twist = 0, and on
- * a cylinder cut perpendicularly, it equals `normal`).
+ * normal: normalize(N − D (∂h/∂s · u_scale · (T_u / L_u + twist/2π · T_v /
+ * L_v) + ∂h/∂t · v_scale · T_v / L_v)), N the eq. 8 normal above,
+ * T_u = a × q̂, T_v = normalize(P1 − P0), L_u = 2π|q|, L_v = |P1 − P0| (on
+ * a cylinder cut perpendicularly, twisted or not, it equals `normal`:
+ * there ∇v = T_v / L_v).
  *
  * Images (meso_ref_frusta_render) follow shell_reference.h's conventions
  * exactly — the same rays per pixel (row 0 at the bottom, centre at

@@ -317,8 +317,8 @@ vec3 relief_normal(Frustum F, ConePoint P)
     vec3 grad = vec3(0.0);
     if (lu > 0.0)
         grad += g.x * F.u_scale * tu / lu;
-    if (lv > 0.0)
-        grad += g.y * F.v_scale * tv / lv;
+    if (lv > 0.0) // twist: u grows by twist/2pi per unit of v, so dh/ds has a share along T_v
+        grad += (g.y * F.v_scale + g.x * F.u_scale * F.twist * INV_TAU) * tv / lv;
     vec3 n = N - F.D * grad;
     float l = length(n);
     return l > 0.0 ? n / l : N;

@@ -34,6 +34,7 @@ typedef struct frusta_file_opts {
     int relief_f32;           /* RELF as F32 (not a dtype §7.2 allows) */
     int bad_node;             /* frustum 0's node1 past the end of SKEL */
     int keep_crossing_caps;   /* bake with the paper's joint planes even where caps cross */
+    double twist;             /* degrees per unit length (mesobake frusta --twist); 0: none */
 } frusta_file_opts;
 
 /* An SWC path (starting with '/') or SWC text. */
@@ -66,7 +67,8 @@ static inline uint8_t* frusta_file(const char* swc, const frusta_file_opts* o, s
     meso_skeleton sk = frusta_scene_skeleton(swc);
     meso_frustum_model m;
     meso_error err;
-    const meso_frustum_options mo = {.keep_cap_intersections = o->keep_crossing_caps};
+    const meso_frustum_options mo = {.keep_cap_intersections = o->keep_crossing_caps,
+                                     .twist_per_length = o->twist * (3.14159265358979323846 / 180)};
     FRUSTA_SCENE_CHECK(meso_frustum_model_build(&sk, &mo, &m, &err) == MESO_OK, err.message);
     const meso_frusta_relief_params rp = {.depth = o->depth, .u_repeat = o->u_repeat};
     meso_frusta_object fo;

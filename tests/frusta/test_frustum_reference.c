@@ -641,7 +641,8 @@ static void smooth_field(float* v, uint32_t w, uint32_t h)
 
 /* The true relief normal against the cross product of hits of rays a small
  * distance apart (same bilinear cell, so the surface is smooth there); and
- * the shading normal equal to it where eq. 8 is the cone's normal. */
+ * the shading normal equal to it where eq. 8 is the cone's normal
+ * (cylinders cut perpendicularly, twisted and not). */
 static void test_relief_normals(void)
 {
     float vals[32 * 16];
@@ -657,6 +658,7 @@ static void test_relief_normals(void)
             f = cylinder(0.5, 2, 0.15);
             f.u_scale = 2;
             f.v_scale = 1.5;
+            f.twist = fi % 2 ? 1.3 : 0; /* the twist's share of ∂h/∂s along T_v (FORMAT.md) */
         } else {
             do
                 random_frustum(&rng, fi % 2, &f);

@@ -2,7 +2,7 @@
  * test_skeleton_swc.c — the SWC reader (bake/skeleton_swc.c): valid files
  * (comments, blank lines, CRLF, sparse unsorted ids, forward parents, the
  * bundled data), each malformed case with its issue code and the line named
- * in the message, and truncated / mutated inputs that must never crash.
+ * in the message, the text format's twist= field, and truncated / mutated inputs that must never crash.
  */
 #include <string.h>
 
@@ -206,12 +206,60 @@ static void test_mutations(void)
     free(buf);
 }
 
+/* The text format's optional twist=DEG (skeleton_swc.h): anywhere on the
+ * line, with or without a parent; every malformed value is E3304 naming
+ * the line. */
+static void test_text_twist(void)
+{
+    const char* text = "0 0 0 0.2\n"
+                       "0 1 0 0.2 twist=90\n"
+                       "twist=-1.5e1 1 2 0 0.15\n"
+                       "-1 2 0 0.1 2 twist=0   # a branch from node 2, explicitly untwisted\n"
+                       "5 5 5 0.1 0\n";
+    meso_skeleton s;
+    meso_error err = {0};
+    assert(meso_skeleton_parse(text, strlen(text), MESO_SKELETON_TEXT, &s, &err) == MESO_OK);
+    assert(s.node_count == 5 && s.root_count == 2);
+    assert(!s.nodes[0].has_twist && s.nodes[1].has_twist && s.nodes[1].twist_deg == 90);
+    assert(s.nodes[2].has_twist && s.nodes[2].twist_deg == -15 && s.nodes[2].pos[0] == 1 && s.nodes[2].parent == 1);
+    assert(s.nodes[3].has_twist && s.nodes[3].twist_deg == 0 && s.nodes[3].parent == 1);
+    assert(!s.nodes[4].has_twist && s.nodes[4].parent == -1);
+    meso_skeleton_free(&s);
+    const bad_case cases[] = {
+        {"0 0 0 1\n0 1 0 1 twist=\n", MESO_SKEL_ISSUE_TWIST, "line 2", "twist="},
+        {"0 0 0 1\n0 1 0 1 twist=ten\n", MESO_SKEL_ISSUE_TWIST, "line 2", "'twist=ten'"},
+        {"0 0 0 1\n\n0 1 0 1 twist=45deg\n", MESO_SKEL_ISSUE_TWIST, "line 3", "45deg"},
+        {"0 0 0 1\n0 1 0 1 twist=nan\n", MESO_SKEL_ISSUE_TWIST, "line 2", "finite"},
+        {"0 0 0 1\n0 1 0 1 twist=-inf\n", MESO_SKEL_ISSUE_TWIST, "line 2", "finite"},
+        {"0 0 0 1\n0 1 0 1 twist=360001\n", MESO_SKEL_ISSUE_TWIST, "line 2", "360000"},
+        {"0 0 0 1\n0 1 0 1 twist=1 twist=2\n", MESO_SKEL_ISSUE_TWIST, "line 2", "second"},
+        {"0 0 0 1 twist=5\n0 1 0 1\n", MESO_SKEL_ISSUE_TWIST, "line 1", "root"},
+        {"0 0 0 1\n0 1 0 1 0 twist=5\n", MESO_SKEL_ISSUE_TWIST, "line 2", "root"},
+        {"0 0 0 1\n0 1 0 twist=5\n", MESO_SKEL_ISSUE_FIELD_COUNT, "line 2", "3 fields"},
+        {"0 0 0 1\n0 1 0 1 1 1 1 1 twist=5\n", MESO_SKEL_ISSUE_FIELD_COUNT, "line 2", "9 fields"},
+        {"0 0 0 1\n0 1 0 1 Twist=5\n", MESO_SKEL_ISSUE_NOT_A_NUMBER, "line 2", "parent"},
+    };
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
+        memset(&err, 0, sizeof(err));
+        meso_result r = meso_skeleton_parse(cases[i].text, strlen(cases[i].text), MESO_SKELETON_TEXT, &s, &err);
+        fprintf(stderr, "    E%u %s\n", err.code, err.message);
+        assert(r == MESO_ERR_CORRUPT && err.code == cases[i].code);
+        assert(strstr(err.message, cases[i].needle));
+        assert(!cases[i].needle2 || strstr(err.message, cases[i].needle2));
+        assert(s.node_count == 0 && s.nodes == NULL);
+    }
+    /* SWC has no twist field: the token is an eighth field. */
+    assert(parse("1 1 0 0 0 1 -1\n2 1 0 1 0 1 1 twist=5\n", &s, &err) == MESO_ERR_CORRUPT &&
+           err.code == MESO_SKEL_ISSUE_FIELD_COUNT);
+}
+
 int main(void)
 {
     TEST_RUN(test_valid);
     TEST_RUN(test_files);
     TEST_RUN(test_errors);
     TEST_RUN(test_drawable);
+    TEST_RUN(test_text_twist);
     TEST_RUN(test_mutations);
     return 0;
 }

@@ -8,7 +8,7 @@
  * ball), NeuroM's radius jump (tests/data/neurom_fat_end.swc), the camera
  * inside a frustum, relief-mapped chains and branches (from outside,
  * grazing, and the camera inside the relief layer, with relief_steps swept
- * from 8 to 256: error against cost), animation through
+ * from 8 to 256: error against cost; twisted, mesobake frusta --twist), animation through
  * meso_rt_frusta_set_pose, the GL state contract and malformed objects.
  *
  * Files are built here from SWC text through mesobake's own code
@@ -276,6 +276,35 @@ static void test_relief(ctx* c, const texture* height)
     run_case(c, "relief_bent_chain_obl", swc_bent, &rel, oblique, 0.02);
     run_case(c, "relief_tapered_chain", swc_tapered, &rel, oblique, 0.02);
     run_case(c, "relief_branch", swc_branch, &rel, front, 0.02);
+    /* Twisted (§2.3, mesobake frusta --twist): the ribs become helices;
+     * u = ... + v·twist/2π in frusta_frag.glsl against the reference. */
+    const frusta_file_opts twisted = {.depth = 0.08, .u_repeat = 3, .twist = 120, RELIEF(height)};
+    run_case(c, "relief_twisted_cylinder", swc_cylinder, &twisted, front, 0.02);
+    {
+        /* The twist shows: GL's twisted image against the untwisted
+         * reference is far off (so the agreement above is not vacuous). */
+        size_t size, size0;
+        uint8_t* file = frusta_file(swc_cylinder, &twisted, &size);
+        uint8_t* file0 = frusta_file(swc_cylinder, &rel, &size0);
+        meso_ref_frusta ref, ref0;
+        meso_rt_object obj = load_both(c, file, size, &ref);
+        meso_file* f0 = NULL;
+        meso_error err;
+        CHECK(meso_file_open_memory(file0, size0, NULL, &f0, &err) == MESO_OK);
+        CHECK(meso_ref_frusta_load(f0, 1, &ref0, &err) == MESO_OK);
+        meso_file_close(f0);
+        const camera cam = auto_camera(file, size, front, 0.7, 0.85);
+        result r = render_compare(c, "twisted_vs_untwisted_ref", obj, &ref0, &cam, NULL);
+        CHECK_MSG(r.m.colour_mae > 0.01, "the twist changes the image: colour MAE %.4f", r.m.colour_mae);
+        meso_ref_frusta_free(&ref);
+        meso_ref_frusta_free(&ref0);
+        meso_rt_release_object(c->rt, obj);
+        free(file);
+        free(file0);
+    }
+    run_case(c, "relief_twisted_bent_chain", swc_bent, &twisted, oblique, 0.02);
+    run_case(c, "relief_twisted_tapered", swc_tapered, &(frusta_file_opts){.depth = 0.08, .u_repeat = 3,
+                                                            .twist = -200, RELIEF(height)}, front, 0.02);
     /* Grazing: along the first segment's axis. */
     const double along[3] = {-1.0, 0.05, 0.08};
     run_case(c, "relief_grazing", swc_bent, &rel, along, 0.02);

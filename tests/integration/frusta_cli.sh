@@ -1,8 +1,9 @@
 #!/bin/sh
 # mesobake frusta from the command line (FORMAT.md §7.2 kind 4): SWC and
 # text skeletons, the chunks a frusta object is made of, the report keys
-# the issue names, relief, determinism, and bad input (a coded error that
-# names the line, a non-zero exit, and no output file).
+# the issue names, relief, determinism, twist (--twist and the .skel
+# twist= field), and bad input (a coded error that names the line, a
+# non-zero exit, and no output file).
 # usage: frusta_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE]
 set -u
 bake=$1 inspect=$2 data=$3 probe=${4:-}
@@ -120,6 +121,31 @@ if [ -n "$probe" ]; then
   fi
 fi
 
+# 3d. Twist (frusta paper §2.3): --twist DEG per unit length and the .skel
+# twist=DEG field; 0 is no option at all (the same bytes); bad values exit 1.
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/tw0.meso" --relief bricks:64 --relief-depth 0.05 --twist 0 >/dev/null 2>&1
+check "twist 0: same bytes as no --twist" cmp -s "$tmp/arm1.meso" "$tmp/tw0.meso"
+check "untwisted: META has no twist" sh -c "! '$inspect' info '$tmp/arm1.meso' | grep -q '\"twist\"'"
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/tw.meso" --relief bricks:64 --relief-depth 0.05 --twist -45.5 >/dev/null 2>&1
+check "twist: bake succeeds and validates" sh -c "'$inspect' validate --full '$tmp/tw.meso' >/dev/null"
+check "twist: META records the rate" sh -c "'$inspect' info '$tmp/tw.meso' | grep -q '\"twist\":[[:space:]]*-45.5'"
+check "twist: differs from untwisted" sh -c "! cmp -s '$tmp/arm1.meso' '$tmp/tw.meso'"
+sed 's/^1.5 3.5 0 0.2$/1.5 3.5 0 0.2 twist=90/' "$tmp/arm.skel" >"$tmp/armtw.skel"
+check "twist= field: in the test skeleton" grep -q "twist=90" "$tmp/armtw.skel"
+"$bake" frusta -i "$tmp/armtw.skel" -o "$tmp/twf.meso" --relief bricks:64 --relief-depth 0.05 >/dev/null 2>&1
+check "twist= field: bake succeeds, differs from untwisted" sh -c "test -s '$tmp/twf.meso' && ! cmp -s '$tmp/arm1.meso' '$tmp/twf.meso'"
+for v in nan inf -inf abc 12deg "" 1e9 -360001; do
+  "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/badtw.meso" --twist "$v" >/dev/null 2>"$tmp/badtw.err"
+  check "--twist '$v': exit 1" test $? = 1
+  check "--twist '$v': message names --twist" grep -q -- "--twist expects" "$tmp/badtw.err"
+  check "--twist '$v': no output" test ! -e "$tmp/badtw.meso"
+done
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/badtw.meso" --twist 300000 >/dev/null 2>"$tmp/badtw.err"
+check "--twist 300000 on segments of length ~2: exit 1 (over 1000 turns)" test $? = 1
+check "--twist 300000: names the segment's line" grep -q "line [0-9]" "$tmp/badtw.err"
+"$bake" frusta --help | grep -q -- "--twist DEG" && "$bake" frusta --help | grep -q "twist=DEG"
+check "--help documents --twist and twist=DEG" test $? = 0
+
 # 4. Bad input: a coded error naming the line, exit 3, no output.
 bad() { # NAME CONTENT EXT CODE
   printf "$2" >"$tmp/$1.$3"
@@ -136,6 +162,12 @@ bad radius "0 0 0 1\n0 1 0 -2\n" skel 3144
 bad parent "0 0 0 1\n0 1 0 1 7\n" skel 3146
 bad swc_cycle "1 1 0 0 0 1 2\n2 1 0 1 0 1 1\n" swc 3147
 bad swc_nan "1 1 0 0 nan 1 -1\n" swc 3143
+bad twist_word "0 0 0 1\n0 1 0 1 twist=ten\n" skel 3304
+bad twist_nan "0 0 0 1\n0 1 0 1 twist=nan\n" skel 3304
+bad twist_huge "0 0 0 1\n0 1 0 1 twist=1e7\n" skel 3304
+bad twist_twice "0 0 0 1\n0 1 0 1 twist=1 twist=2\n" skel 3304
+bad twist_root "0 0 0 1 twist=30\n0 1 0 1\n" skel 3304
+check "bad twist_root: says root" grep -q "root" "$tmp/twist_root.err"
 printf "# only comments\n" >"$tmp/empty.skel"
 "$bake" frusta -i "$tmp/empty.skel" -o "$tmp/empty.meso" >/dev/null 2>"$tmp/empty.err"
 check "bad empty: exit 3 with E3140" sh -c "test $? = 3 && grep -q E3140 '$tmp/empty.err'"

@@ -6,6 +6,8 @@
  * BALL and RELF (FORMAT.md §7.2 kind 4). The bake is meso_bake_frusta
  * (bake/bake_frusta.c); this file parses the options.
  */
+#include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli_util.h"
@@ -19,9 +21,11 @@ static const char* const usage_frusta =
     "\n"
     "Input / output:\n"
     "  -i, --input FILE        .swc      SWC skeleton: id type x y z radius parent\n"
-    "                          .skel     text skeleton: x y z radius [parent] per line\n"
-    "                                    (parent: 1-based node number, 0 = root; omitted:\n"
-    "                                    the previous node)\n"
+    "                          .skel     text skeleton: x y z radius [parent] [twist=DEG] per\n"
+    "                                    line (parent: 1-based node number, 0 = root; omitted:\n"
+    "                                    the previous node; twist=DEG: the segment from the\n"
+    "                                    parent to this node twists DEG degrees, replacing\n"
+    "                                    --twist there)\n"
     "                          a mesh    .obj .off .ply .stl .om: closed, one component;\n"
     "                                    skeleton by mean-curvature flow (CGAL), radii\n"
     "                                    fitted to the mesh, simplified to --tolerance\n"
@@ -42,6 +46,12 @@ static const char* const usage_frusta =
     "      --relief-depth D    depth in skeleton units (default: a quarter of the mean radius)\n"
     "      --relief-repeat N   tiles around the circumference (default 1; along the axis the\n"
     "                          texture keeps texels square and runs on across joints)\n"
+    "      --twist DEG         twist the texture DEG degrees per unit of skeleton length\n"
+    "                          (default 0): a segment of length L twists DEG x L degrees, so\n"
+    "                          the pattern turns uniformly whatever the segmentation (the\n"
+    "                          joints' u alignment accounts for it); DEG > 0 makes lines of\n"
+    "                          constant u left-handed helices; |DEG| <= 360000, and at most\n"
+    "                          1000 turns per segment\n"
     "Other:\n"
     "      --report FILE       the bake report as JSON: segments, joints, branch_points,\n"
     "                          cap_intersections_found, cap_intersections_unhandled,\n"
@@ -56,6 +66,20 @@ static const char* const usage_frusta =
     "\n"
     "Skeletons with nothing to draw are invalid input (exit 3): a single node, every\n"
     "radius 0, only zero-length segments; so are coordinates or radii beyond 1e15.\n";
+
+/* A finite number of degrees within +-MESO_BAKE_MAX_TWIST (strtod syntax,
+ * the whole string). */
+static int parse_twist(const char* s, double* out)
+{
+    char* end = NULL;
+    if (!s || !*s)
+        return 0;
+    const double x = strtod(s, &end);
+    if (*end != '\0' || !isfinite(x) || fabs(x) > MESO_BAKE_MAX_TWIST)
+        return 0;
+    *out = x;
+    return 1;
+}
 
 typedef struct frusta_args {
     const char *out, *report;
@@ -84,7 +108,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             continue;
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tolerance",
-            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat"};
+            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat", "--twist"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -105,6 +129,10 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         } else if (!strcmp(s, "--relief-depth")) {
             if (!meso_bake_parse_positive(v, &o->relief_depth))
                 return usage_error("--relief-depth expects a positive length, got '%s'", v);
+        } else if (!strcmp(s, "--twist")) {
+            if (!parse_twist(v, &o->twist))
+                return usage_error("--twist expects a finite angle in degrees per unit length within +-%g, got '%s'",
+                                   MESO_BAKE_MAX_TWIST, v);
         } else if (!strcmp(s, "--relief-repeat")) {
             if (!meso_bake_parse_positive(v, &o->relief_repeat) || o->relief_repeat > 1e4)
                 return usage_error("--relief-repeat expects a number in (0, 10000], got '%s'", v);
