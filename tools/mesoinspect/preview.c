@@ -64,6 +64,9 @@ static const char* const usage_preview =
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
     "      --technique T   shell technique: smooth (default), curved or tetra\n"
+    "      --time T        shells with stored frames (mesobake --frames): draw the frame\n"
+    "                      shown at T seconds (meso_rt_shell_set_time; default: frame 0).\n"
+    "                      Not with --reference, which draws frame 0\n"
     "      --reference     render the shell, frusta and cells objects with the exact CPU\n"
     "                      reference (runtime/reference; no EGL needed, slow).\n"
     "                      --technique curved selects the curved shell mapping,\n"
@@ -83,6 +86,8 @@ typedef struct preview_knobs {
     int cell_bounces;
     float cell_step;
     double zoom;
+    int has_time;
+    double time; /* with has_time: seconds, for shells with stored frames */
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -365,6 +370,8 @@ static int render(const char* path, const char* out, int width, int height, uint
                     rec->name);
             continue;
         }
+        if (r == MESO_OK && knobs->has_time && rec->kind == MESO_OBJECT_SHELL)
+            r = meso_rt_shell_set_time(rt, objs[nobj], knobs->time);
         if (r != MESO_OK) {
             code = meso_exit_for(r);
             goto done;
@@ -559,6 +566,14 @@ int mesoinspect_preview(int argc, char** argv)
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--time") && val) {
+            knobs.time = strtod(argv[++i], &end);
+            knobs.has_time = 1;
+            if (!end || end == argv[i] || *end || !(knobs.time >= -1e9 && knobs.time <= 1e9)) {
+                fprintf(stderr, "mesoinspect error: --time expects seconds, got '%s'\nSee 'mesoinspect --help'.\n",
+                        argv[i]);
+                return MESO_EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--zoom") && val) {
             knobs.zoom = strtod(argv[++i], &end);
             if (!end || *end || !(knobs.zoom >= 0.01 && knobs.zoom <= 1000)) {
@@ -600,7 +615,7 @@ int mesoinspect_preview(int argc, char** argv)
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
-                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom"))
+                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
@@ -620,6 +635,11 @@ int mesoinspect_preview(int argc, char** argv)
     if (checked != MESO_EXIT_OK)
         return checked;
     knobs.technique = technique;
+    if (reference && knobs.has_time) {
+        fprintf(stderr, "mesoinspect error: --time needs the GL preview (--reference draws frame 0)\n"
+                        "See 'mesoinspect --help'.\n");
+        return MESO_EXIT_USAGE;
+    }
     const int valid = preview_validate(file);
     if (valid != MESO_EXIT_OK)
         return valid;
