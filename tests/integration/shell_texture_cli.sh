@@ -101,6 +101,13 @@ refuse "bad --dist-res" 1 "--dist-res expects" --texture bricks --dist-res 8x8
 refuse "bad --dist-type" 1 "--dist-type expects" --texture bricks --dist-type f16
 refuse "bad --tiling" 1 "--tiling expects" --texture bricks --tiling 0,1
 refuse "--tiling without --texture" 1 "need --texture" --tiling 2
+# animated texture functions (FORMAT.md 7.2): only for a time-dependent built-in
+refuse "--time on a static texture" 1 "need a time-dependent texture (boil)" --texture bricks:16 --time 1
+refuse "--frames without --texture" 1 "need a time-dependent texture" --frames 2
+refuse "--fps without --frames" 1 "fps needs frames" --texture boil:8 --fps 3
+refuse "bad --frames" 1 "--frames expects" --texture boil:8 --frames 0
+refuse "bad --time" 1 "--time expects" --texture boil:8 --time nan
+check "help documents boil, --time and --frames" sh -c "'$bake' shell --help | grep -q 'boil\[:RES\]' && '$bake' shell --help | grep -q -- '--frames N'"
 check "help documents --texture and the built-ins" sh -c "'$bake' shell --help | grep -q 'bricks\[:RES\]'"
 
 # 7. uv seams: each distinct (vertex, corner uv) pair is one MESH vertex, the
