@@ -65,8 +65,8 @@ static const char* const usage_preview =
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
     "      --technique T   shell technique: smooth (default), curved or tetra\n"
     "      --time T        shells with stored frames (mesobake --frames): draw the frame\n"
-    "                      shown at T seconds (meso_rt_shell_set_time; default: frame 0).\n"
-    "                      Not with --reference, which draws frame 0\n"
+    "                      shown at T seconds (meso_rt_shell_set_time, or the reference's\n"
+    "                      meso_ref_shell_set_time; default: frame 0)\n"
     "      --reference     render the shell, frusta and cells objects with the exact CPU\n"
     "                      reference (runtime/reference; no EGL needed, slow).\n"
     "                      --technique curved selects the curved shell mapping,\n"
@@ -204,6 +204,8 @@ static int render_reference(const char* path, const char* out, int width, int he
         r = rec->kind == MESO_OBJECT_SHELL    ? meso_ref_shell_load(f, rec->id, &o->shell, &err)
             : rec->kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_load(f, rec->id, &o->frusta, &err)
                                               : meso_ref_cells_load(f, rec->id, &o->cells, &err);
+        if (r == MESO_OK && rec->kind == MESO_OBJECT_SHELL && knobs->has_time)
+            r = meso_ref_shell_set_time(f, rec->id, knobs->time, &o->shell, &err);
         if (r != MESO_OK) {
             fprintf(stderr, "mesoinspect error: %s\n", err.message);
             code = meso_exit_for(r);
@@ -635,11 +637,6 @@ int mesoinspect_preview(int argc, char** argv)
     if (checked != MESO_EXIT_OK)
         return checked;
     knobs.technique = technique;
-    if (reference && knobs.has_time) {
-        fprintf(stderr, "mesoinspect error: --time needs the GL preview (--reference draws frame 0)\n"
-                        "See 'mesoinspect --help'.\n");
-        return MESO_EXIT_USAGE;
-    }
     const int valid = preview_validate(file);
     if (valid != MESO_EXIT_OK)
         return valid;
