@@ -2,7 +2,10 @@
  * bake_shell_texture.c — the texture function of a shell bake
  * (meso_bake_shell --texture): the SPEC sampled (texture_function.h), its
  * distance map (distance_map.h), and texture coordinates per vertex, split
- * at uv seams (FORMAT.md §7.2, "Shell prisms and texture space").
+ * at uv seams (FORMAT.md §7.2, "Shell prisms and texture space"); with
+ * --frames, every frame of a time-dependent built-in and its distance map
+ * (FORMAT.md §7.2 "Animated texture functions";
+ * volume-textures-lp-averaged-shells.md §6).
  */
 #include "bake_shell.h"
 

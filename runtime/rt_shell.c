@@ -14,6 +14,10 @@
  * from gl_VertexID, so meso_rt_shell_update is one buffer upload: no
  * triangulation on the CPU (the paper's claim that animated meshes need no
  * precomputation holds here too).
+ * The texture function can change too (volume-textures-lp-averaged-shells.md
+ * §6): meso_rt_shell_set_texture uploads new textures and swaps them in
+ * only when complete; the frames a file stores (ANIM, TXFR, DSFR) are kept
+ * on the host and meso_rt_shell_set_time uploads the one a time selects.
  */
 #include "rt_internal.h"
 #include "shaders_embedded.h"
