@@ -8,6 +8,7 @@
  * is bake_shell_texture.c).
  */
 #include "bake_shell.h"
+#include "meso_layout.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -60,6 +61,17 @@ static meso_result normalise(const meso_bake_shell_options* o, meso_bake_shell_o
                               a->dist_dtype != MESO_DTYPE_F32
                           ? "dist_dtype must be U8, U16 or F32"
                           : NULL;
+    const double period = meso_texfn_period(a->texture);
+    if (a->frames && !a->fps && period > 0)
+        a->fps = a->frames / period;
+    if (!bad && (a->time != 0 || a->frames || a->fps) && !(period > 0))
+        bad = "time, frames and fps need a time-dependent texture (boil)";
+    else if (!bad && !(a->time >= -1e6 && a->time <= 1e6))
+        bad = "time must be in [-1e6, 1e6] seconds";
+    else if (!bad && (a->frames > MESO_BAKE_MAX_FRAMES || (a->fps && !a->frames)))
+        bad = "frames must be in 1..256 (fps needs frames)";
+    else if (!bad && a->frames && !(a->fps > 0 && a->fps <= 1000))
+        bad = "fps must be in (0, 1000]";
     for (int k = 0; !bad && k < 3; ++k)
         if (a->dist_res[k] > MESO_BAKE_MAX_DIST_RES || (!a->dist_res[k]) != (!a->dist_res[0]))
             bad = "dist_res must be 0, 0, 0 or each in 1..512";
@@ -349,7 +361,13 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         if (a->texture)
             mesoi_shell_texture_json(rep, a, tx, 1);
         const int height = tx->fn.kind == MESO_TEXFN_HEIGHT;
-        const mesoi_chunk chunks[5] = {
+        /* Animated: the ANIM record (FORMAT.md §7.2 "Animated texture
+         * functions"), then every frame stacked along z. */
+        uint8_t anim[MESO_ANIM_RECORD_SIZE];
+        const meso_anim_record ar = {.frame_count = a->frames, .flags = MESO_ANIM_FLAG_LOOP, .fps = (float)a->fps,
+                                     .time0 = (float)a->time};
+        meso_anim_record_encode(&ar, anim);
+        const mesoi_chunk chunks[8] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -366,9 +384,18 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             {.desc = {.type = MESO_CHUNK_DIST, .object = 1, .dtype = tx->dist.dtype, .components = 1,
                       .dims = {tx->dist.dims[0], tx->dist.dims[1], tx->dist.dims[2]}},
              .data = tx->dist.encoded, .size = tx->dist.encoded_size},
+            {.desc = {.type = MESO_CHUNK_ANIM, .object = 1, .dtype = MESO_DTYPE_BYTES, .components = 1,
+                      .dims = {1, 1, 1}},
+             .data = anim, .size = sizeof(anim)},
+            {.desc = {.type = MESO_CHUNK_TXFR, .object = 1, .dtype = tx->fn.dtype, .components = 1,
+                      .dims = {tx->fn.dims[0], tx->fn.dims[1], tx->fn.dims[2] * a->frames}},
+             .data = tx->fn_frames, .size = tx->fn.encoded_size * a->frames},
+            {.desc = {.type = MESO_CHUNK_DSFR, .object = 1, .dtype = tx->dist.dtype, .components = 1,
+                      .dims = {tx->dist.dims[0], tx->dist.dims[1], tx->dist.dims[2] * a->frames}},
+             .data = tx->dist_frames, .size = tx->dist.encoded_size * a->frames},
         };
         if (r == MESO_OK)
-            r = mesoi_output_build(meta, rep, &rec, chunks, a->texture ? 5 : 3, out, err);
+            r = mesoi_output_build(meta, rep, &rec, chunks, a->frames ? 8 : a->texture ? 5 : 3, out, err);
     }
     cJSON_Delete(meta);
     cJSON_Delete(rep);

@@ -20,6 +20,10 @@ typedef struct mesoi_shell_texture {
     uint32_t seam_vertices; /* copies added: the output has the mesh's vertices plus these */
     uint32_t* source;       /* each output vertex's mesh vertex */
     uint32_t* indices;      /* 3 * triangle_count: the triangles over the output vertices */
+    /* Animated (options frames > 0): every frame's TX3D and DIST payloads,
+     * frame k at k * the frame's size (frame 0 is fn and dist); else NULL. */
+    uint8_t* fn_frames;
+    uint8_t* dist_frames;
 } mesoi_shell_texture;
 
 void mesoi_shell_texture_free(mesoi_shell_texture* tx);

@@ -2,7 +2,10 @@
  * bake_shell_texture.c — the texture function of a shell bake
  * (meso_bake_shell --texture): the SPEC sampled (texture_function.h), its
  * distance map (distance_map.h), and texture coordinates per vertex, split
- * at uv seams (FORMAT.md §7.2, "Shell prisms and texture space").
+ * at uv seams (FORMAT.md §7.2, "Shell prisms and texture space"); with
+ * --frames, every frame of a time-dependent built-in and its distance map
+ * (FORMAT.md §7.2 "Animated texture functions";
+ * volume-textures-lp-averaged-shells.md §6).
  */
 #include "bake_shell.h"
 
@@ -22,6 +25,48 @@ void mesoi_shell_texture_free(mesoi_shell_texture* tx)
     free(tx->uvs);
     free(tx->source);
     free(tx->indices);
+    free(tx->fn_frames);
+    free(tx->dist_frames);
+}
+
+/* Frames 1..N-1 of an animated texture (frame 0 is tx->fn and tx->dist,
+ * copied in first): each sampled at time + k / fps and its distance map
+ * built at frame 0's resolution, exactly as a static bake at that time
+ * would (volume-textures-lp-averaged-shells.md §6). */
+static meso_result bake_frames(mesoi_bake_run* run, const meso_bake_shell_options* a, mesoi_shell_texture* tx,
+                               meso_error* err)
+{
+    const size_t fs = tx->fn.encoded_size, ds = tx->dist.encoded_size, n = a->frames;
+    meso_result r = meso_budget_check(meso_size_mul(n, meso_size_add(fs, ds)), run->common.max_memory,
+                                      MESO_LIMIT_ISSUE_REQUEST, err, "%u frames of %s", a->frames, a->texture);
+    if (r != MESO_OK)
+        return r;
+    const double t0 = meso_seconds();
+    tx->fn_frames = malloc(fs * n);
+    tx->dist_frames = malloc(ds * n);
+    if (!tx->fn_frames || !tx->dist_frames)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "frames: out of memory");
+    memcpy(tx->fn_frames, tx->fn.encoded, fs);
+    memcpy(tx->dist_frames, tx->dist.encoded, ds);
+    for (size_t k = 1; r == MESO_OK && k < n; ++k) {
+        meso_texfn fn = {0};
+        meso_distmap dist = {0};
+        r = meso_texfn_from_spec_at(a->texture, a->time + (double)k / a->fps, run->common.max_memory, &fn, err);
+        if (r == MESO_OK)
+            r = meso_distmap_build(&fn, tx->dist.dims, a->dist_dtype, run->common.threads, &dist, err);
+        if (r == MESO_OK && (fn.encoded_size != fs || dist.encoded_size != ds))
+            r = meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "frame %zu: texture size changed", k);
+        if (r == MESO_OK) {
+            memcpy(tx->fn_frames + k * fs, fn.encoded, fs);
+            memcpy(tx->dist_frames + k * ds, dist.encoded, ds);
+        }
+        meso_texfn_free(&fn);
+        meso_distmap_free(&dist);
+    }
+    if (r == MESO_OK)
+        mesoi_run_stage(run, "frames", 0.1, 0.1, "%u frames at %g fps from t = %g s (%.0f ms)", a->frames, a->fps,
+                        a->time, 1e3 * (meso_seconds() - t0));
+    return r;
 }
 
 /* Parse the spec, sample the function, bake its distance map. */
@@ -29,7 +74,7 @@ meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_she
                                         meso_error* err)
 {
     double t = meso_seconds();
-    meso_result r = meso_texfn_from_spec_max(a->texture, run->common.max_memory, &tx->fn, err);
+    meso_result r = meso_texfn_from_spec_at(a->texture, a->time, run->common.max_memory, &tx->fn, err);
     if (r != MESO_OK)
         return r;
     const uint32_t* td = tx->fn.dims;
@@ -57,6 +102,8 @@ meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_she
                         res[2], tx->dist_type, a->dist_res[0] ? "--dist-res" : "default",
                         (unsigned long long)tx->dist.solid_cells, (unsigned long long)res[0] * res[1] * res[2],
                         1e3 * (meso_seconds() - t));
+    if (r == MESO_OK && a->frames)
+        r = bake_frames(run, a, tx, err);
     return r;
 }
 
@@ -181,6 +228,13 @@ void mesoi_shell_texture_json(cJSON* parent, const meso_bake_shell_options* a, c
     cJSON_AddStringToObject(o, "uv_source", tx->uv_source);
     if (tx->plane[0])
         cJSON_AddStringToObject(o, "uv_plane", tx->plane);
+    if (meso_texfn_period(a->texture) > 0) {
+        cJSON_AddNumberToObject(o, "time", a->time);
+        if (a->frames) {
+            cJSON_AddNumberToObject(o, "frames", a->frames);
+            cJSON_AddNumberToObject(o, "fps", a->fps);
+        }
+    }
     if (report) {
         cJSON_AddNumberToObject(o, "dist_solid_cells", (double)tx->dist.solid_cells);
         cJSON_AddNumberToObject(o, "seam_vertices", tx->seam_vertices);

@@ -326,6 +326,7 @@ MESO_BAKE_API const char* meso_bake_directors_name(meso_shell_directors d);
 
 #define MESO_BAKE_MAX_P 16.0       /* --p: in (2, MESO_BAKE_MAX_P] */
 #define MESO_BAKE_MAX_DIST_RES 512u /* --dist-res: each axis 1..this */
+#define MESO_BAKE_MAX_FRAMES 256u   /* --frames: 1..this */
 
 typedef struct meso_bake_shell_options {
     meso_bake_common common;
@@ -347,6 +348,14 @@ typedef struct meso_bake_shell_options {
     double tiling[2];            /* tiles along u, v; default 1, 1 */
     uint32_t dist_res[3];        /* distance-map cells; 0 = the default for the texture */
     uint16_t dist_dtype;         /* MESO_DTYPE_U8 (default), _U16 or _F32 */
+    /* Animated texture functions (volume-textures-lp-averaged-shells.md §6),
+     * only for a time-dependent built-in (boil; FORMAT.md §7.2 "Animated
+     * texture functions"): */
+    double time;                 /* seconds: the time the texture is sampled at (frame 0's) [0] */
+    uint32_t frames;             /* 0: static; 1..256: that many frames, time + k / fps, stored as
+                                    ANIM + TXFR + DSFR (frame 0 also as the TX3D + DIST) [0] */
+    double fps;                  /* frames per second; 0: frames / the texture's period, so the
+                                    sequence loops seamlessly [0] */
 } meso_bake_shell_options;
 
 typedef struct meso_bake_shell_report {

@@ -331,6 +331,58 @@ static double ribs_height(double s, double t)
     return fmin(1.0, profile + bump);
 }
 
+/* Boiling (papers/volume-textures-lp-averaged-shells.md §6, the "boiling
+ * man"): a liquid layer whose surface ripples around w = 0.35, and per tile
+ * 4 x 4 cells of 2 bubbles each (hashed position and phase) that rise from
+ * inside the liquid (w = 0.15), break through its surface, grow to an
+ * ellipsoid 0.09 tile wide and 0.12 shell high, and at 80 % of their life
+ * burst: the bubble turns into a thin skin that opens from the top until
+ * nothing is left at the end of the life. Everything is a function of
+ * frac(time / BOIL_PERIOD) (bubble ages, ripple phase with whole cycles
+ * per period), so the texture loops with period BOIL_PERIOD seconds, and
+ * it tiles in s and t (integer frequencies, bubbles at their nearest copy). */
+#define BOIL_PERIOD 2.0
+static double boil_density_at(double s, double t, double w, double time)
+{
+    enum { G = 4, PER_CELL = 2 };
+    const double tau = time / BOIL_PERIOD - floor(time / BOIL_PERIOD);
+    const double level = 0.35 + 0.025 * sin(2 * M_PI * (s + tau)) * sin(2 * M_PI * (2 * t - tau));
+    double best = 0.5 + (level - w) / 0.08;
+    const double rs = 0.09, rw = 0.12, k = 2.5;
+    for (int i = 0; i < G; ++i)
+        for (int j = 0; j < G; ++j)
+            for (int b = 0; b < PER_CELL; ++b) {
+                const double phase = hash01(i, j, b, 31);
+                double age = tau + phase;
+                age -= floor(age);
+                const double cs = (i + 0.2 + 0.6 * hash01(i, j, b, 32)) / G + 0.015 * sin(2 * M_PI * (2 * age + phase));
+                const double ct = (j + 0.2 + 0.6 * hash01(i, j, b, 33)) / G;
+                const double cw = 0.15 + 0.7 * age;
+                const double size = 0.35 + 0.65 * fmin(1.0, age / 0.3);
+                double ds = s - cs, dt = t - ct;
+                ds -= floor(ds + 0.5); /* periodic: nearest copy */
+                dt -= floor(dt + 0.5);
+                const double dw = w - cw;
+                const double q = sqrt((ds / rs) * (ds / rs) + (dt / rs) * (dt / rs) + (dw / rw) * (dw / rw)) / size;
+                double a;
+                if (age < 0.8) {
+                    a = 0.5 + (1.0 - q) * k;
+                } else {
+                    /* the skin (q in [0.75, 1]) minus a cap whose opening grows to the whole bubble */
+                    const double open = 1.0 - 2.0 * (age - 0.8) / 0.2; /* cos of the cap's half-angle */
+                    const double up = q > 1e-9 ? (dw / rw) / (q * size) : 0.0;
+                    a = fmin(0.5 + (0.125 - fabs(q - 0.875)) * 4 * k, 0.5 + (open - up) * 4);
+                }
+                best = fmax(best, a);
+            }
+    return clamp01(best);
+}
+
+static double boil_density(double s, double t, double w)
+{
+    return boil_density_at(s, t, w, 0.0);
+}
+
 typedef struct builtin {
     const char* name;
     meso_texfn_kind kind;
@@ -338,14 +390,17 @@ typedef struct builtin {
     double (*height)(double s, double t);
     double (*density)(double s, double t, double w);
     int depth_div; /* D = RES / depth_div */
+    double (*density_at)(double s, double t, double w, double time); /* time-dependent built-ins, else NULL */
+    double period;                                                   /* their loop period, seconds */
 } builtin;
 
 static const builtin builtins[] = {
-    {"bricks", MESO_TEXFN_HEIGHT, 256, 1024, bricks_height, NULL, 0},
-    {"cobble", MESO_TEXFN_HEIGHT, 256, 1024, cobble_height, NULL, 0},
-    {"ribs", MESO_TEXFN_HEIGHT, 256, 1024, ribs_height, NULL, 0},
-    {"weave", MESO_TEXFN_DENSITY, 128, 256, NULL, weave_density, 2},
-    {"cells", MESO_TEXFN_DENSITY, 64, 256, NULL, cells_density, 1},
+    {"bricks", MESO_TEXFN_HEIGHT, 256, 1024, bricks_height, NULL, 0, NULL, 0},
+    {"cobble", MESO_TEXFN_HEIGHT, 256, 1024, cobble_height, NULL, 0, NULL, 0},
+    {"ribs", MESO_TEXFN_HEIGHT, 256, 1024, ribs_height, NULL, 0, NULL, 0},
+    {"weave", MESO_TEXFN_DENSITY, 128, 256, NULL, weave_density, 2, NULL, 0},
+    {"cells", MESO_TEXFN_DENSITY, 64, 256, NULL, cells_density, 1, NULL, 0},
+    {"boil", MESO_TEXFN_DENSITY, 64, 256, NULL, boil_density, 1, boil_density_at, BOIL_PERIOD},
 };
 
 double meso_texfn_builtin_value(const char* name, double s, double t, double w)
@@ -356,7 +411,8 @@ double meso_texfn_builtin_value(const char* name, double s, double t, double w)
     return NAN;
 }
 
-static meso_result build_builtin(const builtin* b, uint32_t res, uint64_t budget, meso_texfn* out, meso_error* err)
+static meso_result build_builtin(const builtin* b, uint32_t res, double time, uint64_t budget, meso_texfn* out,
+                                 meso_error* err)
 {
     const uint32_t dims[3] = {res, res, b->kind == MESO_TEXFN_HEIGHT ? 1 : res / (uint32_t)b->depth_div};
     const size_t n = (size_t)dims[0] * dims[1] * dims[2];
@@ -376,7 +432,9 @@ static meso_result build_builtin(const builtin* b, uint32_t res, uint64_t budget
             for (uint32_t x = 0; x < dims[0]; ++x) {
                 const double s = (x + 0.5) / dims[0], t = (y + 0.5) / dims[1], w = (z + 0.5) / dims[2];
                 v[((size_t)z * dims[1] + y) * dims[0] + x] =
-                    (float)(b->height ? b->height(s, t) : b->density(s, t, w));
+                    (float)(b->height       ? b->height(s, t)
+                            : b->density_at ? b->density_at(s, t, w, time)
+                                            : b->density(s, t, w));
             }
     r = meso_texfn_from_values(b->kind, dims, v,
                                                  b->kind == MESO_TEXFN_HEIGHT ? MESO_DTYPE_U16 : MESO_DTYPE_U8, out,
@@ -393,7 +451,7 @@ static meso_result spec_error(meso_error* err, const char* spec, const char* wha
 {
     return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
                           "texture '%s': %s (expected height:FILE.png, volume:FILE.raw:WxHxD, "
-                          "volume:FILE.vdb[:GRID], bricks[:RES], cobble[:RES], ribs[:RES], weave[:RES] or cells[:RES])",
+                          "volume:FILE.vdb[:GRID], bricks[:RES], cobble[:RES], ribs[:RES], weave[:RES], cells[:RES] or boil[:RES])",
                           spec, what);
 }
 
@@ -560,6 +618,29 @@ meso_result meso_texfn_from_spec(const char* spec, meso_texfn* out, meso_error* 
 
 meso_result meso_texfn_from_spec_max(const char* spec, uint64_t max_bytes, meso_texfn* out, meso_error* err)
 {
+    return meso_texfn_from_spec_at(spec, 0.0, max_bytes, out, err);
+}
+
+/* The built-in `spec` names (its head before ':'), or NULL. */
+static const builtin* find_builtin(const char* spec)
+{
+    const char* colon = strchr(spec, ':');
+    const size_t head = colon ? (size_t)(colon - spec) : strlen(spec);
+    for (size_t i = 0; i < sizeof(builtins) / sizeof(builtins[0]); ++i)
+        if (strlen(builtins[i].name) == head && !strncmp(spec, builtins[i].name, head))
+            return &builtins[i];
+    return NULL;
+}
+
+double meso_texfn_period(const char* spec)
+{
+    const builtin* b = spec ? find_builtin(spec) : NULL;
+    return b && b->density_at ? b->period : 0.0;
+}
+
+meso_result meso_texfn_from_spec_at(const char* spec, double time, uint64_t max_bytes, meso_texfn* out,
+                                    meso_error* err)
+{
     memset(out, 0, sizeof(*out));
     const char* colon = strchr(spec, ':');
     const size_t head = colon ? (size_t)(colon - spec) : strlen(spec);
@@ -576,7 +657,7 @@ meso_result meso_texfn_from_spec_max(const char* spec, uint64_t max_bytes, meso_
                 return spec_error(err, spec, b->max_res == 1024 ? "RES must be an integer in 8..1024"
                                                                 : "RES must be an even integer in 8..256");
         }
-        return build_builtin(b, (uint32_t)res, max_bytes, out, err);
+        return build_builtin(b, (uint32_t)res, time, max_bytes, out, err);
     }
     meso_result r;
     if (head == 6 && !strncmp(spec, "height", 6)) {

@@ -25,6 +25,10 @@
  *   weave[:RES]              interlaced threads, over/under (overhangs);
  *                            RES × RES × RES/2 U8 (default 128)
  *   cells[:RES]              3D periodic Voronoi cell walls; RES³ U8 (default 64)
+ *   boil[:RES]               boiling liquid, bubbles rising through the shell and
+ *                            bursting (volume-textures-lp-averaged-shells.md §6);
+ *                            RES³ U8 (default 64). Depends on time: it loops with
+ *                            a period of 2 s (meso_texfn_period)
  *
  * RES is 8..1024 for height fields and 8..256 for volumes. The built-ins tile
  * seamlessly and are deterministic: they use an integer hash, never libc
@@ -81,6 +85,16 @@ meso_result meso_texfn_from_spec(const char* spec, meso_texfn* out, meso_error* 
  * (3122), refused before its size is allocated. .vdb input is sampled at
  * most 256 texels a side (64 MiB of floats): bounded by construction. */
 meso_result meso_texfn_from_spec_max(const char* spec, uint64_t max_bytes, meso_texfn* out, meso_error* err);
+
+/* The same at `time` seconds: time-dependent built-ins (boil) are sampled
+ * at that time; every other SPEC ignores it. The other two calls are this
+ * one at time 0. */
+meso_result meso_texfn_from_spec_at(const char* spec, double time, uint64_t max_bytes, meso_texfn* out,
+                                    meso_error* err);
+
+/* The loop period in seconds of a time-dependent built-in SPEC, 0 for every
+ * other SPEC (including unparsable ones). */
+double meso_texfn_period(const char* spec);
 
 /* Build a function from normalised values (copied; quantised to `dtype`,
  * and `values` of the result are the quantised ones). dims[2] must be 1 for

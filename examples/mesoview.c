@@ -10,7 +10,10 @@
  * the error bound, - = halve/double the step limit, B cycles the bisection
  * steps, D toggles the distance map, A toggles the animation (shells: a
  * twist of the base mesh and its directors, uploaded every frame with
- * meso_rt_shell_update; frusta: the skeleton sways, every node turning a
+ * meso_rt_shell_update, and a texture function baked with frames
+ * (mesobake shell --texture boil --frames N) plays them in a loop with
+ * meso_rt_shell_set_time, at the 30 frames per second of animation time the
+ * viewer steps; frusta: the skeleton sways, every node turning a
  * little about its parent, rebuilt every frame with meso_rt_frusta_set_pose;
  * no re-bake either way). Frusta use the step limit keys for their relief
  * march (relief_steps). Cells: M cycles first hit / reflection / refraction,
@@ -41,7 +44,8 @@ static const char* const usage =
     "  --screenshot FILE   save the last frame as PNG when quitting\n"
     "  --technique T       shells: smooth (default), curved, tetra or segment\n"
     "  --error-px E        shells: image-space error bound in pixels (default 1)\n"
-    "  --animate           start with the animation on (shells twist, frusta sway)\n"
+    "  --animate           start with the animation on (shells twist and play stored texture\n"
+    "                      frames, frusta sway)\n"
     "  --cells MODE        cells: first (default), reflect or refract\n"
     "  -h, --help          this help;  --version  the version\n"
     "\n"
@@ -495,8 +499,11 @@ int main(int argc, char** argv)
                                     dist + 1.5 * radius);
             if (kn.animate) {
                 anim_time += 1.0 / 30.0;
-                for (int i = 0; i < nanim; ++i)
+                for (int i = 0; i < nanim; ++i) {
                     anim_step(rt, &anims[i], anim_time, centre, radius);
+                    /* a texture function with stored frames (mesobake --frames) plays them */
+                    meso_rt_shell_set_time(rt, anims[i].obj, anim_time);
+                }
                 for (int i = 0; i < nfanim; ++i)
                     frusta_anim_step(rt, &fanims[i], anim_time);
             }

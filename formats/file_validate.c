@@ -50,6 +50,9 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_FSEG:
     case MESO_CHUNK_BALL:
     case MESO_CHUNK_CELL:
+    case MESO_CHUNK_ANIM:
+    case MESO_CHUNK_TXFR:
+    case MESO_CHUNK_DSFR:
     case MESO_CHUNK_RELF: return 1;
     default: return 0;
     }
@@ -167,6 +170,7 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_FSEG:
     case MESO_CHUNK_BALL:
     case MESO_CHUNK_CELL:
+    case MESO_CHUNK_ANIM:
         if (c->dtype != MESO_DTYPE_BYTES || c->components != 1)
             return elem_error(c, chunk, err, "BYTES x 1");
         return MESO_OK;
@@ -185,10 +189,12 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
             return elem_error(c, chunk, err, "a numeric dtype x 1..4, dims W x H x 1");
         return MESO_OK;
     case MESO_CHUNK_TX3D:
+    case MESO_CHUNK_TXFR:
         if (!mesoi_is_dtype(c, DT_TYPED) || c->components > 4)
             return elem_error(c, chunk, err, "a numeric dtype x 1..4");
         return MESO_OK;
     case MESO_CHUNK_DIST:
+    case MESO_CHUNK_DSFR:
         if (!mesoi_is_dtype(c, DT(U8) | DT(U16) | DT(F16) | DT(F32)) || c->components != 1)
             return elem_error(c, chunk, err, "U8, U16, F16 or F32 x 1");
         return MESO_OK;
@@ -580,6 +586,7 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
     case MESO_CHUNK_FSEG: return check_fseg(data, size, chunk, base, err);
     case MESO_CHUNK_BALL: return check_ball(data, size, chunk, base, err);
     case MESO_CHUNK_CELL: return check_cell(data, size, chunk, base, err);
+    case MESO_CHUNK_ANIM: return mesoi_check_anim(data, size, chunk, base, err);
     default: return MESO_OK;
     }
 }

@@ -215,6 +215,74 @@ static void shell_values(obj_check* c, int32_t i, int thickness)
     mesoi_file_free(&c->f->alloc, d);
 }
 
+/* One frame sequence chunk (TXFR or DSFR) against the chunk of frame 0 it
+ * stacks (TX2D/TX3D or DIST): same element, same W x H, D x frames slabs,
+ * slab 0 byte for byte the frame-0 chunk, F32 distances finite and >= 0. */
+static void anim_frames(obj_check* c, int32_t fi, int32_t base, uint32_t frames)
+{
+    const meso_chunk_info *q = &c->f->chunks[fi], *b = &c->f->chunks[base];
+    char cq[5], cb[5];
+    mesoi_fourcc_str(q->type, cq);
+    mesoi_fourcc_str(b->type, cb);
+    if (q->dtype != b->dtype || q->components != b->components || q->dims[0] != b->dims[0] ||
+        q->dims[1] != b->dims[1] || (uint64_t)q->dims[2] != (uint64_t)b->dims[2] * frames) {
+        ISSUE(c, MESO_ISSUE_SHELL_ANIM, fi,
+              "shell %u: %s is dtype %u x %u, %ux%ux%u; %u frames of its %s need dtype %u x %u, %ux%ux%llu", c->id, cq,
+              q->dtype, q->components, q->dims[0], q->dims[1], q->dims[2], frames, cb, b->dtype, b->components,
+              b->dims[0], b->dims[1], (unsigned long long)b->dims[2] * frames);
+        return;
+    }
+    uint8_t* d = load(c, fi);
+    uint8_t* d0 = d ? load(c, base) : NULL;
+    if (d0 && memcmp(d, d0, (size_t)b->decoded_size) != 0)
+        ISSUE(c, MESO_ISSUE_SHELL_ANIM, fi, "shell %u: frame 0 of %s differs from its %s", c->id, cq, cb);
+    for (uint64_t v = 0; d0 && q->dtype == MESO_DTYPE_F32 && v < q->decoded_size / 4; v++) {
+        const float x = mesoi_ldf32(d + 4 * v);
+        if (!isfinite(x) || x < 0.0f) {
+            ISSUE(c, MESO_ISSUE_SHELL_ANIM, fi, "shell %u: %s cell %llu holds %g, not a finite distance >= 0", c->id,
+                  cq, (unsigned long long)v, (double)x);
+            break;
+        }
+    }
+    mesoi_file_free(&c->f->alloc, d);
+    mesoi_file_free(&c->f->alloc, d0);
+}
+
+/* The animated texture function (§7.2 "Animated texture functions"): an
+ * ANIM record with TXFR frames of the TX2D/TX3D, and DSFR frames of the
+ * DIST exactly when there is a DIST. */
+static void shell_anim(obj_check* c)
+{
+    const int32_t ai = finest(c, MESO_CHUNK_ANIM), fi = finest(c, MESO_CHUNK_TXFR), si = finest(c, MESO_CHUNK_DSFR);
+    const int32_t hi = finest(c, MESO_CHUNK_TX2D), vi = finest(c, MESO_CHUNK_TX3D), xi = finest(c, MESO_CHUNK_DIST);
+    const int32_t ti = hi >= 0 ? hi : vi;
+    if (ai < 0) {
+        if (fi >= 0 || si >= 0)
+            ISSUE(c, MESO_ISSUE_SHELL_ANIM, fi >= 0 ? fi : si, "shell %u has %s frames but no ANIM record", c->id,
+                  fi >= 0 ? "TXFR" : "DSFR");
+        return;
+    }
+    if (!rules_ok(c, ai))
+        return;
+    uint8_t* d = load(c, ai);
+    if (!d)
+        return;
+    meso_anim_record r;
+    meso_anim_record_decode(d, &r);
+    mesoi_file_free(&c->f->alloc, d);
+    if (ti < 0 || fi < 0 || (si >= 0) != (xi >= 0)) {
+        ISSUE(c, MESO_ISSUE_SHELL_ANIM, ai,
+              "shell %u: an ANIM record needs a TX2D or TX3D and its TXFR frames, and DSFR frames exactly when there "
+              "is a DIST (%s)",
+              c->id, ti < 0 ? "no texture function" : fi < 0 ? "no TXFR" : si < 0 ? "no DSFR" : "DSFR without DIST");
+        return;
+    }
+    if (rules_ok(c, fi) && rules_ok(c, ti) && !c->stop)
+        anim_frames(c, fi, ti, r.frame_count);
+    if (si >= 0 && !c->stop && rules_ok(c, si) && rules_ok(c, xi))
+        anim_frames(c, si, xi, r.frame_count);
+}
+
 static void check_shell(obj_check* c)
 {
     const int32_t mi = required(c, MESO_OBJECT_SHELL, MESO_CHUNK_MESH);
@@ -240,6 +308,8 @@ static void check_shell(obj_check* c)
     }
     if (!c->stop)
         shell_texture(c);
+    if (!c->stop)
+        shell_anim(c);
 }
 
 /* >>frusta (kind 4) --------------------------------------------------------- */

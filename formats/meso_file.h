@@ -108,6 +108,9 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_FSEG MESO_FOURCC('F', 'S', 'E', 'G') /* per-frustum topology and parametrisation */
 #define MESO_CHUNK_BALL MESO_FOURCC('B', 'A', 'L', 'L') /* balls closing branch points */
 #define MESO_CHUNK_CELL MESO_FOURCC('C', 'E', 'L', 'L') /* cells object grid: tiles, resolution, origin (one record) */
+#define MESO_CHUNK_ANIM MESO_FOURCC('A', 'N', 'I', 'M') /* a shell's animated texture function: frames, rate, loop */
+#define MESO_CHUNK_TXFR MESO_FOURCC('T', 'X', 'F', 'R') /* its frames: TX2D/TX3D slabs stacked along z */
+#define MESO_CHUNK_DSFR MESO_FOURCC('D', 'S', 'F', 'R') /* their distance maps: DIST slabs stacked along z */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -457,11 +460,14 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_CELL_TILE 4804u
 #define MESO_ISSUE_CELL_SPLT 4805u
 #define MESO_ISSUE_CELL_MEMB 4806u
+#define MESO_ISSUE_ANIM_SIZE 4901u           /* ANIM is not one 32-byte record */
+#define MESO_ISSUE_ANIM_VALUE 4902u          /* ANIM field out of range or reserved bytes not zero */
 #define MESO_ISSUE_OBJ_CHUNKS 6001u          /* an object lacks a chunk its kind requires */
 #define MESO_ISSUE_SHELL_COUNT 6101u         /* SDIR/STHK count != MESH vertex count, or no triangles */
 #define MESO_ISSUE_SHELL_SDIR 6102u          /* non-finite director */
 #define MESO_ISSUE_SHELL_STHK 6103u          /* thickness not finite or not > 0 */
 #define MESO_ISSUE_SHELL_TEXTURE 6104u       /* texture function chunks not as FORMAT.md 7.2 */
+#define MESO_ISSUE_SHELL_ANIM 6105u          /* ANIM/TXFR/DSFR do not fit the shell's texture function */
 #define MESO_ISSUE_FRUSTA_COUNT 6201u        /* FSEG and FRUS record counts differ */
 #define MESO_ISSUE_FRUSTA_NODE 6202u         /* a SKEL node reference out of range */
 #define MESO_ISSUE_FRUSTA_AXIS 6203u         /* zero-length axis or zero cutting-plane normal */
@@ -546,6 +552,27 @@ typedef struct meso_object_record {
  * bytes and NUL-padded) / decode 64 bytes at src. */
 MESO_API void meso_object_record_encode(const meso_object_record* rec, void* dst);
 MESO_API void meso_object_record_decode(const void* src, meso_object_record* rec);
+
+/* One 32-byte ANIM record (FORMAT.md §7.2 "Animated texture functions"),
+ * decoded: frame k of the shell's texture function holds time
+ * time0 + k / fps seconds and is slab k of its TXFR (and DSFR) chunk. */
+typedef struct meso_anim_record {
+    uint32_t frame_count; /* 1..MESO_ANIM_MAX_FRAMES */
+    uint32_t flags;       /* MESO_ANIM_FLAG_LOOP or 0 */
+    float fps;            /* frames per second, finite and > 0 */
+    float time0;          /* time of frame 0, seconds, finite */
+} meso_anim_record;
+#define MESO_ANIM_FLAG_LOOP 0x1u /* after the last frame the sequence starts again (else it holds) */
+#define MESO_ANIM_MAX_FRAMES 4096u
+
+/* Encode one record into 32 bytes at dst (reserved bytes zero) / decode 32
+ * bytes at src (no checks: the full tier and meso_file_read_chunk check). */
+MESO_API void meso_anim_record_encode(const meso_anim_record* rec, void* dst);
+MESO_API void meso_anim_record_decode(const void* src, meso_anim_record* rec);
+/* The frame shown at time t: k = floor((t - time0) fps + 1e-4), wrapped into
+ * 0..frame_count-1 with LOOP, else clamped (the 1e-4 frame keeps t = time0
+ * + k / fps on frame k despite rounding). */
+MESO_API uint32_t meso_anim_frame_at(const meso_anim_record* rec, double t);
 
 /* The file's objects: reads and checks the OBJT chunk (CRC and records) and
  * writes up to `cap` records to `out` (NULL with cap 0 only counts); *count

@@ -78,6 +78,15 @@
 #define MESO_OBJT_OFF_NAME 32
 #define MESO_OBJT_SIZE_NAME 32
 
+/* ANIM chunk: one 32-byte record (FORMAT.md §7.2 "Animated texture functions"). */
+#define MESO_ANIM_RECORD_SIZE 32
+#define MESO_ANIM_OFF_FRAME_COUNT 0
+#define MESO_ANIM_OFF_FLAGS 4
+#define MESO_ANIM_OFF_FPS 8
+#define MESO_ANIM_OFF_TIME0 12
+#define MESO_ANIM_OFF_RESERVED 16
+#define MESO_ANIM_SIZE_RESERVED 16
+
 /* SKEL chunk: one 32-byte record per skeleton node. */
 #define MESO_SKEL_RECORD_SIZE 32
 #define MESO_SKEL_OFF_POSITION 0

@@ -244,6 +244,62 @@ MESO_API meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object obj, const
 MESO_API meso_result meso_rt_shell_info(const meso_rt* rt, meso_rt_object obj, uint32_t* vertex_count,
                                         uint32_t* layers);
 
+/* >>animated texture functions -------------------------------------------- */
+
+/* Texture functions that change over time (papers/volume-textures-lp-
+ * averaged-shells.md §6, the boiling textures): replace a shell's function
+ * and distance map between frames without reloading it, or select one of
+ * the frames stored in its file (FORMAT.md §7.2 "Animated texture
+ * functions"; mesobake shell --texture boil --frames N). */
+typedef enum meso_rt_texture_kind {
+    MESO_RT_TEXTURE_HEIGHT = 1,  /* height field h(s, t'), dims W x H x 1 (a TX2D) */
+    MESO_RT_TEXTURE_DENSITY = 2  /* density alpha(s, t', w), dims W x H x D (a TX3D) */
+} meso_rt_texture_kind;
+
+/* A texture function in host memory, laid out and interpreted as its
+ * FORMAT.md §7.2 chunk: values s fastest, then t', then w, value / max. */
+typedef struct meso_rt_shell_texture {
+    meso_rt_texture_kind kind;
+    uint32_t dims[3];      /* each 1..the context's (3D) texture size limit; dims[2] = 1 for a height field */
+    uint16_t dtype;        /* MESO_DTYPE_U8 or MESO_DTYPE_U16 */
+    const void* data;      /* dims[0] * dims[1] * dims[2] values */
+    uint32_t dist_dims[3]; /* the distance map's cells; all 0: none (rays march at fixed_step) */
+    uint16_t dist_dtype;   /* MESO_DTYPE_U8, _U16 (value / max) or _F32 (finite, >= 0) */
+    const void* dist_data; /* dist_dims[0] * dist_dims[1] * dist_dims[2] values, or NULL with no map */
+} meso_rt_shell_texture;
+
+/* Replace the texture function and distance map of a SHELL object. Any
+ * dims and kind are accepted (they need not match the file's): the call
+ * uploads new textures and, once both are complete, deletes the old ones,
+ * so the size may change from call to call; the distance map must bound the
+ * new function (FORMAT.md §7.2) or rays may step over the surface. The
+ * data is copied; the host keeps its buffers. Fails with
+ * MESO_ERR_INVALID_ARG (logged, nothing changed) for a handle that is not a
+ * live shell, a NULL desc or data, an unknown kind or dtype, a zero
+ * dimension or one above GL_MAX_TEXTURE_SIZE / GL_MAX_3D_TEXTURE_SIZE, a
+ * height field with dims[2] != 1, dist_data without dist_dims (or the
+ * reverse), or an F32 distance that is not finite and >= 0; with
+ * MESO_ERR_GL when GL raises an error (out of memory): then the new
+ * textures are deleted and the object still draws its previous function.
+ * The GL state it touches (texture buffer binding, the active unit's 2D/3D
+ * texture binding, unpack alignment) is restored. Cost: one texture upload
+ * of each; tests/bench/bench_anim_update.c measures it. */
+MESO_API meso_result meso_rt_shell_set_texture(meso_rt* rt, meso_rt_object obj, const meso_rt_shell_texture* desc);
+
+/* Show the stored frame for time `seconds` (meso_anim_frame_at: frame k
+ * from time0 + k / fps on, looped), uploading it as meso_rt_shell_set_texture
+ * does when it is not the frame shown already. A shell without stored
+ * frames is left alone (MESO_OK). After meso_rt_shell_set_texture the next
+ * call always uploads. MESO_ERR_INVALID_ARG for a handle that is not a live
+ * shell or a NaN time; MESO_ERR_GL as meso_rt_shell_set_texture. */
+MESO_API meso_result meso_rt_shell_set_time(meso_rt* rt, meso_rt_object obj, double seconds);
+
+/* Stored frames of a shell: count (0: none, or not a shell), rate, and
+ * the frame shown (UINT32_MAX: none, or a host texture from
+ * meso_rt_shell_set_texture). Any output may be NULL. */
+MESO_API meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object obj, uint32_t* frame_count, float* fps,
+                                             uint32_t* frame);
+
 /* >>frusta animation ------------------------------------------------------ */
 
 /* Animation without re-baking (papers/relief-mapped-conical-frusta.md §4:

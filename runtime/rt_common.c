@@ -74,6 +74,38 @@ static int dtype_gl(uint16_t dtype, GLenum* internal, GLenum* type)
     }
 }
 
+meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
+                                const void* data, GLuint* out)
+{
+    GLenum internal, type;
+    if (!dtype_gl(dtype, &internal, &type) || (!nearest && dtype == MESO_DTYPE_F32) || (!dims3 && dims[2] != 1))
+        return MESO_ERR_UNSUPPORTED;
+    mesoi_gl* gl = &rt->gl;
+    const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
+    GLint prev_unpack = 4, prev_tex = 0;
+    gl->GetIntegerv(GL_UNPACK_ALIGNMENT, &prev_unpack);
+    gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
+    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl->GenTextures(1, out);
+    gl->BindTexture(target, *out);
+    if (dims3)
+        gl->TexImage3D(target, 0, (GLint)internal, (GLsizei)dims[0], (GLsizei)dims[1], (GLsizei)dims[2], 0, GL_RED,
+                       type, data);
+    else
+        gl->TexImage2D(target, 0, (GLint)internal, (GLsizei)dims[0], (GLsizei)dims[1], 0, GL_RED, type, data);
+    const GLint filter = nearest ? GL_NEAREST : GL_LINEAR;
+    gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
+    gl->TexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
+    gl->TexParameteri(target, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    gl->TexParameteri(target, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    if (dims3)
+        gl->TexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+    gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
+    gl->BindTexture(target, (GLuint)prev_tex);
+    gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+    return MESO_OK;
+}
+
 meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out)
 {
     const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
@@ -87,32 +119,10 @@ meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims
     void* data = NULL;
     size_t size = 0;
     meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
-    if (r != MESO_OK)
-        return r;
-    mesoi_gl* gl = &rt->gl;
-    GLint prev_unpack = 4;
-    gl->GetIntegerv(GL_UNPACK_ALIGNMENT, &prev_unpack);
-    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
-    gl->GenTextures(1, out);
-    gl->BindTexture(target, *out);
-    if (dims3)
-        gl->TexImage3D(target, 0, (GLint)internal, (GLsizei)c->dims[0], (GLsizei)c->dims[1], (GLsizei)c->dims[2], 0,
-                       GL_RED, type, data);
-    else
-        gl->TexImage2D(target, 0, (GLint)internal, (GLsizei)c->dims[0], (GLsizei)c->dims[1], 0, GL_RED, type, data);
-    const GLint filter = nearest ? GL_NEAREST : GL_LINEAR;
-    gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
-    gl->TexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
-    gl->TexParameteri(target, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    gl->TexParameteri(target, GL_TEXTURE_WRAP_T, GL_REPEAT);
-    if (dims3)
-        gl->TexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
-    gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
-    gl->BindTexture(target, 0);
-    gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+    if (r == MESO_OK)
+        r = mesoi_upload_texels(rt, c->dims, c->dtype, dims3, nearest, data, out);
     mesoi_rt_free(rt, data);
-    return MESO_OK;
+    return r;
 }
 
 GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf)

@@ -67,6 +67,11 @@ meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, 
 /* Uploads a TX2D / TX3D / DIST / RELF chunk of one component as a 2D or 3D
  * texture, linear (or `nearest`) and repeating in s and t. */
 meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out);
+/* The same from texels in memory: a new texture (*out) of `dims` values
+ * of `dtype` (U8, U16, or F32 when `nearest`); the unit's 2D/3D binding and
+ * the unpack alignment are restored. MESO_ERR_UNSUPPORTED for other types. */
+meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
+                                const void* data, GLuint* out);
 /* A texture buffer over a new buffer object holding `size` bytes of `data`. */
 GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf);
 /* Around a sequence of uploads: begin saves the texture buffer binding and

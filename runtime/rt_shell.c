@@ -14,6 +14,10 @@
  * from gl_VertexID, so meso_rt_shell_update is one buffer upload: no
  * triangulation on the CPU (the paper's claim that animated meshes need no
  * precomputation holds here too).
+ * The texture function can change too (volume-textures-lp-averaged-shells.md
+ * §6): meso_rt_shell_set_texture uploads new textures and swaps them in
+ * only when complete; the frames a file stores (ANIM, TXFR, DSFR) are kept
+ * on the host and meso_rt_shell_set_time uploads the one a time selects.
  */
 #include "rt_internal.h"
 #include "shaders_embedded.h"
@@ -31,6 +35,14 @@ typedef struct mesoi_shell {
     GLuint func_tex, dist_tex;
     int tex_kind; /* 0 none, 1 height (2D), 2 density (3D) */
     float tex_size[3];
+    /* Stored frames (ANIM, TXFR, DSFR; FORMAT.md §7.2 "Animated texture
+     * functions"), host copies: frame k of the function at k * fn_bytes,
+     * of the distance map at k * dist_bytes. anim.frame_count 0: none. */
+    meso_anim_record anim;
+    uint8_t *fn_frames, *dist_frames;
+    meso_rt_shell_texture frame_desc; /* dims and types of one frame (data pointers unset) */
+    size_t fn_bytes, dist_bytes;
+    uint32_t shown_frame; /* the stored frame uploaded last; UINT32_MAX after meso_rt_shell_set_texture */
 } mesoi_shell;
 
 enum { UNIT_VERTS = 0, UNIT_INDEX, UNIT_HEIGHT, UNIT_VOLUME, UNIT_DIST, UNIT_COUNT };
@@ -47,6 +59,8 @@ static void shell_free(meso_rt* rt, mesoi_shell* s)
     mesoi_rt_free(rt, s->positions);
     mesoi_rt_free(rt, s->directors);
     mesoi_rt_free(rt, s->uvs);
+    mesoi_rt_free(rt, s->fn_frames);
+    mesoi_rt_free(rt, s->dist_frames);
     mesoi_rt_free(rt, s);
 }
 
@@ -71,6 +85,66 @@ static void fill_vertex_texels(const mesoi_shell* s, float* out)
         o[3] = s->uvs[2 * (size_t)v];
         o[7] = s->uvs[2 * (size_t)v + 1];
     }
+}
+
+/* The stored frames of an animated texture function (FORMAT.md §7.2
+ * "Animated texture functions"): the ANIM record, TXFR and (with a DIST)
+ * DSFR read to host memory and checked against the frame-0 chunks. */
+static meso_result load_frames(meso_rt* rt, meso_file* f, uint32_t id, mesoi_shell* s, int32_t ti, int32_t xi)
+{
+    const int32_t ai = mesoi_find_chunk(f, MESO_CHUNK_ANIM, id), fi = mesoi_find_chunk(f, MESO_CHUNK_TXFR, id);
+    const int32_t si = mesoi_find_chunk(f, MESO_CHUNK_DSFR, id);
+    if (ai < 0)
+        return MESO_OK;
+    void* rec = NULL;
+    size_t rec_size = 0;
+    meso_result r = mesoi_read_whole(rt, f, ai, &rec, &rec_size); /* contents checked: 4901, 4902 */
+    if (r != MESO_OK)
+        return r;
+    meso_anim_record a;
+    meso_anim_record_decode(rec, &a);
+    mesoi_rt_free(rt, rec);
+    const meso_chunk_info *tc = ti >= 0 ? meso_file_chunk(f, (uint32_t)ti) : NULL,
+                          *fc = fi >= 0 ? meso_file_chunk(f, (uint32_t)fi) : NULL;
+    const meso_chunk_info *xc = xi >= 0 ? meso_file_chunk(f, (uint32_t)xi) : NULL,
+                          *sc = si >= 0 ? meso_file_chunk(f, (uint32_t)si) : NULL;
+    int ok = tc && fc && (!xc) == (!sc) && fc->dtype == tc->dtype && fc->components == 1 &&
+             fc->dims[0] == tc->dims[0] && fc->dims[1] == tc->dims[1] &&
+             (uint64_t)fc->dims[2] == (uint64_t)tc->dims[2] * a.frame_count;
+    if (ok && xc)
+        ok = sc->dtype == xc->dtype && sc->components == 1 && sc->dims[0] == xc->dims[0] &&
+             sc->dims[1] == xc->dims[1] && (uint64_t)sc->dims[2] == (uint64_t)xc->dims[2] * a.frame_count;
+    if (!ok) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "shell %u: ANIM needs TXFR (and DSFR with a DIST) of %u frames of its texture function (FORMAT.md "
+                  "issue 6105)",
+                  id, a.frame_count);
+        return MESO_ERR_CORRUPT;
+    }
+    void *fn = NULL, *dist = NULL;
+    size_t fn_size = 0, dist_size = 0;
+    r = mesoi_read_whole(rt, f, fi, &fn, &fn_size);
+    if (r == MESO_OK && sc)
+        r = mesoi_read_whole(rt, f, si, &dist, &dist_size);
+    if (r != MESO_OK) {
+        mesoi_rt_free(rt, fn);
+        return r;
+    }
+    s->anim = a;
+    s->fn_frames = fn;
+    s->dist_frames = dist;
+    s->fn_bytes = fn_size / a.frame_count;
+    s->dist_bytes = dist_size / a.frame_count;
+    meso_rt_shell_texture* d = &s->frame_desc;
+    d->kind = tc->type == MESO_CHUNK_TX2D ? MESO_RT_TEXTURE_HEIGHT : MESO_RT_TEXTURE_DENSITY;
+    memcpy(d->dims, tc->dims, sizeof(d->dims));
+    d->dtype = tc->dtype;
+    if (xc) {
+        memcpy(d->dist_dims, xc->dims, sizeof(d->dist_dims));
+        d->dist_dtype = xc->dtype;
+    }
+    s->shown_frame = 0; /* the TX2D/TX3D and DIST just uploaded */
+    return MESO_OK;
 }
 
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_object* o)
@@ -171,6 +245,8 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     }
     if (r == MESO_OK && xi >= 0)
         r = mesoi_upload_texture(rt, f, xi, 1, 1, &s->dist_tex);
+    if (r == MESO_OK)
+        r = load_frames(rt, f, id, s, hi >= 0 ? hi : vi, xi);
     char what[48];
     snprintf(what, sizeof(what), "uploading shell %u", id);
     r = mesoi_upload_end(rt, prev_tex_buffer, r, what);
@@ -216,6 +292,134 @@ meso_result meso_rt_shell_info(const meso_rt* rt, meso_rt_object h, uint32_t* ve
         *vertex_count = o->shell ? o->shell->vertex_count : 0;
     if (layers)
         *layers = o->shell ? o->shell->layers : 0;
+    return MESO_OK;
+}
+
+/* --- animated texture functions (volume-textures-lp-averaged-shells.md §6) - */
+
+static int dist_finite(const meso_rt_shell_texture* d, size_t n)
+{
+    if (d->dist_dtype != MESO_DTYPE_F32)
+        return 1;
+    const float* v = (const float*)d->dist_data;
+    for (size_t i = 0; i < n; ++i)
+        if (!(v[i] >= 0.0f && v[i] <= 3.4e38f))
+            return 0;
+    return 1;
+}
+
+/* What is wrong with `d` for this context, or NULL. */
+static const char* texture_desc_error(meso_rt* rt, const meso_rt_shell_texture* d)
+{
+    if (!d)
+        return "desc is NULL";
+    if (d->kind != MESO_RT_TEXTURE_HEIGHT && d->kind != MESO_RT_TEXTURE_DENSITY)
+        return "kind is neither MESO_RT_TEXTURE_HEIGHT nor MESO_RT_TEXTURE_DENSITY";
+    if (d->dtype != MESO_DTYPE_U8 && d->dtype != MESO_DTYPE_U16)
+        return "dtype is not U8 or U16";
+    if (!d->data)
+        return "data is NULL";
+    GLint max2 = 0, max3 = 0;
+    rt->gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &max2);
+    rt->gl.GetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max3);
+    const GLint maxd = d->kind == MESO_RT_TEXTURE_HEIGHT ? max2 : max3;
+    for (int k = 0; k < 3; ++k)
+        if (d->dims[k] < 1 || d->dims[k] > (uint32_t)maxd)
+            return "a texture dimension is 0 or above the context's texture size limit";
+    if (d->kind == MESO_RT_TEXTURE_HEIGHT && d->dims[2] != 1)
+        return "a height field needs dims[2] = 1";
+    const int has_dist = d->dist_dims[0] || d->dist_dims[1] || d->dist_dims[2];
+    if (!has_dist)
+        return d->dist_data ? "dist_data given with dist_dims 0, 0, 0" : NULL;
+    for (int k = 0; k < 3; ++k)
+        if (d->dist_dims[k] < 1 || d->dist_dims[k] > (uint32_t)max3)
+            return "a distance-map dimension is 0 or above the context's 3D texture size limit";
+    if (d->dist_dtype != MESO_DTYPE_U8 && d->dist_dtype != MESO_DTYPE_U16 && d->dist_dtype != MESO_DTYPE_F32)
+        return "dist_dtype is not U8, U16 or F32";
+    if (!d->dist_data)
+        return "dist_data is NULL";
+    if (!dist_finite(d, (size_t)d->dist_dims[0] * d->dist_dims[1] * d->dist_dims[2]))
+        return "an F32 distance is not finite and >= 0";
+    return NULL;
+}
+
+/* New textures first, the object's swapped in only when both uploaded:
+ * on any failure the object keeps its old function and distance map. */
+static meso_result replace_texture(meso_rt* rt, mesoi_shell* s, const meso_rt_shell_texture* d, const char* what)
+{
+    GLuint fn = 0, dist = 0;
+    const GLint prev = mesoi_upload_begin(rt);
+    meso_result r = mesoi_upload_texels(rt, d->dims, d->dtype, d->kind == MESO_RT_TEXTURE_DENSITY, 0, d->data, &fn);
+    if (r == MESO_OK && d->dist_data)
+        r = mesoi_upload_texels(rt, d->dist_dims, d->dist_dtype, 1, 1, d->dist_data, &dist);
+    r = mesoi_upload_end(rt, prev, r, what);
+    if (r != MESO_OK) {
+        GLuint tex[2] = {fn, dist};
+        rt->gl.DeleteTextures(2, tex);
+        return r;
+    }
+    GLuint old[2] = {s->func_tex, s->dist_tex};
+    rt->gl.DeleteTextures(2, old);
+    s->func_tex = fn;
+    s->dist_tex = dist;
+    s->tex_kind = d->kind;
+    for (int k = 0; k < 3; ++k)
+        s->tex_size[k] = (float)d->dims[k];
+    return MESO_OK;
+}
+
+meso_result meso_rt_shell_set_texture(meso_rt* rt, meso_rt_object h, const meso_rt_shell_texture* desc)
+{
+    mesoi_object* o = mesoi_lookup(rt, h);
+    const char* bad = !o || !o->shell ? "not a live shell" : texture_desc_error(rt, desc);
+    if (bad) {
+        if (rt)
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_shell_set_texture: %s", bad);
+        return MESO_ERR_INVALID_ARG;
+    }
+    const meso_result r = replace_texture(rt, o->shell, desc, "meso_rt_shell_set_texture");
+    if (r == MESO_OK)
+        o->shell->shown_frame = UINT32_MAX;
+    return r;
+}
+
+meso_result meso_rt_shell_set_time(meso_rt* rt, meso_rt_object h, double seconds)
+{
+    mesoi_object* o = mesoi_lookup(rt, h);
+    if (!o || !o->shell || !(seconds == seconds)) {
+        if (rt)
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                      "meso_rt_shell_set_time: not a live shell, or the time is NaN");
+        return MESO_ERR_INVALID_ARG;
+    }
+    mesoi_shell* s = o->shell;
+    if (!s->anim.frame_count)
+        return MESO_OK;
+    const uint32_t k = meso_anim_frame_at(&s->anim, seconds);
+    if (k == s->shown_frame)
+        return MESO_OK;
+    meso_rt_shell_texture d = s->frame_desc;
+    d.data = s->fn_frames + k * s->fn_bytes;
+    d.dist_data = s->dist_frames ? s->dist_frames + k * s->dist_bytes : NULL;
+    const meso_result r = replace_texture(rt, s, &d, "meso_rt_shell_set_time");
+    if (r == MESO_OK)
+        s->shown_frame = k;
+    return r;
+}
+
+meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_t* frame_count, float* fps,
+                                    uint32_t* frame)
+{
+    const mesoi_object* o = mesoi_lookup(rt, h);
+    if (!o)
+        return MESO_ERR_INVALID_ARG;
+    const mesoi_shell* s = o->shell;
+    if (frame_count)
+        *frame_count = s ? s->anim.frame_count : 0;
+    if (fps)
+        *fps = s && s->anim.frame_count ? s->anim.fps : 0.0f;
+    if (frame)
+        *frame = s && s->anim.frame_count ? s->shown_frame : UINT32_MAX;
     return MESO_OK;
 }
 

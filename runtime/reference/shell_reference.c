@@ -16,6 +16,7 @@
  * image does not depend on the thread count.
  */
 #include "shell_reference.h"
+#include "meso_layout.h"
 
 #include "ref_bvh.h"
 #include "ref_common.h"
@@ -110,6 +111,36 @@ done:
     if (r != MESO_OK)
         meso_ref_shell_free(out);
     return r;
+}
+
+meso_result meso_ref_shell_set_time(meso_file* f, uint32_t object_id, double t, meso_ref_shell* s, meso_error* err)
+{
+    const int32_t ai = meso_file_find(f, MESO_CHUNK_ANIM, object_id, 0);
+    const int32_t fi = meso_file_find(f, MESO_CHUNK_TXFR, object_id, 0);
+    if (ai < 0)
+        return MESO_OK;
+    uint8_t rec[MESO_ANIM_RECORD_SIZE];
+    const meso_chunk_info* ac = meso_file_chunk(f, (uint32_t)ai);
+    if (fi < 0 || !s->tex.kind || ac->decoded_size != sizeof(rec))
+        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "shell", object_id,
+                              "ANIM without TXFR frames of a texture function (FORMAT.md 7.2)");
+    meso_result r = meso_file_read_chunk(f, (uint32_t)ai, rec, sizeof(rec), err);
+    if (r != MESO_OK)
+        return r;
+    meso_anim_record a;
+    meso_anim_record_decode(rec, &a);
+    const meso_chunk_info* fc = meso_file_chunk(f, (uint32_t)fi);
+    const size_t n = (size_t)s->tex.w * s->tex.h * s->tex.d;
+    if (fc->dims[0] != s->tex.w || fc->dims[1] != s->tex.h || (uint64_t)fc->dims[2] != (uint64_t)s->tex.d * a.frame_count)
+        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "shell", object_id,
+                              "TXFR is not ANIM's frame_count frames of the texture function (FORMAT.md 7.2)");
+    float* all = NULL;
+    r = mesoi_ref_read_unorm(f, fi, &all, err);
+    if (r != MESO_OK)
+        return r;
+    memcpy(s->tex_values, all + n * meso_anim_frame_at(&a, t), sizeof(float) * n);
+    free(all);
+    return MESO_OK;
 }
 
 void meso_ref_shell_free(meso_ref_shell* s)

@@ -48,6 +48,11 @@ typedef struct meso_ref_shell {
 /* Load a shell object (kind 2) from an open file. */
 meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err);
 void meso_ref_shell_free(meso_ref_shell* s);
+/* Animated texture functions (FORMAT.md §7.2): replace the loaded function
+ * with the object's stored frame for time t (meso_anim_frame_at), as
+ * libmeso's meso_rt_shell_set_time shows it. A shell without an ANIM chunk
+ * keeps its function (MESO_OK). */
+meso_result meso_ref_shell_set_time(meso_file* f, uint32_t object_id, double t, meso_ref_shell* s, meso_error* err);
 /* The prism of triangle f, with uv_scale applied. */
 void meso_ref_shell_prism(const meso_ref_shell* s, uint32_t f, double uv_scale, meso_prism* out);
 

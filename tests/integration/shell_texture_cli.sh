@@ -101,6 +101,13 @@ refuse "bad --dist-res" 1 "--dist-res expects" --texture bricks --dist-res 8x8
 refuse "bad --dist-type" 1 "--dist-type expects" --texture bricks --dist-type f16
 refuse "bad --tiling" 1 "--tiling expects" --texture bricks --tiling 0,1
 refuse "--tiling without --texture" 1 "need --texture" --tiling 2
+# animated texture functions (FORMAT.md 7.2): only for a time-dependent built-in
+refuse "--time on a static texture" 1 "need a time-dependent texture (boil)" --texture bricks:16 --time 1
+refuse "--frames without --texture" 1 "need a time-dependent texture" --frames 2
+refuse "--fps without --frames" 1 "fps needs frames" --texture boil:8 --fps 3
+refuse "bad --frames" 1 "--frames expects" --texture boil:8 --frames 0
+refuse "bad --time" 1 "--time expects" --texture boil:8 --time nan
+check "help documents boil, --time and --frames" sh -c "'$bake' shell --help | grep -q 'boil\[:RES\]' && '$bake' shell --help | grep -q -- '--frames N'"
 check "help documents --texture and the built-ins" sh -c "'$bake' shell --help | grep -q 'bricks\[:RES\]'"
 
 # 7. uv seams: each distinct (vertex, corner uv) pair is one MESH vertex, the
@@ -175,4 +182,17 @@ check "no uvs: MESH keeps 6 vertices" test "$(vertex_count "$tmp/plain.meso")" =
 check "no uvs: seam_vertices 0" seams "$tmp/plain.json" 0
 check "one uv per vertex (saddle): MESH keeps 1089 vertices" test "$(vertex_count "$tmp/png16.meso")" = 1089
 check "one uv per vertex (saddle): seam_vertices 0" seams "$tmp/png16.json" 0
+
+# 8. Animated texture functions (FORMAT.md 7.2): --frames stores the frames,
+# info lists them, and the reference preview of the frame at --time T is
+# the preview of a static bake at T, pixel for pixel.
+"$bake" shell -i "$spot" -o "$tmp/seq.meso" --texture boil:16 --frames 4 --fps 8 -j 2 2>/dev/null
+"$bake" shell -i "$spot" -o "$tmp/t2.meso" --texture boil:16 --time 0.25 -j 2 2>/dev/null
+check "frames: info shows the ANIM record" sh -c "'$inspect' info '$tmp/seq.meso' | grep -q 'ANIM: 4 frames at 8 fps'"
+check "frames: validate --full" "$inspect" validate --full "$tmp/seq.meso"
+"$inspect" preview "$tmp/seq.meso" -o "$tmp/seq2.png" --reference --time 0.3 --size 40x40 --samples 32 >/dev/null 2>&1
+"$inspect" preview "$tmp/t2.meso" -o "$tmp/t2.png" --reference --size 40x40 --samples 32 >/dev/null 2>&1
+"$inspect" preview "$tmp/seq.meso" -o "$tmp/seq0.png" --reference --size 40x40 --samples 32 >/dev/null 2>&1
+check "frames: preview --reference --time 0.3 (frame 2) = the bake at 0.25" cmp -s "$tmp/seq2.png" "$tmp/t2.png"
+check "frames: ... and not frame 0" sh -c "! cmp -s '$tmp/seq0.png' '$tmp/t2.png'"
 exit $fail

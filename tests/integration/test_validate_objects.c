@@ -1,6 +1,6 @@
 /*
  * test_validate_objects.c — full validation refuses objects that cannot be
- * drawn (FORMAT.md §7.2, issues 4312 and 6xxx), on files baked by mesobake
+ * drawn (FORMAT.md §7.2, issues 4312, 4902 and 6xxx), on files baked by mesobake
  * from tests/data and then mutated so that only the content is wrong: every
  * CRC is recomputed, chunks are "removed" by renaming them to an unknown,
  * non-required type (readers skip those), and count mismatches are written
@@ -292,6 +292,23 @@ static void shell_cases(void)
     free(m);
 }
 
+/* Animated texture functions (FORMAT.md §7.2, issues 4902 and 6105). */
+static uint8_t* anim_record(uint8_t* m) { return payload(m, chunk_of(m, MESO_CHUNK_ANIM)); }
+
+static void anim_cases(void)
+{
+    CASE("anim", "anim-zero-frames", MESO_ISSUE_ANIM_VALUE, st32(anim_record(m) + MESO_ANIM_OFF_FRAME_COUNT, 0));
+    CASE("anim", "anim-nan-fps", MESO_ISSUE_ANIM_VALUE, stf(anim_record(m) + MESO_ANIM_OFF_FPS, NAN));
+    CASE("anim", "anim-flags", MESO_ISSUE_ANIM_VALUE, st32(anim_record(m) + MESO_ANIM_OFF_FLAGS, 2));
+    CASE("anim", "anim-reserved", MESO_ISSUE_ANIM_VALUE, anim_record(m)[MESO_ANIM_OFF_RESERVED + 3] = 1);
+    /* 5 frames claimed, 4 stored */
+    CASE("anim", "anim-frame-count", MESO_ISSUE_SHELL_ANIM, st32(anim_record(m) + MESO_ANIM_OFF_FRAME_COUNT, 5));
+    CASE("anim", "anim-frame0", MESO_ISSUE_SHELL_ANIM, payload(m, chunk_of(m, MESO_CHUNK_TXFR))[1] ^= 1);
+    CASE("anim", "anim-no-txfr", MESO_ISSUE_SHELL_ANIM, drop(m, MESO_CHUNK_TXFR));
+    CASE("anim", "anim-no-dsfr", MESO_ISSUE_SHELL_ANIM, drop(m, MESO_CHUNK_DSFR));
+    CASE("anim", "anim-no-anim", MESO_ISSUE_SHELL_ANIM, drop(m, MESO_CHUNK_ANIM));
+}
+
 static void frusta_cases(void)
 {
     CASE("frusta", "frusta-no-skel", MESO_ISSUE_OBJ_CHUNKS, drop(m, MESO_CHUNK_SKEL));
@@ -341,12 +358,14 @@ int main(int argc, char** argv)
     bake_file("shell", args);
     snprintf(args, sizeof args, "frusta -i '%s/neurom_simple.swc'", data);
     bake_file("frusta", args);
+    snprintf(args, sizeof args, "shell -i '%s/sphere.obj' --texture boil:16 --frames 4 --dist-res 8x8x8", data);
+    bake_file("anim", args);
     snprintf(args, sizeof args, "cells -i '%s/sphere.obj' --tiles 2 --tile-res 8", data);
     bake_file("cells", args);
 
-    const char* names[] = {"mesh", "draco", "shell", "frusta", "cells"};
+    const char* names[] = {"mesh", "draco", "shell", "frusta", "cells", "anim"};
     char path[600];
-    for (int i = 0; i < 5; i++) {
+    for (int i = 0; i < 6; i++) {
         snprintf(path, sizeof path, "%s/%s.meso", tmp, names[i]);
         expect_valid(path, names[i]);
     }
@@ -367,6 +386,7 @@ int main(int argc, char** argv)
 
     mesh_cases();
     shell_cases();
+    anim_cases();
     frusta_cases();
 
     char cmd[600];

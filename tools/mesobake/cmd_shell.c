@@ -53,6 +53,8 @@ static const char* const usage_shell =
     "                          weave[:RES]            built-in interlaced threads (RES x RES x RES/2,\n"
     "                                                 default 128)\n"
     "                          cells[:RES]            built-in 3D Voronoi cell walls (RES^3, default 64)\n"
+    "                          boil[:RES]             built-in boiling liquid, bubbles rising and\n"
+    "                                                 bursting (RES^3, default 64); loops every 2 s\n"
     "      --tiling U[,V]      tiles along the texture coordinates (default 1,1). The mesh's own\n"
     "                          uvs are multiplied by it; a mesh without uvs is projected onto the\n"
     "                          plane of its two largest bounding-box extents, the longest spanning\n"
@@ -61,11 +63,15 @@ static const char* const usage_shell =
     "      --dist-res WxHxD    distance-map cells (each 1..512; default: half the texture's\n"
     "                          resolution in s, t (8..128) and, in w, half a volume's depth or,\n"
     "                          for a height field, about one cell per typical height step)\n"
-    "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n"
-    "Reporting:\n"
-    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n";
+    "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n";
 /* (in two parts: one literal would pass the 4095 characters C11 promises) */
 static const char* const usage_shell_end =
+    "      --time T            seconds: sample a time-dependent texture (boil) at T (default 0)\n"
+    "      --frames N          store N frames (1..256) at T + k / FPS, looped (FORMAT.md 7.2\n"
+    "                          \"Animated texture functions\"); frame k equals a bake at that time\n"
+    "      --fps F             frames per second (default: N / the texture's period: a seamless loop)\n"
+    "Reporting:\n"
+    "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
     MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this help\n"
@@ -163,7 +169,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
-            "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type"};
+            "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -173,6 +179,19 @@ static int parse_args(int argc, char** argv, shell_args* a)
             continue;
         if (!strcmp(s, "--texture"))
             o->texture = v;
+        else if (!strcmp(s, "--time")) {
+            char* end = NULL;
+            o->time = strtod(v, &end);
+            if (!end || end == v || *end || !(o->time >= -1e6 && o->time <= 1e6))
+                return usage_error("--time expects seconds in [-1e6, 1e6], got '%s'", v);
+        } else if (!strcmp(s, "--frames")) {
+            if (!meso_bake_parse_long(v, 1, MESO_BAKE_MAX_FRAMES, &n))
+                return usage_error("--frames expects a frame count in 1..%u, got '%s'", MESO_BAKE_MAX_FRAMES, v);
+            o->frames = (uint32_t)n;
+        } else if (!strcmp(s, "--fps")) {
+            if (!meso_bake_parse_positive(v, &o->fps) || o->fps > 1000)
+                return usage_error("--fps expects frames per second in (0, 1000], got '%s'", v);
+        }
         else if (!strcmp(s, "--tiling")) {
             if (!parse_tiling(v, o->tiling))
                 return usage_error("--tiling expects U or U,V (positive numbers), got '%s'", v);

@@ -160,7 +160,8 @@ static float ld_f32(const uint8_t* p)
 }
 
 /* One line about a frusta object's FSEG (end kinds, caps, relief) or BALL
- * chunk, or a cells object's CELL record, for someone checking what a bake made of a skeleton. Nothing when
+ * chunk, a cells object's CELL record, or a shell's ANIM record (its
+ * frames and their times, FORMAT.md §7.2), for someone checking what a bake made of a skeleton. Nothing when
  * the chunk is not raw, its CRC fails or its size is not whole records. */
 static void frusta_detail(const meso_file* f, uint32_t i)
 {
@@ -198,6 +199,13 @@ static void frusta_detail(const meso_file* f, uint32_t i)
             hi = r > hi ? r : hi;
         }
         printf("  chunk %u BALL: %llu balls, radius %g to %g\n", i, (unsigned long long)n, lo, hi);
+    } else if (c->type == MESO_CHUNK_ANIM && c->stored_size == MESO_ANIM_RECORD_SIZE) {
+        meso_anim_record a;
+        meso_anim_record_decode(p, &a);
+        printf("  chunk %u ANIM: %u frames at %g fps (%g s), frame k at t = %g + k/%g s, %s; in TXFR/DSFR of "
+               "object %u\n",
+               i, a.frame_count, (double)a.fps, a.fps > 0 ? a.frame_count / (double)a.fps : 0.0, (double)a.time0,
+               (double)a.fps, a.flags & MESO_ANIM_FLAG_LOOP ? "looped" : "held at the end", c->object);
     } else if (c->type == MESO_CHUNK_CELL && c->stored_size == MESO_CELL_RECORD_SIZE) {
         /* the cells object's grid (FORMAT.md §7.8) */
         const uint32_t R = ld_u32(p + MESO_CELL_OFF_TILE_RES);

@@ -319,6 +319,7 @@ const char* mi_issue_name(uint32_t code)
         {4801, "CELL_SIZE"},         {4802, "CELL_VALUE"},
         {4803, "CELL_CHUNKS"},       {4804, "CELL_TILE"},
         {4805, "CELL_SPLT"},         {4806, "CELL_MEMB"},
+        {4901, "ANIM_SIZE"},         {4902, "ANIM_VALUE"},
         {5001, "API_ARG"},           {5002, "API_BUFFER"},
         {5003, "API_MEMORY"},        {5004, "IO_OPEN"},
         {5005, "IO_READ"},           {5006, "IO_MMAP"},
@@ -327,7 +328,8 @@ const char* mi_issue_name(uint32_t code)
         {5011, "IO_DESTINATION"},
         {6001, "OBJ_CHUNKS"},        {6101, "SHELL_COUNT"},
         {6102, "SHELL_SDIR"},        {6103, "SHELL_STHK"},
-        {6104, "SHELL_TEXTURE"},     {6201, "FRUSTA_COUNT"},
+        {6104, "SHELL_TEXTURE"},     {6105, "SHELL_ANIM"},
+        {6201, "FRUSTA_COUNT"},
         {6202, "FRUSTA_NODE"},       {6203, "FRUSTA_AXIS"},
         {6204, "FRUSTA_RELF"},
     };

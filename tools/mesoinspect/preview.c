@@ -64,6 +64,9 @@ static const char* const usage_preview =
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
     "      --technique T   shell technique: smooth (default), curved or tetra\n"
+    "      --time T        shells with stored frames (mesobake --frames): draw the frame\n"
+    "                      shown at T seconds (meso_rt_shell_set_time, or the reference's\n"
+    "                      meso_ref_shell_set_time; default: frame 0)\n"
     "      --reference     render the shell, frusta and cells objects with the exact CPU\n"
     "                      reference (runtime/reference; no EGL needed, slow).\n"
     "                      --technique curved selects the curved shell mapping,\n"
@@ -83,6 +86,8 @@ typedef struct preview_knobs {
     int cell_bounces;
     float cell_step;
     double zoom;
+    int has_time;
+    double time; /* with has_time: seconds, for shells with stored frames */
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -199,6 +204,8 @@ static int render_reference(const char* path, const char* out, int width, int he
         r = rec->kind == MESO_OBJECT_SHELL    ? meso_ref_shell_load(f, rec->id, &o->shell, &err)
             : rec->kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_load(f, rec->id, &o->frusta, &err)
                                               : meso_ref_cells_load(f, rec->id, &o->cells, &err);
+        if (r == MESO_OK && rec->kind == MESO_OBJECT_SHELL && knobs->has_time)
+            r = meso_ref_shell_set_time(f, rec->id, knobs->time, &o->shell, &err);
         if (r != MESO_OK) {
             fprintf(stderr, "mesoinspect error: %s\n", err.message);
             code = meso_exit_for(r);
@@ -365,6 +372,8 @@ static int render(const char* path, const char* out, int width, int height, uint
                     rec->name);
             continue;
         }
+        if (r == MESO_OK && knobs->has_time && rec->kind == MESO_OBJECT_SHELL)
+            r = meso_rt_shell_set_time(rt, objs[nobj], knobs->time);
         if (r != MESO_OK) {
             code = meso_exit_for(r);
             goto done;
@@ -559,6 +568,14 @@ int mesoinspect_preview(int argc, char** argv)
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--time") && val) {
+            knobs.time = strtod(argv[++i], &end);
+            knobs.has_time = 1;
+            if (!end || end == argv[i] || *end || !(knobs.time >= -1e9 && knobs.time <= 1e9)) {
+                fprintf(stderr, "mesoinspect error: --time expects seconds, got '%s'\nSee 'mesoinspect --help'.\n",
+                        argv[i]);
+                return MESO_EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--zoom") && val) {
             knobs.zoom = strtod(argv[++i], &end);
             if (!end || *end || !(knobs.zoom >= 0.01 && knobs.zoom <= 1000)) {
@@ -600,7 +617,7 @@ int mesoinspect_preview(int argc, char** argv)
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
-                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom"))
+                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
