@@ -96,6 +96,13 @@ Prism hull_prism(Prism P, vec2 r)
     return P;
 }
 
+// The smooth mapping Phi(u, v, w) (shell_map.h: meso_phi).
+vec3 phi(Prism P, vec3 q)
+{
+    float t = 1.0 - q.x - q.y;
+    return t * P.b[0] + q.x * P.b[1] + q.y * P.b[2] + q.z * (t * P.n[0] + q.x * P.n[1] + q.y * P.n[2]);
+}
+
 vec3 corner_pos(Prism P, int c) // c: 0..2 bottom, 3..5 top
 {
     return c < 3 ? P.b[c] : P.b[c - 3] + P.n[c - 3];
