@@ -118,7 +118,7 @@ MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);
 /* Object-space bounds from the file's OBJT record. */
 MESO_API meso_result meso_rt_object_bounds(const meso_rt* rt, meso_rt_object obj, float lo[3], float hi[3]);
 
-/* Shell ray-casting techniques (papers/smooth-and-curved-shell-mapping.md). */
+/* Shell techniques: ray casting (papers/smooth-and-curved-shell-mapping.md), or slices. */
 typedef enum meso_shell_technique {
     MESO_SHELL_SMOOTH = 0,  /* §3.1/§4: Φ along interpolated directors, corrected ray-path sampling */
     MESO_SHELL_CURVED,      /* §3.2/§4.5: Coons-patch curved shells, continuous across edges and only

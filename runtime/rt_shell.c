@@ -2,6 +2,7 @@
  * rt_shell.c — SHELL objects (FORMAT.md §7.2): streaming the base mesh,
  * directors and texture function of one shell into GL, and ray casting it
  * with one of three techniques (papers/smooth-and-curved-shell-mapping.md;
+ * MESO_SHELL_SLICES, the slice renderer, is runtime/rt_slices.c;
  * the shaders are runtime/shaders/shell_*.glsl, their maths is spelled out
  * in runtime/reference/shell_map.h).
  *

@@ -143,8 +143,6 @@ static void set_uniforms(meso_rt* rt, GLuint prog, const mesoi_shell* s, const m
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_slices"), k->slices > 0 ? k->slices : 16);
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_uv_scale"), k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_prism_count"), (GLint)s->triangle_count);
-    /* t1 and t2 farther apart than this in (s, t') lie in different charts. */
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_seam"), 0.25f);
 }
 
 /* Binds `prog` with the common uniforms mesoi_draw_begin sets for the first

@@ -33,10 +33,14 @@
 //  4  composite: the second pass's colour and depth where it found a slice
 //     outside, else the first pass's, into the host's framebuffer with its
 //     depth test.
-// Texture coordinates from different charts cannot be interpolated: when
-// t1 and t2 are more than u_seam apart in (s, t') (a uv seam, or prisms
-// without uvs), the pixel keeps t1 (no interpolation). The paper instead
-// renders texture boundaries twice, offset towards each texture.
+// Texture coordinates from different charts cannot be interpolated (a uv
+// seam between the two slices' prisms, or prisms without uvs, each its own
+// chart). The test: t1 read in the chart of t2's prism (prism_coords, then
+// Phi) must land within a quarter of |p1 - p2| of p1; else the pixel keeps
+// t1 and p1 (no interpolation). Within one chart it lands on p1 exactly
+// (same prism, or a flat neighbour) or nearly (a curved neighbour: the
+// error is second order in the distance). The paper instead renders texture
+// boundaries twice, offset towards each texture.
 
 flat in int v_prism;
 in vec3 v_q;
@@ -52,7 +56,6 @@ out vec4 o_color;
 
 uniform sampler2D u_first;  // pass 2/3: T1; pass 4: the first pass's colour and depth
 uniform sampler2D u_second; // pass 2/3: Z1 (depth); pass 4: the second pass's colour and depth
-uniform float u_seam;
 
 float slice_alpha(vec3 stw)
 {
@@ -114,15 +117,16 @@ void main()
     if (a >= 0.0 || z1 >= 1.0 || gl_FragCoord.z >= z1)
         discard;
     vec4 T1 = texelFetch(u_first, pix, 0);
-    float f = -a / (T1.w - a);
-    if (length(T1.xy - v_stw.xy) > u_seam)
-        f = 1.0;
-    vec3 t3 = mix(v_stw, T1.xyz, f);
     // p1: the first inside slice's point, on this pixel's ray at depth z1.
     vec2 ndc = gl_FragCoord.xy / u_viewport.zw * 2.0 - 1.0;
     float zn = (2.0 * z1 - gl_DepthRange.near - gl_DepthRange.far) / gl_DepthRange.diff;
     vec4 h = u_inv_mvp * vec4(ndc, zn, 1.0);
-    vec3 p3 = mix(v_pos, h.xyz / h.w, f);
+    vec3 p1 = h.xyz / h.w;
+    float f = -a / (T1.w - a);
+    if (length(phi(P, prism_coords(P, T1.xyz)) - p1) > 0.25 * length(p1 - v_pos))
+        f = 1.0; // another chart
+    vec3 t3 = mix(v_stw, T1.xyz, f);
+    vec3 p3 = mix(v_pos, p1, f);
 #if SLICE_PASS == 2
     vec3 n = mix(slice_normal(P, v_q, v_stw), slice_normal(P, prism_coords(P, T1.xyz), T1.xyz), f);
 #else
