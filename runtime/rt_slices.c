@@ -31,7 +31,7 @@
  *        exactly as the ray casters do. (The paper renders pass 2 into the
  *        framebuffer with the depth test reversed; a host's depth buffer
  *        cannot be reversed under it, hence the offscreen target.)
- *    The target (2 framebuffers, 5 textures: 4 × 16 + 2 × 4 bytes a pixel)
+ *    The target (2 framebuffers, 5 textures: 3 × 16 + 2 × 4 = 56 bytes a pixel)
  *    belongs to the meso_rt context, is created on the first two-pass draw,
  *    re-created whenever the viewport's size changes, and freed by
  *    meso_rt_destroy.

@@ -29,7 +29,7 @@
 //     at t3; 2 mixes the normals looked up at t2 and t1 with the same f.
 //     Both also place the hit at p3 = mix(p2, p1, f): p1 and p2 lie on the
 //     same pixel's view ray, so p3 is on it too, and its depth is written
-//     (the paper keeps Z1, the first inside slice's).
+//     (the paper leaves a slice fragment's own depth).
 //  4  composite: the second pass's colour and depth where it found a slice
 //     outside, else the first pass's, into the host's framebuffer with its
 //     depth test.
