@@ -33,6 +33,11 @@
 //  4  composite: the second pass's colour and depth where it found a slice
 //     outside, else the first pass's, into the host's framebuffer with its
 //     depth test.
+// The paper renders extra slices in front and behind when the first or last
+// slice is inside; here a pixel whose first inside fragment has no slice
+// outside in front of it (solid reaching the top level, or entered through
+// a side wall with nothing outside before it) keeps pass 1's colour and
+// depth: no interpolation, never a hole.
 // Texture coordinates from different charts cannot be interpolated (a uv
 // seam between the two slices' prisms, or prisms without uvs, each its own
 // chart). The test: t1 read in the chart of t2's prism (prism_coords, then
