@@ -233,7 +233,7 @@ MESO_BAKE_API void meso_bake_skeleton_free(meso_bake_skeleton* s);
  * `mesobake frusta --relief` take it:
  *   height:FILE.png  volume:FILE.raw:WxHxD  volume:FILE.vdb[:GRID]
  *   bricks[:RES]  cobble[:RES]  ribs[:RES]     (built-in height fields)
- *   weave[:RES]  cells[:RES]                   (built-in density volumes) */
+ *   weave[:RES]  cells[:RES]  icospheres[:RES] (built-in density volumes) */
 typedef struct meso_bake_texture_info {
     int density;       /* 0: a height field (TX2D, RELF), 1: a density volume (TX3D) */
     uint32_t dims[3];  /* texels W, H, D (D = 1 for a height field) */

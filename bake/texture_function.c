@@ -383,6 +383,37 @@ static double boil_density(double s, double t, double w)
     return boil_density_at(s, t, w, 0.0);
 }
 
+/* Figure 12 of papers/volume-textures-lp-averaged-shells.md (§5): "the
+ * distance field for a large sphere with smaller spheres attached at
+ * vertices of a regular icosahedron". One copy per tile, not periodic (the
+ * tile's border is empty): a sphere of radius 0.25 at the centre of the unit
+ * cube (s, t, w) and twelve of radius 0.09 centred at distance 0.29 from it
+ * in the directions of the icosahedron's vertices (0, ±1, ±φ) and their
+ * cyclic permutations, so each sits 0.04 deep in the large one and all stay
+ * within 0.38 of the centre (0.12 from the cube's faces). Density
+ * 1/2 − 2 d, d the signed distance to the union (negative inside),
+ * clamped to [0, 1]: linear over ±0.25 of the surface, so α = ½ lies
+ * between any two slices at least 1/15 apart (16 slices of a unit shell) and
+ * the paper's interpolation between them is exact for a single sphere. */
+static double icospheres_density(double s, double t, double w)
+{
+    const double phi = 0.5 * (1.0 + sqrt(5.0)), len = sqrt(1.0 + phi * phi);
+    const double p[3] = {s - 0.5, t - 0.5, w - 0.5};
+    double d = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 0.25;
+    for (int v = 0; v < 12; ++v) {
+        /* (0, ±1, ±φ) rotated cyclically by v / 4 places. */
+        const double a = (v & 1) ? -1.0 : 1.0, b = (v & 2) ? -phi : phi;
+        const double e[3] = {0.0, a / len, b / len};
+        const int r = v / 4;
+        double c[3];
+        for (int k = 0; k < 3; ++k)
+            c[(k + r) % 3] = 0.29 * e[k];
+        const double dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+        d = fmin(d, sqrt(dx * dx + dy * dy + dz * dz) - 0.09);
+    }
+    return clamp01(0.5 - 2.0 * d);
+}
+
 typedef struct builtin {
     const char* name;
     meso_texfn_kind kind;
@@ -401,6 +432,7 @@ static const builtin builtins[] = {
     {"weave", MESO_TEXFN_DENSITY, 128, 256, NULL, weave_density, 2, NULL, 0},
     {"cells", MESO_TEXFN_DENSITY, 64, 256, NULL, cells_density, 1, NULL, 0},
     {"boil", MESO_TEXFN_DENSITY, 64, 256, NULL, boil_density, 1, boil_density_at, BOIL_PERIOD},
+    {"icospheres", MESO_TEXFN_DENSITY, 64, 256, NULL, icospheres_density, 1, NULL, 0},
 };
 
 double meso_texfn_builtin_value(const char* name, double s, double t, double w)
@@ -451,7 +483,7 @@ static meso_result spec_error(meso_error* err, const char* spec, const char* wha
 {
     return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_TEXFN_ISSUE_SPEC,
                           "texture '%s': %s (expected height:FILE.png, volume:FILE.raw:WxHxD, "
-                          "volume:FILE.vdb[:GRID], bricks[:RES], cobble[:RES], ribs[:RES], weave[:RES], cells[:RES] or boil[:RES])",
+                          "volume:FILE.vdb[:GRID], bricks[:RES], cobble[:RES], ribs[:RES], weave[:RES], cells[:RES], boil[:RES] or icospheres[:RES])",
                           spec, what);
 }
 

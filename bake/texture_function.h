@@ -29,11 +29,15 @@
  *                            bursting (volume-textures-lp-averaged-shells.md §6);
  *                            RES³ U8 (default 64). Depends on time: it loops with
  *                            a period of 2 s (meso_texfn_period)
+ *   icospheres[:RES]         Figure 12's test volume of the Lp-averaged shells
+ *                            paper (§5): a sphere with 12 small spheres at the
+ *                            vertices of an icosahedron, one per tile, not
+ *                            periodic; RES³ U8 (default 64)
  *
- * RES is 8..1024 for height fields and 8..256 for volumes. The built-ins tile
- * seamlessly and are deterministic: they use an integer hash, never libc
- * rand(), and do not depend on the thread count or the platform's libm beyond
- * ordinary rounding.
+ * RES is 8..1024 for height fields and 8..256 for volumes. The built-ins but
+ * icospheres tile seamlessly. All are deterministic: they use an integer hash,
+ * never libc rand(), and do not depend on the thread count or the platform's
+ * libm beyond ordinary rounding.
  *
  * The values held here are exactly what the runtime reads: value / max of
  * the chunk encoding (never the unquantised floats), so the distance map

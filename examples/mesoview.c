@@ -3,10 +3,13 @@
  * GLFW's loader, and draws .meso files into the window's framebuffer.
  *
  *   mesoview [FILE.meso] [--size WxH] [--frames N] [--screenshot OUT.png]
- *            [--technique smooth|curved|tetra|segment] [--error-px E] [--animate]
+ *            [--technique smooth|curved|tetra|segment|slices] [--slices N]
+ *            [--slice-interp none|normal|texcoord] [--error-px E] [--animate]
  *
  * Mouse: drag to orbit, scroll to zoom. Keys: Esc quits, S saves a
- * screenshot (mesoview.png); 1-4 pick the shell technique, [ ] halve/double
+ * screenshot (mesoview.png); 1-5 pick the shell technique (5: slices,
+ * papers/volume-textures-lp-averaged-shells.md §5), I cycles the slices'
+ * interpolation, , . halve/double the slice count, [ ] halve/double
  * the error bound, - = halve/double the step limit, B cycles the bisection
  * steps, D toggles the distance map, A toggles the animation (shells: a
  * twist of the base mesh and its directors, uploaded every frame with
@@ -42,7 +45,9 @@ static const char* const usage =
     "  --size WxH          window size (default 800x600)\n"
     "  --frames N          quit after N frames (0 = run until closed)\n"
     "  --screenshot FILE   save the last frame as PNG when quitting\n"
-    "  --technique T       shells: smooth (default), curved, tetra or segment\n"
+    "  --technique T       shells: smooth (default), curved, tetra, segment or slices\n"
+    "  --slices N          slices: slice polygons per prism (2..1024, default 16)\n"
+    "  --slice-interp I    slices: texcoord (default), normal or none\n"
     "  --error-px E        shells: image-space error bound in pixels (default 1)\n"
     "  --animate           start with the animation on (shells twist and play stored texture\n"
     "                      frames, frusta sway)\n"
@@ -50,13 +55,16 @@ static const char* const usage =
     "  -h, --help          this help;  --version  the version\n"
     "\n"
     "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png,\n"
-    "1-4 technique (smooth curved tetra segment), [ ] error bound, - = step limit,\n"
+    "1-5 technique (smooth curved tetra segment slices), I slice interpolation,\n"
+    ", . slice count, [ ] error bound, - = step limit,\n"
     "B bisection steps, D distance map on/off, A animation on/off,\n"
     "M cells mode, N cells bounces, L cells linear search on/off\n";
 
 static const char* const cell_mode_names[3] = {"first", "reflect", "refract"};
 
-static const char* const technique_names[MESO_SHELL_TECHNIQUE_COUNT] = {"smooth", "curved", "tetra", "segment"};
+static const char* const technique_names[MESO_SHELL_TECHNIQUE_COUNT] = {"smooth", "curved", "tetra", "segment",
+                                                                        "slices"};
+static const char* const interp_names[MESO_SLICE_INTERP_COUNT] = {"texcoord", "normal", "none"};
 
 /* What the keyboard changes. */
 typedef struct knobs {
@@ -74,8 +82,14 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
     knobs* k = ((knobs**)glfwGetWindowUserPointer(w))[1];
     meso_rt_draw_desc* d = &k->d;
     meso_rt_shell_draw* sh = &d->shell;
-    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_4)
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_5)
         sh->technique = (meso_shell_technique)(key - GLFW_KEY_1);
+    else if (key == GLFW_KEY_I)
+        sh->slice_interp = (meso_slice_interp)((sh->slice_interp + 1) % MESO_SLICE_INTERP_COUNT);
+    else if (key == GLFW_KEY_COMMA)
+        sh->slices = sh->slices > 4 ? sh->slices / 2 : 2;
+    else if (key == GLFW_KEY_PERIOD)
+        sh->slices = sh->slices < 512 ? sh->slices * 2 : 1024;
     else if (key == GLFW_KEY_LEFT_BRACKET)
         sh->error_px = fmaxf(sh->error_px * 0.5f, 0.0625f);
     else if (key == GLFW_KEY_RIGHT_BRACKET)
@@ -332,7 +346,7 @@ static void load(void* dst, const char* name, int* missing)
 int main(int argc, char** argv)
 {
     int width = 800, height = 600, frames = 0;
-    knobs kn = {.d = {.shell = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4},
+    knobs kn = {.d = {.shell = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4, .slices = 16},
                       .frusta = {.relief_steps = 64, .bisection_steps = 4},
                       .cells = {.bounces = 1, .bisection_steps = 4}}};
     const char *file = NULL, *shot = NULL;
@@ -372,10 +386,28 @@ int main(int argc, char** argv)
                 if (!strcmp(t, technique_names[k]))
                     found = k;
             if (found < 0) {
-                fprintf(stderr, "mesoview error: --technique expects smooth, curved, tetra or segment, got '%s'\n", t);
+                fprintf(stderr, "mesoview error: --technique expects smooth, curved, tetra, segment or slices, got '%s'\n",
+                        t);
                 return 1;
             }
             kn.d.shell.technique = (meso_shell_technique)found;
+        } else if (!strcmp(a, "--slices") && i + 1 < argc) {
+            kn.d.shell.slices = atoi(argv[++i]);
+            if (kn.d.shell.slices < 2 || kn.d.shell.slices > 1024) {
+                fprintf(stderr, "mesoview error: --slices expects 2..1024\n");
+                return 1;
+            }
+        } else if (!strcmp(a, "--slice-interp") && i + 1 < argc) {
+            const char* m = argv[++i];
+            int found = -1;
+            for (int k = 0; k < MESO_SLICE_INTERP_COUNT; ++k)
+                if (!strcmp(m, interp_names[k]))
+                    found = k;
+            if (found < 0) {
+                fprintf(stderr, "mesoview error: --slice-interp expects texcoord, normal or none, got '%s'\n", m);
+                return 1;
+            }
+            kn.d.shell.slice_interp = (meso_slice_interp)found;
         } else if (!strcmp(a, "--error-px") && i + 1 < argc) {
             kn.d.shell.error_px = (float)atof(argv[++i]);
             if (!(kn.d.shell.error_px > 0.0f)) {
@@ -523,8 +555,12 @@ int main(int argc, char** argv)
         if (frame % 10 == 0 || kn.changed) {
             char title[256];
             snprintf(title, sizeof(title),
-                     "mesoview  %s  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
-                     technique_names[kn.d.shell.technique], kn.d.shell.error_px, kn.d.shell.max_steps,
+                     "mesoview  %s%s%s%.0d  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
+                     technique_names[kn.d.shell.technique],
+                     kn.d.shell.technique == MESO_SHELL_SLICES ? " " : "",
+                     kn.d.shell.technique == MESO_SHELL_SLICES ? interp_names[kn.d.shell.slice_interp] : "",
+                     kn.d.shell.technique == MESO_SHELL_SLICES ? kn.d.shell.slices : 0, kn.d.shell.error_px,
+                     kn.d.shell.max_steps,
                      kn.d.shell.bisection_steps, kn.d.shell.no_distance_map ? "  no-dist" : "",
                      kn.animate ? "  animated" : "", cell_mode_names[kn.d.cells.mode], kn.d.cells.bounces,
                      kn.d.cells.step > 0 ? " linear" : "", ms_avg);

@@ -118,7 +118,7 @@ MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);
 /* Object-space bounds from the file's OBJT record. */
 MESO_API meso_result meso_rt_object_bounds(const meso_rt* rt, meso_rt_object obj, float lo[3], float hi[3]);
 
-/* Shell ray-casting techniques (papers/smooth-and-curved-shell-mapping.md). */
+/* Shell techniques: ray casting (papers/smooth-and-curved-shell-mapping.md), or slices. */
 typedef enum meso_shell_technique {
     MESO_SHELL_SMOOTH = 0,  /* §3.1/§4: Φ along interpolated directors, corrected ray-path sampling */
     MESO_SHELL_CURVED,      /* §3.2/§4.5: Coons-patch curved shells, continuous across edges and only
@@ -128,8 +128,21 @@ typedef enum meso_shell_technique {
                                on a sharply bent one) */
     MESO_SHELL_TETRA,       /* the baseline: each prism as three tetrahedra, linear in each */
     MESO_SHELL_SEGMENT_ONLY, /* §4.2 only: entry/exit in texture space, no sampling (Table 1's first column) */
+    MESO_SHELL_SLICES,       /* not a ray caster: slice polygons through each prism and an alpha test at the
+                                isosurface (papers/volume-textures-lp-averaged-shells.md §5; runtime/rt_slices.c),
+                                knobs `slices` and `slice_interp` */
     MESO_SHELL_TECHNIQUE_COUNT
 } meso_shell_technique;
+
+/* How MESO_SHELL_SLICES finds the normal and depth between two slices
+ * (papers/volume-textures-lp-averaged-shells.md §5, Figures 11-12). */
+typedef enum meso_slice_interp {
+    MESO_SLICE_TEXCOORD = 0, /* the paper's two passes: texture coordinates of the last slice outside and the
+                                first inside interpolated to the α = ½ crossing; gradient looked up there */
+    MESO_SLICE_NORMAL,       /* the same two passes, the normals at the two slices interpolated instead */
+    MESO_SLICE_NONE,         /* one pass: the first slice inside, its own normal and depth */
+    MESO_SLICE_INTERP_COUNT
+} meso_slice_interp;
 
 /* How cells objects are ray traced (papers/cell-based-object-representation.md §3.2). */
 typedef enum meso_cells_mode {
@@ -164,6 +177,9 @@ typedef struct meso_rt_shell_draw {
     float uv_scale;      /* multiplies the baked texture coordinates (tiling) [1] */
     int no_distance_map; /* 1: march at fixed_step instead of sphere tracing the distance map [0] */
     float fixed_step;    /* texture-space step without a distance map [1/256] */
+    int slices;          /* MESO_SHELL_SLICES: slice polygons per prism, at levels w = m / (slices - 1),
+                            2..1024 [16] */
+    meso_slice_interp slice_interp; /* MESO_SHELL_SLICES [MESO_SLICE_TEXCOORD] */
 } meso_rt_shell_draw;
 
 /* MESO_OBJECT_FRUSTA (papers/relief-mapped-conical-frusta.md §3: the relief
@@ -220,12 +236,19 @@ typedef struct meso_rt_draw_desc {
  * wall). Cells write the exact depth of the first hit; their rays start on
  * the base mesh's front faces, and when the camera is inside the tile grid
  * also at the near plane behind its back faces, so the camera may be inside
- * the object. Meshes are rasterised with the host's face culling as it
+ * the object. Shells drawn with MESO_SHELL_SLICES write the depth of
+ * their slice hit (MESO_SLICE_NONE: the first slice inside, up to one slice
+ * spacing behind the surface along the ray; the two-pass variants: the
+ * α = ½ crossing interpolated between two slices on the pixel's ray) and
+ * draw their two-pass variants through an offscreen target the context
+ * owns, sized to the viewport (runtime/rt_slices.c); they fill no stats
+ * (supported = 0). Meshes are rasterised with the host's face culling as it
  * is. Shells, frusta and cells need the inverse of proj · view · model: a
  * singular one is refused with MESO_ERR_INVALID_ARG (logged). The GL state
  * the call changes (program, vertex array, active texture, textures on
- * units 0-4, depth test/func/mask, culling, and on OpenGL 4.3 with `stats`
- * the shader storage buffer binding) is restored before it returns, for
+ * units 0-4 (0-7 for slices), depth test/func/mask, culling, and on OpenGL 4.3
+ * with `stats` the shader storage buffer binding; for two-pass slices also
+ * the draw framebuffer binding, the viewport and blending) is restored before it returns, for
  * every kind. GL errors are logged (GL_ERROR) and returned as MESO_ERR_GL,
  * never fatal. */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);

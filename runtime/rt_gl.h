@@ -67,7 +67,15 @@
     X(PFNGLCULLFACEPROC, CullFace)                                           \
     X(PFNGLFRONTFACEPROC, FrontFace)                                         \
     X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                               \
-    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)
+    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)                           \
+    X(PFNGLVIEWPORTPROC, Viewport)                                           \
+    X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                             \
+    X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)                       \
+    X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                             \
+    X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)                   \
+    X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)               \
+    X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                                     \
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)
 
 /* Entry points used only when the context has them (the stats counters of
  * OpenGL 4.3); missing ones are left NULL and never fail creation. */

@@ -31,13 +31,42 @@ struct meso_rt {
     GLuint shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], compiled on first use */
     GLuint frusta_programs[2];                            /* [stats], compiled on first use */
     GLuint cells_programs[2];                             /* [stats], compiled on first use */
+    GLuint slice_programs[5]; /* MESO_SHELL_SLICES, per pass (shell_slices_frag.glsl SLICE_PASS) */
+    GLuint slice_fbo[2];      /* the two-pass slice variants' offscreen target (rt_slices.c) */
+    GLuint slice_tex[5];
+    GLint slice_size[2];      /* its width and height: the viewport's */
     GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
     GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
     mesoi_object* objects;
     uint32_t object_capacity;
 };
 
-/* rt_shell.c */
+/* rt_shell.c: one uploaded shell (rt_slices.c draws it too). */
+typedef struct mesoi_shell {
+    uint32_t vertex_count, triangle_count, layers;
+    float* positions; /* 3 per vertex (CPU copy for updates) */
+    float* directors; /* 3 per vertex per layer */
+    float* uvs;       /* 2 per vertex */
+    GLuint vert_buf, vert_tex, index_buf, index_tex;
+    GLuint func_tex, dist_tex;
+    int tex_kind; /* 0 none, 1 height (2D), 2 density (3D) */
+    float tex_size[3];
+    /* Stored frames (ANIM, TXFR, DSFR; FORMAT.md §7.2 "Animated texture
+     * functions"), host copies: frame k of the function at k * fn_bytes,
+     * of the distance map at k * dist_bytes. anim.frame_count 0: none. */
+    meso_anim_record anim;
+    uint8_t *fn_frames, *dist_frames;
+    meso_rt_shell_texture frame_desc; /* dims and types of one frame (data pointers unset) */
+    size_t fn_bytes, dist_bytes;
+    uint32_t shown_frame; /* the stored frame uploaded last; UINT32_MAX after meso_rt_shell_set_texture */
+} mesoi_shell;
+
+enum { SHELL_UNIT_VERTS = 0, SHELL_UNIT_INDEX, SHELL_UNIT_HEIGHT, SHELL_UNIT_VOLUME, SHELL_UNIT_DIST, SHELL_UNIT_COUNT };
+
+meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d); /* rt_slices.c */
+/* Deletes the slice programs and the offscreen target (rt_slices.c). */
+void mesoi_slices_destroy(meso_rt* rt);
+
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);

@@ -2,6 +2,7 @@
  * rt_shell.c — SHELL objects (FORMAT.md §7.2): streaming the base mesh,
  * directors and texture function of one shell into GL, and ray casting it
  * with one of three techniques (papers/smooth-and-curved-shell-mapping.md;
+ * MESO_SHELL_SLICES, the slice renderer, is runtime/rt_slices.c;
  * the shaders are runtime/shaders/shell_*.glsl, their maths is spelled out
  * in runtime/reference/shell_map.h).
  *
@@ -25,27 +26,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-
-typedef struct mesoi_shell {
-    uint32_t vertex_count, triangle_count, layers;
-    float* positions; /* 3 per vertex (CPU copy for updates) */
-    float* directors; /* 3 per vertex per layer */
-    float* uvs;       /* 2 per vertex */
-    GLuint vert_buf, vert_tex, index_buf, index_tex;
-    GLuint func_tex, dist_tex;
-    int tex_kind; /* 0 none, 1 height (2D), 2 density (3D) */
-    float tex_size[3];
-    /* Stored frames (ANIM, TXFR, DSFR; FORMAT.md §7.2 "Animated texture
-     * functions"), host copies: frame k of the function at k * fn_bytes,
-     * of the distance map at k * dist_bytes. anim.frame_count 0: none. */
-    meso_anim_record anim;
-    uint8_t *fn_frames, *dist_frames;
-    meso_rt_shell_texture frame_desc; /* dims and types of one frame (data pointers unset) */
-    size_t fn_bytes, dist_bytes;
-    uint32_t shown_frame; /* the stored frame uploaded last; UINT32_MAX after meso_rt_shell_set_texture */
-} mesoi_shell;
-
-enum { UNIT_VERTS = 0, UNIT_INDEX, UNIT_HEIGHT, UNIT_VOLUME, UNIT_DIST, UNIT_COUNT };
 
 static void shell_free(meso_rt* rt, mesoi_shell* s)
 {
@@ -435,11 +415,12 @@ static GLuint shell_program(meso_rt* rt, meso_shell_technique t, int stats)
     snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_TECHNIQUE %d\n", stats ? "430" : "330",
              stats ? "#define MESO_STATS 1\n" : "", (int)t);
     const char* vs[3] = {head, mesoi_glsl_shell_common, mesoi_glsl_shell_vert};
-    const char* fs[4] = {head, mesoi_glsl_shell_common, mesoi_glsl_raycast_common, mesoi_glsl_shell_frag};
+    const char* fs[5] = {head, mesoi_glsl_shell_common, mesoi_glsl_raycast_common, mesoi_glsl_shell_texfn,
+                         mesoi_glsl_shell_frag};
     static const char* const names[MESO_SHELL_TECHNIQUE_COUNT] = {"shell smooth", "shell curved", "shell tetra",
                                                                   "shell segment"};
     GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "shell_vert.glsl"),
-                          mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 4, "shell_frag.glsl"), names[t]);
+                          mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_frag.glsl"), names[t]);
     rt->shell_programs[stats][t] = p;
     return p;
 }
@@ -455,6 +436,7 @@ void mesoi_shell_programs_destroy(meso_rt* rt)
     if (rt->stats_buffer)
         rt->gl.DeleteBuffers(1, &rt->stats_buffer);
     memset(rt->shell_programs, 0, sizeof(rt->shell_programs));
+    mesoi_slices_destroy(rt);
     rt->empty_vao = rt->stats_buffer = 0;
 }
 
@@ -466,6 +448,8 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     const meso_rt_shell_draw* k = &d->shell;
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
+    if (k->technique == MESO_SHELL_SLICES)
+        return mesoi_slices_draw(rt, o, d);
     if ((unsigned)k->technique >= MESO_SHELL_TECHNIQUE_COUNT) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: technique %d",
                   (int)k->technique);
@@ -486,13 +470,13 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         error_px * 2.0 / (ds.proj11 * (ds.viewport[3] > 0 ? ds.viewport[3] : 1)) / (scale > 0 ? scale : 1);
     float max_tex = fmaxf(s->tex_size[0], fmaxf(s->tex_size[1], s->tex_size[2]));
 
-    static const GLenum unit_target[UNIT_COUNT] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
+    static const GLenum unit_target[SHELL_UNIT_COUNT] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
                                                    GL_TEXTURE_3D, GL_TEXTURE_3D};
-    const GLuint bind[UNIT_COUNT] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
+    const GLuint bind[SHELL_UNIT_COUNT] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
                                      s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex};
-    mesoi_draw_begin(rt, &ds, prog, UNIT_COUNT, unit_target, bind);
-    static const char* const samplers[UNIT_COUNT] = {"u_verts", "u_index", "u_height", "u_volume", "u_dist"};
-    for (int u = 0; u < UNIT_COUNT; ++u)
+    mesoi_draw_begin(rt, &ds, prog, SHELL_UNIT_COUNT, unit_target, bind);
+    static const char* const samplers[SHELL_UNIT_COUNT] = {"u_verts", "u_index", "u_height", "u_volume", "u_dist"};
+    for (int u = 0; u < SHELL_UNIT_COUNT; ++u)
         gl->Uniform1i(gl->GetUniformLocation(prog, samplers[u]), u);
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_uv_scale"), k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(gl->GetUniformLocation(prog, "u_tex_kind"), s->tex_kind);

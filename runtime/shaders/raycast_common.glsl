@@ -29,11 +29,17 @@ void fragment_ray(out vec3 ro, out vec3 rd)
     rd = normalize(b.xyz / b.w - ro);
 }
 
-void write_depth(vec3 p)
+// Window depth of object-space point p.
+float window_depth(vec3 p)
 {
     vec4 clip = u_mvp * vec4(p, 1.0);
     float ndc_z = clip.z / clip.w;
-    gl_FragDepth = 0.5 * (gl_DepthRange.diff * ndc_z + gl_DepthRange.near + gl_DepthRange.far);
+    return 0.5 * (gl_DepthRange.diff * ndc_z + gl_DepthRange.near + gl_DepthRange.far);
+}
+
+void write_depth(vec3 p)
+{
+    gl_FragDepth = window_depth(p);
 }
 
 // Counts the fragment and discards it on a miss.

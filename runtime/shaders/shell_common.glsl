@@ -1,6 +1,7 @@
 // shell_common.glsl - shared by the shell vertex and fragment shaders.
 // The runtime prepends "#version", "#define MESO_TECHNIQUE n" (0 smooth,
-// 1 curved, 2 tetra, 3 segment only) and, on OpenGL 4.3+, MESO_STATS.
+// 1 curved, 2 tetra, 3 segment only, 4 slices: shell_slices_*.glsl) and, on
+// OpenGL 4.3+, MESO_STATS.
 // Every function mirrors runtime/reference/shell_map.c (double precision)
 // operation by operation; see runtime/reference/shell_map.h for the maths
 // and FORMAT.md sec. 7.2 for texture space.
@@ -94,6 +95,13 @@ Prism hull_prism(Prism P, vec2 r)
         P.n[k] = (r.y - r.x) * P.n[k];
     }
     return P;
+}
+
+// The smooth mapping Phi(u, v, w) (shell_map.h: meso_phi).
+vec3 phi(Prism P, vec3 q)
+{
+    float t = 1.0 - q.x - q.y;
+    return t * P.b[0] + q.x * P.b[1] + q.y * P.b[2] + q.z * (t * P.n[0] + q.x * P.n[1] + q.y * P.n[2]);
 }
 
 vec3 corner_pos(Prism P, int c) // c: 0..2 bottom, 3..5 top

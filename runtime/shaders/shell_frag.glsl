@@ -25,58 +25,15 @@ flat in int v_prism;
 flat in int v_tet;
 out vec4 o_color;
 
-uniform int u_tex_kind; // 0 none (all solid), 1 height field, 2 density volume
-uniform sampler2D u_height;
-uniform sampler3D u_volume;
+// The texture function, tex_st and shade: shell_texfn.glsl.
 uniform sampler3D u_dist;
 uniform int u_has_dist;
-uniform vec3 u_tex_size;   // texels of the texture function (1 on unused axes)
-uniform vec3 u_light_obj;  // towards the light, object space, unit
-uniform vec3 u_albedo;
 uniform float u_err_scale; // error_px * object units per pixel per unit w_clip
 uniform int u_max_steps;
 uniform int u_bisect_steps;
 uniform int u_segment_steps;
 uniform float u_fixed_step;
 uniform float u_min_step;
-
-// --- texture function (FORMAT.md sec. 7.2) -------------------------------------
-
-bool solid(vec3 stw)
-{
-    if (u_tex_kind == 1)
-        return stw.z <= textureLod(u_height, stw.xy, 0.0).r;
-    if (u_tex_kind == 2)
-        return textureLod(u_volume, stw, 0.0).r >= 0.5;
-    return true;
-}
-
-float tex_value(vec3 stw)
-{
-    if (u_tex_kind == 1)
-        return textureLod(u_height, stw.xy, 0.0).r;
-    return textureLod(u_volume, stw, 0.0).r;
-}
-
-// Outward direction of the solid in texture space (shell_map.h:
-// meso_ref_texfn_gradient): central differences one texel apart.
-vec3 tex_gradient(vec3 stw)
-{
-    vec3 d = 1.0 / u_tex_size;
-    if (u_tex_kind == 1) {
-        float hs = (tex_value(stw + vec3(d.x, 0, 0)) - tex_value(stw - vec3(d.x, 0, 0))) / (2.0 * d.x);
-        float ht = (tex_value(stw + vec3(0, d.y, 0)) - tex_value(stw - vec3(0, d.y, 0))) / (2.0 * d.y);
-        return vec3(-hs, -ht, 1.0);
-    }
-    if (u_tex_kind == 2) {
-        vec3 g;
-        g.x = (tex_value(stw + vec3(d.x, 0, 0)) - tex_value(stw - vec3(d.x, 0, 0))) / (2.0 * d.x);
-        g.y = (tex_value(stw + vec3(0, d.y, 0)) - tex_value(stw - vec3(0, d.y, 0))) / (2.0 * d.y);
-        g.z = (tex_value(stw + vec3(0, 0, d.z)) - tex_value(stw - vec3(0, 0, d.z))) / (2.0 * d.z);
-        return -g;
-    }
-    return vec3(0.0, 0.0, 1.0);
-}
 
 // Sphere-tracing radius at a texture point (a lower bound on the distance
 // to the solid), or the fixed step without a distance map. All solid lies
@@ -127,12 +84,6 @@ void set_view_floor(vec3 a, vec3 b, float tex_len)
 }
 
 // --- the mappings (shell_map.h) --------------------------------------------
-
-vec3 phi(Prism P, vec3 q)
-{
-    float t = 1.0 - q.x - q.y;
-    return t * P.b[0] + q.x * P.b[1] + q.y * P.b[2] + q.z * (t * P.n[0] + q.x * P.n[1] + q.y * P.n[2]);
-}
 
 // Barycentrics (u, v) of p projected onto the plane of triangle a0 a1 a2.
 vec2 barycentric(vec3 a0, vec3 a1, vec3 a2, vec3 p)
@@ -238,19 +189,6 @@ vec3 phi_curved(Prism P, vec3 q)
 
 // --- shading ---------------------------------------------------------------
 
-vec2 tex_st(Prism P, vec2 uv)
-{
-    return P.uv[0] + uv.x * (P.uv[1] - P.uv[0]) + uv.y * (P.uv[2] - P.uv[0]);
-}
-
-vec3 shade(vec3 n, float w, vec3 rd)
-{
-    n = normalize(n);
-    if (dot(n, rd) > 0.0)
-        n = -n;
-    return u_albedo * (0.25 + 0.75 * clamp(w, 0.0, 1.0)) * (0.15 + 0.85 * max(0.0, dot(n, u_light_obj)));
-}
-
 // n = J^-T g with J = dmap/d(s,t',w) by central differences in (u,v,w).
 vec3 mapped_normal(Prism P, vec3 q, vec3 g, bool curved)
 {
@@ -265,13 +203,7 @@ vec3 mapped_normal(Prism P, vec3 q, vec3 g, bool curved)
         jv = (phi(P, q + vec3(0, h, 0)) - phi(P, q - vec3(0, h, 0))) / (2.0 * h);
         jw = (phi(P, q + vec3(0, 0, h)) - phi(P, q - vec3(0, 0, h))) / (2.0 * h);
     }
-    // (s,t') = A (u,v) + c  =>  [d/ds d/dt'] = [d/du d/dv] A^-1.
-    vec2 e1 = P.uv[1] - P.uv[0], e2 = P.uv[2] - P.uv[0];
-    float det = e1.x * e2.y - e2.x * e1.y;
-    vec3 js = (ju * e2.y - jv * e1.y) / det;
-    vec3 jt = (-ju * e2.x + jv * e1.x) / det;
-    mat3 J = mat3(js, jt, jw);
-    return transpose(inverse(J)) * g;
+    return jacobian_normal(P, ju, jv, jw, g);
 }
 
 // --- rays (fragment_ray, write_depth, finish: raycast_common.glsl) --------

@@ -56,6 +56,16 @@ if [ "${MESO_BENCH_SKIP_RENDER:-0}" != 1 ]; then
     echo "render results in $results"
 fi
 
+# Slice-based shell rendering (issue #19): Figure 12 recreated. Results:
+# slices.csv, slices_angle.csv, slices_fig12.png, slices_error_time.png.
+# Skip with MESO_BENCH_SKIP_SLICES=1.
+if [ "${MESO_BENCH_SKIP_SLICES:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_slices
+    echo "== bench_slices"
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_slices" "$results"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_slices.gp"
+fi
+
 # Frusta (issue #7): set_pose per 1000 frusta and draw times (bench_frusta),
 # frusta against polygon tessellations at equal error, relief steps, and
 # segments against fit error on $fit_mesh (bench_frusta_render). ~1 min. Results: bench_frusta.csv,

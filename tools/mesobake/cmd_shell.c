@@ -55,6 +55,8 @@ static const char* const usage_shell =
     "                          cells[:RES]            built-in 3D Voronoi cell walls (RES^3, default 64)\n"
     "                          boil[:RES]             built-in boiling liquid, bubbles rising and\n"
     "                                                 bursting (RES^3, default 64); loops every 2 s\n"
+    "                          icospheres[:RES]       Figure 12's sphere with 12 spheres at icosahedron\n"
+    "                                                 vertices, one per tile (RES^3, default 64)\n"
     "      --tiling U[,V]      tiles along the texture coordinates (default 1,1). The mesh's own\n"
     "                          uvs are multiplied by it; a mesh without uvs is projected onto the\n"
     "                          plane of its two largest bounding-box extents, the longest spanning\n"

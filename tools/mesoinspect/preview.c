@@ -63,14 +63,17 @@ static const char* const usage_preview =
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
-    "      --technique T   shell technique: smooth (default), curved or tetra\n"
+    "      --technique T   shell technique: smooth (default), curved, tetra or slices\n"
+    "                      (slice-based rendering, the Lp-averaged shells paper's section 5)\n"
+    "      --slices N      slices: slice polygons per prism (2..1024, default 16)\n"
+    "      --slice-interp I  slices: texcoord (default: the paper's two passes), normal or none\n"
     "      --time T        shells with stored frames (mesobake --frames): draw the frame\n"
     "                      shown at T seconds (meso_rt_shell_set_time, or the reference's\n"
     "                      meso_ref_shell_set_time; default: frame 0)\n"
     "      --reference     render the shell, frusta and cells objects with the exact CPU\n"
     "                      reference (runtime/reference; no EGL needed, slow).\n"
     "                      --technique curved selects the curved shell mapping,\n"
-    "                      smooth and tetra the smooth one; mesh objects are skipped\n"
+    "                      smooth, tetra and slices the smooth one; mesh objects are skipped\n"
     "      --samples N     reference: samples per prism along each ray (default 1024)\n"
     "      --cells MODE    cells objects: first (first hit, default), reflect or refract\n"
     "      --bounces N     cells: reflected rays traced after the first hit, or refraction\n"
@@ -82,6 +85,8 @@ static const char* const usage_preview =
 /* The options that change the drawing. */
 typedef struct preview_knobs {
     meso_shell_technique technique;
+    int slices;
+    meso_slice_interp slice_interp;
     meso_cells_mode cell_mode;
     int cell_bounces;
     float cell_step;
@@ -413,6 +418,8 @@ static int render(const char* path, const char* out, int width, int height, uint
     meso_rt_draw_desc d = {0};
     preview_camera(lo, hi, width, height, yaw, pitch, knobs->zoom, &d);
     d.shell.technique = knobs->technique;
+    d.shell.slices = knobs->slices;
+    d.shell.slice_interp = knobs->slice_interp;
     d.cells.mode = knobs->cell_mode;
     d.cells.bounces = knobs->cell_bounces;
     d.cells.step = knobs->cell_step;
@@ -554,9 +561,32 @@ int mesoinspect_preview(int argc, char** argv)
                 technique = MESO_SHELL_CURVED;
             else if (!strcmp(t, "tetra"))
                 technique = MESO_SHELL_TETRA;
+            else if (!strcmp(t, "slices"))
+                technique = MESO_SHELL_SLICES;
             else {
-                fprintf(stderr, "mesoinspect error: --technique expects smooth, curved or tetra, got '%s'\n"
+                fprintf(stderr, "mesoinspect error: --technique expects smooth, curved, tetra or slices, got '%s'\n"
                                 "See 'mesoinspect --help'.\n", t);
+                return MESO_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--slices") && val) {
+            const long n = strtol(argv[++i], &end, 10);
+            if (!end || *end || n < 2 || n > 1024) {
+                fprintf(stderr, "mesoinspect error: --slices expects 2..1024, got '%s'\nSee 'mesoinspect --help'.\n",
+                        argv[i]);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.slices = (int)n;
+        } else if (!strcmp(a, "--slice-interp") && val) {
+            const char* m = argv[++i];
+            if (!strcmp(m, "texcoord"))
+                knobs.slice_interp = MESO_SLICE_TEXCOORD;
+            else if (!strcmp(m, "normal"))
+                knobs.slice_interp = MESO_SLICE_NORMAL;
+            else if (!strcmp(m, "none"))
+                knobs.slice_interp = MESO_SLICE_NONE;
+            else {
+                fprintf(stderr, "mesoinspect error: --slice-interp expects texcoord, normal or none, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", m);
                 return MESO_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--reference")) {
@@ -617,7 +647,8 @@ int mesoinspect_preview(int argc, char** argv)
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
-                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time"))
+                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
+                     !strcmp(a, "--slices") || !strcmp(a, "--slice-interp"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
