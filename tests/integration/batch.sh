@@ -18,7 +18,8 @@ bake=$1 inspect=$2 data=$3 writepng=$4
 abs() { case $1 in /*) echo "$1" ;; *) echo "$PWD/$1" ;; esac; }
 bake=$(abs "$bake") inspect=$(abs "$inspect") data=$(abs "$data") writepng=$(abs "$writepng")
 tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+short=$(mktemp -d /tmp/mbXXXXXX) # a short base for the $TMPDIR lengths below
+trap 'rm -rf "$tmp" "$short"' EXIT
 fail=0
 ok() { echo "ok   $1"; }
 bad() { echo "FAIL $*"; fail=1; }
@@ -427,9 +428,9 @@ eq "--no-cache: no temporary files left" "$(tmpfiles "$nc")" ""
 # log paths short: every job failed), and are removed.
 grep '^frusta_swc ' "$tmp/jobs.txt" >"$tmp/td_jobs.txt"
 for len in 24 28 40 300; do
-  td=$tmp/t
+  td=$short/t
   while [ ${#td} -lt $len ]; do [ $((${#td} % 60)) = 0 ] && td=$td/ || td=${td}d; done
-  [ ${#td} = $len ] || continue # $tmp itself longer
+  [ ${#td} = $len ] || { bad "TMPDIR of $len bytes: cannot make one from $short"; continue; }
   rm -rf "$nc/out" && mkdir -p "$td" && write_manifest "$tmp/td_jobs.txt" "$nc/m.json"
   TMPDIR=$td "$bake" batch "$nc/m.json" --no-cache >/dev/null 2>"$tmp/td.err"
   eq "TMPDIR of $len bytes: exit 0" "$?" 0
@@ -437,5 +438,60 @@ for len in 24 28 40 300; do
   eq "TMPDIR of $len bytes: the logs removed" "$(ls -A "$td")" ""
   rm -rf "$td"
 done
+
+# Option values are hashed as values, whatever they look like: --name -v,
+# --name --verbose and --name --max-memory are three different bakes.
+kv=$tmp/kv && mkdir -p "$kv" && cp "$orig/sphere.obj" "$kv/"
+cat >"$kv/m.json" <<'JSON'
+{"jobs": [
+  {"name": "v", "command": "mesh", "input": "sphere.obj", "output": "v.meso", "args": ["--name", "-v"]},
+  {"name": "verbose", "command": "mesh", "input": "sphere.obj", "output": "verbose.meso", "args": ["--name", "--verbose"]},
+  {"name": "mm", "command": "mesh", "input": "sphere.obj", "output": "mm.meso", "args": ["--name", "--max-memory", "--draco"]}]}
+JSON
+"$bake" batch "$kv/m.json" --cache "$kv/cache" --report "$kv/r.json" >/dev/null 2>&1
+eq "option values: three different bakes" "$(counts "$kv/r.json")" "3 baked 0 cached 0 failed"
+(cd "$kv" && "$bake" mesh -i sphere.obj -o want_v.meso --name -v && "$bake" mesh -i sphere.obj -o want_mm.meso \
+  --name --max-memory --draco) >/dev/null 2>&1
+same "option values: --name -v" "$kv/want_v.meso" "$kv/v.meso"
+same "option values: --name --max-memory --draco" "$kv/want_mm.meso" "$kv/mm.meso"
+
+# A job whose bake cannot even start (its output's directory is a file)
+# fails alone: the jobs after it still run, also when it took the only slot.
+sf=$tmp/sf && mkdir -p "$sf" && cp "$orig/sphere.obj" "$sf/" && : >"$sf/afile"
+cat >"$sf/m.json" <<'JSON'
+{"jobs": [
+  {"name": "nostart", "command": "mesh", "input": "sphere.obj", "output": "afile/x.meso"},
+  {"name": "good1", "command": "mesh", "input": "sphere.obj", "output": "g1.meso"},
+  {"name": "good2", "command": "mesh", "input": "sphere.obj", "output": "g2.meso", "args": ["--draco"]}]}
+JSON
+"$bake" batch "$sf/m.json" --no-cache -j 1 --report "$sf/r.json" >/dev/null 2>&1
+eq "a job that cannot start: exit 6" "$?" 6
+eq "a job that cannot start: the others run" "$(counts "$sf/r.json")" "2 baked 0 cached 1 failed"
+eq "a job that cannot start: its exit code" "$(field "$sf/r.json" nostart exit_code)" 2
+
+# An input saved while its bake runs: job 1 is keyed at the start, job 0 (a
+# slow bake) runs first (-j 1), the test replaces p.obj as soon as job 0 has
+# started; job 1 then bakes the new bytes, which must not be kept under the
+# old bytes' key. Restoring p.obj must then bake again, not serve them.
+mc=$tmp/mc && mkdir -p "$mc/tmp" && cp "$orig/spot_uv.obj" "$mc/" && cp "$orig/sphere.obj" "$mc/p.obj"
+cat >"$mc/m.json" <<'JSON'
+{"jobs": [
+  {"name": "slow", "command": "shell", "input": "spot_uv.obj", "output": "slow.meso", "args": ["--texture", "bricks:256", "--tiling", "4", "--dist-res", "64x64x16"]},
+  {"name": "p", "command": "mesh", "input": "p.obj", "output": "p.meso"}]}
+JSON
+TMPDIR=$mc/tmp "$bake" batch "$mc/m.json" --cache "$mc/cache" -j 1 --report "$mc/r1.json" >/dev/null 2>"$mc/err1" &
+bpid=$!
+i=0
+while [ -z "$(find "$mc/tmp" -name 0.log 2>/dev/null)" ] && [ $i -lt 600 ]; do sleep 0.05; i=$((i + 1)); done
+cp "$orig/torus.obj" "$mc/p.obj"
+wait $bpid
+eq "input changed mid-batch: exit 6" "$?" 6
+eq "input changed mid-batch: job p failed" "$(field "$mc/r1.json" p status)" failed
+has "input changed mid-batch: says why" "$mc/err1" "changed while it was baked"
+cp "$orig/sphere.obj" "$mc/p.obj"
+"$bake" batch "$mc/m.json" --cache "$mc/cache" -j 1 --report "$mc/r2.json" >/dev/null 2>&1
+eq "input restored: p baked again, not served from the cache" "$(field "$mc/r2.json" p status)" baked
+(cd "$mc" && "$bake" mesh -i p.obj -o want.meso) >/dev/null 2>&1
+same "input restored: p's bytes" "$mc/want.meso" "$mc/p.meso"
 
 exit $fail

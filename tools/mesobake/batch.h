@@ -88,6 +88,10 @@ typedef struct batch_manifest {
  * ("jobs[3].args[1]") and the issue code above; nothing is allocated. */
 meso_result batch_manifest_load(const char* path, batch_manifest* m, meso_error* err);
 void batch_manifest_free(batch_manifest* m);
+/* first_of[i] = the smallest index whose string equals names[i] (i itself
+ * for the first of each); sorted, so O(n log n) for manifests of many
+ * thousands of jobs. 0 when out of memory. */
+int batch_group_equal(const char* const* names, size_t n, size_t* first_of);
 /* Does `command` take --threads? (shell and cells do) */
 int batch_command_threaded(const char* command);
 
@@ -125,6 +129,15 @@ int batch_cache_has(const batch_cache* c, const char* key);
  * Also reads the entry's report into job->report_json. */
 meso_result batch_cache_copy_out(const batch_cache* c, batch_job* job, meso_error* err);
 
+/* A scratch path beside `key`'s entry, unique in this process (malloc'd). */
+char* batch_cache_scratch(const batch_cache* c, const char* key, const char* ext);
+/* After a successful bake into the scratch files: compute the job's key
+ * again and, only if the inputs still give the same key, rename the scratch
+ * report and file into the entry. Otherwise (an input changed while it was
+ * baked) MESO_ERR_IO, and nothing is kept. The scratch files are gone
+ * either way. */
+meso_result batch_cache_publish(const batch_cache* c, const batch_manifest* m, batch_job* job,
+                                const char* scratch_meso, const char* scratch_json, meso_error* err);
 /* Create the directories above `path` (mkdir -p of its dirname). */
 meso_result batch_mkdir_parents(const char* path, meso_error* err);
 /* Read a whole file (NUL-terminated); NULL on failure. */
@@ -167,9 +180,11 @@ meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch
 meso_result batch_run_slurm(batch_manifest* m, const batch_cache* c, const batch_options* o, batch_progress* p,
                             meso_error* err);
 /* One job of a Slurm array (--run-job I): bake job `index` into the cache
- * unless it is there. Prints "mesobake batch: job I exit N". Returns the
- * exit code. */
-int batch_run_one(batch_manifest* m, const batch_cache* c, size_t index, int threads);
+ * unless it is there. With `expect_key` (--expect-key, the submitter's key
+ * of the job) a different key here is refused, exit 3: a node whose build
+ * or inputs differ must not publish under the submitter's name. Prints
+ * "mesobake batch: job I exit N seconds S". Returns the exit code. */
+int batch_run_one(batch_manifest* m, const batch_cache* c, size_t index, int threads, const char* expect_key);
 /* Is a failed bake's exit code worth another attempt? (Not when the input
  * or the command line is wrong: 1, 3, 5; those fail the same way again.) */
 int batch_retryable(int exit_code);

@@ -3,11 +3,16 @@
  *   DIR/v1/ab/ab12…ef.meso   the baked file of key ab12…ef
  *   DIR/v1/ab/ab12…ef.json   its bake report (--report), when there is one
  *
- * Entries are written only by `mesobake <command> -o ENTRY --report ENTRY.json`,
- * whose outputs are atomic (a temporary file beside the entry, renamed into
- * place: FORMAT.md §10). So concurrent writers of one key — two batches, two
- * machines on a shared file system — each rename a complete file over the
- * other's identical one, and a reader sees a whole entry or none. A lookup
+ * A bake writes `mesobake <command> -o SCRATCH --report SCRATCH.json` (both
+ * atomic: FORMAT.md §10) into a scratch name beside the entry; when it has
+ * succeeded the key is computed again from the inputs as they are now, and
+ * only if it is unchanged are the scratch files renamed into the entry
+ * (report first, so a .meso is only ever seen whole). An input saved by an
+ * artist while its bake ran therefore never lands under the old input's key.
+ * Concurrent writers of one key — two batches, two machines on a shared
+ * file system — each rename a complete file over the other's, which holds
+ * the same bytes: the key names the inputs' bytes, the options and the
+ * build (batch_key.c), and a bake is deterministic (rule 7). A lookup
  * still checks the entry in full (every CRC, every structure): a file damaged
  * on disk is a miss and is baked again rather than copied into a build.
  */
@@ -182,13 +187,22 @@ void batch_last_line(const char* path, char* line, size_t size)
     char* text = batch_read_file(path, NULL);
     if (!text)
         return;
-    char* end = text + strlen(text);
-    while (end > text && (end[-1] == '\n' || end[-1] == '\r' || end[-1] == ' '))
-        *--end = 0;
-    char* start = end;
-    while (start > text && start[-1] != '\n')
-        --start;
-    snprintf(line, size, "%s", start);
+    /* The bake's own "mesobake error ..." line when there is one (a usage
+     * error ends with the hint "See 'mesobake --help'."), else the last. */
+    const char *last = NULL, *error = NULL;
+    for (char* l = text; l && *l;) {
+        char* nl = strchr(l, '\n');
+        if (nl)
+            *nl = 0;
+        for (size_t n = strlen(l); n > 0 && (l[n - 1] == '\r' || l[n - 1] == ' '); --n)
+            l[n - 1] = 0;
+        if (*l)
+            last = l;
+        if (!strncmp(l, "mesobake error", 14))
+            error = l;
+        l = nl ? nl + 1 : NULL;
+    }
+    snprintf(line, size, "%s", error ? error : last ? last : "");
     free(text);
 }
 
@@ -227,5 +241,40 @@ meso_result batch_cache_copy_out(const batch_cache* c, batch_job* job, meso_erro
     free(data);
     free(from);
     free(from_report);
+    return r;
+}
+
+char* batch_cache_scratch(const batch_cache* c, const char* key, const char* ext)
+{
+    static unsigned seq;
+    char tail[64];
+    snprintf(tail, sizeof tail, ".pending-%ld-%u%s", (long)getpid(), seq++, ext);
+    return batch_cache_entry(c, key, tail, 1);
+}
+
+meso_result batch_cache_publish(const batch_cache* c, const batch_manifest* m, batch_job* job,
+                                const char* scratch_meso, const char* scratch_json, meso_error* err)
+{
+    char before[sizeof job->key];
+    memcpy(before, job->key, sizeof before);
+    meso_result r = batch_job_key(m, job, err);
+    const int same = r == MESO_OK && !strcmp(before, job->key);
+    memcpy(job->key, before, sizeof before);
+    char* entry = batch_cache_entry(c, job->key, ".meso", 1);
+    char* entry_json = batch_cache_entry(c, job->key, ".json", 1);
+    if (r == MESO_OK && !same)
+        r = meso_bake_fail(err, MESO_ERR_IO, 0,
+                           "an input of %s changed while it was baked: its bytes were not kept; bake again", job->name);
+    else if (r == MESO_OK && (!entry || !entry_json))
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    /* The report first: an entry's .meso appears only when it is whole. */
+    if (r == MESO_OK && access(scratch_json, F_OK) == 0 && rename(scratch_json, entry_json) != 0)
+        r = meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot publish: %s", entry_json, strerror(errno));
+    if (r == MESO_OK && rename(scratch_meso, entry) != 0)
+        r = meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot publish: %s", entry, strerror(errno));
+    unlink(scratch_meso);
+    unlink(scratch_json);
+    free(entry);
+    free(entry_json);
     return r;
 }

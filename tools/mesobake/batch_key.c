@@ -3,6 +3,7 @@
  *
  *   meso-batch-key 1
  *   mesobake 0.1.0 format 1.0 cache 1 arch x86_64
+ *   build 64:9c1e...               (build_fingerprint: the binaries that bake)
  *   command shell
  *   input 7:bunny.obj
  *   arg 15:--thickness-rel
@@ -124,6 +125,81 @@ static int put_arg_files(struct sha256_ctx* h, int dirfd, const char* arg)
     return ok;
 }
 
+/* The options of each command that take no value (cmd_<command>.c). Every
+ * other word starting with '-' takes the next word as its value, which is
+ * hashed as it is even when it looks like -v or --max-memory. A flag
+ * missing here only makes the key stricter (its next word is kept), never
+ * looser. */
+static int is_flag(const char* command, const char* s)
+{
+    static const char* const common[] = {"-v", "--verbose", "-h", "--help"};
+    static const char* const mesh[] = {"--draco"};
+    static const char* const shell[] = {"--repair", "--no-repair"};
+    static const char* const frusta[] = {"--no-fit", "--keep-cap-intersections"};
+    for (size_t k = 0; k < sizeof common / sizeof common[0]; ++k)
+        if (!strcmp(s, common[k]))
+            return 1;
+    const char* const* list = !strcmp(command, "mesh")     ? mesh
+                              : !strcmp(command, "shell")  ? shell
+                              : !strcmp(command, "frusta") ? frusta
+                                                           : NULL;
+    const size_t n = list == mesh ? 1 : list ? 2 : 0;
+    for (size_t k = 0; k < n; ++k)
+        if (!strcmp(s, list[k]))
+            return 1;
+    return 0;
+}
+
+static int by_digest(const void* a, const void* b)
+{
+    return memcmp(a, b, 65);
+}
+
+/* The build: SHA-256 over the contents of every file this process has
+ * mapped executable (mesobake, libmeso_bake, the adapters' libraries:
+ * OpenVDB, Draco, OpenMesh, libpng, the C and C++ runtimes), sorted so the
+ * address layout does not matter. Any rebuild or library update that could
+ * change a bake's bytes changes the key; the same binaries on another
+ * machine (a farm deploying one build) give the same key. Computed once. */
+static const char* build_fingerprint(void)
+{
+    static char out[65];
+    if (out[0])
+        return out;
+    snprintf(out, sizeof out, "unknown");
+    FILE* maps = fopen("/proc/self/maps", "r");
+    if (!maps)
+        return out;
+    char (*digests)[65] = NULL, line[4608], last[4096] = "";
+    size_t n = 0;
+    while (fgets(line, sizeof line, maps)) {
+        char perms[8] = "", *path = strchr(line, '/');
+        if (sscanf(line, "%*s %7s", perms) != 1 || perms[2] != 'x' || !path)
+            continue;
+        path[strcspn(path, "\n")] = 0;
+        if (!strcmp(path, last) || strlen(path) >= sizeof last)
+            continue;
+        snprintf(last, sizeof last, "%s", path);
+        char(*grown)[65] = realloc(digests, (n + 1) * sizeof *digests);
+        if (!grown)
+            break;
+        digests = grown;
+        if (hash_file(AT_FDCWD, path, digests[n]))
+            ++n;
+    }
+    fclose(maps);
+    qsort(digests, n, sizeof *digests, by_digest);
+    struct sha256_ctx h;
+    sha256_init(&h);
+    for (size_t i = 0; i < n; ++i)
+        sha256_update(&h, 64, (const uint8_t*)digests[i]);
+    free(digests);
+    uint8_t d[SHA256_DIGEST_SIZE];
+    sha256_digest(&h, sizeof d, d);
+    hex(d, sizeof d, out);
+    return out;
+}
+
 meso_result batch_job_key(const batch_manifest* m, batch_job* job, meso_error* err)
 {
     job->key[0] = 0;
@@ -136,17 +212,21 @@ meso_result batch_job_key(const batch_manifest* m, batch_job* job, meso_error* e
     int n = snprintf(line, sizeof line, "meso-batch-key 1\nmesobake %s format %d.%d cache %d arch %s\n",
                      MESO_VERSION_STRING, MESO_FORMAT_MAJOR, MESO_FORMAT_MINOR, MESO_BATCH_CACHE_VERSION, BATCH_ARCH);
     sha256_update(&h, (size_t)n, (const uint8_t*)line);
+    put_str(&h, "build", build_fingerprint());
     put_str(&h, "command", job->command);
     put_str(&h, "input", job->input);
     for (size_t a = 0; a < job->arg_count; ++a) {
         const char* s = job->args[a];
+        const int flag = is_flag(job->command, s);
         if (!strcmp(s, "-v") || !strcmp(s, "--verbose"))
             continue; /* what is printed, not what is baked */
-        if (!strcmp(s, "--max-memory")) {
+        if (!strcmp(s, "--max-memory") && a + 1 < job->arg_count) {
             ++a; /* a limit refuses a bake or not; it never changes its bytes */
             continue;
         }
         put_str(&h, "arg", s);
+        if (!flag && s[0] == '-' && a + 1 < job->arg_count)
+            put_str(&h, "arg", job->args[++a]); /* its value, whatever it looks like */
     }
     int ok = put_file(&h, dirfd, job->input);
     for (size_t a = 0; a < job->arg_count && ok; ++a)

@@ -5,10 +5,12 @@
  * Processes, not threads: a bake that crashes or runs out of memory takes
  * only its own job down, every job gets the same command line a person (or
  * a Slurm task) would run, and the baker library needs no re-entrancy
- * beyond what one bake uses. Threads per bake: the cores divided among the
- * bakes that can still run at once, so -j 2 on two cores runs two
- * one-thread bakes and the last bake of a batch gets both cores. The
- * outputs do not depend on it (rule 7). Jobs start in manifest order.
+ * beyond what one bake uses. Threads per bake, fixed when it starts: the
+ * cores divided among the bakes that can still run at once, so -j 2 on two
+ * cores runs two one-thread bakes, and a bake that starts alone gets both.
+ * The outputs do not depend on it (rule 7). Jobs start in manifest order.
+ * A job without a key (an input that cannot be read) bakes straight to its
+ * output, uncached, so that the bake's own error says what is missing.
  */
 #include "batch.h"
 
@@ -130,7 +132,8 @@ typedef struct slot {
     size_t job;
     double t0;
     char log[BATCH_TMP_MAX + 32];
-    char report[BATCH_TMP_MAX + 32]; /* the --report path when not in the cache */
+    char report[BATCH_TMP_MAX + 32]; /* the --report path (scratch, when in the cache) */
+    char scratch[4096];               /* the scratch .meso in the cache; "" when not cached */
 } slot;
 
 static void start_job(batch_manifest* m, const batch_cache* c, size_t i, int threads, slot* s, const char* tmp,
@@ -141,11 +144,14 @@ static void start_job(batch_manifest* m, const batch_cache* c, size_t i, int thr
     char *dest = NULL, *report = NULL;
     meso_error e = {0};
     s->job = i;
+    s->scratch[0] = 0;
     snprintf(s->log, sizeof s->log, "%s/%zu.log", tmp, i);
     snprintf(s->report, sizeof s->report, "%s/%zu.json", tmp, i);
     if (cached) {
-        dest = batch_cache_entry(c, job->key, ".meso", 1);
-        report = batch_cache_entry(c, job->key, ".json", 1);
+        dest = batch_cache_scratch(c, job->key, ".meso");
+        report = dest ? batch_cache_scratch(c, job->key, ".json") : NULL;
+        snprintf(s->scratch, sizeof s->scratch, "%s", dest ? dest : "");
+        snprintf(s->report, sizeof s->report, "%s", report ? report : "");
     } else if (batch_mkdir_parents(job->output_path, &e) == MESO_OK) {
         dest = strdup(job->output_path);
         report = strdup(s->report);
@@ -156,6 +162,7 @@ static void start_job(batch_manifest* m, const batch_cache* c, size_t i, int thr
     s->pid = dest && report ? batch_spawn(m, job, dest, report, threads, s->log) : -1;
     if (s->pid < 0) {
         job->status = BATCH_FAILED;
+        job->exit_code = MESO_EXIT_IO;
         snprintf(job->error, sizeof job->error, "cannot start the bake: %s",
                  e.message[0] ? e.message : strerror(errno));
         batch_progress_job(p, job);
@@ -181,13 +188,15 @@ static void finish_job(batch_manifest* m, const batch_cache* c, slot* s, int sta
         if (!job->error[0] || job->exit_code > 128)
             snprintf(job->error, sizeof job->error, "the bake %s %d", job->exit_code > 128 ? "died of signal" : "exited",
                      job->exit_code > 128 ? job->exit_code - 128 : job->exit_code);
-    } else if (c->dir && job->key[0]) {
-        if (!batch_cache_has(c, job->key))
-            snprintf(job->error, sizeof job->error, "the bake exited 0 but left no valid cache entry %s", job->key);
-        else if (batch_cache_copy_out(c, job, &e) != MESO_OK)
-            snprintf(job->error, sizeof job->error, "%s", e.message);
-        else
+    } else if (s->scratch[0]) {
+        if (batch_cache_publish(c, m, job, s->scratch, s->report, &e) != MESO_OK ||
+            !batch_cache_has(c, job->key) || batch_cache_copy_out(c, job, &e) != MESO_OK) {
+            snprintf(job->error, sizeof job->error, "%s",
+                     e.message[0] ? e.message : "the bake exited 0 but left no valid cache entry");
+            job->exit_code = MESO_EXIT_IO;
+        } else {
             job->status = BATCH_BAKED;
+        }
     } else {
         free(job->report_json);
         job->report_json = batch_read_file(s->report, NULL);
@@ -195,6 +204,8 @@ static void finish_job(batch_manifest* m, const batch_cache* c, slot* s, int sta
     }
     unlink(s->log);
     unlink(s->report);
+    if (s->scratch[0])
+        unlink(s->scratch);
     s->pid = 0;
     batch_progress_job(p, job);
 }
@@ -237,8 +248,10 @@ meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch
             else
                 slots[s].pid = 0, --left;
         }
-        if (running == 0)
+        if (running == 0 && next >= m->count)
             break;
+        if (running == 0)
+            continue; /* every slot's start failed this pass: start the next jobs */
         int status = 0;
         const pid_t pid = waitpid(-1, &status, 0);
         if (pid < 0) {
@@ -258,32 +271,40 @@ meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch
     return MESO_OK;
 }
 
-int batch_run_one(batch_manifest* m, const batch_cache* c, size_t index, int threads)
+int batch_run_one(batch_manifest* m, const batch_cache* c, size_t index, int threads, const char* expect_key)
 {
     batch_job* job = &m->jobs[index];
     const double t0 = meso_seconds();
     int code = MESO_EXIT_OK;
-    if (!batch_cache_has(c, job->key)) {
+    if (expect_key && strcmp(expect_key, job->key)) {
+        fprintf(stderr,
+                "mesobake error: jobs[%zu]: its key here is %s, the submitter's %s: this node's mesobake build or "
+                "an input differs from the submitting machine's, so what it bakes would not be what was asked for\n",
+                index, job->key[0] ? job->key : "(none: an input cannot be read)", expect_key);
+        code = MESO_EXIT_INVALID;
+    } else if (!batch_cache_has(c, job->key)) {
         /* Without a key (an input that cannot be read) the bake still runs,
          * into a scratch entry, so that its own error and exit code tell the
          * batch what is wrong; whatever it writes is not kept. */
-        char scratch[32];
-        snprintf(scratch, sizeof scratch, "unkeyed-%ld", (long)getpid());
-        const char* key = job->key[0] ? job->key : scratch;
-        char* dest = batch_cache_entry(c, key, ".meso", 1);
-        char* report = batch_cache_entry(c, key, ".json", 1);
+        const char* key = job->key[0] ? job->key : "unkeyed";
+        char* dest = batch_cache_scratch(c, key, ".meso");
+        char* report = batch_cache_scratch(c, key, ".json");
         const pid_t pid = dest && report ? batch_spawn(m, job, dest, report, threads, NULL) : -1;
         int status = 0;
         while (pid > 0 && waitpid(pid, &status, 0) < 0 && errno == EINTR) {
         }
         code = pid > 0 ? exit_code_of(status) : MESO_EXIT_INTERNAL;
-        if (!job->key[0] && dest && report) {
+        meso_error e = {0};
+        if (code == MESO_EXIT_OK && !job->key[0]) {
+            fprintf(stderr, "mesobake error: jobs[%zu]: an input could not be read to make the cache key\n", index);
+            code = MESO_EXIT_IO;
+        } else if (code == MESO_EXIT_OK && batch_cache_publish(c, m, job, dest, report, &e) != MESO_OK) {
+            fprintf(stderr, "mesobake error: jobs[%zu]: %s\n", index, e.message);
+            code = meso_exit_for(e.result);
+        }
+        if (dest && report) {
             unlink(dest);
             unlink(report);
-            if (code == MESO_EXIT_OK) {
-                fprintf(stderr, "mesobake error: jobs[%zu]: an input could not be read to make the cache key\n", index);
-                code = MESO_EXIT_IO;
-            }
         }
         free(dest);
         free(report);

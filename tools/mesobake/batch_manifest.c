@@ -98,7 +98,34 @@ static char* plain_path(const char* path)
     return s;
 }
 
-/* Two jobs writing one file, however its path is spelt: MESO_OK or E3455. */
+typedef struct named_index {
+    const char* name;
+    size_t index;
+} named_index;
+
+static int by_name_then_index(const void* a, const void* b)
+{
+    const named_index *x = a, *y = b;
+    const int c = strcmp(x->name, y->name);
+    return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+int batch_group_equal(const char* const* names, size_t n, size_t* first_of)
+{
+    named_index* v = malloc((n ? n : 1) * sizeof *v);
+    if (!v)
+        return 0;
+    for (size_t i = 0; i < n; ++i)
+        v[i] = (named_index){names[i], i};
+    qsort(v, n, sizeof *v, by_name_then_index);
+    for (size_t i = 0; i < n; ++i)
+        first_of[v[i].index] = i > 0 && !strcmp(v[i - 1].name, v[i].name) ? first_of[v[i - 1].index] : v[i].index;
+    free(v);
+    return 1;
+}
+
+/* Two jobs writing one file, however its path is spelt: MESO_OK or E3455.
+ * Sorted, not compared pairwise: a manifest of 50,000 jobs loads at once. */
 static meso_result check_outputs_distinct(const batch_manifest* m, meso_error* err)
 {
     char** plain = calloc(m->count, sizeof *plain);
@@ -106,21 +133,26 @@ static meso_result check_outputs_distinct(const batch_manifest* m, meso_error* e
     for (size_t a = 0; a < m->count && r == MESO_OK; ++a)
         if (!(plain[a] = plain_path(m->jobs[a].output_path)))
             r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", m->path);
-    for (size_t a = 0; a < m->count && r == MESO_OK; ++a)
-        for (size_t b = 0; b < a && r == MESO_OK; ++b) {
-            if (strcmp(plain[a], plain[b]))
-                continue;
-            const char *first = m->jobs[b].output, *second = m->jobs[a].output;
-            if (strcmp(first, second))
-                r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT,
-                         "jobs[%zu] and jobs[%zu] both write \"%s\" (as \"%s\")", b, a, first, second);
-            else
-                r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT, "jobs[%zu] and jobs[%zu] both write \"%s\"", b,
-                         a, first);
-        }
-    for (size_t a = 0; plain && a < m->count; ++a)
-        free(plain[a]);
+    size_t* first_of = r == MESO_OK ? malloc((m->count ? m->count : 1) * sizeof *first_of) : NULL;
+    if (r == MESO_OK && !(first_of && batch_group_equal((const char* const*)plain, m->count, first_of)))
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", m->path);
+    size_t a = 0;
+    while (r == MESO_OK && a < m->count && first_of[a] == a)
+        ++a;
+    if (r == MESO_OK && a < m->count) {
+        const size_t b = first_of[a];
+        const char *first = m->jobs[b].output, *second = m->jobs[a].output;
+        if (strcmp(first, second))
+            r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT, "jobs[%zu] and jobs[%zu] both write \"%s\" (as \"%s\")",
+                     b, a, first, second);
+        else
+            r = fail(err, m->path, BATCH_ISSUE_DUPLICATE_OUTPUT, "jobs[%zu] and jobs[%zu] both write \"%s\"", b, a,
+                     first);
+    }
+    for (size_t i = 0; plain && i < m->count; ++i)
+        free(plain[i]);
     free(plain);
+    free(first_of);
     return r;
 }
 

@@ -4,10 +4,13 @@
  * Slurm cluster (batch.h says which file does what). This file is the
  * command line, the progress display, the summary and the JSON report.
  */
+#define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT */
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cjson/cJSON.h>
@@ -34,8 +37,9 @@ static const char* const usage_batch =
     "  A job's args follow the defaults' args; -i, -o, --report and --threads are the batch's.\n"
     "\n"
     "Options:\n"
-    "  -j, --jobs N            bakes at once (default: the number of cores); each bake gets\n"
-    "                          the cores divided among the bakes that can run at once\n"
+    "  -j, --jobs N            bakes at once (default: the cores this process may use); each\n"
+    "                          bake gets, when it starts, those cores divided among the bakes\n"
+    "                          that can still run at once\n"
     "      --cache DIR         the cache (default: $MESO_CACHE_DIR, else $XDG_CACHE_HOME/meso,\n"
     "                          else ~/.cache/meso); safe to share between batches and machines\n"
     "      --no-cache          bake every job straight to its output\n"
@@ -47,17 +51,20 @@ static const char* const usage_batch =
     "      --partition P       slurm: the partition to submit to (default: the cluster's)\n"
     "      --max-parallel K    slurm: at most K array tasks at once (--array=...%K)\n"
     "      --cpus-per-task C   slurm: cores per task, and the bake's --threads (default 1)\n"
-    "      --retries N         slurm: submit a task again up to N times when it failed for a\n"
-    "                          reason other than its input: any exit but 1, 3, 5 (default 2)\n"
+    "      --retries N         slurm: submit a task again up to N times when it may succeed\n"
+    "                          another time: killed, its node lost, an I/O error (exit 2, e.g. a\n"
+    "                          file not yet visible on a shared file system), exit 4; never\n"
+    "                          after 1, 3 or 5, which fail the same way again (default 2)\n"
     "      --run-job J         bake job J (0-based) into the cache and exit: what a Slurm\n"
-    "                          array task runs; --threads T gives its threads\n"
+    "                          array task runs; --threads T gives its threads, --expect-key K\n"
+    "                          refuses (exit 3) when this machine computes another key for J\n"
     "  -v, --verbose           a line for every job, cached ones too\n"
     "  -h, --help              this help\n"
     "\n"
     "Exit codes: 0 every job succeeded, 6 at least one job failed (the report and the\n"
     "lines above the summary say which and why); otherwise as for every command: 1\n"
-    "command-line error, 2 I/O failure, 3 invalid manifest (E3450..E3456), 4 internal\n"
-    "error, 5 --engine slurm without sbatch.\n";
+    "command-line error, 2 I/O failure (an unreadable manifest, E3450), 3 invalid manifest\n"
+    "(E3451..E3456), 4 internal error, 5 --engine slurm without sbatch.\n";
 
 static int verbose_jobs;
 
@@ -189,7 +196,7 @@ static void finish_duplicates(batch_manifest* m, const batch_cache* c, batch_pro
             snprintf(j->error, sizeof j->error, "the same bake as %s, which failed", first->name);
         else if (batch_cache_copy_out(c, j, &e) != MESO_OK)
             snprintf(j->error, sizeof j->error, "%s", e.message);
-        j->exit_code = first->exit_code;
+        j->exit_code = j->error[0] && first->exit_code == 0 ? MESO_EXIT_IO : first->exit_code;
         j->status = j->error[0] ? BATCH_FAILED : BATCH_CACHED;
         batch_progress_job(p, j);
     }
@@ -198,14 +205,35 @@ static void finish_duplicates(batch_manifest* m, const batch_cache* c, batch_pro
 /* Keys, cache hits, and which jobs repeat an earlier one. */
 static void look_up(batch_manifest* m, const batch_cache* c, batch_progress* p)
 {
+    const char** keys = calloc(m->count ? m->count : 1, sizeof *keys);
+    size_t* first_of = calloc(m->count ? m->count : 1, sizeof *first_of);
     for (size_t i = 0; i < m->count; ++i) {
         batch_job* j = &m->jobs[i];
         meso_error e = {0};
-        if (!c->dir || batch_job_key(m, j, &e) != MESO_OK || !j->key[0])
+        /* An output that is there but cannot be replaced (a directory, a
+         * FIFO, a dangling link) is refused before its bake runs. */
+        struct stat st;
+        if (lstat(j->output_path, &st) == 0 && meso_output_check(j->output_path, &e) != MESO_OK) {
+            j->status = BATCH_FAILED;
+            j->exit_code = MESO_EXIT_IO;
+            snprintf(j->error, sizeof j->error, "%s", e.message);
+            batch_progress_job(p, j);
             continue;
-        for (size_t k = 0; k < i && j->same_as == (size_t)-1; ++k)
-            if (!strcmp(m->jobs[k].key, j->key))
-                j->same_as = k;
+        }
+        if (c->dir)
+            batch_job_key(m, j, &e);
+    }
+    /* Jobs with the same key bake once (sorted: fine for many thousands). */
+    for (size_t i = 0; i < m->count && keys; ++i)
+        keys[i] = m->jobs[i].status == BATCH_PENDING && m->jobs[i].key[0] ? m->jobs[i].key : "";
+    const int grouped = keys && first_of && batch_group_equal(keys, m->count, first_of);
+    for (size_t i = 0; i < m->count; ++i) {
+        batch_job* j = &m->jobs[i];
+        meso_error e = {0};
+        if (j->status != BATCH_PENDING || !j->key[0])
+            continue;
+        if (grouped && first_of[i] != i)
+            j->same_as = first_of[i];
         if (j->same_as != (size_t)-1 || !batch_cache_has(c, j->key))
             continue;
         if (batch_cache_copy_out(c, j, &e) == MESO_OK) {
@@ -213,27 +241,43 @@ static void look_up(batch_manifest* m, const batch_cache* c, batch_progress* p)
             j->exit_code = 0;
         } else {
             j->status = BATCH_FAILED;
+            j->exit_code = MESO_EXIT_IO;
             snprintf(j->error, sizeof j->error, "%s", e.message);
         }
         batch_progress_job(p, j);
     }
+    free(keys);
+    free(first_of);
+}
+
+/* The cores this process may run on (its affinity mask: taskset, a Slurm
+ * allocation, a container's cpuset), not every core of the machine. */
+static int usable_cpus(void)
+{
+#ifdef CPU_COUNT
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+        return CPU_COUNT(&set);
+#endif
+    const long online = sysconf(_SC_NPROCESSORS_ONLN);
+    return online > 0 ? (int)online : 1;
 }
 
 static int parse_count(const char* opt, const char* v, int lo, int* out)
 {
+    const long hi = !strcmp(opt, "--run-job") ? 1000000000L : 4096;
     long n = 0;
-    if (!meso_bake_parse_long(v, lo, 4096, &n))
-        return usage_error("%s expects a whole number in %d..4096, got '%s'", opt, lo, v);
+    if (!meso_bake_parse_long(v, lo, hi, &n))
+        return usage_error("%s expects a whole number in %d..%ld, got '%s'", opt, lo, hi, v);
     *out = (int)n;
     return 0;
 }
 
 int cmd_batch(int argc, char** argv)
 {
-    const long online = sysconf(_SC_NPROCESSORS_ONLN);
-    batch_options o = {.jobs = 0, .cpus = online > 0 ? (int)online : 1, .engine = "local", .retries = 2,
+    batch_options o = {.jobs = 0, .cpus = usable_cpus(), .engine = "local", .retries = 2,
                        .cpus_per_task = 1};
-    const char *manifest = NULL, *cache_dir = NULL, *report = NULL;
+    const char *manifest = NULL, *cache_dir = NULL, *report = NULL, *expect_key = NULL;
     int no_cache = 0, run_job = -1, threads = 0, code = 0;
     for (int i = 0; i < argc && !code; ++i) {
         const char* s = argv[i];
@@ -249,7 +293,7 @@ int cmd_batch(int argc, char** argv)
             manifest = s;
         } else {
             static const char* const valued[] = {"-j", "--jobs", "--cache", "--report", "--engine", "--partition",
-                "--max-parallel", "--cpus-per-task", "--retries", "--run-job", "--threads"};
+                "--max-parallel", "--cpus-per-task", "--retries", "--run-job", "--threads", "--expect-key"};
             if ((code = option_value(s, v, valued, sizeof valued / sizeof valued[0])) != 0)
                 break;
             ++i;
@@ -273,6 +317,8 @@ int cmd_batch(int argc, char** argv)
                 code = parse_count(s, v, 0, &o.retries);
             else if (!strcmp(s, "--run-job"))
                 code = parse_count(s, v, 0, &run_job);
+            else if (!strcmp(s, "--expect-key"))
+                expect_key = v;
             else
                 code = parse_count(s, v, 1, &threads);
         }
@@ -314,7 +360,7 @@ int cmd_batch(int argc, char** argv)
     }
     if (run_job >= 0) { /* a Slurm array task */
         batch_job_key(&m, &m.jobs[run_job], &err);
-        code = batch_run_one(&m, &c, (size_t)run_job, threads > 0 ? threads : 1);
+        code = batch_run_one(&m, &c, (size_t)run_job, threads > 0 ? threads : 1, expect_key);
         batch_manifest_free(&m);
         batch_cache_close(&c);
         return code;
