@@ -71,11 +71,11 @@ measure() {
         r=$((r + 1))
     done
     cold=$(median <"$tmp/cold") warm=$(median <"$tmp/warm") busy=$(median <"$tmp/busy")
-    echo "$name,$jobs,$runs,$cold,$busy,$warm" >>"$out.tmp"
+    echo "$name,$jobs,$runs,$cold,$busy,$warm" >>"$tmp/batch.csv"
     echo "$name: $jobs jobs, median of $runs: ${cold} s from an empty cache (cpu busy $busy), ${warm} s cached"
 }
 
-echo "config,jobs,runs,median_seconds,median_cpu_busy,median_cached_seconds" >"$out.tmp"
+echo "config,jobs,runs,median_seconds,median_cpu_busy,median_cached_seconds" >"$tmp/batch.csv"
 measure local_j1 -j 1
 measure local_j2 -j 2
 if [ "$(id -u)" -eq 0 ] && command -v sbatch >/dev/null 2>&1; then
@@ -86,5 +86,5 @@ if [ "$(id -u)" -eq 0 ] && command -v sbatch >/dev/null 2>&1; then
 else
     echo "bench_batch: no Slurm row (needs root and slurm-client, slurmd, slurmctld, munge)" >&2
 fi
-mv "$out.tmp" "$out"
+mv "$tmp/batch.csv" "$out"
 echo "results in $out"
