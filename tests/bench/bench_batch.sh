@@ -18,7 +18,6 @@ cleanup() {
     rm -rf "$tmp"
 }
 trap cleanup EXIT
-[ -n "${KEEP:-}" ] && trap - EXIT
 mkdir -p "$tmp/data"
 cp "$src"/tests/data/*.obj "$src"/tests/data/*.swc "$src"/tests/data/*.skel "$tmp/data/"
 

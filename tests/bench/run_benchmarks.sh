@@ -112,3 +112,11 @@ if [ "${MESO_BENCH_SKIP_CELLS_RENDER:-0}" != 1 ]; then
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_cells_render.gp"
     echo "cells render results in $results"
 fi
+
+# mesobake batch (issue 17): a 34-job manifest, -j 1, -j 2 and the Slurm
+# engine on a private one-node cluster (root only), cold and cached, medians
+# of 5. Result: batch.csv. Skip with MESO_BENCH_SKIP_BATCH=1.
+if [ "${MESO_BENCH_SKIP_BATCH:-0}" != 1 ]; then
+    ninja -C "$build" tools/mesobake
+    sh "$src/tests/bench/bench_batch.sh" "$build/tools/mesobake" 5
+fi
