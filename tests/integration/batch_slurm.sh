@@ -174,6 +174,8 @@ expect_eq "$(grep -c -- --array= sbatch.calls)" 3 "8 uncached jobs went out as 3
 expect_eq "$(grep -o -- '--array=[^ ]*' sbatch.calls | sort | tr '\n' ' ')" \
     "--array=0-1%1 --array=0-2%1 --array=0-2%2 " "3+3+2 tasks, --max-parallel 4 shared out as 2+1+1"
 expect_eq "$(ls cache3/slurm/*/attempt1.c*.jobs | wc -l)" 3 "one job list per array"
+expect_eq "$(cat cache3/slurm/*/attempt1.c*.jobs | grep -cvE '^[0-9]+ [0-9a-f]{64}$')/$(cat cache3/slurm/*/attempt1.c*.jobs | wc -l)" \
+    0/8 "the job lists hold lines INDEX KEY (the task passes --expect-key KEY)"
 log=$(job_field r5.json invalid error | sed -n 's/.*(log: \(.*\))$/\1/p')
 [ -f "$log" ] && grep -q "exit 3" "$log" && ok || fail "the failed task's log in a chunk is named ($log)"
 

@@ -3,15 +3,18 @@
  * meso grows no scheduler of its own: the uncached jobs go to Slurm as job
  * arrays, `sbatch --wait --array=0-(N-1)%K`, whose task T runs
  *
- *   mesobake batch MANIFEST --cache DIR --run-job J --threads C
+ *   mesobake batch MANIFEST --cache DIR --run-job J --expect-key KEY --threads C
  *
- * for the T-th job J of its list — the same `mesobake <command>` line the
- * local engine runs, so the bytes are the same — and publishes into the
- * shared cache. The cache is the result channel: once the arrays have left
- * the queue, a job whose entry is there (and checks out in full) is baked
- * and copied to its output, whatever its log says; one whose entry is
- * missing failed, and its task's log (which ends with "mesobake batch: job J
- * exit N seconds S") says how. Tasks that failed for a reason other than
+ * for the T-th line "J KEY" of its list — the same `mesobake <command>` line
+ * the local engine runs, so the bytes are the same — and publishes into the
+ * shared cache. KEY is job J's key here: a task whose node computes another
+ * (its mesobake build or its view of the inputs differs) refuses to bake; a
+ * job without a key (an input that cannot be read) passes none. The cache
+ * is the result channel: once the arrays have left the queue, a job whose
+ * entry is there (and checks out in full) is baked and copied to its
+ * output, whatever its log says; one whose entry is missing failed, and
+ * its task's log (which ends with "mesobake batch: job J exit N seconds S")
+ * says how. Tasks that failed for a reason other than
  * their input (a node lost, killed, out of memory, an I/O error, no status
  * line, exit 0 without an entry: any exit but 1, 3 and 5) are submitted
  * again, up to --retries times. Accounting (sacct) is not needed.
@@ -93,8 +96,10 @@ static meso_result write_script(const char* path, const batch_manifest* m, const
         return meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot write the Slurm task script: %s", path, strerror(errno));
     }
     fputs("#!/bin/sh\n"
-          "# mesobake batch --engine slurm: array task T bakes the job on line T+1 of the list in $1.\n"
-          "job=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" \"$1\")\n"
+          "# mesobake batch --engine slurm: array task T bakes the job on line T+1 (\"INDEX KEY\") of the list\n"
+          "# in $1, refusing when this node computes another key for it.\n"
+          "line=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" \"$1\")\n"
+          "job=${line%% *} key=${line#* }\n"
           "exec ",
           f);
     put_quoted(f, batch_self_exe());
@@ -102,7 +107,7 @@ static meso_result write_script(const char* path, const batch_manifest* m, const
     put_quoted(f, manifest);
     fputs(" --cache ", f);
     put_quoted(f, c->dir);
-    fputs(" --run-job \"$job\" --threads \"${SLURM_CPUS_PER_TASK:-1}\"\n", f);
+    fputs(" --run-job \"$job\" ${key:+--expect-key \"$key\"} --threads \"${SLURM_CPUS_PER_TASK:-1}\"\n", f);
     free(manifest);
     const int bad = ferror(f) | fclose(f);
     if (bad || chmod(path, 0755) != 0)
@@ -228,8 +233,8 @@ typedef struct chunk {
 
 /* Start `sbatch --wait` of chunk `ch` (list file written here); stdout to
  * BASE.out, stderr to BASE.err. */
-static meso_result start_chunk(const batch_options* o, const char* script, const size_t* list, chunk* ch, int throttle,
-                               meso_error* err)
+static meso_result start_chunk(const batch_manifest* m, const batch_options* o, const char* script,
+                               const size_t* list, chunk* ch, int throttle, meso_error* err)
 {
     char jobs_path[4300], out[4300], errp[4300], array[64], output[8600], part[256], cpus[32];
     char pattern[8500];
@@ -240,7 +245,7 @@ static meso_result start_chunk(const batch_options* o, const char* script, const
     if (!f)
         return meso_bake_fail(err, MESO_ERR_IO, 0, "%s: %s", jobs_path, strerror(errno));
     for (size_t k = 0; k < ch->n; ++k)
-        fprintf(f, "%zu\n", list[ch->first + k]);
+        fprintf(f, "%zu %s\n", list[ch->first + k], m->jobs[list[ch->first + k]].key);
     if ((ferror(f) | fclose(f)) != 0)
         return meso_bake_fail(err, MESO_ERR_IO, 0, "%s: cannot write", jobs_path);
     if (throttle > 0)
@@ -424,7 +429,7 @@ static meso_result attempt_once(batch_manifest* m, const batch_cache* c, const b
             throttle = throttle < 1 ? 1 : throttle;
         }
         if (r == MESO_OK)
-            r = start_chunk(o, script, list, &ch[k], throttle, err);
+            r = start_chunk(m, o, script, list, &ch[k], throttle, err);
     }
     wait_chunks(ch, nch, m, c, list, n, p);
     p->running -= n;
