@@ -19,6 +19,8 @@
 # No accounting: read per-task exit codes with `scontrol show job -o JOBID`
 # soon after `sbatch --wait` returns: finished records are purged MinJobAge
 # (MESO_SLURM_MIN_JOB_AGE, default 4 s) and a few seconds more after the end.
+# MESO_SLURM_MAX_ARRAY_SIZE sets MaxArraySize (default 100001; arrays then hold
+# indices 0..N-1), small to test how a client splits a large array.
 set -eu
 
 me=cluster.sh
@@ -138,6 +140,10 @@ do_start() {
   case $min_job_age in
     '' | *[!0-9]*) die "MESO_SLURM_MIN_JOB_AGE must be a number of seconds (2..65533)" ;;
   esac
+  max_array_size=${MESO_SLURM_MAX_ARRAY_SIZE:-100001}
+  case $max_array_size in
+    '' | *[!0-9]*) die "MESO_SLURM_MAX_ARRAY_SIZE must be a number (1..4000001)" ;;
+  esac
   mungekey --create --keyfile="$DIR/munge/munge.key" >/dev/null 2>&1 ||
     fail "mungekey could not create $DIR/munge/munge.key"
   cat >"$DIR/slurm.conf" <<EOF
@@ -166,7 +172,7 @@ JobCompType=jobcomp/none
 # 8 and 32 s otherwise); finished job records then last only seconds.
 MinJobAge=$min_job_age
 MaxJobCount=200000
-MaxArraySize=100001
+MaxArraySize=$max_array_size
 KillWait=5
 SlurmctldPidFile=$DIR/slurmctld.pid
 SlurmdPidFile=$DIR/slurmd.pid
