@@ -6,7 +6,7 @@
  *   batch_key.c       a job's cache key: SHA-256 over what decides its bytes
  *   batch_cache.c     the cache directory: entries, lookups, copies out
  *   batch_local.c     the local engine: a pool of `mesobake` processes
- *   batch_slurm.c     the Slurm engine: one job array, waited for, retried
+ *   batch_slurm.c     the Slurm engine: job arrays, waited for, retried
  *   cmd_batch.c       the command line, the progress display, the report
  *
  * A job runs exactly the command line a person would type — `mesobake
