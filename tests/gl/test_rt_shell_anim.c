@@ -34,6 +34,9 @@
 #include "meso_rt.h"
 
 /* Aborts with the message unless `ok`. */
+#if defined(__GNUC__)
+static void need(int ok, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+#endif
 static void need(int ok, const char* fmt, ...)
 {
     if (ok)
