@@ -8,7 +8,8 @@
  * beyond what one bake uses. Threads per bake, fixed when it starts: the
  * cores divided among the bakes that can still run at once, so -j 2 on two
  * cores runs two one-thread bakes, and a bake that starts alone gets both.
- * The outputs do not depend on it (rule 7). Jobs start in manifest order.
+ * The outputs do not depend on it (rule 7). The costliest jobs start first
+ * (start_order).
  * A job without a key (an input that cannot be read) bakes straight to its
  * output, uncached, so that the bake's own error says what is missing.
  */
@@ -20,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/prctl.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -210,6 +212,51 @@ static void finish_job(batch_manifest* m, const batch_cache* c, slot* s, int sta
     batch_progress_job(p, job);
 }
 
+/* A guess at a job's cost, for the start order: the input's size times
+ * how much work a command does per input byte (shells trace and validate
+ * every vertex; cells voxelize; frusta fit a skeleton; mesh copies). */
+static double cost_guess(const batch_manifest* m, const batch_job* job)
+{
+    const double weight = !strcmp(job->command, "shell")   ? 8
+                          : !strcmp(job->command, "cells") ? 4
+                          : !strcmp(job->command, "frusta") ? 2
+                                                            : 1;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", m->dir, job->input);
+    struct stat st;
+    const int found = stat(job->input[0] == '/' ? job->input : path, &st) == 0;
+    return found ? weight * (double)st.st_size : 0;
+}
+
+static const double* sort_costs;
+static int by_cost_descending(const void* a, const void* b)
+{
+    const size_t i = *(const size_t*)a, j = *(const size_t*)b;
+    if (sort_costs[i] != sort_costs[j])
+        return sort_costs[i] < sort_costs[j] ? 1 : -1;
+    return (i > j) - (i < j);
+}
+
+/* The order bakes start in: the costliest first (longest-processing-time
+ * first keeps the cores busy at the end of a batch, where a long bake that
+ * started last would run alone), manifest order among equals. The bytes
+ * do not depend on it. NULL when out of memory. */
+static size_t* start_order(const batch_manifest* m)
+{
+    size_t* order = malloc((m->count ? m->count : 1) * sizeof *order);
+    double* cost = malloc((m->count ? m->count : 1) * sizeof *cost);
+    for (size_t i = 0; order && i < m->count; ++i)
+        order[i] = i;
+    if (order && cost) { /* (without `cost`: manifest order) */
+        for (size_t i = 0; i < m->count; ++i)
+            cost[i] = cost_guess(m, &m->jobs[i]);
+        sort_costs = cost;
+        qsort(order, m->count, sizeof *order, by_cost_descending);
+    }
+    free(cost);
+    return order;
+}
+
 meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch_options* o, batch_progress* p,
                             meso_error* err)
 {
@@ -230,19 +277,26 @@ meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch
     size_t left = 0; /* jobs to bake not yet finished */
     for (size_t i = 0; i < m->count; ++i)
         left += m->jobs[i].status == BATCH_PENDING && m->jobs[i].same_as == (size_t)-1;
+    size_t* order = start_order(m);
+    if (!order) {
+        free(slots);
+        rmdir(tmp);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
+    }
     size_t next = 0;
     int running = 0;
     for (;;) {
         for (int s = 0; s < width && next < m->count; ++s) {
             if (slots[s].pid)
                 continue;
-            while (next < m->count && !(m->jobs[next].status == BATCH_PENDING && m->jobs[next].same_as == (size_t)-1))
+            while (next < m->count &&
+                   !(m->jobs[order[next]].status == BATCH_PENDING && m->jobs[order[next]].same_as == (size_t)-1))
                 ++next;
             if (next == m->count)
                 break;
             const size_t at_once = left < (size_t)width ? left : (size_t)width;
             const int threads = at_once ? (int)((size_t)o->cpus / at_once) : 1;
-            start_job(m, c, next++, threads > 0 ? threads : 1, &slots[s], tmp, p);
+            start_job(m, c, order[next++], threads > 0 ? threads : 1, &slots[s], tmp, p);
             if (slots[s].pid > 0)
                 ++running;
             else
@@ -267,6 +321,7 @@ meso_result batch_run_local(batch_manifest* m, const batch_cache* c, const batch
             }
     }
     free(slots);
+    free(order);
     rmdir(tmp);
     return MESO_OK;
 }
