@@ -75,7 +75,9 @@
     X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)                   \
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)               \
     X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                                     \
-    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                                 \
+    X(PFNGLGETTEXLEVELPARAMETERIVPROC, GetTexLevelParameteriv)               \
+    X(PFNGLGETBUFFERPARAMETERIVPROC, GetBufferParameteriv)
 
 /* Entry points used only when the context has them (the stats counters of
  * OpenGL 4.3); missing ones are left NULL and never fail creation. */
