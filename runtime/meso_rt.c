@@ -170,6 +170,7 @@ void meso_rt_destroy(meso_rt* rt)
     if (!rt)
         return;
     mesoi_objects_destroy(rt);
+    mesoi_instances_destroy(rt);
     mesoi_frusta_programs_destroy(rt);
     mesoi_cells_programs_destroy(rt);
     mesoi_shell_programs_destroy(rt);

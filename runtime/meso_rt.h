@@ -317,6 +317,71 @@ typedef struct meso_rt_draw_desc {
  * are logged as GL_ERROR and returned as MESO_ERR_GL, never fatal). */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
 
+/* >>many objects ----------------------------------------------------------- */
+
+/* One instance of an instanced draw. Zero-initialise it and set what
+ * differs from the defaults. */
+typedef struct meso_rt_instance {
+    float model[16];    /* object -> world, the rules of meso_rt_draw_desc.model (similarity, else refused
+                           naming the instance's index) [all zero: identity] */
+    uint32_t pose_slot; /* frusta: the pose slot drawn (meso_rt_frusta_pose_slots) [0: the current pose] */
+    int has_time;       /* shells with stored frames: 1 = draw the frame of `time` [0: the frame shown] */
+    double time;        /* seconds, as meso_rt_shell_set_time (meso_anim_frame_at) */
+} meso_rt_instance;
+
+/* Draw `count` instances of one object in one instanced GL draw call
+ * (glDrawArraysInstanced / glDrawElementsInstanced), each with its own
+ * model matrix (desc->model is ignored) and, for frusta, its own pose slot.
+ * An instance draws what meso_rt_draw would with desc->model = its model
+ * (the same per-object values, computed on the CPU in double precision
+ * and read by the same shaders from a texture buffer; tests/gl/
+ * test_rt_instances.c compares the images with separate draws, bit for
+ * bit). Everything else, including the GL state changed and restored, is
+ * meso_rt_draw's, plus the texture buffer binding (the instance data's
+ * upload) and one more texture unit (5 for shells and cells, 2 for frusta,
+ * 0 for meshes). Cells: when the near plane reaches into any instance's
+ * grid, every instance's rays may start there too (the same image up to
+ * rounding). Refused (MESO_ERR_INVALID_ARG, logged, nothing drawn): a
+ * stale handle, NULL desc or instances, count 0, an instance whose model
+ * is not a similarity (or makes the view singular), mirrored and
+ * unmirrored instances in one call (the winding is one GL state: draw them
+ * in two calls), a pose slot the object does not have, more instances than
+ * the context's texture buffer holds (GL_MAX_TEXTURE_BUFFER_SIZE / 14).
+ * MESO_SHELL_SLICES is not instanced (its two-pass variants composite
+ * through one offscreen target per draw): MESO_ERR_UNSUPPORTED. Shells with
+ * stored frames: instances with has_time must all show the same frame
+ * (it is shown first, as meso_rt_shell_set_time does); instances at
+ * different frames are MESO_ERR_UNSUPPORTED for now. */
+MESO_API meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc,
+                                            const meso_rt_instance* instances, uint32_t count);
+
+/* One item of meso_rt_draw_list. */
+typedef struct meso_rt_draw_item {
+    meso_rt_object object;
+    float model[16];                     /* object -> world, as meso_rt_draw_desc.model; ignored with
+                                            instances [all zero: identity] */
+    const meso_rt_draw_desc* knobs;      /* optional: this item's albedo, shell / frusta / cells knobs and
+                                            stats instead of common's [NULL] */
+    const meso_rt_instance* instances;   /* optional: draw the item instanced [NULL] */
+    uint32_t instance_count;             /* with instances: how many (> 0) [0] */
+} meso_rt_draw_item;
+
+/* Draw a list of objects in one call: each item as meso_rt_draw (or
+ * meso_rt_draw_instanced) would with `common` (view, proj, light, depth
+ * conventions, viewport, and the knobs of items without their own), sorted
+ * by kind, program (shell technique, stats) and object so that each
+ * program is bound once; the items of one key keep the caller's order.
+ * Under MESO_STATE_RESTORE the state is saved once before the first item
+ * and restored once after the last (texture units 0-7 of every target the
+ * kinds bind, besides meso_rt_draw's list); the items' own draws query and
+ * restore nothing (slices items excepted: their offscreen passes save and
+ * restore as in meso_rt_draw). An item that fails is logged and skipped,
+ * the others are drawn, and the first failure is returned. Refused before
+ * anything is drawn (MESO_ERR_INVALID_ARG): NULL items or common, count 0,
+ * an item with a stale handle or instance_count without instances. */
+MESO_API meso_result meso_rt_draw_list(meso_rt* rt, const meso_rt_draw_item* items, uint32_t count,
+                                       const meso_rt_draw_desc* common);
+
 /* Animation without re-baking: replace a shell's base positions (3 floats
  * per vertex) and directors (3 floats per vertex per SDIR layer, the layout
  * of its SDIR chunk); either may be NULL to keep it. vertex_count must equal
@@ -404,6 +469,24 @@ MESO_API meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object o
  * per 1000 frusta: tests/bench/bench_frusta.c (bench_frusta.csv). */
 MESO_API meso_result meso_rt_frusta_set_pose(meso_rt* rt, meso_rt_object obj, const float* node_positions,
                                              uint32_t node_count);
+/* Pose slots for instanced draws (meso_rt_instance.pose_slot): the object
+ * keeps `slots` poses side by side on the GPU (slot 0 is the current pose,
+ * the one meso_rt_frusta_set_pose moves and meso_rt_draw draws), each with
+ * its own bounding geometry. New slots start as a copy of slot 0; shrinking
+ * drops the last ones. 1..the texture buffer's limit (GL_MAX_TEXTURE_BUFFER_
+ * SIZE / 16 texels per primitive). Cost: a re-upload of every slot (256
+ * bytes per primitive per slot). MESO_ERR_INVALID_ARG (logged, nothing
+ * changed) for a handle that is not a live frusta object or a bad count,
+ * MESO_ERR_GL when GL cannot store them (the old slots stay). */
+MESO_API meso_result meso_rt_frusta_pose_slots(meso_rt* rt, meso_rt_object obj, uint32_t slots);
+/* meso_rt_frusta_set_pose for one pose slot: the slot's frusta are rebuilt
+ * from its own previous pose (as a separate object posed with the same
+ * sequence of meso_rt_frusta_set_pose calls would be), and only its part
+ * of the buffer is uploaded. Slot 0 is meso_rt_frusta_set_pose itself.
+ * MESO_ERR_INVALID_ARG (logged, nothing changed) as meso_rt_frusta_set_pose,
+ * and for a slot the object does not have. */
+MESO_API meso_result meso_rt_frusta_set_pose_slot(meso_rt* rt, meso_rt_object obj, uint32_t slot,
+                                                  const float* node_positions, uint32_t node_count);
 /* Frustum and skeleton node counts of a FRUSTA object (0 for other kinds).
  * Either output may be NULL. */
 MESO_API meso_result meso_rt_frusta_info(const meso_rt* rt, meso_rt_object obj, uint32_t* frustum_count,

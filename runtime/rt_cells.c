@@ -210,14 +210,14 @@ static const mesoi_program* cells_program(meso_rt* rt, int stats)
     if (p->id)
         return p;
     char head[160];
-    snprintf(head, sizeof(head), "#version %s core\n%suniform mat4 u_mvp;\nuniform mat4 u_inv_mvp;\n",
-             stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "");
-    const char* vs[2] = {head, mesoi_glsl_cells_vert};
-    const char* fs[3] = {head, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
-    static const char* const samplers[UNIT_COUNT] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 2, "cells_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 3, "cells_frag.glsl"), "cells", samplers,
-                       UNIT_COUNT);
+    snprintf(head, sizeof(head), "#version %s core\n%s", stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "");
+    const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_cells_vert};
+    const char* fs[4] = {head, mesoi_glsl_instance, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
+    static const char* const samplers[UNIT_COUNT + 1] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env",
+                                                         "u_instances"};
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "cells_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 4, "cells_frag.glsl"), "cells", samplers,
+                       UNIT_COUNT + 1);
     return p->id ? p : NULL;
 }
 
@@ -258,7 +258,31 @@ static int near_plane_in_grid(const mesoi_draw* ds, const mesoi_cells* c)
     return 1;
 }
 
-meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
+/* The model's rotation, object -> world directions (u_env_rot). */
+static void env_rotation(const mesoi_draw* ds, float rot[9])
+{
+    for (int col = 0; col < 3; ++col)
+        for (int row = 0; row < 3; ++row)
+            rot[3 * col + row] = (float)(ds->model[4 * col + row] / ds->model_scale);
+}
+
+/* An instance's rotation (texels 10-12) and whether its rays start at the
+ * near plane (ORed into *user). */
+static meso_result instance_cells(meso_rt* rt, mesoi_object* o, const mesoi_draw* ds, const meso_rt_draw_desc* d,
+                                  const meso_rt_instance* in, uint32_t index, float* texels, void* user)
+{
+    (void)rt, (void)d, (void)in, (void)index;
+    float rot[9];
+    env_rotation(ds, rot);
+    for (int col = 0; col < 3; ++col)
+        for (int row = 0; row < 3; ++row)
+            texels[40 + 4 * col + row] = rot[3 * col + row];
+    *(int*)user |= near_plane_in_grid(ds, o->cells);
+    return MESO_OK;
+}
+
+meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count)
 {
     const mesoi_cells* c = o->cells;
     const meso_rt_cells_draw* k = &d->cells;
@@ -273,18 +297,23 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         return MESO_ERR_INVALID_ARG;
     }
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 1, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
     const mesoi_program* prog = cells_program(rt, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
-    static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D,
-                                               GL_TEXTURE_CUBE_MAP};
-    const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment};
-    mesoi_draw_begin(rt, &ds, prog, 1, UNIT_COUNT, targets, bind);
-    const int from_near = near_plane_in_grid(&ds, c);
+    static const GLenum targets[UNIT_COUNT + 1] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D,
+                                                   GL_TEXTURE_CUBE_MAP, GL_TEXTURE_BUFFER};
+    GLuint bind[UNIT_COUNT + 1] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment, 0};
+    int from_near = 0;
+    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 1, instance_cells, &from_near,
+                                            &bind[UNIT_COUNT])) != MESO_OK)
+        return r;
+    mesoi_draw_begin(rt, &ds, prog, 1, inst ? UNIT_COUNT + 1 : UNIT_COUNT, targets, bind);
+    if (!inst)
+        from_near = near_plane_in_grid(&ds, c);
     if (from_near)
         gl->Disable(GL_CULL_FACE);
     else
@@ -292,10 +321,8 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->BindVertexArray(o->vao);
     const GLint* u = prog->loc;
     gl->Uniform1i(u[MESOI_U_has_env], k->environment != 0);
-    float rot[9]; /* the model's rotation: object -> world directions */
-    for (int col = 0; col < 3; ++col)
-        for (int row = 0; row < 3; ++row)
-            rot[3 * col + row] = (float)(ds.model[4 * col + row] / ds.model_scale);
+    float rot[9];
+    env_rotation(&ds, rot);
     gl->UniformMatrix3fv(u[MESOI_U_env_rot], 1, GL_FALSE, rot);
     gl->Uniform3fv(u[MESOI_U_origin], 1, c->origin);
     gl->Uniform1f(u[MESOI_U_h], c->voxel);
@@ -317,6 +344,10 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         bisect = k->step > 0.0f ? (int)ceil(log2((double)k->step * 64.0)) : 0;
     gl->Uniform1i(u[MESOI_U_bisect], bisect > 0 ? bisect : 1);
     gl->Uniform1i(u[MESOI_U_max_steps], k->max_steps > 0 ? k->max_steps : 4096);
-    gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
+    if (inst)
+        gl->DrawElementsInstanced(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT,
+                                  (const void*)(uintptr_t)o->indices_offset, (GLsizei)count);
+    else
+        gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
     return mesoi_draw_end(rt, &ds, d->stats, "cells");
 }

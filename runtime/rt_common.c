@@ -18,6 +18,7 @@
 #include "rt_internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* >>chunks ----------------------------------------------------------------- */
@@ -349,7 +350,51 @@ static int similarity(const double m[16], double* scale, int* mirrored)
            m[3] == 0.0 && m[7] == 0.0 && m[11] == 0.0 && m[15] == 1.0;
 }
 
-meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, mesoi_draw* out)
+meso_result mesoi_draw_model(meso_rt* rt, mesoi_draw* out, const float* model_in, int need_inverse, int64_t index)
+{
+    double model[16], mvp[16], inv[16];
+    const int identity = zero16(model_in);
+    for (int i = 0; i < 16; ++i)
+        model[i] = identity ? (i % 5 == 0 ? 1.0 : 0.0) : model_in[i];
+    char who[64] = "meso_rt_draw";
+    if (index >= 0)
+        snprintf(who, sizeof(who), "meso_rt_draw_instanced: instance %lld", (long long)index);
+    if (!similarity(model, &out->model_scale, &out->mirrored)) {
+        /* The ray casters' error bounds and shading assume one scale; a
+         * sheared or stretched object would be drawn wrong, so say so. */
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "%s: model matrix is not rotation + uniform scale + translation (column lengths "
+                  "%g %g %g); bake the scale into the object instead",
+                  who, sqrt(model[0] * model[0] + model[1] * model[1] + model[2] * model[2]),
+                  sqrt(model[4] * model[4] + model[5] * model[5] + model[6] * model[6]),
+                  sqrt(model[8] * model[8] + model[9] * model[9] + model[10] * model[10]));
+        return MESO_ERR_INVALID_ARG;
+    }
+    mat4_mul(out->pv, model, mvp);
+    const int invertible = meso_mat4_inverse(mvp, inv);
+    if (!invertible && need_inverse) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "%s: singular view/projection", who);
+        return MESO_ERR_INVALID_ARG;
+    }
+    for (int i = 0; i < 16; ++i) {
+        out->model[i] = (float)model[i];
+        out->mvp[i] = (float)mvp[i];
+        out->inv_mvp[i] = invertible ? (float)inv[i] : 0.0f;
+    }
+    const double* light = out->light_world;
+    double ll = 0.0;
+    for (int k = 0; k < 3; ++k) { /* transpose(mat3(model)) · light */
+        const double v = model[4 * k] * light[0] + model[4 * k + 1] * light[1] + model[4 * k + 2] * light[2];
+        out->light_obj[k] = (float)v;
+        ll += v * v;
+    }
+    for (int k = 0; k < 3; ++k)
+        out->light_obj[k] = ll > 0.0 ? (float)(out->light_obj[k] / sqrt(ll)) : 0.0f;
+    return MESO_OK;
+}
+
+meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, int instanced,
+                               mesoi_draw* out)
 {
     memset(out, 0, sizeof(*out));
     if (d->stats)
@@ -361,35 +406,21 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
                   (int)d->clip_depth, (int)d->viewport[2], (int)d->viewport[3]);
         return MESO_ERR_INVALID_ARG;
     }
-    double view[16], proj[16], model[16], mvp[16], inv[16];
-    const int identity = zero16(d->model);
+    double view[16], proj[16];
     for (int i = 0; i < 16; ++i) {
         view[i] = d->view[i];
         proj[i] = d->proj[i];
-        model[i] = identity ? (i % 5 == 0 ? 1.0 : 0.0) : d->model[i];
     }
-    if (!similarity(model, &out->model_scale, &out->mirrored)) {
-        /* The ray casters' error bounds and shading assume one scale; a
-         * sheared or stretched object would be drawn wrong, so say so. */
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                  "meso_rt_draw: model matrix is not rotation + uniform scale + translation (column lengths "
-                  "%g %g %g); bake the scale into the object instead",
-                  sqrt(model[0] * model[0] + model[1] * model[1] + model[2] * model[2]),
-                  sqrt(model[4] * model[4] + model[5] * model[5] + model[6] * model[6]),
-                  sqrt(model[8] * model[8] + model[9] * model[9] + model[10] * model[10]));
-        return MESO_ERR_INVALID_ARG;
-    }
-    mat4_mul(proj, view, mvp);
-    mat4_mul(mvp, model, mvp);
-    const int invertible = meso_mat4_inverse(mvp, inv);
-    if (!invertible && need_inverse) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: singular view/projection");
-        return MESO_ERR_INVALID_ARG;
-    }
-    for (int i = 0; i < 16; ++i) {
-        out->model[i] = (float)model[i];
-        out->mvp[i] = (float)mvp[i];
-        out->inv_mvp[i] = invertible ? (float)inv[i] : 0.0f;
+    mat4_mul(proj, view, out->pv);
+    double light[3] = {0.3, 0.8, 0.5};
+    if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
+        for (int k = 0; k < 3; ++k)
+            light[k] = d->light_dir[k];
+    memcpy(out->light_world, light, sizeof(light));
+    if (!instanced) {
+        const meso_result r = mesoi_draw_model(rt, out, d->model, need_inverse, -1);
+        if (r != MESO_OK)
+            return r;
     }
     if (d->viewport[2] > 0 && d->viewport[3] > 0) {
         memcpy(out->viewport, d->viewport, sizeof(out->viewport));
@@ -408,18 +439,7 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     out->depth_func = (GLenum)d->depth_func;
     out->restore = rt->state_policy == MESO_STATE_RESTORE;
     out->proj11 = fabs(proj[5]);
-    double light[3] = {0.3, 0.8, 0.5};
-    if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
-        for (int k = 0; k < 3; ++k)
-            light[k] = d->light_dir[k];
-    double ll = 0.0;
-    for (int k = 0; k < 3; ++k) { /* transpose(mat3(model)) · light */
-        const double v = model[4 * k] * light[0] + model[4 * k + 1] * light[1] + model[4 * k + 2] * light[2];
-        out->light_obj[k] = (float)v;
-        ll += v * v;
-    }
-    for (int k = 0; k < 3; ++k)
-        out->light_obj[k] = ll > 0.0 ? (float)(out->light_obj[k] / sqrt(ll)) : 0.0f;
+    out->instanced = instanced;
     const float albedo[3] = {0.80f, 0.74f, 0.66f};
     memcpy(out->albedo, albedo, sizeof(albedo));
     if (d->albedo[0] != 0.0f || d->albedo[1] != 0.0f || d->albedo[2] != 0.0f)
@@ -451,7 +471,9 @@ static GLenum binding_of(GLenum target)
 void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
 {
     mesoi_gl* gl = &rt->gl;
-    gl->UseProgram(p->id);
+    if (!rt->in_list || rt->list_program != p->id) /* a list binds each program once */
+        gl->UseProgram(p->id);
+    rt->list_program = p->id;
     gl->UniformMatrix4fv(p->loc[MESOI_U_mvp], 1, GL_FALSE, s->mvp);
     gl->UniformMatrix4fv(p->loc[MESOI_U_inv_mvp], 1, GL_FALSE, s->inv_mvp);
     const float viewport[4] = {(float)s->viewport[0], (float)s->viewport[1], (float)s->viewport[2],
@@ -460,6 +482,7 @@ void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
     gl->Uniform3fv(p->loc[MESOI_U_light_obj], 1, s->light_obj);
     gl->Uniform3fv(p->loc[MESOI_U_albedo], 1, s->albedo);
     gl->Uniform4fv(p->loc[MESOI_U_depth_ndc], 1, s->depth_ndc);
+    gl->Uniform1i(p->loc[MESOI_U_instanced], s->instanced);
 }
 
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,

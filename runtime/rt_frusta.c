@@ -57,13 +57,16 @@ typedef struct mesoi_frusta {
     meso_frustum_ball_rec* balls_scratch;
     float* rest;                    /* SKEL positions, 3 per node */
     int32_t* parents;               /* SKEL parents */
-    float* texels;                  /* FLOATS per primitive (host copy of the buffer) */
+    float* texels;                  /* FLOATS per primitive per pose slot (host copy of the buffer) */
+    uint32_t slots;                 /* pose slots (meso_rt_frusta_pose_slots), >= 1; slot 0 is recs/balls */
+    meso_frustum_rec* slot_recs;    /* slots 1.., count each */
+    meso_frustum_ball_rec* slot_balls; /* slots 1.., ball_count each */
     GLuint prim_buf, prim_tex, relief_tex;
     int relief_w, relief_h;         /* 0 without RELF */
     uint32_t boxed;                 /* frusta whose bound fell back to a box (last build) */
 } mesoi_frusta;
 
-enum { UNIT_PRIMS = 0, UNIT_RELIEF, UNIT_COUNT };
+enum { UNIT_PRIMS = 0, UNIT_RELIEF, UNIT_COUNT, UNIT_INSTANCES = UNIT_COUNT };
 
 /* >>bounds ----------------------------------------------------------------- */
 
@@ -296,17 +299,31 @@ static void ball_texels(const meso_frustum_ball_rec* b, float* t)
     put_corners(corners, t);
 }
 
-/* Every primitive's texels from the current records. */
-static void build_texels(mesoi_frusta* s)
+/* Every primitive's texels from one pose's records; returns the boxed count. */
+static uint32_t build_pose_texels(const mesoi_frusta* s, const meso_frustum_rec* recs,
+                                  const meso_frustum_ball_rec* balls, float* texels)
 {
-    s->boxed = 0;
+    uint32_t boxed = 0;
     for (uint32_t i = 0; i < s->count; ++i)
-        s->boxed += (uint32_t)frustum_texels(&s->recs[i], s->relief_w > 0, s->texels + (size_t)FLOATS * i);
+        boxed += (uint32_t)frustum_texels(&recs[i], s->relief_w > 0, texels + (size_t)FLOATS * i);
     for (uint32_t b = 0; b < s->ball_count; ++b)
-        ball_texels(&s->balls[b], s->texels + (size_t)FLOATS * (s->count + b));
+        ball_texels(&balls[b], texels + (size_t)FLOATS * (s->count + b));
+    return boxed;
 }
 
-/* Object bounds: the corners' box. */
+/* Slot 0's texels from the current records. */
+static void build_texels(mesoi_frusta* s)
+{
+    s->boxed = build_pose_texels(s, s->recs, s->balls, s->texels);
+}
+
+/* Bytes of one slot's texels. */
+static size_t slot_bytes(const mesoi_frusta* s)
+{
+    return sizeof(float) * FLOATS * ((size_t)s->count + s->ball_count);
+}
+
+/* Object bounds: the corners' box (slot 0). */
 static void corner_bounds(const mesoi_frusta* s, float lo[3], float hi[3])
 {
     const uint32_t n = s->count + s->ball_count;
@@ -340,6 +357,8 @@ static void frusta_free(meso_rt* rt, mesoi_frusta* s)
     mesoi_rt_free(rt, s->rest);
     mesoi_rt_free(rt, s->parents);
     mesoi_rt_free(rt, s->texels);
+    mesoi_rt_free(rt, s->slot_recs);
+    mesoi_rt_free(rt, s->slot_balls);
     mesoi_rt_free(rt, s);
 }
 
@@ -451,6 +470,7 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
     if (!s)
         return MESO_ERR_OUT_OF_MEMORY;
     memset(s, 0, sizeof(*s));
+    s->slots = 1;
     meso_result r = read_records(rt, f, id, ci, s);
     const uint64_t prims = (uint64_t)s->count + s->ball_count;
     GLint max_texels = 0;
@@ -504,26 +524,45 @@ static mesoi_frusta* live_frusta(const meso_rt* rt, meso_rt_object h, mesoi_obje
     return o && o->kind == MESO_OBJECT_FRUSTA ? o->frusta : NULL;
 }
 
+/* Checks a pose call; logs under `who`. */
+static mesoi_frusta* pose_target(meso_rt* rt, meso_rt_object h, uint32_t slot, const float* node_positions,
+                                 uint32_t node_count, const char* who, mesoi_object** o)
+{
+    mesoi_frusta* s = live_frusta(rt, h, o);
+    if (!s || !node_positions || node_count != s->node_count || slot >= s->slots) {
+        if (rt)
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                      "%s: not a live frusta object, no positions, node_count %u differs, or slot %u of %u", who,
+                      node_count, slot, s ? s->slots : 0);
+        return NULL;
+    }
+    return s;
+}
+
+/* Rebuild a pose into the scratch copies (the pose carries frames over
+ * from the previous pose), so a failure leaves the pose intact. */
+static meso_result pose_scratch(meso_rt* rt, mesoi_frusta* s, const meso_frustum_rec* recs,
+                                const meso_frustum_ball_rec* balls, const float* node_positions, const char* who)
+{
+    memcpy(s->scratch, recs, sizeof(meso_frustum_rec) * s->count);
+    memcpy(s->balls_scratch, balls, sizeof(meso_frustum_ball_rec) * s->ball_count);
+    if (meso_frusta_pose(s->scratch, s->count, s->balls_scratch, s->ball_count, node_positions, s->node_count) != 0) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "%s: the pose collapses a frustum to zero length",
+                  who);
+        return MESO_ERR_INVALID_ARG;
+    }
+    return MESO_OK;
+}
+
 meso_result mesoi_frusta_pose_host(meso_rt* rt, meso_rt_object h, const float* node_positions, uint32_t node_count)
 {
     mesoi_object* o = NULL;
-    mesoi_frusta* s = live_frusta(rt, h, &o);
-    if (!s || !node_positions || node_count != s->node_count) {
-        if (rt)
-            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                      "meso_rt_frusta_set_pose: not a live frusta object, no positions, or node_count %u differs",
-                      node_count);
+    mesoi_frusta* s = pose_target(rt, h, 0, node_positions, node_count, "meso_rt_frusta_set_pose", &o);
+    if (!s)
         return MESO_ERR_INVALID_ARG;
-    }
-    /* Rebuild into the scratch copies (the pose carries frames over from
-     * the previous pose), so a failure leaves the current pose intact. */
-    memcpy(s->scratch, s->recs, sizeof(meso_frustum_rec) * s->count);
-    memcpy(s->balls_scratch, s->balls, sizeof(meso_frustum_ball_rec) * s->ball_count);
-    if (meso_frusta_pose(s->scratch, s->count, s->balls_scratch, s->ball_count, node_positions, node_count) != 0) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                  "meso_rt_frusta_set_pose: the pose collapses a frustum to zero length");
-        return MESO_ERR_INVALID_ARG;
-    }
+    const meso_result r = pose_scratch(rt, s, s->recs, s->balls, node_positions, "meso_rt_frusta_set_pose");
+    if (r != MESO_OK)
+        return r;
     meso_frustum_rec* t = s->recs;
     s->recs = s->scratch;
     s->scratch = t;
@@ -541,8 +580,103 @@ meso_result meso_rt_frusta_set_pose(meso_rt* rt, meso_rt_object h, const float* 
     if (r != MESO_OK)
         return r;
     const mesoi_frusta* s = live_frusta(rt, h, NULL);
-    return mesoi_buffer_update(rt, s->prim_buf, s->texels,
-                               sizeof(float) * FLOATS * ((size_t)s->count + s->ball_count), "meso_rt_frusta_set_pose");
+    return mesoi_buffer_update(rt, s->prim_buf, s->texels, slot_bytes(s), "meso_rt_frusta_set_pose");
+}
+
+meso_result meso_rt_frusta_set_pose_slot(meso_rt* rt, meso_rt_object h, uint32_t slot, const float* node_positions,
+                                         uint32_t node_count)
+{
+    if (slot == 0)
+        return meso_rt_frusta_set_pose(rt, h, node_positions, node_count);
+    mesoi_object* o = NULL;
+    mesoi_frusta* s = pose_target(rt, h, slot, node_positions, node_count, "meso_rt_frusta_set_pose_slot", &o);
+    if (!s)
+        return MESO_ERR_INVALID_ARG;
+    meso_frustum_rec* recs = s->slot_recs + (size_t)(slot - 1) * s->count;
+    meso_frustum_ball_rec* balls = s->slot_balls + (size_t)(slot - 1) * s->ball_count;
+    const meso_result r = pose_scratch(rt, s, recs, balls, node_positions, "meso_rt_frusta_set_pose_slot");
+    if (r != MESO_OK)
+        return r;
+    memcpy(recs, s->scratch, sizeof(meso_frustum_rec) * s->count);
+    memcpy(balls, s->balls_scratch, sizeof(meso_frustum_ball_rec) * s->ball_count);
+    float* texels = s->texels + (size_t)slot * FLOATS * ((size_t)s->count + s->ball_count);
+    build_pose_texels(s, recs, balls, texels);
+    const GLint prev = mesoi_upload_begin(rt);
+    rt->gl.BindBuffer(GL_TEXTURE_BUFFER, s->prim_buf);
+    rt->gl.BufferSubData(GL_TEXTURE_BUFFER, (GLintptr)(slot * slot_bytes(s)), (GLsizeiptr)slot_bytes(s), texels);
+    return mesoi_upload_end(rt, prev, MESO_OK, "meso_rt_frusta_set_pose_slot");
+}
+
+meso_result meso_rt_frusta_pose_slots(meso_rt* rt, meso_rt_object h, uint32_t slots)
+{
+    mesoi_frusta* s = live_frusta(rt, h, NULL);
+    GLint max_texels = 0;
+    if (s)
+        rt->gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+    const uint64_t prims = s ? (uint64_t)s->count + s->ball_count : 0;
+    if (!s || slots == 0 || prims * TEXELS * slots > (uint64_t)max_texels ||
+        prims * slots > (1u << 24) /* the slot's first primitive is a float in the instance data */) {
+        if (rt)
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                      "meso_rt_frusta_pose_slots: not a live frusta object, or %u slots of %llu primitives do not fit "
+                      "(1..%llu)",
+                      slots, (unsigned long long)prims,
+                      prims ? (unsigned long long)((uint64_t)max_texels / (prims * TEXELS)) : 0ull);
+        return MESO_ERR_INVALID_ARG;
+    }
+    if (slots == s->slots)
+        return MESO_OK;
+    const size_t one = slot_bytes(s);
+    float* texels = mesoi_rt_alloc(rt, one * slots);
+    meso_frustum_rec* recs = slots > 1 ? mesoi_rt_alloc(rt, sizeof(meso_frustum_rec) * s->count * (slots - 1)) : NULL;
+    meso_frustum_ball_rec* balls =
+        slots > 1 ? mesoi_rt_alloc(rt, sizeof(meso_frustum_ball_rec) * (s->ball_count ? s->ball_count : 1) *
+                                           (slots - 1))
+                  : NULL;
+    if (!texels || (slots > 1 && (!recs || !balls))) {
+        mesoi_rt_free(rt, texels);
+        mesoi_rt_free(rt, recs);
+        mesoi_rt_free(rt, balls);
+        return MESO_ERR_OUT_OF_MEMORY;
+    }
+    const uint32_t kept = slots < s->slots ? slots : s->slots;
+    memcpy(texels, s->texels, one * kept);
+    for (uint32_t k = 1; k < slots; ++k) { /* kept slots as they are, new ones a copy of slot 0 */
+        const int old = k < kept;
+        memcpy(recs + (size_t)(k - 1) * s->count, old ? s->slot_recs + (size_t)(k - 1) * s->count : s->recs,
+               sizeof(meso_frustum_rec) * s->count);
+        memcpy(balls + (size_t)(k - 1) * s->ball_count,
+               old ? s->slot_balls + (size_t)(k - 1) * s->ball_count : s->balls,
+               sizeof(meso_frustum_ball_rec) * s->ball_count);
+        if (!old)
+            memcpy((char*)texels + one * k, s->texels, one);
+    }
+    const GLint prev = mesoi_upload_begin(rt);
+    GLuint buf = 0;
+    const GLuint tex = mesoi_texture_buffer(rt, GL_RGBA32F, texels, one * slots, &buf);
+    const meso_result r = mesoi_upload_end(rt, prev, tex ? MESO_OK : MESO_ERR_GL, "meso_rt_frusta_pose_slots");
+    if (r != MESO_OK) {
+        if (tex) {
+            rt->gl.DeleteTextures(1, &tex);
+            rt->gl.DeleteBuffers(1, &buf);
+        }
+        mesoi_rt_free(rt, texels);
+        mesoi_rt_free(rt, recs);
+        mesoi_rt_free(rt, balls);
+        return r;
+    }
+    rt->gl.DeleteTextures(1, &s->prim_tex);
+    rt->gl.DeleteBuffers(1, &s->prim_buf);
+    s->prim_tex = tex;
+    s->prim_buf = buf;
+    mesoi_rt_free(rt, s->texels);
+    mesoi_rt_free(rt, s->slot_recs);
+    mesoi_rt_free(rt, s->slot_balls);
+    s->texels = texels;
+    s->slot_recs = recs;
+    s->slot_balls = balls;
+    s->slots = slots;
+    return MESO_OK;
 }
 
 meso_result meso_rt_frusta_info(const meso_rt* rt, meso_rt_object h, uint32_t* frustum_count, uint32_t* node_count)
@@ -581,12 +715,14 @@ static const mesoi_program* frusta_program(meso_rt* rt, int stats)
     char head[192];
     snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_FRUSTA_TEXELS %d\n#define MESO_FRUSTA_CORNER0 %d\n",
              stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "", TEXELS, CORNER0);
-    const char* vs[3] = {head, mesoi_glsl_frusta_common, mesoi_glsl_frusta_vert};
-    const char* fs[4] = {head, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common, mesoi_glsl_frusta_frag};
-    static const char* const samplers[UNIT_COUNT] = {"u_prims", "u_relief"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "frusta_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 4, "frusta_frag.glsl"), "frusta", samplers,
-                       UNIT_COUNT);
+    const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_frusta_common,
+                         mesoi_glsl_frusta_vert};
+    const char* fs[5] = {head, mesoi_glsl_instance, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common,
+                         mesoi_glsl_frusta_frag};
+    static const char* const samplers[UNIT_COUNT + 1] = {"u_prims", "u_relief", "u_instances"};
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "frusta_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "frusta_frag.glsl"), "frusta", samplers,
+                       UNIT_COUNT + 1);
     return p->id ? p : NULL;
 }
 
@@ -601,25 +737,49 @@ void mesoi_frusta_programs_destroy(meso_rt* rt)
         mesoi_program_delete(rt, &rt->frusta_programs[st]);
 }
 
-meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
+/* An instance's pose slot: the first primitive of its texels (texel 9.x). */
+static meso_result instance_slot(meso_rt* rt, mesoi_object* o, const mesoi_draw* ds, const meso_rt_draw_desc* d,
+                                 const meso_rt_instance* in, uint32_t index, float* texels, void* user)
+{
+    (void)ds, (void)d, (void)user;
+    const mesoi_frusta* s = o->frusta;
+    if (in->pose_slot >= s->slots) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw_instanced: instance %u: pose slot %u, the object has %u (meso_rt_frusta_pose_slots)",
+                  index, in->pose_slot, s->slots);
+        return MESO_ERR_INVALID_ARG;
+    }
+    texels[36] = (float)((uint64_t)in->pose_slot * (s->count + s->ball_count)); /* < 2^24: exact */
+    return MESO_OK;
+}
+
+meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                              uint32_t count)
 {
     const mesoi_frusta* s = o->frusta;
     const meso_rt_frusta_draw* k = &d->frusta;
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 1, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
     const mesoi_program* prog = frusta_program(rt, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
-    static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_BUFFER, GL_TEXTURE_2D};
-    const GLuint bind[UNIT_COUNT] = {s->prim_tex, s->relief_tex};
-    mesoi_draw_begin(rt, &ds, prog, 1, UNIT_COUNT, targets, bind);
+    static const GLenum targets[UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_2D, GL_TEXTURE_BUFFER};
+    GLuint bind[UNIT_COUNT + 1] = {s->prim_tex, s->relief_tex, 0};
+    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 1, instance_slot, NULL,
+                                            &bind[UNIT_INSTANCES])) != MESO_OK)
+        return r;
+    mesoi_draw_begin(rt, &ds, prog, 1, inst ? UNIT_COUNT + 1 : UNIT_COUNT, targets, bind);
     const GLint size[2] = {s->relief_w, s->relief_h};
     gl->Uniform2iv(prog->loc[MESOI_U_relief_size], 1, size);
     gl->Uniform1i(prog->loc[MESOI_U_relief_steps], k->relief_steps > 0 ? k->relief_steps : 64);
     gl->Uniform1i(prog->loc[MESOI_U_bisect_steps], k->bisection_steps > 0 ? k->bisection_steps : 4);
-    gl->DrawArrays(GL_TRIANGLES, 0, 36 * (GLsizei)(s->count + s->ball_count));
+    const GLsizei vertices = 36 * (GLsizei)(s->count + s->ball_count);
+    if (inst)
+        gl->DrawArraysInstanced(GL_TRIANGLES, 0, vertices, (GLsizei)count);
+    else
+        gl->DrawArrays(GL_TRIANGLES, 0, vertices);
     return mesoi_draw_end(rt, &ds, d->stats, "frusta");
 }

@@ -31,7 +31,8 @@ typedef struct mesoi_object {
     X(segment_steps) X(fixed_step) X(min_step) X(slices) X(prism_count) /* shell, slices */                \
     X(relief_size) X(relief_steps)                                     /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
-    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) /* cells */
+    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) /* cells */                              \
+    X(instanced)                                                       /* instance.glsl */
 
 enum {
 #define MESOI_X_ENUM(name) MESOI_U_##name,
@@ -64,6 +65,12 @@ struct meso_rt {
     GLint slice_size[2];      /* its width and height: the viewport's */
     GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
     GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
+    GLuint inst_buf, inst_tex; /* per-instance data of instanced draws (rt_instances.c), made on first use */
+    size_t inst_capacity;      /* bytes in inst_buf */
+    float* inst_texels;        /* host staging for it */
+    size_t inst_texels_capacity; /* floats */
+    GLuint list_program;       /* inside meso_rt_draw_list: the program bound last (0: none yet) */
+    int in_list;               /* inside meso_rt_draw_list: the list saved the state, the draws do not */
     mesoi_object* objects;
     uint32_t object_capacity;
 };
@@ -96,7 +103,10 @@ void mesoi_slices_destroy(meso_rt* rt);
 
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
-meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+/* The kinds' draws: one object (inst NULL: desc->model, uniforms), or
+ * `count` instances in one instanced draw call (rt_instances.c). */
+meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count);
 void mesoi_shell_programs_destroy(meso_rt* rt);
 /* Build every shell program (stats: the counting variants; without, the
  * slice passes too): meso_rt_prepare. */
@@ -106,7 +116,8 @@ meso_result mesoi_slices_prepare(meso_rt* rt); /* rt_slices.c */
 /* rt_frusta.c */
 meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 void mesoi_frusta_release(meso_rt* rt, mesoi_object* o);
-meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                              uint32_t count);
 void mesoi_frusta_programs_destroy(meso_rt* rt);
 meso_result mesoi_frusta_prepare(meso_rt* rt, int stats);
 /* meso_rt_frusta_set_pose without the upload: the pose rebuild and the
@@ -116,7 +127,8 @@ meso_result mesoi_frusta_pose_host(meso_rt* rt, meso_rt_object obj, const float*
 /* rt_cells.c */
 meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 void mesoi_cells_release(meso_rt* rt, mesoi_object* o);
-meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count);
 void mesoi_cells_programs_destroy(meso_rt* rt);
 meso_result mesoi_cells_prepare(meso_rt* rt, int stats);
 
@@ -161,6 +173,9 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
  * created with check_gl_errors). */
 #define MESOI_DRAW_MAX_UNITS 8
 typedef struct mesoi_draw {
+    double pv[16];              /* proj · view */
+    double light_world[3];      /* towards the light, world space (not normalised) */
+    int instanced;              /* the per-object values come from the instance buffer (u_instanced) */
     float model[16];            /* object -> world: desc->model, or identity when it is all zero */
     float mvp[16], inv_mvp[16]; /* object -> clip and back (inv_mvp zero when singular) */
     double proj11;              /* |proj[1][1]| */
@@ -180,7 +195,14 @@ typedef struct mesoi_draw {
     GLint prev_program, prev_vao, prev_func, prev_mask, prev_active, prev_cull_mode, prev_front, prev_ssbo;
     GLboolean prev_test, prev_cull;
 } mesoi_draw;
-meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, mesoi_draw* out);
+meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, int instanced,
+                               mesoi_draw* out);
+/* The per-object part of prepare (model, mvp, inv_mvp, model_scale,
+ * mirrored, light_obj) from a model matrix (all zero: identity), after
+ * prepare set pv and light_world; `index` >= 0 names the instance in the
+ * logged reason of a refusal. prepare calls it with desc->model unless
+ * `instanced`; instanced draws call it once per instance (rt_instances.c). */
+meso_result mesoi_draw_model(meso_rt* rt, mesoi_draw* s, const float* model, int need_inverse, int64_t index);
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,
                       const GLenum* targets, const GLuint* textures);
 meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
@@ -222,7 +244,26 @@ void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u);
  * their base mesh. */
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 meso_result mesoi_mesh_program_create(meso_rt* rt);
-meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
+meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count);
+
+/* rt_instances.c: per-instance data (shaders/instance.glsl has the texel
+ * layout: 0-3 mvp, 4-7 inv_mvp, 8 light_obj + err_scale, 9 prim_base,
+ * 10-13 model). upload: for each instance mesoi_draw_model (refusals name
+ * the instance; mixed mirrored and unmirrored instances are refused), the
+ * shared texels, then the kind's `fn` for its own; the result into the
+ * instance buffer, *tex its texture (to bind at the kind's instance unit).
+ * ds->mirrored is left as the instances'. */
+#define MESOI_INSTANCE_TEXELS 14
+typedef meso_result (*mesoi_instance_fn)(meso_rt* rt, mesoi_object* o, const mesoi_draw* ds,
+                                         const meso_rt_draw_desc* d, const meso_rt_instance* in, uint32_t index,
+                                         float* texels, void* user);
+meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o, const meso_rt_draw_desc* d,
+                                   const meso_rt_instance* inst, uint32_t count, int need_inverse,
+                                   mesoi_instance_fn fn, void* user, GLuint* tex);
+void mesoi_instances_destroy(meso_rt* rt);
+/* The vertex-stage define instance.glsl needs before it. */
+#define MESOI_GLSL_VERTEX_STAGE "#define MESO_STAGE_VERTEX 1\n"
 
 /* rt_objects.c */
 mesoi_object* mesoi_lookup(const meso_rt* rt, meso_rt_object h);

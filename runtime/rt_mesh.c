@@ -17,10 +17,11 @@
 
 meso_result mesoi_mesh_program_create(meso_rt* rt)
 {
-    const char* vsrc = mesoi_glsl_mesh_vert;
-    const char* fsrc = mesoi_glsl_mesh_frag;
-    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, &vsrc, 1, "mesh_vert.glsl"),
-                              mesoi_compile(rt, GL_FRAGMENT_SHADER, &fsrc, 1, "mesh_frag.glsl"), "mesh", NULL, 0)
+    const char* vs[4] = {"#version 330 core\n", MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_mesh_vert};
+    const char* fs[2] = {"#version 330 core\n", mesoi_glsl_mesh_frag};
+    static const char* const samplers[1] = {"u_instances"}; /* unit 0: the instance data */
+    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "mesh_vert.glsl"),
+                              mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 2, "mesh_frag.glsl"), "mesh", samplers, 1)
                ? MESO_OK
                : MESO_ERR_GL;
 }
@@ -85,16 +86,21 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
     return MESO_OK;
 }
 
-meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
+meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                            uint32_t count)
 {
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, 0, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 0, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
     ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
+    static const GLenum targets[1] = {GL_TEXTURE_BUFFER};
+    GLuint bind[1] = {0};
+    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 0, NULL, NULL, &bind[0])) != MESO_OK)
+        return r;
     /* Meshes are drawn with the host's culling, not the ray casters' back
      * faces (raycast 0). */
-    mesoi_draw_begin(rt, &ds, &rt->mesh_program, 0, 0, NULL, NULL);
+    mesoi_draw_begin(rt, &ds, &rt->mesh_program, 0, inst ? 1 : 0, targets, bind);
     /* The light in world space, as the fragment shader takes it. */
     float light[3] = {0.3f, 0.8f, 0.5f};
     if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
@@ -109,6 +115,10 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     gl->UniformMatrix4fv(u[MESOI_U_model], 1, GL_FALSE, ds.model);
     gl->Uniform3fv(u[MESOI_U_light_dir], 1, light);
     gl->BindVertexArray(o->vao);
-    gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
+    if (inst)
+        gl->DrawElementsInstanced(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT,
+                                  (const void*)(uintptr_t)o->indices_offset, (GLsizei)count);
+    else
+        gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
     return mesoi_draw_end(rt, &ds, d->stats, "mesh");
 }

@@ -1,9 +1,8 @@
 /*
  * rt_objects.c — the object table and the dispatch for every kind: load a
  * record's object (MESH, SHELL, FRUSTA, CELLS) into a generation-checked
- * slot through its kind's loader, release it, report its bounds, and route
- * meso_rt_draw to the kind's renderer (rt_mesh.c, rt_shell.c, rt_frusta.c,
- * rt_cells.c).
+ * slot through its kind's loader, release it and report its bounds
+ * (rt_instances.c routes the draws to the kinds' renderers).
  */
 #include "rt_internal.h"
 
@@ -162,20 +161,4 @@ void mesoi_objects_destroy(meso_rt* rt)
     mesoi_rt_free(rt, rt->objects);
     rt->objects = NULL;
     rt->object_capacity = 0;
-}
-
-meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d)
-{
-    mesoi_object* o = mesoi_lookup(rt, h);
-    if (!o || !d) {
-        if (rt)
-            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: stale handle or NULL desc");
-        return MESO_ERR_INVALID_ARG;
-    }
-    switch (o->kind) {
-    case MESO_OBJECT_SHELL: return mesoi_shell_draw(rt, o, d);
-    case MESO_OBJECT_FRUSTA: return mesoi_frusta_draw(rt, o, d);
-    case MESO_OBJECT_CELLS: return mesoi_cells_draw(rt, o, d);
-    default: return mesoi_mesh_draw(rt, o, d);
-    }
 }

@@ -409,8 +409,8 @@ meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_
 
 /* Programs per technique, with or without the stats counters (atomics
  * cost time, so draws that do not ask for stats run without them). */
-static const char* const shell_samplers[SHELL_UNIT_COUNT] = {"u_verts", "u_index", "u_height", "u_volume",
-                                                             "u_dist"};
+static const char* const shell_samplers[SHELL_UNIT_COUNT + 1] = {"u_verts", "u_index", "u_height", "u_volume",
+                                                                 "u_dist", "u_instances"};
 
 static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, int stats)
 {
@@ -420,14 +420,15 @@ static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, i
     char head[160];
     snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_TECHNIQUE %d\n", stats ? "430" : "330",
              stats ? "#define MESO_STATS 1\n" : "", (int)t);
-    const char* vs[3] = {head, mesoi_glsl_shell_common, mesoi_glsl_shell_vert};
-    const char* fs[5] = {head, mesoi_glsl_shell_common, mesoi_glsl_raycast_common, mesoi_glsl_shell_texfn,
-                         mesoi_glsl_shell_frag};
+    const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_shell_common,
+                         mesoi_glsl_shell_vert};
+    const char* fs[6] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
+                         mesoi_glsl_shell_texfn, mesoi_glsl_shell_frag};
     static const char* const names[MESO_SHELL_TECHNIQUE_COUNT] = {"shell smooth", "shell curved", "shell tetra",
                                                                   "shell segment"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "shell_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_frag.glsl"), names[t], shell_samplers,
-                       SHELL_UNIT_COUNT);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 6, "shell_frag.glsl"), names[t], shell_samplers,
+                       SHELL_UNIT_COUNT + 1);
     return p->id ? p : NULL;
 }
 
@@ -454,12 +455,70 @@ void mesoi_shell_programs_destroy(meso_rt* rt)
 
 /* --- drawing ------------------------------------------------------------- */
 
-meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
+/* The error bound's scale (shell_frag.glsl u_err_scale) for the model
+ * scale of ds: one pixel spans 2 w_clip / (proj[1][1] · height) eye units
+ * at clip w. */
+static double err_scale_of(const mesoi_draw* ds, const meso_rt_shell_draw* k)
+{
+    const double scale = ds->model_scale;
+    const double error_px = k->error_px > 0.0f ? k->error_px : 1.0;
+    return error_px * 2.0 / (ds->proj11 * (ds->viewport[3] > 0 ? ds->viewport[3] : 1)) / (scale > 0 ? scale : 1);
+}
+
+static meso_result instance_err(meso_rt* rt, mesoi_object* o, const mesoi_draw* ds, const meso_rt_draw_desc* d,
+                                const meso_rt_instance* in, uint32_t index, float* texels, void* user)
+{
+    (void)rt, (void)o, (void)in, (void)index, (void)user;
+    texels[35] = (float)err_scale_of(ds, &d->shell);
+    return MESO_OK;
+}
+
+/* Instances with has_time show their frame first; all must show the same
+ * one (per-instance frames are not resident at once yet). */
+static meso_result instance_frames(meso_rt* rt, mesoi_object* o, const meso_rt_instance* inst, uint32_t count)
+{
+    const mesoi_shell* s = o->shell;
+    uint32_t frame = UINT32_MAX, first = 0;
+    for (uint32_t i = 0; i < count && s->anim.frame_count; ++i) {
+        if (!inst[i].has_time)
+            continue;
+        if (inst[i].time != inst[i].time) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw_instanced: instance %u: NaN time",
+                      i);
+            return MESO_ERR_INVALID_ARG;
+        }
+        const uint32_t f = meso_anim_frame_at(&s->anim, inst[i].time);
+        if (frame == UINT32_MAX) {
+            frame = f;
+            first = i;
+        } else if (f != frame) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                      "meso_rt_draw_instanced: instance %u shows frame %u and instance %u frame %u; instances at "
+                      "different frames of an animated shell are not supported yet (draw one call per frame)",
+                      first, frame, i, f);
+            return MESO_ERR_UNSUPPORTED;
+        }
+    }
+    if (frame == UINT32_MAX)
+        return MESO_OK;
+    meso_rt_object h = {0};
+    h.id = (uint32_t)(o - rt->objects) | (o->generation << 16);
+    return meso_rt_shell_set_time(rt, h, inst[first].time);
+}
+
+meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count)
 {
     const mesoi_shell* s = o->shell;
     const meso_rt_shell_draw* k = &d->shell;
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
+    if (k->technique == MESO_SHELL_SLICES && inst) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw_instanced: MESO_SHELL_SLICES is not instanced (its passes share one offscreen "
+                  "target per draw); draw each instance with meso_rt_draw");
+        return MESO_ERR_UNSUPPORTED;
+    }
     if (k->technique == MESO_SHELL_SLICES)
         return mesoi_slices_draw(rt, o, d);
     if ((unsigned)k->technique >= MESO_SHELL_TECHNIQUE_COUNT) {
@@ -468,25 +527,26 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         return MESO_ERR_INVALID_ARG;
     }
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
+    meso_result r = mesoi_draw_prepare(rt, d, 1, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
     const mesoi_program* prog = shell_program(rt, k->technique, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
-    const double scale = ds.model_scale;
-    const double error_px = k->error_px > 0.0f ? k->error_px : 1.0;
-    /* One pixel spans 2 w_clip / (proj[1][1] · height) eye units at clip w. */
-    const double err_scale =
-        error_px * 2.0 / (ds.proj11 * (ds.viewport[3] > 0 ? ds.viewport[3] : 1)) / (scale > 0 ? scale : 1);
+    const double err_scale = err_scale_of(&ds, k);
+    GLuint inst_tex = 0;
+    if (inst && ((r = instance_frames(rt, o, inst, count)) != MESO_OK ||
+                 (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 1, instance_err, NULL, &inst_tex)) !=
+                     MESO_OK))
+        return r;
     float max_tex = fmaxf(s->tex_size[0], fmaxf(s->tex_size[1], s->tex_size[2]));
 
-    static const GLenum unit_target[SHELL_UNIT_COUNT] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
-                                                   GL_TEXTURE_3D, GL_TEXTURE_3D};
-    const GLuint bind[SHELL_UNIT_COUNT] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
-                                     s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex};
-    mesoi_draw_begin(rt, &ds, prog, 1, SHELL_UNIT_COUNT, unit_target, bind);
+    static const GLenum unit_target[SHELL_UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
+                                                         GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_BUFFER};
+    const GLuint bind[SHELL_UNIT_COUNT + 1] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
+                                               s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, inst_tex};
+    mesoi_draw_begin(rt, &ds, prog, 1, inst ? SHELL_UNIT_COUNT + 1 : SHELL_UNIT_COUNT, unit_target, bind);
     const GLint* u = prog->loc;
     gl->Uniform1f(u[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(u[MESOI_U_tex_kind], s->tex_kind);
@@ -501,6 +561,9 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
      * quarter texel: finer than the texture's own detail. */
     gl->Uniform1f(u[MESOI_U_min_step], max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
     const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
-    gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
+    if (inst)
+        gl->DrawArraysInstanced(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count, (GLsizei)count);
+    else
+        gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
     return mesoi_draw_end(rt, &ds, d->stats, "shell");
 }

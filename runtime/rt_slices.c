@@ -55,17 +55,20 @@ static const mesoi_program* slice_program(meso_rt* rt, int pass)
     if (p->id)
         return p;
     char head[128];
-    snprintf(head, sizeof(head), "#version 330 core\n#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n",
+    /* MESO_SINGLE: never instanced, instance.glsl leaves the uniforms as they are */
+    snprintf(head, sizeof(head),
+             "#version 330 core\n#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n#define MESO_SINGLE 1\n",
              (int)MESO_SHELL_SLICES, pass);
-    const char* vs[4] = {head, mesoi_glsl_shell_common, mesoi_glsl_shell_texfn, mesoi_glsl_shell_slices_vert};
-    const char* fs[5] = {head, mesoi_glsl_shell_common, mesoi_glsl_raycast_common, mesoi_glsl_shell_texfn,
-                         mesoi_glsl_shell_slices_frag};
+    const char* vs[5] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_shell_texfn,
+                         mesoi_glsl_shell_slices_vert};
+    const char* fs[6] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
+                         mesoi_glsl_shell_texfn, mesoi_glsl_shell_slices_frag};
     static const char* const names[PASS_COUNT] = {"slices none", "slices first pass", "slices normal",
                                                   "slices texcoord", "slices composite"};
     static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
                                                       "u_dist",  "u_first", "u_second"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "shell_slices_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_slices_frag.glsl"), names[pass], samplers,
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_slices_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 6, "shell_slices_frag.glsl"), names[pass], samplers,
                        SLICE_UNITS);
     return p->id ? p : NULL;
 }
@@ -169,7 +172,7 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     meso_rt_draw_desc dd = *d;
     dd.stats = NULL; /* the slice shaders count nothing */
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, &dd, 1, &ds);
+    meso_result r = mesoi_draw_prepare(rt, &dd, 1, 0, &ds);
     if (r != MESO_OK)
         return r;
     const int two_pass = k->slice_interp != MESO_SLICE_NONE;

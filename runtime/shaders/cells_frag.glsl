@@ -27,8 +27,7 @@ uniform sampler3D u_nrmm;
 uniform sampler3D u_colr;
 uniform samplerCube u_env;  // the host's environment (u_has_env == 1)
 uniform int u_has_env;
-uniform mat3 u_env_rot;     // object -> world directions
-uniform vec3 u_light_obj;   // towards the light, object space, unit
+// u_env_rot, u_light_obj: instance.glsl
 uniform vec3 u_origin;      // grid origin
 uniform float u_h;          // voxel size
 uniform ivec3 u_tiles;      // T0, T1, T2
@@ -335,6 +334,7 @@ bool cross_face(vec3 d, vec3 ns, vec3 g, float eta, out vec3 t)
 
 void main()
 {
+    instance_begin();
     vec3 ro, rd;
     fragment_ray(ro, rd);
     // Up to the far plane; an infinite one (w = 0 there) does not limit.

@@ -8,6 +8,7 @@ out vec3 v_pos;
 out vec3 v_nrm;
 void main()
 {
+    instance_begin();
     v_pos = a_position;
     v_nrm = a_normal;
     gl_Position = u_mvp * vec4(a_position, 1.0);

@@ -5,5 +5,4 @@
 // texel layout.
 
 uniform samplerBuffer u_prims; // MESO_FRUSTA_TEXELS RGBA32F texels per primitive
-uniform mat4 u_mvp;            // object -> clip
-uniform mat4 u_inv_mvp;        // clip -> object
+// u_mvp, u_inv_mvp: instance.glsl

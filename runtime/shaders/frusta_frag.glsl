@@ -52,7 +52,7 @@ out vec4 o_color;
 
 uniform sampler2D u_relief;  // RELF heights (value / max)
 uniform ivec2 u_relief_size; // texels; (0, 0) without relief
-uniform vec3 u_light_obj;    // towards the light, object space, unit
+// u_light_obj: instance.glsl
 uniform vec3 u_albedo;
 uniform int u_relief_steps;
 uniform int u_bisect_steps;
@@ -441,6 +441,7 @@ void frustum_main(int prim, vec3 ro, vec3 rd)
 
 void main()
 {
+    instance_begin();
     vec3 ro, rd;
     fragment_ray(ro, rd);
     if (texelFetch(u_prims, MESO_FRUSTA_TEXELS * v_prim + 6).x != 0.0)

@@ -22,8 +22,10 @@ const int k_corner[36] = int[36](0, 1, 2, 0, 2, 3,   // end-0 face
 
 void main()
 {
-    int prim = gl_VertexID / 36;
-    int corner = k_corner[gl_VertexID - 36 * prim];
+    instance_begin();
+    int local = gl_VertexID / 36;
+    int corner = k_corner[gl_VertexID - 36 * local];
+    int prim = g_prim_base + local; // the instance's pose slot (instance.glsl)
     vec3 p = texelFetch(u_prims, MESO_FRUSTA_TEXELS * prim + MESO_FRUSTA_CORNER0 + corner).xyz;
     v_prim = prim;
     gl_Position = u_mvp * vec4(p, 1.0);

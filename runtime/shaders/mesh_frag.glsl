@@ -1,5 +1,4 @@
-#version 330 core
-// Two-sided Lambert with a little ambient; depth is the rasterised depth.
+// mesh_frag.glsl - prepended: #version. Two-sided Lambert with a little ambient; depth is the rasterised depth.
 in vec3 v_normal;
 uniform vec3 u_light_dir; // world space, towards the light, normalised
 uniform vec3 u_albedo;

@@ -8,8 +8,7 @@
 
 uniform samplerBuffer u_verts;  // 2 texels per vertex: (bottom.xyz, s), (top.xyz, t)
 uniform usamplerBuffer u_index; // 3 per triangle
-uniform mat4 u_mvp;             // object -> clip
-uniform mat4 u_inv_mvp;         // clip -> object
+// u_mvp, u_inv_mvp: instance.glsl
 uniform float u_uv_scale;
 
 struct Prism {

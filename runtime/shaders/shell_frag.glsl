@@ -28,7 +28,7 @@ out vec4 o_color;
 // The texture function, tex_st and shade: shell_texfn.glsl.
 uniform sampler3D u_dist;
 uniform int u_has_dist;
-uniform float u_err_scale; // error_px * object units per pixel per unit w_clip
+// u_err_scale: instance.glsl
 uniform int u_max_steps;
 uniform int u_bisect_steps;
 uniform int u_segment_steps;
@@ -246,6 +246,7 @@ bool onto_ray(Prism P, vec3 q, vec3 ro, vec3 rd, out vec3 r)
 // --- tetrahedra ------------------------------------------------------------
 void main()
 {
+    instance_begin();
     Prism P = fetch_prism(v_prism);
     ivec4 T = tet_corners(P, v_tet);
     vec3 X[4];
@@ -340,6 +341,7 @@ void main()
 // --- smooth, curved, segment only ------------------------------------------
 void main()
 {
+    instance_begin();
     Prism P = fetch_prism(v_prism);
     vec3 ro, rd;
     fragment_ray(ro, rd);

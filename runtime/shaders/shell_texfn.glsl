@@ -7,7 +7,7 @@ uniform int u_tex_kind; // 0 none (all solid), 1 height field, 2 density volume
 uniform sampler2D u_height;
 uniform sampler3D u_volume;
 uniform vec3 u_tex_size;   // texels of the texture function (1 on unused axes)
-uniform vec3 u_light_obj;  // towards the light, object space, unit
+// u_light_obj: instance.glsl
 uniform vec3 u_albedo;
 
 // --- texture function (FORMAT.md sec. 7.2) -------------------------------------

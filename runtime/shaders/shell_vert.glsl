@@ -18,6 +18,7 @@ flat out int v_tet;
 
 void main()
 {
+    instance_begin();
 #if MESO_TECHNIQUE == 2
     const int per = 36;
 #else

@@ -32,24 +32,8 @@
 #include "gl_fbo.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
+#include "test_need.h"
 
-/* Aborts with the message unless `ok`. */
-#if defined(__GNUC__)
-static void need(int ok, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
-#endif
-static void need(int ok, const char* fmt, ...)
-{
-    if (ok)
-        return;
-    va_list ap;
-    va_start(ap, fmt);
-    fputs("FAILED: ", stderr);
-    vfprintf(stderr, fmt, ap);
-    fputs("\n", stderr);
-    va_end(ap);
-    abort();
-}
-#define CHECK(x) need((x), "%s", #x)
 
 enum { W = 96, H = 72, FRAMES = 4 };
 
