@@ -38,6 +38,7 @@
 #include "mesh_chunk.h"
 #include "meso_rt.h"
 #include "png_io.h"
+#include "screenshot.h"
 
 static const char* const usage =
     "Usage: mesoview [FILE.meso] [options]\n"
@@ -319,18 +320,7 @@ static void on_log(void* user, meso_log_level level, meso_log_item item, const c
 
 static int save_screenshot(const view_gl* gl, GLFWwindow* win, const char* path)
 {
-    int w, h;
-    glfwGetFramebufferSize(win, &w, &h);
-    unsigned char* px = malloc((size_t)w * (size_t)h * 4);
-    if (!px)
-        return -1;
-    gl->ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, px);
-    char why[256];
-    int rc = meso_png_write_rgba8(path, px, w, h, 1, why, sizeof(why));
-    if (rc != 0)
-        fprintf(stderr, "mesoview error: %s\n", why);
-    free(px);
-    return rc;
+    return example_save_screenshot(gl->ReadPixels, win, path, "mesoview");
 }
 
 static void load(void* dst, const char* name, int* missing)

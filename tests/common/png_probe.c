@@ -1,15 +1,21 @@
 /* png_probe — test helper: `png_probe FILE` prints "W H" and the RGBA of the
  * four corner pixels and the centre, one per line, so shell tests can assert
- * on images without another dependency. */
+ * on images without another dependency. `png_probe FILE --dominant r|g|b`
+ * prints instead how many pixels have that channel above both others by
+ * more than 8 (e.g. the green cacti of tests/integration/cactus_field_xvfb.sh). */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "png_io.h"
 
 int main(int argc, char** argv)
 {
-    if (argc != 2) {
-        fprintf(stderr, "usage: png_probe FILE.png\n");
+    const int dominant = argc == 4 && !strcmp(argv[2], "--dominant") && strchr("rgb", argv[3][0]) && argv[3][0]
+                             ? (int)(strchr("rgb", argv[3][0]) - "rgb")
+                             : -1;
+    if (argc != 2 && dominant < 0) {
+        fprintf(stderr, "usage: png_probe FILE.png [--dominant r|g|b]\n");
         return 1;
     }
     uint8_t* px;
@@ -18,6 +24,17 @@ int main(int argc, char** argv)
     if (meso_png_read_rgba8(argv[1], &px, &w, &h, why, sizeof(why)) != 0) {
         fprintf(stderr, "png_probe: %s\n", why);
         return 3;
+    }
+    if (dominant >= 0) {
+        long n = 0;
+        for (size_t i = 0; i < (size_t)w * (size_t)h; ++i) {
+            const uint8_t* p = px + 4 * i;
+            const int c = p[dominant], o1 = p[(dominant + 1) % 3], o2 = p[(dominant + 2) % 3];
+            n += c > o1 + 8 && c > o2 + 8;
+        }
+        printf("%ld\n", n);
+        free(px);
+        return 0;
     }
     printf("%d %d\n", w, h);
     const int at[5][2] = {{0, 0}, {w - 1, 0}, {0, h - 1}, {w - 1, h - 1}, {w / 2, h / 2}};
