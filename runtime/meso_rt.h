@@ -330,7 +330,8 @@ typedef struct meso_rt_instance {
 } meso_rt_instance;
 
 /* Draw `count` instances of one object in one instanced GL draw call
- * (glDrawArraysInstanced / glDrawElementsInstanced), each with its own
+ * (glDrawArraysInstanced / glDrawElementsInstanced; animated shells: one
+ * per frame the instances show, see below), each with its own
  * model matrix (desc->model is ignored) and, for frusta, its own pose slot.
  * An instance draws what meso_rt_draw would with desc->model = its model
  * (the same per-object values, computed on the CPU in double precision
@@ -349,9 +350,11 @@ typedef struct meso_rt_instance {
  * the context's texture buffer holds (GL_MAX_TEXTURE_BUFFER_SIZE / 14).
  * MESO_SHELL_SLICES is not instanced (its two-pass variants composite
  * through one offscreen target per draw): MESO_ERR_UNSUPPORTED. Shells with
- * stored frames: instances with has_time must all show the same frame
- * (it is shown first, as meso_rt_shell_set_time does); instances at
- * different frames are MESO_ERR_UNSUPPORTED for now. */
+ * stored frames: each instance shows the frame of its time (has_time) or
+ * the texture shown; the instances are drawn grouped by frame, the texture
+ * shown first, with one instanced call and one frame upload (as
+ * meso_rt_shell_set_time) per further frame, so afterwards the shell shows
+ * the last group's frame; a NaN time is refused naming the instance. */
 MESO_API meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc,
                                             const meso_rt_instance* instances, uint32_t count);
 

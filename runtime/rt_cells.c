@@ -210,7 +210,8 @@ static const mesoi_program* cells_program(meso_rt* rt, int stats)
     if (p->id)
         return p;
     char head[160];
-    snprintf(head, sizeof(head), "#version %s core\n%s", stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "");
+    snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_INSTANCE_MODEL 1\n", stats ? "430" : "330",
+             stats ? "#define MESO_STATS 1\n" : "");
     const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_cells_vert};
     const char* fs[4] = {head, mesoi_glsl_instance, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
     static const char* const samplers[UNIT_COUNT + 1] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env",
@@ -308,7 +309,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
                                                    GL_TEXTURE_CUBE_MAP, GL_TEXTURE_BUFFER};
     GLuint bind[UNIT_COUNT + 1] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment, 0};
     int from_near = 0;
-    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 1, instance_cells, &from_near,
+    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, 1, instance_cells, &from_near,
                                             &bind[UNIT_COUNT])) != MESO_OK)
         return r;
     mesoi_draw_begin(rt, &ds, prog, 1, inst ? UNIT_COUNT + 1 : UNIT_COUNT, targets, bind);

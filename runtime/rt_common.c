@@ -9,7 +9,9 @@
  * MESO_STATE_RESTORE they save and restore the program, vertex array,
  * active texture and the bindings of the units the kind uses, depth
  * test/func/mask, culling and the shader storage binding of the counters;
- * under MESO_STATE_HOST_OWNS they query nothing and restore nothing. The
+ * under MESO_STATE_HOST_OWNS they query nothing and restore nothing
+ * (meso_rt_draw_list, rt_instances.c, saves and restores once around its
+ * items and draws them under MESO_STATE_HOST_OWNS). The
  * host's GL error queue is read only when the context was created with
  * check_gl_errors; uploads detect failure from the objects themselves
  * (a texture level's width, a buffer's size).
@@ -483,6 +485,7 @@ void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
     gl->Uniform3fv(p->loc[MESOI_U_albedo], 1, s->albedo);
     gl->Uniform4fv(p->loc[MESOI_U_depth_ndc], 1, s->depth_ndc);
     gl->Uniform1i(p->loc[MESOI_U_instanced], s->instanced);
+    gl->Uniform1i(p->loc[MESOI_U_instance_base], 0);
 }
 
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,

@@ -768,7 +768,7 @@ meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     mesoi_gl* gl = &rt->gl;
     static const GLenum targets[UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_2D, GL_TEXTURE_BUFFER};
     GLuint bind[UNIT_COUNT + 1] = {s->prim_tex, s->relief_tex, 0};
-    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 1, instance_slot, NULL,
+    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, 1, instance_slot, NULL,
                                             &bind[UNIT_INSTANCES])) != MESO_OK)
         return r;
     mesoi_draw_begin(rt, &ds, prog, 1, inst ? UNIT_COUNT + 1 : UNIT_COUNT, targets, bind);

@@ -83,8 +83,8 @@ static meso_result upload(meso_rt* rt, size_t floats, int restore)
 }
 
 meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o, const meso_rt_draw_desc* d,
-                                   const meso_rt_instance* inst, uint32_t count, int need_inverse,
-                                   mesoi_instance_fn fn, void* user, GLuint* tex)
+                                   const meso_rt_instance* inst, const uint32_t* order, uint32_t count,
+                                   int need_inverse, mesoi_instance_fn fn, void* user, GLuint* tex)
 {
     GLint max_texels = 0;
     rt->gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
@@ -99,7 +99,8 @@ meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o,
         return MESO_ERR_OUT_OF_MEMORY;
     int mirrored = 0;
     for (uint32_t i = 0; i < count; ++i) {
-        meso_result r = mesoi_draw_model(rt, ds, inst[i].model, need_inverse, (int64_t)i);
+        const uint32_t j = order ? order[i] : i; /* the caller's index, for the logs */
+        meso_result r = mesoi_draw_model(rt, ds, inst[j].model, need_inverse, (int64_t)j);
         if (r != MESO_OK)
             return r;
         if (i == 0)
@@ -107,9 +108,9 @@ meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o,
         else if (ds->mirrored != mirrored) {
             /* The winding (front faces) is one GL state per draw call. */
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                      "meso_rt_draw_instanced: instance %u is %smirrored and instance 0 is %s; draw mirrored "
+                      "meso_rt_draw_instanced: instance %u is %smirrored and instance %u is %s; draw mirrored "
                       "instances in a call of their own",
-                      i, ds->mirrored ? "" : "not ", mirrored ? "" : "not");
+                      j, ds->mirrored ? "" : "not ", order ? order[0] : 0, mirrored ? "" : "not");
             return MESO_ERR_INVALID_ARG;
         }
         float* t = all + (size_t)i * MESOI_INSTANCE_TEXELS * 4;
@@ -118,7 +119,7 @@ meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o,
         memcpy(t + 16, ds->inv_mvp, sizeof(ds->inv_mvp));
         memcpy(t + 32, ds->light_obj, sizeof(ds->light_obj));
         memcpy(t + 40, ds->model, sizeof(ds->model));
-        if (fn && (r = fn(rt, o, ds, d, &inst[i], i, t, user)) != MESO_OK)
+        if (fn && (r = fn(rt, o, ds, d, &inst[j], j, t, user)) != MESO_OK)
             return r;
     }
     ds->mirrored = mirrored;

@@ -32,7 +32,7 @@ typedef struct mesoi_object {
     X(relief_size) X(relief_steps)                                     /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
     X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) /* cells */                              \
-    X(instanced)                                                       /* instance.glsl */
+    X(instanced) X(instance_base)                                      /* instance.glsl */
 
 enum {
 #define MESOI_X_ENUM(name) MESOI_U_##name,
@@ -249,7 +249,8 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
 
 /* rt_instances.c: per-instance data (shaders/instance.glsl has the texel
  * layout: 0-3 mvp, 4-7 inv_mvp, 8 light_obj + err_scale, 9 prim_base,
- * 10-13 model). upload: for each instance mesoi_draw_model (refusals name
+ * 10-13 model). upload: for each instance (inst[order[i]], or inst[i]
+ * without an order) mesoi_draw_model (refusals name
  * the instance; mixed mirrored and unmirrored instances are refused), the
  * shared texels, then the kind's `fn` for its own; the result into the
  * instance buffer, *tex its texture (to bind at the kind's instance unit).
@@ -259,8 +260,8 @@ typedef meso_result (*mesoi_instance_fn)(meso_rt* rt, mesoi_object* o, const mes
                                          const meso_rt_draw_desc* d, const meso_rt_instance* in, uint32_t index,
                                          float* texels, void* user);
 meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o, const meso_rt_draw_desc* d,
-                                   const meso_rt_instance* inst, uint32_t count, int need_inverse,
-                                   mesoi_instance_fn fn, void* user, GLuint* tex);
+                                   const meso_rt_instance* inst, const uint32_t* order, uint32_t count,
+                                   int need_inverse, mesoi_instance_fn fn, void* user, GLuint* tex);
 void mesoi_instances_destroy(meso_rt* rt);
 /* The vertex-stage define instance.glsl needs before it. */
 #define MESOI_GLSL_VERTEX_STAGE "#define MESO_STAGE_VERTEX 1\n"

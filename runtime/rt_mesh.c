@@ -17,7 +17,8 @@
 
 meso_result mesoi_mesh_program_create(meso_rt* rt)
 {
-    const char* vs[4] = {"#version 330 core\n", MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_mesh_vert};
+    const char* vs[4] = {"#version 330 core\n#define MESO_INSTANCE_MODEL 1\n", MESOI_GLSL_VERTEX_STAGE,
+                         mesoi_glsl_instance, mesoi_glsl_mesh_vert};
     const char* fs[2] = {"#version 330 core\n", mesoi_glsl_mesh_frag};
     static const char* const samplers[1] = {"u_instances"}; /* unit 0: the instance data */
     return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "mesh_vert.glsl"),
@@ -96,7 +97,7 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
     static const GLenum targets[1] = {GL_TEXTURE_BUFFER};
     GLuint bind[1] = {0};
-    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 0, NULL, NULL, &bind[0])) != MESO_OK)
+    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, 0, NULL, NULL, &bind[0])) != MESO_OK)
         return r;
     /* Meshes are drawn with the host's culling, not the ray casters' back
      * faces (raycast 0). */

@@ -365,6 +365,18 @@ meso_result meso_rt_shell_set_texture(meso_rt* rt, meso_rt_object h, const meso_
     return r;
 }
 
+/* Uploads stored frame k as the texture shown. */
+static meso_result show_frame(meso_rt* rt, mesoi_shell* s, uint32_t k, const char* what)
+{
+    meso_rt_shell_texture d = s->frame_desc;
+    d.data = s->fn_frames + k * s->fn_bytes;
+    d.dist_data = s->dist_frames ? s->dist_frames + k * s->dist_bytes : NULL;
+    const meso_result r = replace_texture(rt, s, &d, what);
+    if (r == MESO_OK)
+        s->shown_frame = k;
+    return r;
+}
+
 meso_result meso_rt_shell_set_time(meso_rt* rt, meso_rt_object h, double seconds)
 {
     mesoi_object* o = mesoi_lookup(rt, h);
@@ -378,15 +390,7 @@ meso_result meso_rt_shell_set_time(meso_rt* rt, meso_rt_object h, double seconds
     if (!s->anim.frame_count)
         return MESO_OK;
     const uint32_t k = meso_anim_frame_at(&s->anim, seconds);
-    if (k == s->shown_frame)
-        return MESO_OK;
-    meso_rt_shell_texture d = s->frame_desc;
-    d.data = s->fn_frames + k * s->fn_bytes;
-    d.dist_data = s->dist_frames ? s->dist_frames + k * s->dist_bytes : NULL;
-    const meso_result r = replace_texture(rt, s, &d, "meso_rt_shell_set_time");
-    if (r == MESO_OK)
-        s->shown_frame = k;
-    return r;
+    return k == s->shown_frame ? MESO_OK : show_frame(rt, s, k, "meso_rt_shell_set_time");
 }
 
 meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_t* frame_count, float* fps,
@@ -473,37 +477,67 @@ static meso_result instance_err(meso_rt* rt, mesoi_object* o, const mesoi_draw* 
     return MESO_OK;
 }
 
-/* Instances with has_time show their frame first; all must show the same
- * one (per-instance frames are not resident at once yet). */
-static meso_result instance_frames(meso_rt* rt, mesoi_object* o, const meso_rt_instance* inst, uint32_t count)
+/* The instances' frames (has_time: their time's; else the texture shown)
+ * and the order they are drawn in: grouped by frame, the texture shown
+ * first (no upload), then the stored frames in ascending order, the
+ * caller's order kept inside a group. groups[g] = {frame, first, count}.
+ * Allocates *order and *groups (free both with mesoi_rt_free). */
+typedef struct frame_group {
+    uint32_t frame, first, count;
+} frame_group;
+
+static meso_result instance_frames(meso_rt* rt, const mesoi_shell* s, const meso_rt_instance* inst, uint32_t count,
+                                   uint32_t** order_out, frame_group** groups_out, uint32_t* group_count)
 {
-    const mesoi_shell* s = o->shell;
-    uint32_t frame = UINT32_MAX, first = 0;
-    for (uint32_t i = 0; i < count && s->anim.frame_count; ++i) {
-        if (!inst[i].has_time)
+    *order_out = NULL;
+    *groups_out = NULL;
+    *group_count = 0;
+    const uint32_t frames = s->anim.frame_count, shown = s->shown_frame;
+    /* key 0: the texture shown; 1 + k: stored frame k */
+    uint32_t* key = mesoi_rt_alloc(rt, sizeof(uint32_t) * count);
+    uint32_t* order = mesoi_rt_alloc(rt, sizeof(uint32_t) * count);
+    uint32_t* first = mesoi_rt_alloc(rt, sizeof(uint32_t) * (frames + 2));
+    frame_group* groups = mesoi_rt_alloc(rt, sizeof(frame_group) * (frames + 1));
+    meso_result r = key && order && first && groups ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    for (uint32_t i = 0; r == MESO_OK && i < count; ++i) {
+        key[i] = 0;
+        if (!frames || !inst[i].has_time)
             continue;
         if (inst[i].time != inst[i].time) {
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw_instanced: instance %u: NaN time",
                       i);
-            return MESO_ERR_INVALID_ARG;
+            r = MESO_ERR_INVALID_ARG;
+            break;
         }
-        const uint32_t f = meso_anim_frame_at(&s->anim, inst[i].time);
-        if (frame == UINT32_MAX) {
-            frame = f;
-            first = i;
-        } else if (f != frame) {
-            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                      "meso_rt_draw_instanced: instance %u shows frame %u and instance %u frame %u; instances at "
-                      "different frames of an animated shell are not supported yet (draw one call per frame)",
-                      first, frame, i, f);
-            return MESO_ERR_UNSUPPORTED;
-        }
+        const uint32_t k = meso_anim_frame_at(&s->anim, inst[i].time);
+        key[i] = k == shown ? 0 : 1 + k;
     }
-    if (frame == UINT32_MAX)
-        return MESO_OK;
-    meso_rt_object h = {0};
-    h.id = (uint32_t)(o - rt->objects) | (o->generation << 16);
-    return meso_rt_shell_set_time(rt, h, inst[first].time);
+    if (r == MESO_OK) { /* a counting sort by key, stable */
+        memset(first, 0, sizeof(uint32_t) * (frames + 2));
+        for (uint32_t i = 0; i < count; ++i)
+            ++first[key[i] + 1];
+        for (uint32_t k = 0; k <= frames; ++k) {
+            if (first[k + 1]) {
+                groups[*group_count].frame = k == 0 ? shown : k - 1;
+                groups[*group_count].first = first[k];
+                groups[*group_count].count = first[k + 1];
+                ++*group_count;
+            }
+            first[k + 1] += first[k];
+        }
+        for (uint32_t i = 0; i < count; ++i)
+            order[first[key[i]]++] = i;
+    }
+    mesoi_rt_free(rt, key);
+    mesoi_rt_free(rt, first);
+    if (r != MESO_OK) {
+        mesoi_rt_free(rt, order);
+        mesoi_rt_free(rt, groups);
+        return r;
+    }
+    *order_out = order;
+    *groups_out = groups;
+    return MESO_OK;
 }
 
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
@@ -536,10 +570,19 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     mesoi_gl* gl = &rt->gl;
     const double err_scale = err_scale_of(&ds, k);
     GLuint inst_tex = 0;
-    if (inst && ((r = instance_frames(rt, o, inst, count)) != MESO_OK ||
-                 (r = mesoi_instances_upload(rt, &ds, o, d, inst, count, 1, instance_err, NULL, &inst_tex)) !=
-                     MESO_OK))
-        return r;
+    uint32_t* order = NULL;
+    frame_group* groups = NULL;
+    uint32_t group_count = 0;
+    if (inst) {
+        r = instance_frames(rt, s, inst, count, &order, &groups, &group_count);
+        if (r == MESO_OK)
+            r = mesoi_instances_upload(rt, &ds, o, d, inst, order, count, 1, instance_err, NULL, &inst_tex);
+        if (r != MESO_OK) {
+            mesoi_rt_free(rt, order);
+            mesoi_rt_free(rt, groups);
+            return r;
+        }
+    }
     float max_tex = fmaxf(s->tex_size[0], fmaxf(s->tex_size[1], s->tex_size[2]));
 
     static const GLenum unit_target[SHELL_UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
@@ -561,9 +604,28 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
      * quarter texel: finer than the texture's own detail. */
     gl->Uniform1f(u[MESOI_U_min_step], max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
     const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
-    if (inst)
-        gl->DrawArraysInstanced(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count, (GLsizei)count);
-    else
+    if (!inst) {
         gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
-    return mesoi_draw_end(rt, &ds, d->stats, "shell");
+        return mesoi_draw_end(rt, &ds, d->stats, "shell");
+    }
+    /* One instanced call per frame the instances show (one in all when
+     * the object has no stored frames or they show one). */
+    for (uint32_t g = 0; g < group_count && r == MESO_OK; ++g) {
+        if (groups[g].frame != s->shown_frame) {
+            r = show_frame(rt, o->shell, groups[g].frame, "meso_rt_draw_instanced");
+            const GLuint now[3] = {s->tex_kind == 1 ? s->func_tex : 0, s->tex_kind == 2 ? s->func_tex : 0,
+                                   s->dist_tex};
+            for (int unit = 0; unit < 3; ++unit) {
+                gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_HEIGHT + (GLenum)unit);
+                gl->BindTexture(unit_target[SHELL_UNIT_HEIGHT + unit], now[unit]);
+            }
+        }
+        gl->Uniform1i(u[MESOI_U_instance_base], (GLint)groups[g].first);
+        if (r == MESO_OK)
+            gl->DrawArraysInstanced(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count, (GLsizei)groups[g].count);
+    }
+    mesoi_rt_free(rt, order);
+    mesoi_rt_free(rt, groups);
+    const meso_result e = mesoi_draw_end(rt, &ds, d->stats, "shell");
+    return r != MESO_OK ? r : e;
 }

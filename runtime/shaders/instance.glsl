@@ -13,6 +13,8 @@
 //   0-3  object -> clip (columns)      4-7  clip -> object (columns)
 //   8    light_obj.xyz, err_scale      9    prim_base, -, -, -
 //   10-13 model (mesh: object -> world columns; cells: 10-12 the rotation)
+// Vertex stages fetch 0-3 and 9, fragment stages 0-8; 10-13 only where the
+// runtime defines MESO_INSTANCE_MODEL (meshes, cells).
 // The same shader code serves both: main() calls instance_begin() first,
 // and after it the names u_mvp, u_inv_mvp, u_light_obj, u_err_scale,
 // u_env_rot and u_model stand for the selected values (macros below), so
@@ -33,6 +35,7 @@ void instance_begin()
 #else
 #define MESO_INSTANCE_TEXELS 14
 uniform int u_instanced;            // 1: the values below come from u_instances
+uniform int u_instance_base;        // added to gl_InstanceID (animated shells draw one call per frame)
 uniform samplerBuffer u_instances;  // MESO_INSTANCE_TEXELS texels per instance
 #ifdef MESO_STAGE_VERTEX
 flat out int v_instance;
@@ -57,7 +60,7 @@ mat4 instance_mat4(int base)
 void instance_begin()
 {
 #ifdef MESO_STAGE_VERTEX
-    int i = gl_InstanceID;
+    int i = gl_InstanceID + u_instance_base;
     v_instance = i;
 #else
     int i = v_instance;
@@ -72,15 +75,22 @@ void instance_begin()
         g_prim_base = 0;
         return;
     }
+    // Each stage fetches what it reads (llvmpipe shades vertices on the
+    // draw call's thread: fetches per vertex are CPU time).
     int b = MESO_INSTANCE_TEXELS * i;
     g_mvp = instance_mat4(b);
+#ifdef MESO_STAGE_VERTEX
+    g_prim_base = int(texelFetch(u_instances, b + 9).x);
+#else
     g_inv_mvp = instance_mat4(b + 4);
     vec4 t8 = texelFetch(u_instances, b + 8);
     g_light_obj = t8.xyz;
     g_err_scale = t8.w;
-    g_prim_base = int(texelFetch(u_instances, b + 9).x);
+#endif
+#ifdef MESO_INSTANCE_MODEL
     g_model = instance_mat4(b + 10);
     g_env_rot = mat3(g_model);
+#endif
 }
 
 #define u_mvp g_mvp

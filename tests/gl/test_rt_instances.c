@@ -236,28 +236,40 @@ static void test_pose_slots(ctx* c)
     free(pose);
 }
 
+/* Instances at one time and at different times (frames) against
+ * meso_rt_shell_set_time before each separate draw. */
 static void test_shell_time(ctx* c)
 {
     meso_rt_object o = load(c, "anim"), ref = load(c, "anim");
-    meso_rt_instance inst[3];
-    spread(c, o, inst, 3);
-    for (int i = 0; i < 3; ++i) {
-        inst[i].has_time = 1;
-        inst[i].time = 0.25 + 0.01 * i; /* frame 2 of 4 at 8 fps */
+    enum { NT = 5 };
+    meso_rt_instance inst[NT];
+    spread(c, o, inst, NT);
+    for (int pass = 0; pass < 2; ++pass) {
+        /* pass 0: all at frame 2 of 4 (8 fps); pass 1: frames 2, 0, 3, 2, 1 */
+        static const double times[2][NT] = {{0.25, 0.26, 0.27, 0.28, 0.29}, {0.25, 0.0, 0.4, 0.3, 0.13}};
+        render_begin(c);
+        for (int i = 0; i < NT; ++i) {
+            inst[i].has_time = 1;
+            inst[i].time = times[pass][i];
+            CHECK(meso_rt_shell_set_time(c->rt, ref, inst[i].time) == MESO_OK);
+            meso_rt_draw_desc di = c->desc;
+            memcpy(di.model, inst[i].model, sizeof(di.model));
+            CHECK(meso_rt_draw(c->rt, ref, &di) == MESO_OK);
+        }
+        render_end(c, 0);
+        render_begin(c);
+        need(meso_rt_draw_instanced(c->rt, o, &c->desc, inst, NT) == MESO_OK, "%s", c->log.message);
+        render_end(c, 1);
+        uint32_t shown = 0;
+        CHECK(meso_rt_shell_anim_info(c->rt, o, NULL, NULL, &shown) == MESO_OK);
+        need(shown == (pass ? 3u : 2u), "shown frame %u after the draw", shown);
+        same(c, pass ? "animated shell instances at frames 2 0 3 2 1 = set_time + separate draws"
+                     : "animated shell instances at one frame = set_time + separate draws");
     }
-    CHECK(meso_rt_shell_set_time(c->rt, ref, 0.25) == MESO_OK);
-    draw_separately(c, ref, &c->desc, inst, 3, "set_time");
-    render_begin(c);
-    need(meso_rt_draw_instanced(c->rt, o, &c->desc, inst, 3) == MESO_OK, "%s", c->log.message);
-    render_end(c, 1);
-    uint32_t shown = 0;
-    CHECK(meso_rt_shell_anim_info(c->rt, o, NULL, NULL, &shown) == MESO_OK && shown == 2);
-    same(c, "animated shell instances at one time = meso_rt_shell_set_time + draws");
-    inst[1].time = 0.0;
-    CHECK(meso_rt_draw_instanced(c->rt, o, &c->desc, inst, 3) == MESO_ERR_UNSUPPORTED);
-    need(strstr(c->log.message, "instance 0 shows frame 2 and instance 1 frame 0") != NULL, "log: %s",
-         c->log.message);
-    printf("ok   instances at different frames refused: %s\n", c->log.message);
+    inst[3].time = NAN;
+    CHECK(meso_rt_draw_instanced(c->rt, o, &c->desc, inst, NT) == MESO_ERR_INVALID_ARG);
+    need(strstr(c->log.message, "instance 3: NaN time") != NULL, "log: %s", c->log.message);
+    printf("ok   NaN time refused: %s\n", c->log.message);
     meso_rt_release_object(c->rt, o);
     meso_rt_release_object(c->rt, ref);
 }
