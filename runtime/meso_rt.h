@@ -475,7 +475,8 @@ MESO_API meso_result meso_rt_frusta_set_pose(meso_rt* rt, meso_rt_object obj, co
 /* Pose slots for instanced draws (meso_rt_instance.pose_slot): the object
  * keeps `slots` poses side by side on the GPU (slot 0 is the current pose,
  * the one meso_rt_frusta_set_pose moves and meso_rt_draw draws), each with
- * its own bounding geometry. New slots start as a copy of slot 0; shrinking
+ * its own bounding geometry (meso_rt_object_bounds stays slot 0's). New
+ * slots start as a copy of slot 0; shrinking
  * drops the last ones. 1..the texture buffer's limit (GL_MAX_TEXTURE_BUFFER_
  * SIZE / 16 texels per primitive). Cost: a re-upload of every slot (256
  * bytes per primitive per slot). MESO_ERR_INVALID_ARG (logged, nothing

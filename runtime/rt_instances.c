@@ -40,11 +40,13 @@ static float* staging(meso_rt* rt, uint32_t count)
 }
 
 /* Uploads `floats` of the staging array into the instance buffer (made on
- * first use; re-specified each draw, so the driver can rename it instead of
- * waiting for the previous draw). The texture buffer binding is put back
- * under MESO_STATE_RESTORE, left at 0 otherwise; the texture unit bindings
- * are not touched (the texture is made through unit 0's buffer binding,
- * restored, once). */
+ * first use). A buffer large enough is orphaned (glBufferData with no data:
+ * the driver renames it instead of waiting for the previous draw) and
+ * written, with no query; a larger one is made and its size checked (out
+ * of memory shows there, the host's error queue is left alone). The
+ * texture buffer binding is put back under MESO_STATE_RESTORE, left at 0
+ * otherwise; the texture unit bindings are not touched (the texture is made
+ * through unit 0's buffer binding, restored, once). */
 static meso_result upload(meso_rt* rt, size_t floats, int restore)
 {
     mesoi_gl* gl = &rt->gl;
@@ -68,6 +70,12 @@ static meso_result upload(meso_rt* rt, size_t floats, int restore)
     }
     const size_t bytes = floats * sizeof(float);
     gl->BindBuffer(GL_TEXTURE_BUFFER, rt->inst_buf);
+    if (bytes <= rt->inst_capacity) {
+        gl->BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)rt->inst_capacity, NULL, GL_STREAM_DRAW);
+        gl->BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)bytes, rt->inst_texels);
+        gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)prev_buf);
+        return MESO_OK;
+    }
     gl->BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)bytes, rt->inst_texels, GL_STREAM_DRAW);
     GLint stored = 0;
     gl->GetBufferParameteriv(GL_TEXTURE_BUFFER, GL_BUFFER_SIZE, &stored);
@@ -86,12 +94,12 @@ meso_result mesoi_instances_upload(meso_rt* rt, mesoi_draw* ds, mesoi_object* o,
                                    const meso_rt_instance* inst, const uint32_t* order, uint32_t count,
                                    int need_inverse, mesoi_instance_fn fn, void* user, GLuint* tex)
 {
-    GLint max_texels = 0;
-    rt->gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-    if ((uint64_t)count * MESOI_INSTANCE_TEXELS > (uint64_t)max_texels || count > (uint32_t)INT32_MAX) {
+    if (!rt->inst_max_texels) /* asked once: no query per draw */
+        rt->gl.GetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &rt->inst_max_texels);
+    if ((uint64_t)count * MESOI_INSTANCE_TEXELS > (uint64_t)rt->inst_max_texels || count > (uint32_t)INT32_MAX) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
                   "meso_rt_draw_instanced: %u instances exceed this context's texture buffer size (%d texels)",
-                  count, max_texels);
+                  count, (int)rt->inst_max_texels);
         return MESO_ERR_INVALID_ARG;
     }
     float* all = staging(rt, count);

@@ -67,6 +67,7 @@ struct meso_rt {
     GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
     GLuint inst_buf, inst_tex; /* per-instance data of instanced draws (rt_instances.c), made on first use */
     size_t inst_capacity;      /* bytes in inst_buf */
+    GLint inst_max_texels;     /* GL_MAX_TEXTURE_BUFFER_SIZE, asked on the first instanced draw */
     float* inst_texels;        /* host staging for it */
     size_t inst_texels_capacity; /* floats */
     GLuint list_program;       /* inside meso_rt_draw_list: the program bound last (0: none yet) */

@@ -120,3 +120,14 @@ if [ "${MESO_BENCH_SKIP_BATCH:-0}" != 1 ]; then
     ninja -C "$build" tools/mesobake
     sh "$src/tests/bench/bench_batch.sh" "$build/tools/mesobake" 5
 fi
+
+# Many objects (issue 18 items 3, 10): CPU us per instance (instanced,
+# separate, list), the Goal's GPU-time ratio (1000 instanced saguaros
+# against one object of 1000 saguaros) and the cactus field at 1, 10, 100,
+# 1000 objects, at 320x240. ~15 min on 2 cores. Result: instances.csv. Skip
+# with MESO_BENCH_SKIP_INSTANCES=1.
+if [ "${MESO_BENCH_SKIP_INSTANCES:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_instances tools/mesobake
+    echo "== bench_instances"
+    "$build/tests/bench/bench_instances" "$results/instances.csv" "$build/tools/mesobake" "$src/tests/data"
+fi
