@@ -297,6 +297,23 @@ GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, c
     return p->id;
 }
 
+int mesoi_program_owned(const meso_rt* rt, GLuint id)
+{
+    /* Every program array of struct meso_rt, whatever its dimensions. */
+#define MESOI_PROGRAMS(a) {(const mesoi_program*)(a), sizeof(a) / sizeof(mesoi_program)}
+    const struct {
+        const mesoi_program* p;
+        size_t n;
+    } lists[] = {{&rt->mesh_program, 1}, MESOI_PROGRAMS(rt->shell_programs), MESOI_PROGRAMS(rt->frusta_programs),
+                 MESOI_PROGRAMS(rt->cells_programs), MESOI_PROGRAMS(rt->slice_programs)};
+#undef MESOI_PROGRAMS
+    for (size_t l = 0; l < sizeof(lists) / sizeof(lists[0]); ++l)
+        for (size_t i = 0; i < lists[l].n; ++i)
+            if (lists[l].p[i].id == id)
+                return 1;
+    return 0;
+}
+
 void mesoi_program_delete(meso_rt* rt, mesoi_program* p)
 {
     if (p->id)
