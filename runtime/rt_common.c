@@ -86,6 +86,18 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
         return MESO_ERR_UNSUPPORTED;
     mesoi_gl* gl = &rt->gl;
     const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
+    /* Refused before GL sees it: an invalid TexImage would raise an error
+     * in the host's queue. */
+    GLint limit = 0;
+    gl->GetIntegerv(dims3 ? GL_MAX_3D_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &limit);
+    for (int k = 0; k < (dims3 ? 3 : 2); ++k)
+        if (dims[k] == 0 || dims[k] > (uint32_t)limit) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
+                      "a %ux%ux%u texture exceeds this context's limit of %d texels a side", dims[0], dims[1],
+                      dims[2], (int)limit);
+            *out = 0;
+            return MESO_ERR_GL;
+        }
     GLint prev_tex = 0;
     gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
     mesoi_unpack unpack;
