@@ -28,6 +28,10 @@
  * context never goes through the wrappers.
  *
  * usage: bench_draw_cpu OUT.csv MESOBAKE TEST_DATA_DIR [--label L] [--runs R] [--draws N]
+ *                       [--policy restore|host]
+ * --policy host: the contexts are created with MESO_STATE_HOST_OWNS and the
+ * draws give their viewport (meso_rt_draw_desc.viewport), the set-up under
+ * which a draw asks GL nothing.
  * Rows of other labels in OUT.csv are kept, rows of label L replaced, so
  * "before" and "after" rows of a change can live in one file.
  */
@@ -206,6 +210,8 @@ static meso_rt_object load(meso_rt* rt, const char* path)
 }
 
 /* A camera two radii from the object's centre, looking at it. */
+static int host_owns; /* --policy host */
+
 static meso_rt_draw_desc draw_desc_for(meso_rt* rt, meso_rt_object obj)
 {
     float lo[3], hi[3];
@@ -220,6 +226,10 @@ static meso_rt_draw_desc draw_desc_for(meso_rt* rt, meso_rt_object obj)
     meso_rt_draw_desc d = {0};
     meso_camera_look_at(d.view, eye, c, up);
     meso_camera_perspective(d.proj, 0.9, 1.0, 0.1 * r, 6.0 * r);
+    if (host_owns) {
+        d.viewport[2] = VIEWPORT;
+        d.viewport[3] = VIEWPORT;
+    }
     return d;
 }
 
@@ -329,7 +339,8 @@ static void write_csv(const char* path, const char* label, const result* res, in
 
 int main(int argc, char** argv)
 {
-    const char* usage = "usage: bench_draw_cpu OUT.csv MESOBAKE TEST_DATA_DIR [--label L] [--runs R] [--draws N]";
+    const char* usage = "usage: bench_draw_cpu OUT.csv MESOBAKE TEST_DATA_DIR [--label L] [--runs R] [--draws N] "
+                        "[--policy restore|host]";
     if (argc < 4)
         fail(usage);
     const char *label = "latest", *csv = argv[1], *mesobake = argv[2], *data = argv[3];
@@ -341,6 +352,9 @@ int main(int argc, char** argv)
             runs = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--draws") && i + 1 < argc)
             draws = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--policy") && i + 1 < argc && (!strcmp(argv[i + 1], "restore") ||
+                                                                  !strcmp(argv[i + 1], "host")))
+            host_owns = !strcmp(argv[++i], "host");
         else
             fail(usage);
     }
@@ -384,8 +398,11 @@ int main(int argc, char** argv)
     PFNGLGETSTRINGPROC GetString = (PFNGLGETSTRINGPROC)meso_egl_proc("glGetString");
     const char* renderer = (const char*)GetString(GL_RENDERER);
     meso_rt *rt = NULL, *rt_count = NULL;
-    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) != MESO_OK ||
-        meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = counting_proc}, &rt_count) != MESO_OK)
+    const meso_rt_state_policy policy = host_owns ? MESO_STATE_HOST_OWNS : MESO_STATE_RESTORE;
+    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .state_policy = policy}, &rt) !=
+            MESO_OK ||
+        meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = counting_proc, .state_policy = policy}, &rt_count) !=
+            MESO_OK)
         fail("meso_rt_create failed");
     printf("GL renderer: %s; %dx%d viewport, %d runs of %d draws per kind; load average %.2f\n", renderer, VIEWPORT,
            VIEWPORT, runs, draws, load1);
