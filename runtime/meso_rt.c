@@ -170,6 +170,14 @@ void meso_rt_destroy(meso_rt* rt)
     if (!rt)
         return;
     mesoi_objects_destroy(rt);
+    /* A deleted program stays current (MESO_STATE_HOST_OWNS leaves the last
+     * one bound) and its name turns invalid: unbind ours first, so the
+     * host's next glGetIntegerv(GL_CURRENT_PROGRAM) / glUseProgram pair
+     * does not raise GL_INVALID_VALUE. */
+    GLint current = 0;
+    rt->gl.GetIntegerv(GL_CURRENT_PROGRAM, &current);
+    if (current && mesoi_program_owned(rt, (GLuint)current))
+        rt->gl.UseProgram(0);
     mesoi_instances_destroy(rt);
     mesoi_frusta_programs_destroy(rt);
     mesoi_cells_programs_destroy(rt);

@@ -267,7 +267,9 @@ typedef struct meso_rt_draw_desc {
                                   refused with MESO_ERR_INVALID_ARG and a logged reason [all zero:
                                   identity] */
     float light_dir[3];        /* towards the light, world space [all zero: (0.3, 0.8, 0.5) normalised] */
-    float albedo[3];           /* linear RGB [all zero: (0.80, 0.74, 0.66)] */
+    float albedo[3];           /* linear RGB [all zero: (0.80, 0.74, 0.66)]. Every kind writes linear
+                                  colour: into an sRGB framebuffer (GL_SRGB8_ALPHA8 with
+                                  GL_FRAMEBUFFER_SRGB enabled) GL encodes it */
     meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) [NULL] */
     meso_depth_convention depth; /* how proj maps depth [MESO_DEPTH_STANDARD] */
     meso_clip_depth clip_depth;  /* the context's clip control depth mode [NEGATIVE_ONE_TO_ONE] */

@@ -89,6 +89,18 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
         return MESO_ERR_UNSUPPORTED;
     mesoi_gl* gl = &rt->gl;
     const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
+    /* Refused before GL sees it: an invalid TexImage would raise an error
+     * in the host's queue. */
+    GLint limit = 0;
+    gl->GetIntegerv(dims3 ? GL_MAX_3D_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &limit);
+    for (int k = 0; k < (dims3 ? 3 : 2); ++k)
+        if (dims[k] == 0 || dims[k] > (uint32_t)limit) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
+                      "a %ux%ux%u texture exceeds this context's limit of %d texels a side", dims[0], dims[1],
+                      dims[2], (int)limit);
+            *out = 0;
+            return MESO_ERR_GL;
+        }
     GLint prev_tex = 0;
     gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
     mesoi_unpack unpack;
@@ -298,6 +310,23 @@ GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, c
         gl->UseProgram((GLuint)prev);
     }
     return p->id;
+}
+
+int mesoi_program_owned(const meso_rt* rt, GLuint id)
+{
+    /* Every program array of struct meso_rt, whatever its dimensions. */
+#define MESOI_PROGRAMS(a) {(const mesoi_program*)(a), sizeof(a) / sizeof(mesoi_program)}
+    const struct {
+        const mesoi_program* p;
+        size_t n;
+    } lists[] = {{&rt->mesh_program, 1}, MESOI_PROGRAMS(rt->shell_programs), MESOI_PROGRAMS(rt->frusta_programs),
+                 MESOI_PROGRAMS(rt->cells_programs), MESOI_PROGRAMS(rt->slice_programs)};
+#undef MESOI_PROGRAMS
+    for (size_t l = 0; l < sizeof(lists) / sizeof(lists[0]); ++l)
+        for (size_t i = 0; i < lists[l].n; ++i)
+            if (lists[l].p[i].id == id)
+                return 1;
+    return 0;
 }
 
 void mesoi_program_delete(meso_rt* rt, mesoi_program* p)

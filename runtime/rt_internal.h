@@ -227,6 +227,8 @@ GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name);
 GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, const char* name,
                           const char* const* samplers, int sampler_count);
 void mesoi_program_delete(meso_rt* rt, mesoi_program* p);
+/* 1 when `id` is one of the context's programs. */
+int mesoi_program_owned(const meso_rt* rt, GLuint id);
 
 /* rt_common.c: around uploads, the pixel-unpack state they depend on set to
  * GL's defaults (alignment 1, no row length / skips / image height, no

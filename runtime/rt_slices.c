@@ -107,6 +107,9 @@ static int target_ensure(meso_rt* rt, GLint w, GLint h)
         return 1;
     target_free(rt);
     mesoi_gl* gl = &rt->gl;
+    /* No data, but a host's bound unpack buffer would be read from. */
+    mesoi_unpack unpack;
+    mesoi_unpack_default(rt, &unpack);
     gl->GenTextures(TEX_COUNT, rt->slice_tex);
     for (int t = 0; t < TEX_COUNT; ++t) {
         const int depth = t == TEX_A_DEPTH || t == TEX_B_DEPTH;
@@ -116,6 +119,7 @@ static int target_ensure(meso_rt* rt, GLint w, GLint h)
         gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
         gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     }
+    mesoi_unpack_restore(rt, &unpack);
     gl->GenFramebuffers(2, rt->slice_fbo);
     static const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     int ok = 1;

@@ -1,8 +1,11 @@
 /* png_probe — test helper: `png_probe FILE` prints "W H" and the RGBA of the
  * four corner pixels and the centre, one per line, so shell tests can assert
- * on images without another dependency. `png_probe FILE --dominant r|g|b`
- * prints instead how many pixels have that channel above both others by
- * more than 8 (e.g. the green cacti of tests/integration/cactus_field_xvfb.sh). */
+ * on images without another dependency. `png_probe --diff A B` prints the
+ * number of pixels whose RGB differs by more than 2 (of 255) in a channel
+ * and the largest difference (exit 1 when the sizes differ).
+ * `png_probe FILE --dominant r|g|b` prints how many pixels have that
+ * channel above both others by more than 8 (e.g. the green cacti of
+ * tests/integration/cactus_field_xvfb.sh). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,11 +14,38 @@
 
 int main(int argc, char** argv)
 {
+    if (argc == 4 && !strcmp(argv[1], "--diff")) {
+        uint8_t *a, *b;
+        int w, h, w2, h2;
+        char why[256];
+        if (meso_png_read_rgba8(argv[2], &a, &w, &h, why, sizeof(why)) != 0 ||
+            meso_png_read_rgba8(argv[3], &b, &w2, &h2, why, sizeof(why)) != 0) {
+            fprintf(stderr, "png_probe: %s\n", why);
+            return 3;
+        }
+        if (w != w2 || h != h2) {
+            fprintf(stderr, "png_probe: sizes differ: %dx%d and %dx%d\n", w, h, w2, h2);
+            return 1;
+        }
+        long differing = 0;
+        int worst = 0;
+        for (size_t i = 0; i < (size_t)w * (size_t)h; ++i) {
+            int m = 0;
+            for (int k = 0; k < 3; ++k)
+                m = abs(a[4 * i + k] - b[4 * i + k]) > m ? abs(a[4 * i + k] - b[4 * i + k]) : m;
+            differing += m > 2;
+            worst = m > worst ? m : worst;
+        }
+        printf("%ld %d\n", differing, worst);
+        free(a);
+        free(b);
+        return 0;
+    }
     const int dominant = argc == 4 && !strcmp(argv[2], "--dominant") && strchr("rgb", argv[3][0]) && argv[3][0]
                              ? (int)(strchr("rgb", argv[3][0]) - "rgb")
                              : -1;
     if (argc != 2 && dominant < 0) {
-        fprintf(stderr, "usage: png_probe FILE.png [--dominant r|g|b]\n");
+        fprintf(stderr, "usage: png_probe FILE.png [--dominant r|g|b] | png_probe --diff A.png B.png\n");
         return 1;
     }
     uint8_t* px;
