@@ -297,6 +297,7 @@ GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, c
 {
     mesoi_gl* gl = &rt->gl;
     p->id = mesoi_link(rt, vs, fs, name);
+    p->instanced = 0; /* GL starts every uniform at 0 */
     if (!p->id)
         return 0;
     for (int u = 0; u < MESOI_U_COUNT; ++u)
@@ -513,8 +514,12 @@ void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
     gl->Uniform3fv(p->loc[MESOI_U_light_obj], 1, s->light_obj);
     gl->Uniform3fv(p->loc[MESOI_U_albedo], 1, s->albedo);
     gl->Uniform4fv(p->loc[MESOI_U_depth_ndc], 1, s->depth_ndc);
-    gl->Uniform1i(p->loc[MESOI_U_instanced], s->instanced);
-    gl->Uniform1i(p->loc[MESOI_U_instance_base], 0);
+    if (p->instanced != s->instanced) { /* the program's cache of its own uniform */
+        gl->Uniform1i(p->loc[MESOI_U_instanced], s->instanced);
+        ((mesoi_program*)p)->instanced = s->instanced;
+    }
+    if (s->instanced)
+        gl->Uniform1i(p->loc[MESOI_U_instance_base], 0);
 }
 
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,

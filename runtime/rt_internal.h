@@ -45,6 +45,8 @@ enum {
 typedef struct mesoi_program {
     GLuint id;
     GLint loc[MESOI_U_COUNT];
+    int instanced; /* the value u_instanced holds (GL starts uniforms at 0), so single draws set it only
+                      after an instanced one */
 } mesoi_program;
 
 struct meso_rt {
