@@ -2,8 +2,8 @@
  * meso_rt.h — libmeso, the runtime: stream a .meso file and ray cast it with
  * OpenGL into the host's framebuffer and depth buffer.
  *
- * C11. Depends on nothing but OpenGL (3.3 core or newer) and what the host
- * passes in: its GL loader, and optionally an allocator, a logger and read
+ * C11. Depends on nothing but OpenGL (3.3 core or newer, or OpenGL ES 3.2;
+ * meso_rt_create tells them apart) and what the host passes in: its GL loader, and optionally an allocator, a logger and read
  * callbacks. No global state: every call takes a meso_rt context, and several
  * contexts may live side by side (one per GL context).
  *
@@ -41,7 +41,7 @@ typedef enum meso_log_level {
 #define MESO_LOG_ITEMS(X)                                                           \
     X(OK, "no error")                                                               \
     X(GL_ENTRY_POINT_MISSING, "a required OpenGL function was not found")          \
-    X(GL_VERSION_TOO_OLD, "OpenGL 3.3 core or newer is required")                   \
+    X(GL_VERSION_TOO_OLD, "OpenGL 3.3 core or newer, or OpenGL ES 3.2, is required") \
     X(GL_ERROR, "an OpenGL call raised an error")                                   \
     X(SHADER_COMPILE_FAILED, "a shader failed to compile")                          \
     X(PROGRAM_LINK_FAILED, "a shader program failed to link")                       \
@@ -81,15 +81,29 @@ typedef struct meso_rt meso_rt;
 
 /* Create a context: loads every GL entry point the runtime uses through
  * desc->gl_get_proc_address and checks the context is OpenGL 3.3 core or
- * newer. Fails with MESO_ERR_GL (logging GL_ENTRY_POINT_MISSING with the
+ * newer, or OpenGL ES 3.2 or newer (GL_VERSION starting "OpenGL ES"). The
+ * same shaders run on both, behind a version and precision prelude (ES:
+ * "#version 320 es", highp floats, ints and samplers). On ES:
+ *  - 16-bit normalised textures (U16 texture functions and distance maps,
+ *    cells' NRMM normals) need GL_EXT_texture_norm16. Without it they are
+ *    converted on the CPU to 32-bit floats (v / 65535: no precision lost)
+ *    where the texture is sampled nearest or GL_OES_texture_float_linear
+ *    is present, else (U16 texture functions, which are filtered linearly)
+ *    to 16-bit floats, which keep 11 significant bits: an error up to
+ *    2^-12 relative, about 2.4e-4 near 1, where 16 bits resolve 1.5e-5.
+ *  - draw stats need fragment shader storage blocks
+ *    (GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS > 0), else `supported` is 0.
+ * Fails with MESO_ERR_GL (logging GL_ENTRY_POINT_MISSING with the
  * function's name, or GL_VERSION_TOO_OLD), MESO_ERR_OUT_OF_MEMORY or
  * MESO_ERR_INVALID_ARG. On success *out must be destroyed. */
 MESO_API meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out);
 /* Release every GL object and all memory of the context. NULL is allowed. */
 MESO_API void meso_rt_destroy(meso_rt* rt);
 
-/* The context's GL version as major*10+minor (e.g. 45). */
+/* The context's GL version as major*10+minor (e.g. 45; 32 for ES 3.2). */
 MESO_API int meso_rt_gl_version(const meso_rt* rt);
+/* 1 when the context is OpenGL ES, 0 for desktop OpenGL (and for NULL). */
+MESO_API int meso_rt_gl_is_es(const meso_rt* rt);
 
 /* >>objects --------------------------------------------------------------- */
 
@@ -151,8 +165,9 @@ typedef enum meso_cells_mode {
     MESO_CELLS_REFRACT        /* §3.2.4: refraction through the cells, then the environment */
 } meso_cells_mode;
 
-/* Work counted by the shaders during one draw (needs OpenGL 4.3 for the
- * counters; on older contexts, and for MESH objects, `supported` is 0 and
+/* Work counted by the shaders during one draw (needs OpenGL 4.3, or ES
+ * with fragment shader storage blocks, for the counters; on other
+ * contexts, and for MESH objects, `supported` is 0 and
  * the counts are 0). */
 typedef struct meso_rt_draw_stats {
     int supported;
@@ -246,8 +261,9 @@ typedef struct meso_rt_draw_desc {
  * is. Shells, frusta and cells need the inverse of proj · view · model: a
  * singular one is refused with MESO_ERR_INVALID_ARG (logged). The GL state
  * the call changes (program, vertex array, active texture, textures on
- * units 0-4 (0-7 for slices), depth test/func/mask, culling, and on OpenGL 4.3
- * with `stats` the shader storage buffer binding; for two-pass slices also
+ * units 0-4 (0-7 for slices), depth test/func/mask, culling, and where
+ * stats are counted (OpenGL 4.3, ES 3.2 with fragment shader storage) the
+ * shader storage buffer binding; for two-pass slices also
  * the draw framebuffer binding, the viewport and blending) is restored before it returns, for
  * every kind. GL errors are logged (GL_ERROR) and returned as MESO_ERR_GL,
  * never fatal. */

@@ -1,8 +1,9 @@
 /*
  * rt_common.c — what the object kinds share: streaming and checking a
- * chunk, texture and texture-buffer uploads, compiling and linking their
- * shaders, and a draw's matrices, light, GL state save/restore and work
- * counters.
+ * chunk, texture and texture-buffer uploads (with the formats OpenGL ES
+ * lacks converted), the prelude every shader starts with (desktop or ES),
+ * compiling and linking the shaders, and a draw's matrices, light, GL
+ * state save/restore and work counters (read back by mapping on ES).
  *
  * The GL state contract of meso_rt_draw (meso_rt.h) lives here: every draw,
  * of every kind, goes through mesoi_draw_begin / mesoi_draw_end, which save
@@ -62,7 +63,7 @@ static int dtype_gl(uint16_t dtype, GLenum* internal, GLenum* type)
         *type = GL_UNSIGNED_BYTE;
         return 1;
     case MESO_DTYPE_U16:
-        *internal = GL_R16;
+        *internal = GL_R16; /* = GL_R16_EXT of GL_EXT_texture_norm16 on ES */
         *type = GL_UNSIGNED_SHORT;
         return 1;
     case MESO_DTYPE_F32:
@@ -74,12 +75,36 @@ static int dtype_gl(uint16_t dtype, GLenum* internal, GLenum* type)
     }
 }
 
+float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count)
+{
+    float* f = mesoi_rt_alloc(rt, sizeof(float) * count);
+    if (!f)
+        return NULL;
+    const uint16_t* v = texels;
+    for (size_t i = 0; i < count; ++i)
+        f[i] = (float)v[i] / 65535.0f;
+    return f;
+}
+
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
                                 const void* data, GLuint* out)
 {
     GLenum internal, type;
     if (!dtype_gl(dtype, &internal, &type) || (!nearest && dtype == MESO_DTYPE_F32) || (!dims3 && dims[2] != 1))
         return MESO_ERR_UNSUPPORTED;
+    /* OpenGL ES without GL_EXT_texture_norm16 has no R16: U16 texels go up
+     * as floats, R32F (exact) where they are sampled nearest or R32F
+     * filters linearly (GL_OES_texture_float_linear), else R16F (11
+     * significant bits, meso_rt.h says what that costs). */
+    float* converted = NULL;
+    if (dtype == MESO_DTYPE_U16 && !rt->norm16) {
+        converted = mesoi_unorm16_to_float(rt, data, (size_t)dims[0] * dims[1] * dims[2]);
+        if (!converted)
+            return MESO_ERR_OUT_OF_MEMORY;
+        internal = nearest || rt->float_linear ? GL_R32F : GL_R16F;
+        type = GL_FLOAT;
+        data = converted;
+    }
     mesoi_gl* gl = &rt->gl;
     const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
     GLint prev_unpack = 4, prev_tex = 0;
@@ -103,6 +128,7 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
     gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
     gl->BindTexture(target, (GLuint)prev_tex);
     gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+    mesoi_rt_free(rt, converted);
     return MESO_OK;
 }
 
@@ -169,6 +195,23 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
 }
 
 /* >>shaders ---------------------------------------------------------------- */
+
+/* ES has no default precision for floats in fragment shaders nor for most
+ * sampler types; highp everywhere keeps the desktop arithmetic (IEEE
+ * single precision) and 32-bit integers. */
+#define ES_PRECISIONS                                                                                   \
+    "precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n"                         \
+    "precision highp sampler3D;\nprecision highp samplerCube;\nprecision highp samplerBuffer;\n"         \
+    "precision highp usampler3D;\nprecision highp usamplerBuffer;\nprecision highp isamplerBuffer;\n"
+
+const char* mesoi_glsl_prelude(const meso_rt* rt, int stats)
+{
+    static const char* const prelude[2][2] = {
+        {"#version 330 core\n", "#version 430 core\n#define MESO_STATS 1\n"},
+        {"#version 320 es\n" ES_PRECISIONS, "#version 320 es\n" ES_PRECISIONS "#define MESO_STATS 1\n"},
+    };
+    return prelude[rt->gles ? 1 : 0][stats ? 1 : 0];
+}
 
 /* 1 when the shader compiled (`program` 0) or the program linked (1); else
  * logs its info log under `name`, deletes it and returns 0. */
@@ -281,7 +324,7 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     memcpy(out->albedo, albedo, sizeof(albedo));
     if (d->albedo[0] != 0.0f || d->albedo[1] != 0.0f || d->albedo[2] != 0.0f)
         memcpy(out->albedo, d->albedo, sizeof(out->albedo));
-    out->stats = d->stats && rt->gl_version >= 43 && rt->gl.MemoryBarrier;
+    out->stats = d->stats && rt->stats_ok;
     return MESO_OK;
 }
 
@@ -361,7 +404,14 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
     if (s->stats) {
         uint32_t counts[3] = {0, 0, 0};
         gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), counts);
+        if (rt->gles) { /* ES has no glGetBufferSubData: map the buffer */
+            const void* mapped = gl->MapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), GL_MAP_READ_BIT);
+            if (mapped)
+                memcpy(counts, mapped, sizeof(counts));
+            gl->UnmapBuffer(GL_SHADER_STORAGE_BUFFER);
+        } else {
+            gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), counts);
+        }
         stats->supported = 1;
         stats->fragments = counts[0];
         stats->steps = counts[1];

@@ -575,9 +575,9 @@ static GLuint frusta_program(meso_rt* rt, int stats)
 {
     if (rt->frusta_programs[stats])
         return rt->frusta_programs[stats];
-    char head[192];
-    snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_FRUSTA_TEXELS %d\n#define MESO_FRUSTA_CORNER0 %d\n",
-             stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "", TEXELS, CORNER0);
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_FRUSTA_TEXELS %d\n#define MESO_FRUSTA_CORNER0 %d\n",
+             mesoi_glsl_prelude(rt, stats), TEXELS, CORNER0);
     const char* vs[3] = {head, mesoi_glsl_frusta_common, mesoi_glsl_frusta_vert};
     const char* fs[4] = {head, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common, mesoi_glsl_frusta_frag};
     const GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "frusta_vert.glsl"),

@@ -26,6 +26,12 @@ struct meso_rt {
     void* log_user;
     mesoi_gl gl;
     int gl_version; /* major*10+minor */
+    int gles;       /* 1 on an OpenGL ES context (GL_VERSION "OpenGL ES ...") */
+    /* ES only (desktop: both 1, core since 3.0): GL_EXT_texture_norm16 (R16,
+     * RG16 textures) and GL_OES_texture_float_linear (linear R32F); without
+     * them the uploads convert (rt_common.c: upload formats). */
+    int norm16, float_linear;
+    int stats_ok; /* fragment shaders can count into a shader storage buffer (GL 4.3, or ES with fragment SSBOs) */
     GLuint mesh_program;
     GLint u_view, u_proj, u_model, u_light_dir; /* of mesh_program */
     GLuint shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], compiled on first use */
@@ -36,7 +42,7 @@ struct meso_rt {
     GLuint slice_tex[5];
     GLint slice_size[2];      /* its width and height: the viewport's */
     GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
-    GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
+    GLuint stats_buffer; /* 3 counters (OpenGL 4.3 / ES 3.1 shader storage) */
     mesoi_object* objects;
     uint32_t object_capacity;
 };
@@ -128,7 +134,7 @@ typedef struct mesoi_draw {
     double model_scale;         /* length of the model matrix's first column */
     GLint viewport[4];
     float light_obj[3], albedo[3];
-    int stats; /* the shaders count work (OpenGL 4.3 and desc->stats) */
+    int stats; /* the shaders count work (rt->stats_ok and desc->stats) */
     int units;
     GLenum target[MESOI_DRAW_MAX_UNITS];
     GLint prev_bind[MESOI_DRAW_MAX_UNITS];
@@ -139,6 +145,15 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, const GLenum* targets,
                       const GLuint* textures);
 meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
+
+/* rt_common.c: what every shader starts with: the #version line (desktop:
+ * "330 core", "430 core" with `stats`; ES: "320 es" and default precisions
+ * highp for floats, ints and every sampler type the shaders use), then
+ * "#define MESO_STATS 1" with `stats`. A static string. */
+const char* mesoi_glsl_prelude(const meso_rt* rt, int stats);
+/* An allocation of `count` floats v / 65535 from `count` host-order U16 texels, for contexts without 16-bit normalised textures
+ * (ES without GL_EXT_texture_norm16); NULL (logged) when out of memory. */
+float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count);
 
 /* rt_common.c: shaders. compile: one shader from `count` sources, 0
  * (logged with `name`) on failure; link: links and deletes the two shaders

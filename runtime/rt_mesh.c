@@ -18,10 +18,10 @@
 meso_result mesoi_mesh_program_create(meso_rt* rt)
 {
     mesoi_gl* gl = &rt->gl;
-    const char* vsrc = mesoi_glsl_mesh_vert;
-    const char* fsrc = mesoi_glsl_mesh_frag;
-    GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, &vsrc, 1, "mesh_vert.glsl"),
-                          mesoi_compile(rt, GL_FRAGMENT_SHADER, &fsrc, 1, "mesh_frag.glsl"), "mesh");
+    const char* vsrc[2] = {mesoi_glsl_prelude(rt, 0), mesoi_glsl_mesh_vert};
+    const char* fsrc[2] = {mesoi_glsl_prelude(rt, 0), mesoi_glsl_mesh_frag};
+    GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vsrc, 2, "mesh_vert.glsl"),
+                          mesoi_compile(rt, GL_FRAGMENT_SHADER, fsrc, 2, "mesh_frag.glsl"), "mesh");
     if (!p)
         return MESO_ERR_GL;
     rt->mesh_program = p;

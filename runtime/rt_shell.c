@@ -411,9 +411,8 @@ static GLuint shell_program(meso_rt* rt, meso_shell_technique t, int stats)
 {
     if (rt->shell_programs[stats][t])
         return rt->shell_programs[stats][t];
-    char head[160];
-    snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_TECHNIQUE %d\n", stats ? "430" : "330",
-             stats ? "#define MESO_STATS 1\n" : "", (int)t);
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n", mesoi_glsl_prelude(rt, stats), (int)t);
     const char* vs[3] = {head, mesoi_glsl_shell_common, mesoi_glsl_shell_vert};
     const char* fs[5] = {head, mesoi_glsl_shell_common, mesoi_glsl_raycast_common, mesoi_glsl_shell_texfn,
                          mesoi_glsl_shell_frag};

@@ -51,8 +51,8 @@ static GLuint slice_program(meso_rt* rt, int pass)
 {
     if (rt->slice_programs[pass])
         return rt->slice_programs[pass];
-    char head[128];
-    snprintf(head, sizeof(head), "#version 330 core\n#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n",
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n", mesoi_glsl_prelude(rt, 0),
              (int)MESO_SHELL_SLICES, pass);
     const char* vs[4] = {head, mesoi_glsl_shell_common, mesoi_glsl_shell_texfn, mesoi_glsl_shell_slices_vert};
     const char* fs[5] = {head, mesoi_glsl_shell_common, mesoi_glsl_raycast_common, mesoi_glsl_shell_texfn,

@@ -1,5 +1,5 @@
-#version 330 core
 // Base-mesh pass: positions and normals straight from the MESH chunk buffer.
+// The runtime prepends the #version prelude (rt_common.c: mesoi_glsl_prelude).
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 uniform mat4 u_view;
