@@ -28,6 +28,7 @@
  *    as background. Must be 0 everywhere, joints and branches included.
  * Tolerances: see check_close() below.
  * MESO_TEST_PNG=DIR writes each case's GL, reference and difference images. */
+#include "gl_api.h"
 #include "meso_clock.h"
 #include "test_util.h"
 
@@ -544,7 +545,7 @@ int main(void)
     scene_w = W;
     scene_h = H;
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = test_egl_create(why, sizeof(why));
     CHECK_MSG(egl != NULL, "%s", why);
     ctx c = {0};
     CHECK(test_fbo_create(&c.fbo, W, H));
@@ -558,6 +559,7 @@ int main(void)
 #undef TEST_L
     const meso_rt_desc desc = {.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log};
     CHECK(meso_rt_create(&desc, &c.rt) == MESO_OK);
+    CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);
     texture height = make_height(64);
