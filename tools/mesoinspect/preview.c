@@ -1,7 +1,8 @@
 /*
  * preview.c — `mesoinspect preview FILE -o OUT.png`: render a .meso file
  * headlessly with libmeso on an EGL surfaceless context (Mesa llvmpipe when
- * there is no GPU) and write a PNG.
+ * there is no GPU) and write a PNG. --api gles renders through an OpenGL
+ * ES 3.2 context instead of desktop OpenGL core (libmeso runs on both).
  *
  * The camera orbits the union of the objects' bounds (from the OBJT records)
  * at --yaw/--pitch, framed so the bounding sphere fills the view. The image
@@ -63,6 +64,7 @@ static const char* const usage_preview =
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
+    "      --api A         gl (default: desktop OpenGL core) or gles (OpenGL ES 3.2)\n"
     "      --technique T   shell technique: smooth (default), curved, tetra or slices\n"
     "                      (slice-based rendering, the Lp-averaged shells paper's section 5)\n"
     "      --slices N      slices: slice polygons per prism (2..1024, default 16)\n"
@@ -93,6 +95,7 @@ typedef struct preview_knobs {
     double zoom;
     int has_time;
     double time; /* with has_time: seconds, for shells with stored frames */
+    int gles;    /* --api gles: an OpenGL ES 3.2 context */
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -318,9 +321,9 @@ static int render(const char* path, const char* out, int width, int height, uint
                   const preview_knobs* knobs)
 {
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = meso_egl_create_api(knobs->gles ? MESO_EGL_GLES : MESO_EGL_GL, 0, why, sizeof(why));
     if (!egl) {
-        fprintf(stderr, "mesoinspect error: no headless OpenGL: %s\n", why);
+        fprintf(stderr, "mesoinspect error: no headless OpenGL%s: %s\n", knobs->gles ? " ES 3.2" : "", why);
         return MESO_EXIT_UNSUPPORTED;
     }
     preview_gl gl;
@@ -613,6 +616,14 @@ int mesoinspect_preview(int argc, char** argv)
                         argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--api") && val) {
+            const char* m = argv[++i];
+            if (strcmp(m, "gl") && strcmp(m, "gles")) {
+                fprintf(stderr, "mesoinspect error: --api expects gl or gles, got '%s'\nSee 'mesoinspect --help'.\n",
+                        m);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.gles = !strcmp(m, "gles");
         } else if (!strcmp(a, "--cells") && val) {
             const char* m = argv[++i];
             if (!strcmp(m, "first"))
@@ -648,7 +659,7 @@ int mesoinspect_preview(int argc, char** argv)
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
                      !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
-                     !strcmp(a, "--slices") || !strcmp(a, "--slice-interp"))
+                     !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") || !strcmp(a, "--api"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
