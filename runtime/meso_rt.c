@@ -128,6 +128,11 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
         return MESO_ERR_INVALID_ARG;
     if (!desc->allocator.alloc_fn != !desc->allocator.free_fn)
         return MESO_ERR_INVALID_ARG; /* both or neither (STYLE.md §5) */
+    if ((unsigned)desc->state_policy > MESO_STATE_HOST_OWNS) {
+        if (desc->log_fn)
+            desc->log_fn(desc->log_user, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_desc.state_policy");
+        return MESO_ERR_INVALID_ARG;
+    }
 
     meso_allocator a = desc->allocator;
     if (!a.alloc_fn) {
@@ -150,15 +155,22 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
         meso_rt_destroy(rt);
         return MESO_ERR_GL;
     }
-    GLint major = 0, minor = 0;
-    rt->gl.GetIntegerv(GL_MAJOR_VERSION, &major);
-    rt->gl.GetIntegerv(GL_MINOR_VERSION, &minor);
-    while (rt->gl.GetError() != GL_NO_ERROR) {
-        /* GL_MAJOR_VERSION is unknown before 3.0: leave major at 0. */
+    /* The version from GL_VERSION ("3.3 ...", "4.5 (Core Profile) Mesa ..."):
+     * GL_MAJOR_VERSION would raise an error on contexts older than 3.0, and
+     * the host's GL error queue is not the runtime's to touch. */
+    const GLubyte* version = rt->gl.GetString(GL_VERSION);
+    int major = 0, minor = 0;
+    if (version) {
+        const char* v = (const char*)version;
+        while (*v && (*v < '0' || *v > '9'))
+            ++v;
+        if (sscanf(v, "%d.%d", &major, &minor) != 2)
+            major = minor = 0;
     }
     rt->gl_version = major * 10 + minor;
+    rt->state_policy = desc->state_policy;
+    rt->check_gl_errors = desc->check_gl_errors != 0;
     /* OpenGL ES says so at the start of GL_VERSION ("OpenGL ES 3.2 Mesa ..."). */
-    const GLubyte* version = rt->gl.GetString(GL_VERSION);
     rt->gles = version && strncmp((const char*)version, "OpenGL ES", 9) == 0;
     if (rt->gl_version < (rt->gles ? 32 : 33)) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_VERSION_TOO_OLD, "context reports \"%s\" (needs %s)",
@@ -169,6 +181,10 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
     query_features(rt);
     meso_result pr = mesoi_mesh_program_create(rt);
     if (pr != MESO_OK) {
+        meso_rt_destroy(rt);
+        return pr;
+    }
+    if (desc->prepare && (pr = meso_rt_prepare(rt, 0)) != MESO_OK) {
         meso_rt_destroy(rt);
         return pr;
     }
@@ -184,11 +200,18 @@ void meso_rt_destroy(meso_rt* rt)
     if (!rt)
         return;
     mesoi_objects_destroy(rt);
+    /* A deleted program stays current (MESO_STATE_HOST_OWNS leaves the last
+     * one bound) and its name turns invalid: unbind ours first, so the
+     * host's next glGetIntegerv(GL_CURRENT_PROGRAM) / glUseProgram pair
+     * does not raise GL_INVALID_VALUE. */
+    GLint current = 0;
+    rt->gl.GetIntegerv(GL_CURRENT_PROGRAM, &current);
+    if (current && mesoi_program_owned(rt, (GLuint)current))
+        rt->gl.UseProgram(0);
     mesoi_frusta_programs_destroy(rt);
     mesoi_cells_programs_destroy(rt);
     mesoi_shell_programs_destroy(rt);
-    if (rt->mesh_program)
-        rt->gl.DeleteProgram(rt->mesh_program);
+    mesoi_program_delete(rt, &rt->mesh_program);
     meso_allocator a = rt->alloc;
     a.free_fn(rt, a.user);
 }
@@ -201,4 +224,20 @@ int meso_rt_gl_version(const meso_rt* rt)
 int meso_rt_gl_is_es(const meso_rt* rt)
 {
     return rt ? rt->gles : 0;
+}
+
+meso_result meso_rt_prepare(meso_rt* rt, uint32_t flags)
+{
+    if (!rt || (flags & ~MESO_PREPARE_STATS))
+        return MESO_ERR_INVALID_ARG;
+    for (int stats = 0; stats <= ((flags & MESO_PREPARE_STATS) && rt->stats_ok ? 1 : 0); ++stats) {
+        meso_result r = mesoi_shell_prepare(rt, stats);
+        if (r == MESO_OK)
+            r = mesoi_frusta_prepare(rt, stats);
+        if (r == MESO_OK)
+            r = mesoi_cells_prepare(rt, stats);
+        if (r != MESO_OK)
+            return r;
+    }
+    return MESO_OK;
 }

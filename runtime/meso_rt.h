@@ -70,11 +70,28 @@ typedef void (*meso_log_fn)(void* user, meso_log_level level, meso_log_item item
 typedef void (*meso_gl_fn)(void);
 typedef meso_gl_fn (*meso_gl_get_proc_fn)(const char* name);
 
+/* Who owns the GL state around meso_rt_draw (see meso_rt_draw for the list
+ * of what a draw changes). */
+typedef enum meso_rt_state_policy {
+    MESO_STATE_RESTORE = 0, /* every draw queries the state it changes and puts it back: drop-in, a few
+                               glGet calls per draw */
+    MESO_STATE_HOST_OWNS    /* a draw queries nothing and restores nothing: it sets what it needs and
+                               leaves it set; the host sets whatever it relies on before its own draws
+                               (engines with their own state cache) */
+} meso_rt_state_policy;
+
 typedef struct meso_rt_desc {
     meso_gl_get_proc_fn gl_get_proc_address; /* required: glfwGetProcAddress, eglGetProcAddress, ... */
     meso_allocator allocator;                /* optional (default malloc/free) */
     meso_log_fn log_fn;                      /* optional: silent without one */
     void* log_user;
+    meso_rt_state_policy state_policy;       /* [MESO_STATE_RESTORE] */
+    int check_gl_errors;  /* 1: read the GL error queue after uploads and draws, log what it holds
+                             (GL_ERROR) and return MESO_ERR_GL. This takes errors the host raised
+                             before the call too, so it is for debugging. 0: the runtime never calls
+                             glGetError; failed uploads are still found (from the texture or buffer
+                             GL made) and refused [0] */
+    int prepare;          /* 1: meso_rt_prepare(rt, 0) inside create, so no draw compiles a shader [0] */
 } meso_rt_desc;
 
 typedef struct meso_rt meso_rt;
@@ -104,6 +121,16 @@ MESO_API void meso_rt_destroy(meso_rt* rt);
 MESO_API int meso_rt_gl_version(const meso_rt* rt);
 /* 1 when the context is OpenGL ES, 0 for desktop OpenGL (and for NULL). */
 MESO_API int meso_rt_gl_is_es(const meso_rt* rt);
+
+/* Shader pre-warm: compile and link every program meso_rt_draw may use now,
+ * so that no draw compiles one (a first-draw hitch of tens of milliseconds
+ * per program on a software rasteriser). Flags: MESO_PREPARE_STATS also the
+ * work-counting variants (OpenGL 4.3, or ES with fragment shader storage;
+ * elsewhere ignored). Programs already built are
+ * kept. MESO_ERR_GL (logged) when one fails to build. The GL state is left
+ * as it was. */
+#define MESO_PREPARE_STATS 1u
+MESO_API meso_result meso_rt_prepare(meso_rt* rt, uint32_t flags);
 
 /* >>objects --------------------------------------------------------------- */
 
@@ -228,45 +255,85 @@ typedef struct meso_rt_cells_draw {
                              0: the built-in sky of runtime/reference/cell_reference.h [0] */
 } meso_rt_cells_draw;
 
+/* Depth conventions (meso_rt_draw_desc.depth, .clip_depth): where the near
+ * and far planes land in normalised device coordinates. The ray casters
+ * unproject the near plane and a point between the planes, so an infinite
+ * far plane works under each. */
+typedef enum meso_depth_convention {
+    MESO_DEPTH_STANDARD = 0, /* near plane at NDC z = -1 (0 with MESO_CLIP_DEPTH_ZERO_TO_ONE), far at +1;
+                                the nearer fragment has the smaller depth (GL_LESS, GL_LEQUAL) */
+    MESO_DEPTH_REVERSED      /* near at +1, far at 0 (or -1); the nearer fragment has the larger depth
+                                (GL_GREATER, GL_GEQUAL): reversed-Z */
+} meso_depth_convention;
+
+typedef enum meso_clip_depth {
+    MESO_CLIP_DEPTH_NEGATIVE_ONE_TO_ONE = 0, /* OpenGL's default */
+    MESO_CLIP_DEPTH_ZERO_TO_ONE              /* after glClipControl(..., GL_ZERO_TO_ONE) (OpenGL 4.5 or
+                                                ARB_clip_control; ES: EXT_clip_control) */
+} meso_clip_depth;
+
 /* One draw. Zero-initialise it (`meso_rt_draw_desc d = {0};`) and set what
  * differs from the defaults; designated initialisers read as
  * `{.view = ..., .proj = ..., .shell = {.technique = MESO_SHELL_CURVED}}`. */
 typedef struct meso_rt_draw_desc {
     float view[16];            /* world -> eye, column-major (OpenGL convention) */
     float proj[16];            /* eye -> clip */
-    float model[16];           /* object -> world, rigid + uniform scale [all zero: identity] */
+    float model[16];           /* object -> world: rotation, uniform scale, translation, mirroring
+                                  allowed; other matrices (non-uniform scale, shear, projective) are
+                                  refused with MESO_ERR_INVALID_ARG and a logged reason [all zero:
+                                  identity] */
     float light_dir[3];        /* towards the light, world space [all zero: (0.3, 0.8, 0.5) normalised] */
-    float albedo[3];           /* linear RGB [all zero: (0.80, 0.74, 0.66)] */
+    float albedo[3];           /* linear RGB [all zero: (0.80, 0.74, 0.66)]. Every kind writes linear
+                                  colour: into an sRGB framebuffer (GL_SRGB8_ALPHA8 with
+                                  GL_FRAMEBUFFER_SRGB enabled; on ES, any sRGB attachment) GL
+                                  encodes it */
     meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) [NULL] */
+    meso_depth_convention depth; /* how proj maps depth [MESO_DEPTH_STANDARD] */
+    meso_clip_depth clip_depth;  /* the context's clip control depth mode [NEGATIVE_ONE_TO_ONE] */
+    uint32_t depth_func;         /* a GL depth function (GL_LESS, GL_GEQUAL, ...) to set for the draw;
+                                    0: the host's, left as it is [0] */
+    int32_t viewport[4];         /* the host's viewport (x, y, width, height), which the ray casters
+                                    need; all zero: queried from GL (a glGet per draw) [0] */
     meso_rt_shell_draw shell;   /* read for shells only */
     meso_rt_frusta_draw frusta; /* read for frusta only */
     meso_rt_cells_draw cells;   /* read for cells only */
 } meso_rt_draw_desc;
 
 /* Draw an object into the host's currently bound framebuffer and viewport,
- * with depth testing (GL_LESS) and depth writes, so it sorts against the
- * host's own geometry. Shells and frusta write the exact depth of the ray's
- * hit, and render correctly with the camera inside the shell or a frustum
- * (they rasterise back faces of their bounding geometry and see the inner
- * wall). Cells write the exact depth of the first hit; their rays start on
- * the base mesh's front faces, and when the camera is inside the tile grid
- * also at the near plane behind its back faces, so the camera may be inside
- * the object. Shells drawn with MESO_SHELL_SLICES write the depth of
- * their slice hit (MESO_SLICE_NONE: the first slice inside, up to one slice
- * spacing behind the surface along the ray; the two-pass variants: the
- * α = ½ crossing interpolated between two slices on the pixel's ray) and
- * draw their two-pass variants through an offscreen target the context
- * owns, sized to the viewport (runtime/rt_slices.c); they fill no stats
- * (supported = 0). Meshes are rasterised with the host's face culling as it
- * is. Shells, frusta and cells need the inverse of proj · view · model: a
- * singular one is refused with MESO_ERR_INVALID_ARG (logged). The GL state
- * the call changes (program, vertex array, active texture, textures on
- * units 0-4 (0-7 for slices), depth test/func/mask, culling, and where
- * stats are counted (OpenGL 4.3, ES 3.2 with fragment shader storage) the
- * shader storage buffer binding; for two-pass slices also
- * the draw framebuffer binding, the viewport and blending) is restored before it returns, for
- * every kind. GL errors are logged (GL_ERROR) and returned as MESO_ERR_GL,
- * never fatal. */
+ * with depth testing and depth writes under the host's depth function (or
+ * desc->depth_func), so it sorts against the host's own geometry under
+ * either depth convention. Shells and frusta write the exact depth of the
+ * ray's hit, and render correctly with the camera inside the shell or a
+ * frustum (they rasterise back faces of their bounding geometry and see the
+ * inner wall). Cells write the exact depth of the first hit; their rays
+ * start on the base mesh's front faces, and when the camera is inside the
+ * tile grid also at the near plane behind its back faces, so the camera may
+ * be inside the object. Shells drawn with MESO_SHELL_SLICES write the depth
+ * of their slice hit (MESO_SLICE_NONE: the first slice inside, up to one
+ * slice spacing behind the surface along the ray; the two-pass variants:
+ * the α = ½ crossing interpolated between two slices on the pixel's ray)
+ * and draw their two-pass variants through an offscreen target the context
+ * owns, sized to the viewport (runtime/rt_slices.c); their last pass, into
+ * the host's framebuffer, uses desc->depth_func, else under
+ * MESO_STATE_RESTORE the host's function, else GL_LESS (GL_GREATER
+ * reversed); they fill no stats (supported = 0). Meshes are rasterised with
+ * the host's face culling as it is. Shells, frusta and cells need the
+ * inverse of proj · view · model: a singular one is refused with
+ * MESO_ERR_INVALID_ARG (logged).
+ *
+ * GL state. A draw changes: the program, vertex array, active texture,
+ * textures on units 0-4 (0-7 for slices), depth test (enabled) and mask
+ * (written), the depth function only with desc->depth_func, culling (ray
+ * casters: enabled, front faces culled, counter-clockwise front faces;
+ * meshes: untouched), where stats are counted (OpenGL 4.3, ES 3.2 with
+ * fragment shader storage) the shader storage buffer binding; for two-pass slices also the draw framebuffer binding, the
+ * viewport, blending and the depth function. Under MESO_STATE_RESTORE all of
+ * it is queried first and put back before the call returns; under
+ * MESO_STATE_HOST_OWNS none of it is queried or put back (and, with
+ * desc->viewport given, the draw makes no glGet call at all). The uniform
+ * locations of every program are looked up once, when it links. The GL
+ * error queue is read only with meso_rt_desc.check_gl_errors (then errors
+ * are logged as GL_ERROR and returned as MESO_ERR_GL, never fatal). */
 MESO_API meso_result meso_rt_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc);
 
 /* Animation without re-baking: replace a shell's base positions (3 floats

@@ -65,13 +65,12 @@ void mesoi_cells_release(meso_rt* rt, mesoi_object* o)
 }
 
 /* A 3D texture from a chunk's payload, nearest, clamped. */
-static void upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* data, GLint internal, GLenum format,
-                      GLenum type, GLuint* out)
+static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* data, GLint internal,
+                             GLenum format, GLenum type, GLuint* out)
 {
     mesoi_gl* gl = &rt->gl;
-    GLint prev_unpack = 4;
-    gl->GetIntegerv(GL_UNPACK_ALIGNMENT, &prev_unpack);
-    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    mesoi_unpack unpack;
+    mesoi_unpack_default(rt, &unpack);
     gl->GenTextures(1, out);
     gl->BindTexture(GL_TEXTURE_3D, *out);
     gl->TexImage3D(GL_TEXTURE_3D, 0, internal, (GLsizei)c->dims[0], (GLsizei)c->dims[1], (GLsizei)c->dims[2], 0,
@@ -79,8 +78,18 @@ static void upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* data, G
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAX_LEVEL, 0);
+    GLint width = 0; /* no level 0: GL refused it (the error queue stays the host's) */
+    gl->GetTexLevelParameteriv(GL_TEXTURE_3D, 0, GL_TEXTURE_WIDTH, &width);
     gl->BindTexture(GL_TEXTURE_3D, 0);
-    gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+    mesoi_unpack_restore(rt, &unpack);
+    if (width != (GLint)c->dims[0]) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "cells: a %ux%ux%u texture could not be created",
+                  c->dims[0], c->dims[1], c->dims[2]);
+        gl->DeleteTextures(1, out);
+        *out = 0;
+        return MESO_ERR_GL;
+    }
+    return MESO_OK;
 }
 
 /* Reads a whole chunk and uploads it as a 3D texture. */
@@ -101,7 +110,7 @@ static meso_result upload_chunk_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint 
         type = GL_FLOAT;
     }
     if (r == MESO_OK)
-        upload_3d(rt, meso_file_chunk(f, (uint32_t)ci), data, internal, format, type, out);
+        r = upload_3d(rt, meso_file_chunk(f, (uint32_t)ci), data, internal, format, type, out);
     mesoi_rt_free(rt, data);
     return r;
 }
@@ -178,11 +187,15 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         c->map_full = 1; /* is there empty space in the map? */
         for (size_t v = 0; v < n && c->map_full; ++v)
             c->map_full = wide ? mesoi_ld32(tile + 4 * v) != 0 : mesoi_ld16(tile + 2 * v) != 0;
-        upload_3d(rt, tc, tile, wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER, wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT,
-                  &c->tile_tex);
-        c->memb_tex = mesoi_texture_buffer(rt, GL_R32UI, memb, (size_t)meso_file_chunk(f, (uint32_t)ci[2])->decoded_size,
-                                           &c->memb_buf);
-        r = upload_chunk_3d(rt, f, ci[3], GL_RG16, GL_RG, GL_UNSIGNED_SHORT, &c->nrmm_tex);
+        r = upload_3d(rt, tc, tile, wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER,
+                      wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT, &c->tile_tex);
+        if (r == MESO_OK) {
+            c->memb_tex = mesoi_texture_buffer(rt, GL_R32UI, memb,
+                                               (size_t)meso_file_chunk(f, (uint32_t)ci[2])->decoded_size, &c->memb_buf);
+            r = c->memb_tex ? MESO_OK : MESO_ERR_GL;
+        }
+        if (r == MESO_OK)
+            r = upload_chunk_3d(rt, f, ci[3], GL_RG16, GL_RG, GL_UNSIGNED_SHORT, &c->nrmm_tex);
     }
     if (r == MESO_OK)
         r = upload_chunk_3d(rt, f, ci[4], GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->colr_tex);
@@ -202,26 +215,31 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
 
 /* >>drawing ---------------------------------------------------------------- */
 
-static GLuint cells_program(meso_rt* rt, int stats)
+static const mesoi_program* cells_program(meso_rt* rt, int stats)
 {
-    if (rt->cells_programs[stats])
-        return rt->cells_programs[stats];
+    mesoi_program* p = &rt->cells_programs[stats];
+    if (p->id)
+        return p;
     char head[512];
     snprintf(head, sizeof(head), "%suniform mat4 u_mvp;\nuniform mat4 u_inv_mvp;\n", mesoi_glsl_prelude(rt, stats));
     const char* vs[2] = {head, mesoi_glsl_cells_vert};
     const char* fs[3] = {head, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
-    const GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 2, "cells_vert.glsl"),
-                                mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 3, "cells_frag.glsl"), "cells");
-    rt->cells_programs[stats] = p;
-    return p;
+    static const char* const samplers[UNIT_COUNT] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env"};
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 2, "cells_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 3, "cells_frag.glsl"), "cells", samplers,
+                       UNIT_COUNT);
+    return p->id ? p : NULL;
+}
+
+meso_result mesoi_cells_prepare(meso_rt* rt, int stats)
+{
+    return cells_program(rt, stats) ? MESO_OK : MESO_ERR_GL;
 }
 
 void mesoi_cells_programs_destroy(meso_rt* rt)
 {
     for (int st = 0; st < 2; ++st)
-        if (rt->cells_programs[st])
-            rt->gl.DeleteProgram(rt->cells_programs[st]);
-    memset(rt->cells_programs, 0, sizeof(rt->cells_programs));
+        mesoi_program_delete(rt, &rt->cells_programs[st]);
 }
 
 /* 1 when the near plane's rectangle (its bounding box in object space)
@@ -232,7 +250,7 @@ static int near_plane_in_grid(const mesoi_draw* ds, const mesoi_cells* c)
     for (int i = 0; i < 16; ++i)
         inv[i] = ds->inv_mvp[i];
     for (int k = 0; k < 4; ++k) {
-        const double ndc[4] = {k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, -1.0, 1.0};
+        const double ndc[4] = {k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, ds->depth_ndc[0], 1.0};
         double p[4] = {0, 0, 0, 0};
         for (int row = 0; row < 4; ++row)
             for (int col = 0; col < 4; ++col)
@@ -268,53 +286,47 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
-    const GLuint prog = cells_program(rt, ds.stats);
+    const mesoi_program* prog = cells_program(rt, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
     static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D,
                                                GL_TEXTURE_CUBE_MAP};
     const GLuint bind[UNIT_COUNT] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment};
-    mesoi_draw_begin(rt, &ds, prog, UNIT_COUNT, targets, bind);
+    mesoi_draw_begin(rt, &ds, prog, 1, UNIT_COUNT, targets, bind);
     const int from_near = near_plane_in_grid(&ds, c);
     if (from_near)
         gl->Disable(GL_CULL_FACE);
     else
         gl->CullFace(GL_BACK);
     gl->BindVertexArray(o->vao);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_tile"), UNIT_TILE);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_memb"), UNIT_MEMB);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_nrmm"), UNIT_NRMM);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_colr"), UNIT_COLR);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_env"), UNIT_ENV);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_env"), k->environment != 0);
+    const GLint* u = prog->loc;
+    gl->Uniform1i(u[MESOI_U_has_env], k->environment != 0);
     float rot[9]; /* the model's rotation: object -> world directions */
     for (int col = 0; col < 3; ++col)
         for (int row = 0; row < 3; ++row)
             rot[3 * col + row] = (float)(ds.model[4 * col + row] / ds.model_scale);
-    gl->UniformMatrix3fv(gl->GetUniformLocation(prog, "u_env_rot"), 1, GL_FALSE, rot);
-    gl->Uniform3fv(gl->GetUniformLocation(prog, "u_origin"), 1, c->origin);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_h"), c->voxel);
-    gl->Uniform3i(gl->GetUniformLocation(prog, "u_tiles"), (GLint)c->tiles[0], (GLint)c->tiles[1],
-                  (GLint)c->tiles[2]);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_res"), (GLint)c->res);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_class_words"), (GLint)c->class_words);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_words"), (GLint)c->record_words);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_map_full"), c->map_full);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_from_near"), from_near);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_mode"), (GLint)k->mode);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bounces"), k->bounces);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_refl"), k->reflectivity > 0.0f ? k->reflectivity : 0.5f);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_ior"), k->ior > 0.0f ? k->ior : 1.5f);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_tau"),
-                  k->transparency > 0.0f ? k->transparency : 0.7f);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_step"), k->step);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_fixed_step"), k->fixed_step != 0);
+    gl->UniformMatrix3fv(u[MESOI_U_env_rot], 1, GL_FALSE, rot);
+    gl->Uniform3fv(u[MESOI_U_origin], 1, c->origin);
+    gl->Uniform1f(u[MESOI_U_h], c->voxel);
+    gl->Uniform3i(u[MESOI_U_tiles], (GLint)c->tiles[0], (GLint)c->tiles[1], (GLint)c->tiles[2]);
+    gl->Uniform1i(u[MESOI_U_res], (GLint)c->res);
+    gl->Uniform1i(u[MESOI_U_class_words], (GLint)c->class_words);
+    gl->Uniform1i(u[MESOI_U_words], (GLint)c->record_words);
+    gl->Uniform1i(u[MESOI_U_map_full], c->map_full);
+    gl->Uniform1i(u[MESOI_U_from_near], from_near);
+    gl->Uniform1i(u[MESOI_U_mode], (GLint)k->mode);
+    gl->Uniform1i(u[MESOI_U_bounces], k->bounces);
+    gl->Uniform1f(u[MESOI_U_refl], k->reflectivity > 0.0f ? k->reflectivity : 0.5f);
+    gl->Uniform1f(u[MESOI_U_ior], k->ior > 0.0f ? k->ior : 1.5f);
+    gl->Uniform1f(u[MESOI_U_tau], k->transparency > 0.0f ? k->transparency : 0.7f);
+    gl->Uniform1f(u[MESOI_U_step], k->step);
+    gl->Uniform1i(u[MESOI_U_fixed_step], k->fixed_step != 0);
     int bisect = k->bisection_steps;
     if (bisect <= 0) /* down to 1/64 voxel */
         bisect = k->step > 0.0f ? (int)ceil(log2((double)k->step * 64.0)) : 0;
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect"), bisect > 0 ? bisect : 1);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), k->max_steps > 0 ? k->max_steps : 4096);
+    gl->Uniform1i(u[MESOI_U_bisect], bisect > 0 ? bisect : 1);
+    gl->Uniform1i(u[MESOI_U_max_steps], k->max_steps > 0 ? k->max_steps : 4096);
     gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
     return mesoi_draw_end(rt, &ds, d->stats, "cells");
 }

@@ -6,10 +6,14 @@
  * state save/restore and work counters (read back by mapping on ES).
  *
  * The GL state contract of meso_rt_draw (meso_rt.h) lives here: every draw,
- * of every kind, goes through mesoi_draw_begin / mesoi_draw_end, which save
- * and restore the program, vertex array, active texture and the bindings of
- * the units the kind uses, depth test/func/mask, culling and the shader
- * storage binding of the counters.
+ * of every kind, goes through mesoi_draw_begin / mesoi_draw_end. Under
+ * MESO_STATE_RESTORE they save and restore the program, vertex array,
+ * active texture and the bindings of the units the kind uses, depth
+ * test/func/mask, culling and the shader storage binding of the counters;
+ * under MESO_STATE_HOST_OWNS they query nothing and restore nothing. The
+ * host's GL error queue is read only when the context was created with
+ * check_gl_errors; uploads detect failure from the objects themselves
+ * (a texture level's width, a buffer's size).
  */
 #include "mat4_inverse.h"
 #include "rt_internal.h"
@@ -107,10 +111,22 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
     }
     mesoi_gl* gl = &rt->gl;
     const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
-    GLint prev_unpack = 4, prev_tex = 0;
-    gl->GetIntegerv(GL_UNPACK_ALIGNMENT, &prev_unpack);
+    /* Refused before GL sees it: an invalid TexImage would raise an error
+     * in the host's queue. */
+    GLint limit = 0;
+    gl->GetIntegerv(dims3 ? GL_MAX_3D_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &limit);
+    for (int k = 0; k < (dims3 ? 3 : 2); ++k)
+        if (dims[k] == 0 || dims[k] > (uint32_t)limit) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
+                      "a %ux%ux%u texture exceeds this context's limit of %d texels a side", dims[0], dims[1],
+                      dims[2], (int)limit);
+            *out = 0;
+            return MESO_ERR_GL;
+        }
+    GLint prev_tex = 0;
     gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
-    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    mesoi_unpack unpack;
+    mesoi_unpack_default(rt, &unpack);
     gl->GenTextures(1, out);
     gl->BindTexture(target, *out);
     if (dims3)
@@ -126,9 +142,20 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
     if (dims3)
         gl->TexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
     gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
+    /* A refused or failed TexImage leaves level 0 empty: that is the check,
+     * so the host's GL error queue is left alone. */
+    GLint width = 0;
+    gl->GetTexLevelParameteriv(target, 0, GL_TEXTURE_WIDTH, &width);
     gl->BindTexture(target, (GLuint)prev_tex);
-    gl->PixelStorei(GL_UNPACK_ALIGNMENT, prev_unpack);
+    mesoi_unpack_restore(rt, &unpack);
     mesoi_rt_free(rt, converted);
+    if (width != (GLint)dims[0]) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created", dims[0],
+                  dims[1], dims[2]);
+        gl->DeleteTextures(1, out);
+        *out = 0;
+        return MESO_ERR_GL;
+    }
     return MESO_OK;
 }
 
@@ -155,14 +182,23 @@ GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t
 {
     mesoi_gl* gl = &rt->gl;
     GLuint tex = 0;
+    GLint stored = 0;
     gl->GenBuffers(1, buf);
     gl->BindBuffer(GL_TEXTURE_BUFFER, *buf);
     gl->BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)size, data, GL_DYNAMIC_DRAW);
+    gl->GetBufferParameteriv(GL_TEXTURE_BUFFER, GL_BUFFER_SIZE, &stored);
     gl->GenTextures(1, &tex);
     gl->BindTexture(GL_TEXTURE_BUFFER, tex);
     gl->TexBuffer(GL_TEXTURE_BUFFER, format, *buf);
     gl->BindTexture(GL_TEXTURE_BUFFER, 0);
     gl->BindBuffer(GL_TEXTURE_BUFFER, 0);
+    if ((size_t)stored != size) { /* out of memory: no store; the error queue stays the host's */
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %zu-byte buffer could not be created", size);
+        gl->DeleteTextures(1, &tex);
+        gl->DeleteBuffers(1, buf);
+        *buf = 0;
+        return 0;
+    }
     return tex;
 }
 
@@ -170,15 +206,16 @@ GLint mesoi_upload_begin(meso_rt* rt)
 {
     GLint prev = 0;
     rt->gl.GetIntegerv(GL_TEXTURE_BUFFER_BINDING, &prev);
-    while (rt->gl.GetError() != GL_NO_ERROR) {
-    }
+    if (rt->check_gl_errors)
+        while (rt->gl.GetError() != GL_NO_ERROR) {
+        }
     return prev;
 }
 
 meso_result mesoi_upload_end(meso_rt* rt, GLint prev, meso_result r, const char* what)
 {
     rt->gl.BindBuffer(GL_TEXTURE_BUFFER, (GLuint)prev);
-    const GLenum e = rt->gl.GetError();
+    const GLenum e = rt->check_gl_errors ? rt->gl.GetError() : GL_NO_ERROR;
     if (r == MESO_OK && e != GL_NO_ERROR) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "%s: GL error 0x%04x", what, e);
         return MESO_ERR_GL;
@@ -192,6 +229,43 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
     rt->gl.BindBuffer(GL_TEXTURE_BUFFER, buf);
     rt->gl.BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)size, data);
     return mesoi_upload_end(rt, prev, MESO_OK, what);
+}
+
+/* The unpack state of glPixelStorei that TexImage reads, GL's defaults.
+ * The last two are desktop only: OpenGL ES has neither (unpack_count). */
+static const GLenum unpack_names[] = {GL_UNPACK_ALIGNMENT, GL_UNPACK_ROW_LENGTH, GL_UNPACK_IMAGE_HEIGHT,
+                                      GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNPACK_SKIP_IMAGES,
+                                      GL_UNPACK_SWAP_BYTES, GL_UNPACK_LSB_FIRST};
+static const GLint unpack_default[] = {1, 0, 0, 0, 0, 0, 0, 0}; /* alignment 1: texel rows are packed */
+enum { UNPACK_COUNT = (int)(sizeof(unpack_names) / sizeof(unpack_names[0])) };
+
+static int unpack_count(const meso_rt* rt)
+{
+    return rt->gles ? UNPACK_COUNT - 2 : UNPACK_COUNT;
+}
+
+void mesoi_unpack_default(meso_rt* rt, mesoi_unpack* u)
+{
+    mesoi_gl* gl = &rt->gl;
+    _Static_assert(UNPACK_COUNT <= (int)(sizeof(u->saved) / sizeof(u->saved[0])), "mesoi_unpack too small");
+    for (int i = 0; i < unpack_count(rt); ++i) {
+        gl->GetIntegerv(unpack_names[i], &u->saved[i]);
+        if (u->saved[i] != unpack_default[i])
+            gl->PixelStorei(unpack_names[i], unpack_default[i]);
+    }
+    u->pbo = 0;
+    gl->GetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &u->pbo);
+    if (u->pbo)
+        gl->BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+}
+
+void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u)
+{
+    for (int i = 0; i < unpack_count(rt); ++i)
+        if (u->saved[i] != unpack_default[i])
+            rt->gl.PixelStorei(unpack_names[i], u->saved[i]);
+    if (u->pbo)
+        rt->gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, (GLuint)u->pbo);
 }
 
 /* >>shaders ---------------------------------------------------------------- */
@@ -258,6 +332,56 @@ GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name)
     return built(rt, p, 1, name) ? p : 0;
 }
 
+static const char* const uniform_names[MESOI_U_COUNT] = {
+#define MESOI_X_NAME(name) "u_" #name,
+    MESOI_UNIFORMS(MESOI_X_NAME)
+#undef MESOI_X_NAME
+};
+
+GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, const char* name,
+                          const char* const* samplers, int sampler_count)
+{
+    mesoi_gl* gl = &rt->gl;
+    p->id = mesoi_link(rt, vs, fs, name);
+    if (!p->id)
+        return 0;
+    for (int u = 0; u < MESOI_U_COUNT; ++u)
+        p->loc[u] = gl->GetUniformLocation(p->id, uniform_names[u]);
+    if (sampler_count > 0) { /* units never change: set once */
+        GLint prev = 0;
+        gl->GetIntegerv(GL_CURRENT_PROGRAM, &prev);
+        gl->UseProgram(p->id);
+        for (int i = 0; i < sampler_count; ++i)
+            gl->Uniform1i(gl->GetUniformLocation(p->id, samplers[i]), i);
+        gl->UseProgram((GLuint)prev);
+    }
+    return p->id;
+}
+
+int mesoi_program_owned(const meso_rt* rt, GLuint id)
+{
+    /* Every program array of struct meso_rt, whatever its dimensions. */
+#define MESOI_PROGRAMS(a) {(const mesoi_program*)(a), sizeof(a) / sizeof(mesoi_program)}
+    const struct {
+        const mesoi_program* p;
+        size_t n;
+    } lists[] = {{&rt->mesh_program, 1}, MESOI_PROGRAMS(rt->shell_programs), MESOI_PROGRAMS(rt->frusta_programs),
+                 MESOI_PROGRAMS(rt->cells_programs), MESOI_PROGRAMS(rt->slice_programs)};
+#undef MESOI_PROGRAMS
+    for (size_t l = 0; l < sizeof(lists) / sizeof(lists[0]); ++l)
+        for (size_t i = 0; i < lists[l].n; ++i)
+            if (lists[l].p[i].id == id)
+                return 1;
+    return 0;
+}
+
+void mesoi_program_delete(meso_rt* rt, mesoi_program* p)
+{
+    if (p->id)
+        rt->gl.DeleteProgram(p->id);
+    memset(p, 0, sizeof(*p));
+}
+
 /* >>draws ------------------------------------------------------------------ */
 
 static void mat4_mul(const double a[16], const double b[16], double out[16])
@@ -281,16 +405,57 @@ static int zero16(const float* v)
     return 1;
 }
 
+/* A similarity: the three columns of the upper 3x3 orthogonal and of one
+ * length, nothing projective. Relative tolerance 1e-4 (float matrices
+ * built by hosts carry rounding). */
+static int similarity(const double m[16], double* scale, int* mirrored)
+{
+    double len[3], dot[3];
+    for (int c = 0; c < 3; ++c)
+        len[c] = sqrt(m[4 * c] * m[4 * c] + m[4 * c + 1] * m[4 * c + 1] + m[4 * c + 2] * m[4 * c + 2]);
+    for (int c = 0; c < 3; ++c) {
+        const int d = (c + 1) % 3;
+        dot[c] = m[4 * c] * m[4 * d] + m[4 * c + 1] * m[4 * d + 1] + m[4 * c + 2] * m[4 * d + 2];
+    }
+    *scale = len[0];
+    const double tol = 1e-4 * len[0];
+    const double det = m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
+                       m[8] * (m[1] * m[6] - m[5] * m[2]);
+    *mirrored = det < 0.0;
+    return len[0] > 0.0 && fabs(len[1] - len[0]) <= tol && fabs(len[2] - len[0]) <= tol &&
+           fabs(dot[0]) <= tol * len[0] && fabs(dot[1]) <= tol * len[0] && fabs(dot[2]) <= tol * len[0] &&
+           m[3] == 0.0 && m[7] == 0.0 && m[11] == 0.0 && m[15] == 1.0;
+}
+
 meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, mesoi_draw* out)
 {
     memset(out, 0, sizeof(*out));
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
+    if ((unsigned)d->depth > MESO_DEPTH_REVERSED || (unsigned)d->clip_depth > MESO_CLIP_DEPTH_ZERO_TO_ONE ||
+        d->viewport[2] < 0 || d->viewport[3] < 0) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw: depth %d, clip_depth %d or viewport %dx%d out of range", (int)d->depth,
+                  (int)d->clip_depth, (int)d->viewport[2], (int)d->viewport[3]);
+        return MESO_ERR_INVALID_ARG;
+    }
     double view[16], proj[16], model[16], mvp[16], inv[16];
+    const int identity = zero16(d->model);
     for (int i = 0; i < 16; ++i) {
         view[i] = d->view[i];
         proj[i] = d->proj[i];
-        model[i] = zero16(d->model) ? (i % 5 == 0 ? 1.0 : 0.0) : d->model[i];
+        model[i] = identity ? (i % 5 == 0 ? 1.0 : 0.0) : d->model[i];
+    }
+    if (!similarity(model, &out->model_scale, &out->mirrored)) {
+        /* The ray casters' error bounds and shading assume one scale; a
+         * sheared or stretched object would be drawn wrong, so say so. */
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw: model matrix is not rotation + uniform scale + translation (column lengths "
+                  "%g %g %g); bake the scale into the object instead",
+                  sqrt(model[0] * model[0] + model[1] * model[1] + model[2] * model[2]),
+                  sqrt(model[4] * model[4] + model[5] * model[5] + model[6] * model[6]),
+                  sqrt(model[8] * model[8] + model[9] * model[9] + model[10] * model[10]));
+        return MESO_ERR_INVALID_ARG;
     }
     mat4_mul(proj, view, mvp);
     mat4_mul(mvp, model, mvp);
@@ -304,10 +469,23 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
         out->mvp[i] = (float)mvp[i];
         out->inv_mvp[i] = invertible ? (float)inv[i] : 0.0f;
     }
-    out->viewport[2] = out->viewport[3] = 1;
-    rt->gl.GetIntegerv(GL_VIEWPORT, out->viewport);
+    if (d->viewport[2] > 0 && d->viewport[3] > 0) {
+        memcpy(out->viewport, d->viewport, sizeof(out->viewport));
+    } else {
+        out->viewport[2] = out->viewport[3] = 1;
+        rt->gl.GetIntegerv(GL_VIEWPORT, out->viewport);
+    }
+    /* NDC depth of the near plane, a point between (finite even when the far
+     * plane is at infinity, where proj maps it to w = 0) and the far plane. */
+    const float lo = d->clip_depth == MESO_CLIP_DEPTH_ZERO_TO_ONE ? 0.0f : -1.0f;
+    out->reversed = d->depth == MESO_DEPTH_REVERSED;
+    out->depth_ndc[0] = out->reversed ? 1.0f : lo;
+    out->depth_ndc[2] = out->reversed ? lo : 1.0f;
+    out->depth_ndc[1] = 0.5f * (out->depth_ndc[0] + out->depth_ndc[2]);
+    out->depth_ndc[3] = d->clip_depth == MESO_CLIP_DEPTH_ZERO_TO_ONE ? 1.0f : 0.0f;
+    out->depth_func = (GLenum)d->depth_func;
+    out->restore = rt->state_policy == MESO_STATE_RESTORE;
     out->proj11 = fabs(proj[5]);
-    out->model_scale = sqrt(model[0] * model[0] + model[1] * model[1] + model[2] * model[2]);
     double light[3] = {0.3, 0.8, 0.5};
     if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
         for (int k = 0; k < 3; ++k)
@@ -328,6 +506,16 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     return MESO_OK;
 }
 
+GLenum mesoi_near_func(const mesoi_draw* s)
+{
+    return s->reversed ? GL_GREATER : GL_LESS;
+}
+
+float mesoi_far_clear(const mesoi_draw* s)
+{
+    return s->reversed ? 0.0f : 1.0f;
+}
+
 static GLenum binding_of(GLenum target)
 {
     switch (target) {
@@ -338,32 +526,47 @@ static GLenum binding_of(GLenum target)
     }
 }
 
-void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, const GLenum* targets,
-                      const GLuint* textures)
+void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
+{
+    mesoi_gl* gl = &rt->gl;
+    gl->UseProgram(p->id);
+    gl->UniformMatrix4fv(p->loc[MESOI_U_mvp], 1, GL_FALSE, s->mvp);
+    gl->UniformMatrix4fv(p->loc[MESOI_U_inv_mvp], 1, GL_FALSE, s->inv_mvp);
+    const float viewport[4] = {(float)s->viewport[0], (float)s->viewport[1], (float)s->viewport[2],
+                               (float)s->viewport[3]};
+    gl->Uniform4fv(p->loc[MESOI_U_viewport], 1, viewport);
+    gl->Uniform3fv(p->loc[MESOI_U_light_obj], 1, s->light_obj);
+    gl->Uniform3fv(p->loc[MESOI_U_albedo], 1, s->albedo);
+    gl->Uniform4fv(p->loc[MESOI_U_depth_ndc], 1, s->depth_ndc);
+}
+
+void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,
+                      const GLenum* targets, const GLuint* textures)
 {
     mesoi_gl* gl = &rt->gl;
     s->units = units < MESOI_DRAW_MAX_UNITS ? units : MESOI_DRAW_MAX_UNITS;
-    gl->GetIntegerv(GL_CURRENT_PROGRAM, &s->prev_program);
-    gl->GetIntegerv(GL_VERTEX_ARRAY_BINDING, &s->prev_vao);
-    gl->GetIntegerv(GL_DEPTH_FUNC, &s->prev_func);
-    gl->GetIntegerv(GL_DEPTH_WRITEMASK, &s->prev_mask);
-    gl->GetIntegerv(GL_ACTIVE_TEXTURE, &s->prev_active);
-    gl->GetIntegerv(GL_CULL_FACE_MODE, &s->prev_cull_mode);
-    gl->GetIntegerv(GL_FRONT_FACE, &s->prev_front);
-    s->prev_test = gl->IsEnabled(GL_DEPTH_TEST);
-    s->prev_cull = gl->IsEnabled(GL_CULL_FACE);
+    if (s->restore) {
+        gl->GetIntegerv(GL_CURRENT_PROGRAM, &s->prev_program);
+        gl->GetIntegerv(GL_VERTEX_ARRAY_BINDING, &s->prev_vao);
+        gl->GetIntegerv(GL_DEPTH_FUNC, &s->prev_func);
+        gl->GetIntegerv(GL_DEPTH_WRITEMASK, &s->prev_mask);
+        gl->GetIntegerv(GL_ACTIVE_TEXTURE, &s->prev_active);
+        gl->GetIntegerv(GL_CULL_FACE_MODE, &s->prev_cull_mode);
+        gl->GetIntegerv(GL_FRONT_FACE, &s->prev_front);
+        s->prev_test = gl->IsEnabled(GL_DEPTH_TEST);
+        s->prev_cull = gl->IsEnabled(GL_CULL_FACE);
+        if (s->stats)
+            gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &s->prev_ssbo);
+    }
+    if (rt->check_gl_errors)
+        while (gl->GetError() != GL_NO_ERROR) {
+        }
+
     for (int u = 0; u < s->units; ++u) {
         s->target[u] = targets[u];
         gl->ActiveTexture(GL_TEXTURE0 + (GLenum)u);
-        gl->GetIntegerv(binding_of(targets[u]), &s->prev_bind[u]);
-    }
-    if (s->stats)
-        gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &s->prev_ssbo);
-    while (gl->GetError() != GL_NO_ERROR) {
-    }
-
-    for (int u = 0; u < s->units; ++u) {
-        gl->ActiveTexture(GL_TEXTURE0 + (GLenum)u);
+        if (s->restore)
+            gl->GetIntegerv(binding_of(targets[u]), &s->prev_bind[u]);
         gl->BindTexture(targets[u], textures[u]);
     }
     if (s->stats) {
@@ -378,21 +581,17 @@ void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, con
         }
         gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rt->stats_buffer);
     }
-    gl->UseProgram(program);
-    gl->UniformMatrix4fv(gl->GetUniformLocation(program, "u_mvp"), 1, GL_FALSE, s->mvp);
-    gl->UniformMatrix4fv(gl->GetUniformLocation(program, "u_inv_mvp"), 1, GL_FALSE, s->inv_mvp);
-    const float viewport[4] = {(float)s->viewport[0], (float)s->viewport[1], (float)s->viewport[2],
-                               (float)s->viewport[3]};
-    gl->Uniform4fv(gl->GetUniformLocation(program, "u_viewport"), 1, viewport);
-    gl->Uniform3fv(gl->GetUniformLocation(program, "u_light_obj"), 1, s->light_obj);
-    gl->Uniform3fv(gl->GetUniformLocation(program, "u_albedo"), 1, s->albedo);
+    mesoi_draw_use(rt, s, program);
 
     gl->Enable(GL_DEPTH_TEST);
-    gl->DepthFunc(GL_LESS);
+    if (s->depth_func)
+        gl->DepthFunc(s->depth_func);
     gl->DepthMask(GL_TRUE);
-    gl->Enable(GL_CULL_FACE);
-    gl->CullFace(GL_FRONT); /* back faces: one fragment per solid, camera inside or not */
-    gl->FrontFace(GL_CCW);
+    if (raycast) {
+        gl->Enable(GL_CULL_FACE);
+        gl->CullFace(GL_FRONT); /* back faces: one fragment per solid, camera inside or not */
+        gl->FrontFace(s->mirrored ? GL_CW : GL_CCW); /* a mirroring model turns the winding over */
+    }
     if (!rt->empty_vao)
         gl->GenVertexArrays(1, &rt->empty_vao);
     gl->BindVertexArray(rt->empty_vao); /* both kinds draw from gl_VertexID alone */
@@ -416,29 +615,32 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
         stats->fragments = counts[0];
         stats->steps = counts[1];
         stats->hits = counts[2];
-        gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)s->prev_ssbo);
+        if (s->restore)
+            gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)s->prev_ssbo);
     } else if (stats) {
         memset(stats, 0, sizeof(*stats));
     }
-    const GLenum e = gl->GetError();
+    const GLenum e = rt->check_gl_errors ? gl->GetError() : GL_NO_ERROR;
 
-    for (int u = 0; u < s->units; ++u) {
-        gl->ActiveTexture(GL_TEXTURE0 + (GLenum)u);
-        gl->BindTexture(s->target[u], (GLuint)s->prev_bind[u]);
+    if (s->restore) {
+        for (int u = 0; u < s->units; ++u) {
+            gl->ActiveTexture(GL_TEXTURE0 + (GLenum)u);
+            gl->BindTexture(s->target[u], (GLuint)s->prev_bind[u]);
+        }
+        gl->ActiveTexture((GLenum)s->prev_active);
+        gl->BindVertexArray((GLuint)s->prev_vao);
+        gl->UseProgram((GLuint)s->prev_program);
+        gl->DepthFunc((GLenum)s->prev_func);
+        gl->DepthMask(s->prev_mask ? GL_TRUE : GL_FALSE);
+        gl->CullFace((GLenum)s->prev_cull_mode);
+        gl->FrontFace((GLenum)s->prev_front);
+        if (!s->prev_test)
+            gl->Disable(GL_DEPTH_TEST);
+        if (s->prev_cull) /* the kind may have changed it after begin */
+            gl->Enable(GL_CULL_FACE);
+        else
+            gl->Disable(GL_CULL_FACE);
     }
-    gl->ActiveTexture((GLenum)s->prev_active);
-    gl->BindVertexArray((GLuint)s->prev_vao);
-    gl->UseProgram((GLuint)s->prev_program);
-    gl->DepthFunc((GLenum)s->prev_func);
-    gl->DepthMask(s->prev_mask ? GL_TRUE : GL_FALSE);
-    gl->CullFace((GLenum)s->prev_cull_mode);
-    gl->FrontFace((GLenum)s->prev_front);
-    if (!s->prev_test)
-        gl->Disable(GL_DEPTH_TEST);
-    if (s->prev_cull) /* the kind may have changed it after begin */
-        gl->Enable(GL_CULL_FACE);
-    else
-        gl->Disable(GL_CULL_FACE);
     if (e != GL_NO_ERROR) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "meso_rt_draw (%s): GL error 0x%04x", what, e);
         return MESO_ERR_GL;

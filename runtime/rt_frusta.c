@@ -480,6 +480,8 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
         build_texels(s);
         s->prim_tex = mesoi_texture_buffer(rt, GL_RGBA32F, s->texels, sizeof(float) * FLOATS * (size_t)prims,
                                            &s->prim_buf);
+        if (!s->prim_tex)
+            r = MESO_ERR_GL;
     }
     char what[48];
     snprintf(what, sizeof(what), "uploading frusta %u", id);
@@ -571,27 +573,32 @@ meso_result meso_rt_frusta_rest_pose(const meso_rt* rt, meso_rt_object h, float*
 /* >>drawing ---------------------------------------------------------------- */
 
 /* With or without the work counters (atomics cost time). */
-static GLuint frusta_program(meso_rt* rt, int stats)
+static const mesoi_program* frusta_program(meso_rt* rt, int stats)
 {
-    if (rt->frusta_programs[stats])
-        return rt->frusta_programs[stats];
+    mesoi_program* p = &rt->frusta_programs[stats];
+    if (p->id)
+        return p;
     char head[512];
     snprintf(head, sizeof(head), "%s#define MESO_FRUSTA_TEXELS %d\n#define MESO_FRUSTA_CORNER0 %d\n",
              mesoi_glsl_prelude(rt, stats), TEXELS, CORNER0);
     const char* vs[3] = {head, mesoi_glsl_frusta_common, mesoi_glsl_frusta_vert};
     const char* fs[4] = {head, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common, mesoi_glsl_frusta_frag};
-    const GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "frusta_vert.glsl"),
-                                mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 4, "frusta_frag.glsl"), "frusta");
-    rt->frusta_programs[stats] = p;
-    return p;
+    static const char* const samplers[UNIT_COUNT] = {"u_prims", "u_relief"};
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "frusta_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 4, "frusta_frag.glsl"), "frusta", samplers,
+                       UNIT_COUNT);
+    return p->id ? p : NULL;
+}
+
+meso_result mesoi_frusta_prepare(meso_rt* rt, int stats)
+{
+    return frusta_program(rt, stats) ? MESO_OK : MESO_ERR_GL;
 }
 
 void mesoi_frusta_programs_destroy(meso_rt* rt)
 {
     for (int st = 0; st < 2; ++st)
-        if (rt->frusta_programs[st])
-            rt->gl.DeleteProgram(rt->frusta_programs[st]);
-    memset(rt->frusta_programs, 0, sizeof(rt->frusta_programs));
+        mesoi_program_delete(rt, &rt->frusta_programs[st]);
 }
 
 meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
@@ -602,19 +609,17 @@ meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
-    const GLuint prog = frusta_program(rt, ds.stats);
+    const mesoi_program* prog = frusta_program(rt, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
     static const GLenum targets[UNIT_COUNT] = {GL_TEXTURE_BUFFER, GL_TEXTURE_2D};
     const GLuint bind[UNIT_COUNT] = {s->prim_tex, s->relief_tex};
-    mesoi_draw_begin(rt, &ds, prog, UNIT_COUNT, targets, bind);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_prims"), UNIT_PRIMS);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_relief"), UNIT_RELIEF);
+    mesoi_draw_begin(rt, &ds, prog, 1, UNIT_COUNT, targets, bind);
     const GLint size[2] = {s->relief_w, s->relief_h};
-    gl->Uniform2iv(gl->GetUniformLocation(prog, "u_relief_size"), 1, size);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_relief_steps"), k->relief_steps > 0 ? k->relief_steps : 64);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect_steps"), k->bisection_steps > 0 ? k->bisection_steps : 4);
+    gl->Uniform2iv(prog->loc[MESOI_U_relief_size], 1, size);
+    gl->Uniform1i(prog->loc[MESOI_U_relief_steps], k->relief_steps > 0 ? k->relief_steps : 64);
+    gl->Uniform1i(prog->loc[MESOI_U_bisect_steps], k->bisection_steps > 0 ? k->bisection_steps : 4);
     gl->DrawArrays(GL_TRIANGLES, 0, 36 * (GLsizei)(s->count + s->ball_count));
     return mesoi_draw_end(rt, &ds, d->stats, "frusta");
 }

@@ -80,7 +80,9 @@
     X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)                   \
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)               \
     X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                                     \
-    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                                 \
+    X(PFNGLGETTEXLEVELPARAMETERIVPROC, GetTexLevelParameteriv)               \
+    X(PFNGLGETBUFFERPARAMETERIVPROC, GetBufferParameteriv)
 
 /* Entry points used only when the context has them (the stats counters of
  * OpenGL 4.3 / ES 3.1; glGetBufferSubData, which OpenGL ES lacks: ES maps

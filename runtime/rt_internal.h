@@ -20,6 +20,32 @@ typedef struct mesoi_object {
     float bbox_min[3], bbox_max[3];
 } mesoi_object;
 
+/* Every uniform any of the programs declares. Locations are looked up once,
+ * when a program links (mesoi_program_init), so a draw sets uniforms
+ * without asking GL for names; a program without one has location -1, which
+ * glUniform* ignores. */
+#define MESOI_UNIFORMS(X)                                                                                  \
+    X(mvp) X(inv_mvp) X(viewport) X(light_obj) X(albedo) X(depth_ndc) /* every kind (mesoi_draw_begin) */ \
+    X(view) X(proj) X(model) X(light_dir)                              /* mesh */                          \
+    X(uv_scale) X(tex_kind) X(has_dist) X(tex_size) X(err_scale) X(max_steps) X(bisect_steps)             \
+    X(segment_steps) X(fixed_step) X(min_step) X(slices) X(prism_count) /* shell, slices */                \
+    X(relief_size) X(relief_steps)                                     /* frusta */                        \
+    X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
+    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) /* cells */
+
+enum {
+#define MESOI_X_ENUM(name) MESOI_U_##name,
+    MESOI_UNIFORMS(MESOI_X_ENUM)
+#undef MESOI_X_ENUM
+        MESOI_U_COUNT
+};
+
+/* A linked program and its uniform locations. id 0: not built (yet). */
+typedef struct mesoi_program {
+    GLuint id;
+    GLint loc[MESOI_U_COUNT];
+} mesoi_program;
+
 struct meso_rt {
     meso_allocator alloc;
     meso_log_fn log_fn;
@@ -32,12 +58,13 @@ struct meso_rt {
      * them the uploads convert (rt_common.c: upload formats). */
     int norm16, float_linear;
     int stats_ok; /* fragment shaders can count into a shader storage buffer (GL 4.3, or ES with fragment SSBOs) */
-    GLuint mesh_program;
-    GLint u_view, u_proj, u_model, u_light_dir; /* of mesh_program */
-    GLuint shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], compiled on first use */
-    GLuint frusta_programs[2];                            /* [stats], compiled on first use */
-    GLuint cells_programs[2];                             /* [stats], compiled on first use */
-    GLuint slice_programs[5]; /* MESO_SHELL_SLICES, per pass (shell_slices_frag.glsl SLICE_PASS) */
+    meso_rt_state_policy state_policy;
+    int check_gl_errors;
+    mesoi_program mesh_program;
+    mesoi_program shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], built on first use */
+    mesoi_program frusta_programs[2];                            /* [stats], built on first use */
+    mesoi_program cells_programs[2];                             /* [stats], built on first use */
+    mesoi_program slice_programs[5]; /* MESO_SHELL_SLICES, per pass (shell_slices_frag.glsl SLICE_PASS) */
     GLuint slice_fbo[2];      /* the two-pass slice variants' offscreen target (rt_slices.c) */
     GLuint slice_tex[5];
     GLint slice_size[2];      /* its width and height: the viewport's */
@@ -77,12 +104,17 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t object_id, meso
 void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
 void mesoi_shell_programs_destroy(meso_rt* rt);
+/* Build every shell program (stats: the counting variants; without, the
+ * slice passes too): meso_rt_prepare. */
+meso_result mesoi_shell_prepare(meso_rt* rt, int stats);
+meso_result mesoi_slices_prepare(meso_rt* rt); /* rt_slices.c */
 
 /* rt_frusta.c */
 meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
 void mesoi_frusta_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
 void mesoi_frusta_programs_destroy(meso_rt* rt);
+meso_result mesoi_frusta_prepare(meso_rt* rt, int stats);
 /* meso_rt_frusta_set_pose without the upload: the pose rebuild and the
  * bounding geometry on the host copy (tests/bench time the two parts). */
 meso_result mesoi_frusta_pose_host(meso_rt* rt, meso_rt_object obj, const float* node_positions, uint32_t node_count);
@@ -92,6 +124,7 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t object_id, meso
 void mesoi_cells_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d);
 void mesoi_cells_programs_destroy(meso_rt* rt);
+meso_result mesoi_cells_prepare(meso_rt* rt, int stats);
 
 /* rt_common.c: chunks and uploads */
 /* Index of the finest-level chunk of `type` for `object`, or -1. */
@@ -104,36 +137,48 @@ meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, 
 meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out);
 /* The same from texels in memory: a new texture (*out) of `dims` values
  * of `dtype` (U8, U16, or F32 when `nearest`); the unit's 2D/3D binding and
- * the unpack alignment are restored. MESO_ERR_UNSUPPORTED for other types. */
+ * the unpack state are restored; MESO_ERR_GL (logged) when GL made no level 0. MESO_ERR_UNSUPPORTED for other types. */
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
                                 const void* data, GLuint* out);
-/* A texture buffer over a new buffer object holding `size` bytes of `data`. */
+/* A texture buffer over a new buffer object holding `size` bytes of `data`;
+ * 0 (logged, *buf 0, nothing left behind) when GL could not store them. */
 GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf);
-/* Around a sequence of uploads: begin saves the texture buffer binding and
- * clears stale GL errors (returns the binding); end restores it and turns a
- * GL error raised meanwhile into MESO_ERR_GL (logged as "WHAT: GL error"),
- * else returns r. */
+/* Around a sequence of uploads: begin saves the texture buffer binding
+ * (returns it); end restores it and returns r. Only with check_gl_errors
+ * (meso_rt_desc) do they read the GL error queue: begin drains it, end turns
+ * an error raised meanwhile into MESO_ERR_GL (logged as "WHAT: GL error").
+ * Without, failures are found by mesoi_upload_texels / mesoi_texture_buffer. */
 GLint mesoi_upload_begin(meso_rt* rt);
 meso_result mesoi_upload_end(meso_rt* rt, GLint prev, meso_result r, const char* what);
 /* Overwrites the first `size` bytes of buffer `buf` (animation updates). */
 meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_t size, const char* what);
 
-/* rt_common.c: one draw, of any kind. prepare (no GL state touched; fails
- * on a singular object -> clip matrix when `need_inverse`, as the ray
- * casters need it) → begin (saves the state meso_rt_draw promises to
- * restore, binds the textures, the counters and `program` with its common
- * uniforms u_mvp, u_inv_mvp, u_viewport, u_light_obj, u_albedo, and sets
- * depth test GL_LESS with writes, front-face culling and the empty vertex
- * array) → the kind's own state, uniforms and draw call → end (reads the
- * counters, restores). */
+/* rt_common.c: one draw, of any kind. prepare (no GL state touched but the
+ * viewport query when desc->viewport is unset; fails on a singular object ->
+ * clip matrix when `need_inverse`, as the ray casters need it, and on a
+ * model matrix that is not a similarity) → begin (under
+ * MESO_STATE_RESTORE saves the state meso_rt_draw promises to restore;
+ * binds the textures, the counters and `program` with its common uniforms
+ * u_mvp, u_inv_mvp, u_viewport, u_light_obj, u_albedo, u_depth_ndc; sets
+ * depth test and writes (and desc->depth_func when given), the empty vertex
+ * array, and for ray casters (`raycast`) front-face culling) → the kind's
+ * own state, uniforms and draw call → end (reads the counters; restores
+ * under MESO_STATE_RESTORE; checks GL errors only when the context was
+ * created with check_gl_errors). */
 #define MESOI_DRAW_MAX_UNITS 8
 typedef struct mesoi_draw {
     float model[16];            /* object -> world: desc->model, or identity when it is all zero */
     float mvp[16], inv_mvp[16]; /* object -> clip and back (inv_mvp zero when singular) */
     double proj11;              /* |proj[1][1]| */
-    double model_scale;         /* length of the model matrix's first column */
+    double model_scale;         /* the model matrix's uniform scale (length of its first column) */
+    int mirrored;               /* the model matrix has a negative determinant: triangles wind the other way */
     GLint viewport[4];
     float light_obj[3], albedo[3];
+    float depth_ndc[4];         /* NDC z of the near plane, of a finite point between, of the far plane;
+                                   1 for clip depth 0..1 (raycast_common.glsl u_depth_ndc) */
+    int reversed;               /* the near plane has the larger depth (MESO_DEPTH_REVERSED) */
+    GLenum depth_func;          /* desc->depth_func, or 0 */
+    int restore;                /* MESO_STATE_RESTORE */
     int stats; /* the shaders count work (rt->stats_ok and desc->stats) */
     int units;
     GLenum target[MESOI_DRAW_MAX_UNITS];
@@ -142,9 +187,17 @@ typedef struct mesoi_draw {
     GLboolean prev_test, prev_cull;
 } mesoi_draw;
 meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, mesoi_draw* out);
-void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, GLuint program, int units, const GLenum* targets,
-                      const GLuint* textures);
+void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,
+                      const GLenum* targets, const GLuint* textures);
 meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats, const char* what);
+/* Binds `program` and sets the common uniforms begin sets (for draws of
+ * several passes). */
+void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* program);
+/* The depth function that lets the nearer fragment win under the draw's
+ * convention (GL_LESS, or GL_GREATER reversed), and the cleared value of
+ * "nothing drawn" (1, or 0 reversed). */
+GLenum mesoi_near_func(const mesoi_draw* s);
+float mesoi_far_clear(const mesoi_draw* s);
 
 /* rt_common.c: what every shader starts with: the #version line (desktop:
  * "330 core", "430 core" with `stats`; ES: "320 es" and default precisions
@@ -157,9 +210,28 @@ float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count);
 
 /* rt_common.c: shaders. compile: one shader from `count` sources, 0
  * (logged with `name`) on failure; link: links and deletes the two shaders
- * (either may be 0, then both are deleted), 0 (logged) on failure. */
+ * (either may be 0, then both are deleted), 0 (logged) on failure.
+ * program_init: links as mesoi_link into *p and looks up every uniform of
+ * MESOI_UNIFORMS once; sampler `samplers[i]` is set to unit i (the current
+ * program is put back). Returns p->id (0 on failure). */
 GLuint mesoi_compile(meso_rt* rt, GLenum type, const char* const* src, int count, const char* name);
 GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name);
+GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, const char* name,
+                          const char* const* samplers, int sampler_count);
+void mesoi_program_delete(meso_rt* rt, mesoi_program* p);
+/* 1 when `id` is one of the context's programs. */
+int mesoi_program_owned(const meso_rt* rt, GLuint id);
+
+/* rt_common.c: around uploads, the pixel-unpack state they depend on set to
+ * GL's defaults (alignment 1, no row length / skips / image height, no
+ * unpack buffer bound) and put back after: whatever the host left bound
+ * cannot corrupt an upload. */
+typedef struct mesoi_unpack {
+    GLint saved[8];
+    GLint pbo; /* GL_PIXEL_UNPACK_BUFFER_BINDING */
+} mesoi_unpack;
+void mesoi_unpack_default(meso_rt* rt, mesoi_unpack* u);
+void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u);
 
 /* rt_mesh.c */
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions

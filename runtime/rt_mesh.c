@@ -17,19 +17,12 @@
 
 meso_result mesoi_mesh_program_create(meso_rt* rt)
 {
-    mesoi_gl* gl = &rt->gl;
     const char* vsrc[2] = {mesoi_glsl_prelude(rt, 0), mesoi_glsl_mesh_vert};
     const char* fsrc[2] = {mesoi_glsl_prelude(rt, 0), mesoi_glsl_mesh_frag};
-    GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vsrc, 2, "mesh_vert.glsl"),
-                          mesoi_compile(rt, GL_FRAGMENT_SHADER, fsrc, 2, "mesh_frag.glsl"), "mesh");
-    if (!p)
-        return MESO_ERR_GL;
-    rt->mesh_program = p;
-    rt->u_view = gl->GetUniformLocation(p, "u_view");
-    rt->u_proj = gl->GetUniformLocation(p, "u_proj");
-    rt->u_model = gl->GetUniformLocation(p, "u_model");
-    rt->u_light_dir = gl->GetUniformLocation(p, "u_light_dir");
-    return MESO_OK;
+    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, vsrc, 2, "mesh_vert.glsl"),
+                              mesoi_compile(rt, GL_FRAGMENT_SHADER, fsrc, 2, "mesh_frag.glsl"), "mesh", NULL, 0)
+               ? MESO_OK
+               : MESO_ERR_GL;
 }
 
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
@@ -59,16 +52,15 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
         return MESO_ERR_UNSUPPORTED;
     }
     mesoi_gl* gl = &rt->gl;
-    GLint prev_vao = 0, prev_array = 0;
+    GLint prev_vao = 0, prev_array = 0, stored = 0;
     gl->GetIntegerv(GL_VERTEX_ARRAY_BINDING, &prev_vao);
     gl->GetIntegerv(GL_ARRAY_BUFFER_BINDING, &prev_array);
-    while (gl->GetError() != GL_NO_ERROR) {
-    }
     gl->GenVertexArrays(1, &o->vao);
     gl->GenBuffers(1, &o->buffer);
     gl->BindVertexArray(o->vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, o->buffer);
     gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)size, data, GL_STATIC_DRAW);
+    gl->GetBufferParameteriv(GL_ARRAY_BUFFER, GL_BUFFER_SIZE, &stored);
     gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, o->buffer);
     gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.positions_offset);
     gl->EnableVertexAttribArray(0);
@@ -77,9 +69,12 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
     gl->BindVertexArray((GLuint)prev_vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, (GLuint)prev_array);
     mesoi_rt_free(rt, data);
-    const GLenum e = gl->GetError();
-    if (e != GL_NO_ERROR) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "uploading object %u: GL error 0x%04x", object_id, e);
+    /* No store (out of memory) shows in the buffer's size; the host's GL
+     * error queue is read only on request. */
+    const GLenum e = rt->check_gl_errors ? gl->GetError() : GL_NO_ERROR;
+    if ((size_t)stored != size || e != GL_NO_ERROR) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "uploading object %u: %zu-byte buffer (GL error 0x%04x)",
+                  object_id, size, e);
         gl->DeleteVertexArrays(1, &o->vao);
         gl->DeleteBuffers(1, &o->buffer);
         o->vao = o->buffer = 0;
@@ -97,7 +92,9 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     if (r != MESO_OK)
         return r;
     ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
-    mesoi_draw_begin(rt, &ds, rt->mesh_program, 0, NULL, NULL);
+    /* Meshes are drawn with the host's culling, not the ray casters' back
+     * faces (raycast 0). */
+    mesoi_draw_begin(rt, &ds, &rt->mesh_program, 0, 0, NULL, NULL);
     /* The light in world space, as the fragment shader takes it. */
     float light[3] = {0.3f, 0.8f, 0.5f};
     if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
@@ -106,18 +103,11 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     for (int k = 0; k < 3; ++k)
         light[k] /= len;
     mesoi_gl* gl = &rt->gl;
-    /* Meshes are drawn with the host's culling, not the ray casters' back
-     * faces: put back what begin changed. */
-    if (ds.prev_cull) {
-        gl->CullFace((GLenum)ds.prev_cull_mode);
-        gl->FrontFace((GLenum)ds.prev_front);
-    } else {
-        gl->Disable(GL_CULL_FACE);
-    }
-    gl->UniformMatrix4fv(rt->u_view, 1, GL_FALSE, d->view);
-    gl->UniformMatrix4fv(rt->u_proj, 1, GL_FALSE, d->proj);
-    gl->UniformMatrix4fv(rt->u_model, 1, GL_FALSE, ds.model);
-    gl->Uniform3fv(rt->u_light_dir, 1, light);
+    const GLint* u = rt->mesh_program.loc;
+    gl->UniformMatrix4fv(u[MESOI_U_view], 1, GL_FALSE, d->view);
+    gl->UniformMatrix4fv(u[MESOI_U_proj], 1, GL_FALSE, d->proj);
+    gl->UniformMatrix4fv(u[MESOI_U_model], 1, GL_FALSE, ds.model);
+    gl->Uniform3fv(u[MESOI_U_light_dir], 1, light);
     gl->BindVertexArray(o->vao);
     gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
     return mesoi_draw_end(rt, &ds, d->stats, "mesh");

@@ -212,6 +212,8 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         s->vert_tex = mesoi_texture_buffer(rt, GL_RGBA32F, texels, sizeof(float) * 8 * nv, &s->vert_buf);
         s->index_tex = mesoi_texture_buffer(rt, GL_R32UI, mv.indices, sizeof(uint32_t) * 3 * (size_t)s->triangle_count,
                                       &s->index_buf);
+        if (!s->vert_tex || !s->index_tex)
+            r = MESO_ERR_GL;
     }
     mesoi_rt_free(rt, texels);
     mesoi_rt_free(rt, mesh);
@@ -407,10 +409,14 @@ meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_
 
 /* Programs per technique, with or without the stats counters (atomics
  * cost time, so draws that do not ask for stats run without them). */
-static GLuint shell_program(meso_rt* rt, meso_shell_technique t, int stats)
+static const char* const shell_samplers[SHELL_UNIT_COUNT] = {"u_verts", "u_index", "u_height", "u_volume",
+                                                             "u_dist"};
+
+static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, int stats)
 {
-    if (rt->shell_programs[stats][t])
-        return rt->shell_programs[stats][t];
+    mesoi_program* p = &rt->shell_programs[stats][t];
+    if (p->id)
+        return p;
     char head[512];
     snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n", mesoi_glsl_prelude(rt, stats), (int)t);
     const char* vs[3] = {head, mesoi_glsl_shell_common, mesoi_glsl_shell_vert};
@@ -418,23 +424,29 @@ static GLuint shell_program(meso_rt* rt, meso_shell_technique t, int stats)
                          mesoi_glsl_shell_frag};
     static const char* const names[MESO_SHELL_TECHNIQUE_COUNT] = {"shell smooth", "shell curved", "shell tetra",
                                                                   "shell segment"};
-    GLuint p = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "shell_vert.glsl"),
-                          mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_frag.glsl"), names[t]);
-    rt->shell_programs[stats][t] = p;
-    return p;
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 3, "shell_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_frag.glsl"), names[t], shell_samplers,
+                       SHELL_UNIT_COUNT);
+    return p->id ? p : NULL;
+}
+
+meso_result mesoi_shell_prepare(meso_rt* rt, int stats)
+{
+    for (int t = 0; t < MESO_SHELL_TECHNIQUE_COUNT; ++t)
+        if (t != MESO_SHELL_SLICES && !shell_program(rt, (meso_shell_technique)t, stats))
+            return MESO_ERR_GL;
+    return stats ? MESO_OK : mesoi_slices_prepare(rt);
 }
 
 void mesoi_shell_programs_destroy(meso_rt* rt)
 {
     for (int st = 0; st < 2; ++st)
         for (int t = 0; t < MESO_SHELL_TECHNIQUE_COUNT; ++t)
-            if (rt->shell_programs[st][t])
-                rt->gl.DeleteProgram(rt->shell_programs[st][t]);
+            mesoi_program_delete(rt, &rt->shell_programs[st][t]);
     if (rt->empty_vao)
         rt->gl.DeleteVertexArrays(1, &rt->empty_vao);
     if (rt->stats_buffer)
         rt->gl.DeleteBuffers(1, &rt->stats_buffer);
-    memset(rt->shell_programs, 0, sizeof(rt->shell_programs));
     mesoi_slices_destroy(rt);
     rt->empty_vao = rt->stats_buffer = 0;
 }
@@ -458,7 +470,7 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
-    const GLuint prog = shell_program(rt, k->technique, ds.stats);
+    const mesoi_program* prog = shell_program(rt, k->technique, ds.stats);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
@@ -473,22 +485,20 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
                                                    GL_TEXTURE_3D, GL_TEXTURE_3D};
     const GLuint bind[SHELL_UNIT_COUNT] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
                                      s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex};
-    mesoi_draw_begin(rt, &ds, prog, SHELL_UNIT_COUNT, unit_target, bind);
-    static const char* const samplers[SHELL_UNIT_COUNT] = {"u_verts", "u_index", "u_height", "u_volume", "u_dist"};
-    for (int u = 0; u < SHELL_UNIT_COUNT; ++u)
-        gl->Uniform1i(gl->GetUniformLocation(prog, samplers[u]), u);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_uv_scale"), k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_tex_kind"), s->tex_kind);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_has_dist"), s->dist_tex && !k->no_distance_map);
-    gl->Uniform3fv(gl->GetUniformLocation(prog, "u_tex_size"), 1, s->tex_size);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_err_scale"), (float)err_scale);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_max_steps"), k->max_steps > 0 ? k->max_steps : 256);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_bisect_steps"), k->bisection_steps > 0 ? k->bisection_steps : 4);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_segment_steps"), k->segment_steps > 0 ? k->segment_steps : 12);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_fixed_step"), k->fixed_step > 0.0f ? k->fixed_step : 1.0f / 256);
+    mesoi_draw_begin(rt, &ds, prog, 1, SHELL_UNIT_COUNT, unit_target, bind);
+    const GLint* u = prog->loc;
+    gl->Uniform1f(u[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
+    gl->Uniform1i(u[MESOI_U_tex_kind], s->tex_kind);
+    gl->Uniform1i(u[MESOI_U_has_dist], s->dist_tex && !k->no_distance_map);
+    gl->Uniform3fv(u[MESOI_U_tex_size], 1, s->tex_size);
+    gl->Uniform1f(u[MESOI_U_err_scale], (float)err_scale);
+    gl->Uniform1i(u[MESOI_U_max_steps], k->max_steps > 0 ? k->max_steps : 256);
+    gl->Uniform1i(u[MESOI_U_bisect_steps], k->bisection_steps > 0 ? k->bisection_steps : 4);
+    gl->Uniform1i(u[MESOI_U_segment_steps], k->segment_steps > 0 ? k->segment_steps : 12);
+    gl->Uniform1f(u[MESOI_U_fixed_step], k->fixed_step > 0.0f ? k->fixed_step : 1.0f / 256);
     /* Where the distance map says 0 (a cell touching the solid), step a
      * quarter texel: finer than the texture's own detail. */
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_min_step"), max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
+    gl->Uniform1f(u[MESOI_U_min_step], max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
     const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
     gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
     return mesoi_draw_end(rt, &ds, d->stats, "shell");

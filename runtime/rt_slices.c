@@ -16,18 +16,20 @@
  *
  * Passes:
  *  - MESO_SLICE_NONE: one pass into the host's framebuffer, alpha test
- *    (discard α < ½) and GL_LESS; depth = the first slice inside.
+ *    (discard α < ½) and the host's depth test; depth = the first slice
+ *    inside.
  *  - MESO_SLICE_NORMAL / MESO_SLICE_TEXCOORD: three passes.
  *     1. into target A (colour 0: RGBA32F T1 = (s, t', w, α − ½); colour 1:
  *        RGBA32F the no-interpolation colour and window depth; depth: Z1),
- *        the same fragments as NONE with GL_LESS;
+ *        the same fragments as NONE with GL_LESS (GL_GREATER reversed-Z);
  *     2. into target B (colour: RGBA32F interpolated colour and window depth
- *        of the crossing; depth cleared to 0, GL_GREATER): fragments outside
+ *        of the crossing; depth cleared to the near value, GL_GREATER
+ *        (GL_LESS reversed-Z)): fragments outside
  *        (α < ½) and in front of Z1 — the furthest wins, the last slice
  *        outside (the paper's reversed depth test);
  *     3. a full-screen triangle into the host's framebuffer: B where pass 2
  *        found a slice outside, else A's colour 1, with gl_FragDepth and the
- *        host's GL_LESS — so the slices compose with the host's geometry
+ *        host's depth function — so the slices compose with the host's geometry
  *        exactly as the ray casters do. (The paper renders pass 2 into the
  *        framebuffer with the depth test reversed; a host's depth buffer
  *        cannot be reversed under it, hence the offscreen target.)
@@ -47,10 +49,11 @@ enum { TEX_A_T1 = 0, TEX_A_COLOUR, TEX_A_DEPTH, TEX_B_COLOUR, TEX_B_DEPTH, TEX_C
 /* Units: the shell's five (rt_shell.c), then the target's two inputs. */
 enum { UNIT_FIRST = SHELL_UNIT_COUNT, UNIT_SECOND, SLICE_UNITS };
 
-static GLuint slice_program(meso_rt* rt, int pass)
+static const mesoi_program* slice_program(meso_rt* rt, int pass)
 {
-    if (rt->slice_programs[pass])
-        return rt->slice_programs[pass];
+    mesoi_program* p = &rt->slice_programs[pass];
+    if (p->id)
+        return p;
     char head[512];
     snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n", mesoi_glsl_prelude(rt, 0),
              (int)MESO_SHELL_SLICES, pass);
@@ -59,10 +62,20 @@ static GLuint slice_program(meso_rt* rt, int pass)
                          mesoi_glsl_shell_slices_frag};
     static const char* const names[PASS_COUNT] = {"slices none", "slices first pass", "slices normal",
                                                   "slices texcoord", "slices composite"};
-    rt->slice_programs[pass] = mesoi_link(rt, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "shell_slices_vert.glsl"),
-                                          mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_slices_frag.glsl"),
-                                          names[pass]);
-    return rt->slice_programs[pass];
+    static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
+                                                      "u_dist",  "u_first", "u_second"};
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "shell_slices_vert.glsl"),
+                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "shell_slices_frag.glsl"), names[pass], samplers,
+                       SLICE_UNITS);
+    return p->id ? p : NULL;
+}
+
+meso_result mesoi_slices_prepare(meso_rt* rt)
+{
+    for (int pass = 0; pass < PASS_COUNT; ++pass)
+        if (!slice_program(rt, pass))
+            return MESO_ERR_GL;
+    return MESO_OK;
 }
 
 static void target_free(meso_rt* rt)
@@ -79,9 +92,7 @@ static void target_free(meso_rt* rt)
 void mesoi_slices_destroy(meso_rt* rt)
 {
     for (int p = 0; p < PASS_COUNT; ++p)
-        if (rt->slice_programs[p])
-            rt->gl.DeleteProgram(rt->slice_programs[p]);
-    memset(rt->slice_programs, 0, sizeof(rt->slice_programs));
+        mesoi_program_delete(rt, &rt->slice_programs[p]);
     target_free(rt);
 }
 
@@ -93,6 +104,9 @@ static int target_ensure(meso_rt* rt, GLint w, GLint h)
         return 1;
     target_free(rt);
     mesoi_gl* gl = &rt->gl;
+    /* No data, but a host's bound unpack buffer would be read from. */
+    mesoi_unpack unpack;
+    mesoi_unpack_default(rt, &unpack);
     gl->GenTextures(TEX_COUNT, rt->slice_tex);
     for (int t = 0; t < TEX_COUNT; ++t) {
         const int depth = t == TEX_A_DEPTH || t == TEX_B_DEPTH;
@@ -102,6 +116,7 @@ static int target_ensure(meso_rt* rt, GLint w, GLint h)
         gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
         gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     }
+    mesoi_unpack_restore(rt, &unpack);
     gl->GenFramebuffers(2, rt->slice_fbo);
     static const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     int ok = 1;
@@ -127,36 +142,20 @@ static int target_ensure(meso_rt* rt, GLint w, GLint h)
     return 1;
 }
 
-static void set_uniforms(meso_rt* rt, GLuint prog, const mesoi_shell* s, const meso_rt_shell_draw* k,
-                         const GLint viewport[4])
-{
-    mesoi_gl* gl = &rt->gl;
-    static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
-                                                      "u_dist",  "u_first", "u_second"};
-    gl->UseProgram(prog);
-    for (int u = 0; u < SLICE_UNITS; ++u)
-        gl->Uniform1i(gl->GetUniformLocation(prog, samplers[u]), u);
-    const float vp[4] = {(float)viewport[0], (float)viewport[1], (float)viewport[2], (float)viewport[3]};
-    gl->Uniform4fv(gl->GetUniformLocation(prog, "u_viewport"), 1, vp);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_tex_kind"), s->tex_kind);
-    gl->Uniform3fv(gl->GetUniformLocation(prog, "u_tex_size"), 1, s->tex_size);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_slices"), k->slices > 0 ? k->slices : 16);
-    gl->Uniform1f(gl->GetUniformLocation(prog, "u_uv_scale"), k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
-    gl->Uniform1i(gl->GetUniformLocation(prog, "u_prism_count"), (GLint)s->triangle_count);
-}
-
-/* Binds `prog` with the common uniforms mesoi_draw_begin sets for the first
- * program, then the slice uniforms. */
-static void use_pass(meso_rt* rt, const mesoi_draw* ds, GLuint prog, const mesoi_shell* s,
+/* Binds pass program `p` with the common uniforms (mesoi_draw_use), the
+ * viewport of the target it draws into, then the slice uniforms. */
+static void use_pass(meso_rt* rt, const mesoi_draw* ds, const mesoi_program* p, const mesoi_shell* s,
                      const meso_rt_shell_draw* k, const GLint viewport[4])
 {
     mesoi_gl* gl = &rt->gl;
-    gl->UseProgram(prog);
-    gl->UniformMatrix4fv(gl->GetUniformLocation(prog, "u_mvp"), 1, GL_FALSE, ds->mvp);
-    gl->UniformMatrix4fv(gl->GetUniformLocation(prog, "u_inv_mvp"), 1, GL_FALSE, ds->inv_mvp);
-    gl->Uniform3fv(gl->GetUniformLocation(prog, "u_light_obj"), 1, ds->light_obj);
-    gl->Uniform3fv(gl->GetUniformLocation(prog, "u_albedo"), 1, ds->albedo);
-    set_uniforms(rt, prog, s, k, viewport);
+    mesoi_draw_use(rt, ds, p);
+    const float vp[4] = {(float)viewport[0], (float)viewport[1], (float)viewport[2], (float)viewport[3]};
+    gl->Uniform4fv(p->loc[MESOI_U_viewport], 1, vp);
+    gl->Uniform1i(p->loc[MESOI_U_tex_kind], s->tex_kind);
+    gl->Uniform3fv(p->loc[MESOI_U_tex_size], 1, s->tex_size);
+    gl->Uniform1i(p->loc[MESOI_U_slices], k->slices > 0 ? k->slices : 16);
+    gl->Uniform1f(p->loc[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
+    gl->Uniform1i(p->loc[MESOI_U_prism_count], (GLint)s->triangle_count);
 }
 
 meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
@@ -179,7 +178,7 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
         return r;
     const int two_pass = k->slice_interp != MESO_SLICE_NONE;
     const int second = k->slice_interp == MESO_SLICE_NORMAL ? PASS_NORMAL : PASS_TEXCOORD;
-    const GLuint prog = slice_program(rt, two_pass ? PASS_FIRST : PASS_NONE);
+    const mesoi_program* prog = slice_program(rt, two_pass ? PASS_FIRST : PASS_NONE);
     if (!prog || (two_pass && (!slice_program(rt, second) || !slice_program(rt, PASS_COMPOSITE))))
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
@@ -188,19 +187,24 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
                                                     GL_TEXTURE_2D};
     const GLuint bind[SLICE_UNITS] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
                                       s->tex_kind == 2 ? s->func_tex : 0, 0, 0, 0};
-    mesoi_draw_begin(rt, &ds, prog, SLICE_UNITS, unit_target, bind);
+    mesoi_draw_begin(rt, &ds, prog, 0, SLICE_UNITS, unit_target, bind);
     gl->Disable(GL_CULL_FACE); /* slices are seen from both sides */
     const GLsizei count = 3 * (GLsizei)(slices + 6) * (GLsizei)s->triangle_count;
     if (!two_pass) {
-        set_uniforms(rt, prog, s, k, ds.viewport);
+        use_pass(rt, &ds, prog, s, k, ds.viewport);
         gl->DrawArrays(GL_TRIANGLES, 0, count);
         return mesoi_draw_end(rt, &ds, NULL, "slices");
     }
 
+    /* The last pass draws into the host's framebuffer: its binding is read
+     * under either state policy. */
     const GLint w = ds.viewport[2] > 0 ? ds.viewport[2] : 1, h = ds.viewport[3] > 0 ? ds.viewport[3] : 1;
     GLint prev_fbo = 0;
     gl->GetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &prev_fbo);
-    const GLboolean prev_blend = gl->IsEnabled(GL_BLEND);
+    const GLboolean prev_blend = ds.restore ? gl->IsEnabled(GL_BLEND) : GL_FALSE;
+    /* The host's depth function for the last pass: given, or the one
+     * begin saved, or the convention's. */
+    const GLenum host_func = ds.depth_func ? ds.depth_func : ds.restore ? (GLenum)ds.prev_func : mesoi_near_func(&ds);
     if (!target_ensure(rt, w, h)) {
         gl->BindFramebuffer(GL_DRAW_FRAMEBUFFER, (GLuint)prev_fbo);
         mesoi_draw_end(rt, &ds, NULL, "slices");
@@ -210,21 +214,24 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     gl->Disable(GL_BLEND);
     gl->Viewport(0, 0, w, h);
 
-    /* 1: the first slice inside, T1 and Z1. */
-    static const float none[4] = {0.0f, 0.0f, 0.0f, 1.0f}, zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-    static const float far = 1.0f, near = 0.0f;
+    /* 1: the first slice inside, T1 and Z1 (nearest wins). Colour 1's alpha
+     * holds the window depth, 2 where nothing was drawn (depths are 0..1). */
+    static const float none[4] = {0.0f, 0.0f, 0.0f, 2.0f}, zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    const float far = mesoi_far_clear(&ds), near = 1.0f - far;
     gl->BindFramebuffer(GL_DRAW_FRAMEBUFFER, rt->slice_fbo[0]);
     gl->ClearBufferfv(GL_COLOR, 0, zero);
     gl->ClearBufferfv(GL_COLOR, 1, none);
     gl->ClearBufferfv(GL_DEPTH, 0, &far);
+    gl->DepthFunc(mesoi_near_func(&ds));
     use_pass(rt, &ds, prog, s, k, local);
     gl->DrawArrays(GL_TRIANGLES, 0, count);
 
-    /* 2: the last slice outside in front of Z1 (reversed depth test). */
+    /* 2: the last slice outside in front of Z1 (reversed depth test: the
+     * furthest wins). */
     gl->BindFramebuffer(GL_DRAW_FRAMEBUFFER, rt->slice_fbo[1]);
     gl->ClearBufferfv(GL_COLOR, 0, none);
     gl->ClearBufferfv(GL_DEPTH, 0, &near);
-    gl->DepthFunc(GL_GREATER);
+    gl->DepthFunc(ds.reversed ? GL_LESS : GL_GREATER);
     gl->ActiveTexture(GL_TEXTURE0 + UNIT_FIRST);
     gl->BindTexture(GL_TEXTURE_2D, rt->slice_tex[TEX_A_T1]);
     gl->ActiveTexture(GL_TEXTURE0 + UNIT_SECOND);
@@ -237,7 +244,7 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     gl->Viewport(ds.viewport[0], ds.viewport[1], ds.viewport[2], ds.viewport[3]);
     if (prev_blend)
         gl->Enable(GL_BLEND);
-    gl->DepthFunc(GL_LESS);
+    gl->DepthFunc(host_func);
     gl->ActiveTexture(GL_TEXTURE0 + UNIT_FIRST);
     gl->BindTexture(GL_TEXTURE_2D, rt->slice_tex[TEX_A_COLOUR]);
     gl->ActiveTexture(GL_TEXTURE0 + UNIT_SECOND);

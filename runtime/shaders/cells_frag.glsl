@@ -337,8 +337,9 @@ void main()
 {
     vec3 ro, rd;
     fragment_ray(ro, rd);
-    vec4 fa = u_inv_mvp * vec4((gl_FragCoord.xy - u_viewport.xy) / u_viewport.zw * 2.0 - 1.0, 1.0, 1.0);
-    float s_far = length(fa.xyz / fa.w - ro);
+    // Up to the far plane; an infinite one (w = 0 there) does not limit.
+    vec4 fa = u_inv_mvp * vec4((gl_FragCoord.xy - u_viewport.xy) / u_viewport.zw * 2.0 - 1.0, u_depth_ndc.z, 1.0);
+    float s_far = abs(fa.w) > 1e-30 * length(fa.xyz) ? length(fa.xyz / fa.w - ro) : 3.4e38;
     vec3 gmin = u_origin, gmax = u_origin + vec3(u_tiles * u_res) * u_h;
     float s0;
     if (gl_FrontFacing) {

@@ -95,9 +95,9 @@ void main()
 #if SLICE_PASS == 4
     ivec2 pix = ivec2(gl_FragCoord.xy) - ivec2(u_viewport.xy);
     vec4 c = texelFetch(u_second, pix, 0);
-    if (c.a >= 1.0)
+    if (c.a > 1.5) // cleared: nothing drawn (depths are 0..1)
         c = texelFetch(u_first, pix, 0);
-    if (c.a >= 1.0)
+    if (c.a > 1.5)
         discard;
     o_color = vec4(c.rgb, 1.0);
     gl_FragDepth = c.a;
@@ -119,14 +119,12 @@ void main()
 #else
     ivec2 pix = ivec2(gl_FragCoord.xy);
     float z1 = texelFetch(u_second, pix, 0).r;
-    if (a >= 0.0 || z1 >= 1.0 || gl_FragCoord.z >= z1)
+    float far_clear = u_depth_ndc.x > u_depth_ndc.z ? 0.0 : 1.0; // rt_slices.c clears Z1 to it
+    if (a >= 0.0 || z1 == far_clear || !nearer(gl_FragCoord.z, z1))
         discard;
     vec4 T1 = texelFetch(u_first, pix, 0);
     // p1: the first inside slice's point, on this pixel's ray at depth z1.
-    vec2 ndc = gl_FragCoord.xy / u_viewport.zw * 2.0 - 1.0;
-    float zn = (2.0 * z1 - gl_DepthRange.near - gl_DepthRange.far) / gl_DepthRange.diff;
-    vec4 h = u_inv_mvp * vec4(ndc, zn, 1.0);
-    vec3 p1 = h.xyz / h.w;
+    vec3 p1 = unproject(gl_FragCoord.xy, window_to_ndc(z1));
     float f = -a / (T1.w - a);
     if (length(phi(P, prism_coords(P, T1.xyz)) - p1) > 0.25 * length(p1 - v_pos))
         f = 1.0; // another chart

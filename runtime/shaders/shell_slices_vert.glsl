@@ -23,6 +23,7 @@
 
 uniform int u_slices;      // M >= 2
 uniform int u_prism_count;
+uniform vec4 u_depth_ndc;  // NDC z of the near plane, of a point between the planes (raycast_common.glsl)
 
 flat out int v_prism;
 out vec3 v_q;   // (u, v, w) in the prism
@@ -46,7 +47,7 @@ bool eye_above(Prism P)
     vec3 c = prism_centroid(P);
     vec4 clip = u_mvp * vec4(c, 1.0);
     vec2 ndc = clip.w > 0.0 ? clip.xy / clip.w : vec2(0.0);
-    vec4 a = u_inv_mvp * vec4(ndc, -1.0, 1.0), b = u_inv_mvp * vec4(ndc, 1.0, 1.0);
+    vec4 a = u_inv_mvp * vec4(ndc, u_depth_ndc.x, 1.0), b = u_inv_mvp * vec4(ndc, u_depth_ndc.y, 1.0);
     vec3 rd = b.xyz / b.w - a.xyz / a.w;
     vec3 a0 = P.b[0] + 0.5 * P.n[0], a1 = P.b[1] + 0.5 * P.n[1], a2 = P.b[2] + 0.5 * P.n[2];
     vec3 nn = cross(a1 - a0, a2 - a0);

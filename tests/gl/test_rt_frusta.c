@@ -50,7 +50,8 @@ enum { W = 160, H = 120 };
 #define TEST_GLF(X)                                                                                              \
     X(PFNGLGETINTEGERVPROC, GetIntegerv) X(PFNGLISENABLEDPROC, IsEnabled) X(PFNGLENABLEPROC, Enable)             \
     X(PFNGLDISABLEPROC, Disable) X(PFNGLDEPTHFUNCPROC, DepthFunc) X(PFNGLCULLFACEPROC, CullFace)                 \
-    X(PFNGLACTIVETEXTUREPROC, ActiveTexture) X(PFNGLFRONTFACEPROC, FrontFace) X(PFNGLDEPTHMASKPROC, DepthMask)
+    X(PFNGLACTIVETEXTUREPROC, ActiveTexture) X(PFNGLFRONTFACEPROC, FrontFace) X(PFNGLDEPTHMASKPROC, DepthMask)   \
+    X(PFNGLGETERRORPROC, GetError)
 
 typedef struct test_gl {
 #define TEST_M(t, n) t n;
@@ -437,10 +438,12 @@ static void test_state_contract(ctx* c)
     meso_file* f = NULL;
     meso_error err;
     CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
+    test_gl* gl = &c->gl;
+    while (gl->GetError() != GL_NO_ERROR) {
+    }
     meso_rt_object obj;
     CHECK(meso_rt_load_object(c->rt, f, 1, &obj) == MESO_OK);
     meso_file_close(f);
-    test_gl* gl = &c->gl;
     gl->Disable(GL_DEPTH_TEST);
     gl->DepthFunc(GL_GEQUAL);
     gl->DepthMask(GL_FALSE);
@@ -467,6 +470,9 @@ static void test_state_contract(ctx* c)
     gl->GetIntegerv(GL_CURRENT_PROGRAM, &v);
     CHECK(v == 0);
     CHECK(!gl->IsEnabled(GL_DEPTH_TEST) && gl->IsEnabled(GL_CULL_FACE));
+    /* Neither the upload nor the draw raised a GL error (every query and
+     * call exists on the API the test runs on: desktop or ES). */
+    CHECK(gl->GetError() == GL_NO_ERROR);
     gl->Enable(GL_DEPTH_TEST);
     gl->DepthFunc(GL_LESS);
     gl->DepthMask(GL_TRUE);

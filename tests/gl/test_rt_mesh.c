@@ -138,7 +138,7 @@ static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt)
     gl.ClearBufferfv(GL_DEPTH, 0, &far); /* glClearDepth is desktop only */
     gl.Disable(GL_DEPTH_TEST);
     gl.DepthFunc(GL_GEQUAL); /* host state that draw must restore */
-    meso_rt_draw_desc d = {0};
+    meso_rt_draw_desc d = {.depth_func = GL_LESS}; /* the draw's own; GL_GEQUAL comes back after */
     const double eye[3] = {0, 0, EYE_Z}, at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
     meso_camera_look_at(d.view, eye, at, up); /* looking down -z */
     meso_camera_perspective(d.proj, FOVY, (double)W / H, ZNEAR, ZFAR);

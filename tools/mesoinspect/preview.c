@@ -69,6 +69,10 @@ static const char* const usage_preview =
     "                      (slice-based rendering, the Lp-averaged shells paper's section 5)\n"
     "      --slices N      slices: slice polygons per prism (2..1024, default 16)\n"
     "      --slice-interp I  slices: texcoord (default: the paper's two passes), normal or none\n"
+    "      --depth D       standard (default: GL_LESS, clip depth -1..1, a far plane) or\n"
+    "                      reversed (reversed-Z: GL_GREATER, glClipControl 0..1, no far\n"
+    "                      plane), drawn through libmeso's depth conventions; the images\n"
+    "                      agree (tests/gl/test_rt_conventions.c)\n"
     "      --time T        shells with stored frames (mesobake --frames): draw the frame\n"
     "                      shown at T seconds (meso_rt_shell_set_time, or the reference's\n"
     "                      meso_ref_shell_set_time; default: frame 0)\n"
@@ -95,6 +99,7 @@ typedef struct preview_knobs {
     double zoom;
     int has_time;
     double time; /* with has_time: seconds, for shells with stored frames */
+    int reversed; /* --depth reversed: reversed-Z, 0..1 clip depth, infinite far plane */
     int gles;    /* --api gles: an OpenGL ES 3.2 context */
 } preview_knobs;
 
@@ -300,7 +305,8 @@ done:
     X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers) X(PFNGLBINDRENDERBUFFERPROC, BindRenderbuffer)              \
     X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage) X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus) X(PFNGLVIEWPORTPROC, Viewport)                        \
-    X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear) X(PFNGLREADPIXELSPROC, ReadPixels)
+    X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear) X(PFNGLREADPIXELSPROC, ReadPixels)                  \
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) X(PFNGLDEPTHFUNCPROC, DepthFunc)
 
 typedef struct preview_gl {
 #define M(t, n) t n;
@@ -415,11 +421,34 @@ static int render(const char* path, const char* out, int width, int height, uint
         goto done;
     }
     gl.Viewport(0, 0, W, H);
-    gl.ClearColor(clear_rgb[0], clear_rgb[1], clear_rgb[2], 1.0f);
-    gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-
     meso_rt_draw_desc d = {0};
     preview_camera(lo, hi, width, height, yaw, pitch, knobs->zoom, &d);
+    if (knobs->reversed) {
+        /* The same frustum, reversed-Z with the far plane at infinity:
+         * NDC z = near / distance. */
+        PFNGLCLIPCONTROLPROC clip_control = NULL;
+        /* OpenGL ES has it as glClipControlEXT (GL_EXT_clip_control, which llvmpipe offers). */
+        void (*p)(void) = meso_egl_proc(knobs->gles ? "glClipControlEXT" : "glClipControl");
+        memcpy(&clip_control, &p, sizeof(p));
+        if (!clip_control || (!knobs->gles && meso_rt_gl_version(rt) < 45)) {
+            fprintf(stderr, "mesoinspect error: --depth reversed needs glClipControl (OpenGL 4.5, or ES with "
+                            "GL_EXT_clip_control)\n");
+            code = MESO_EXIT_UNSUPPORTED;
+            goto done;
+        }
+        clip_control(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+        const float znear = d.proj[14] / (d.proj[10] - 1.0f);
+        d.proj[10] = 0.0f;
+        d.proj[14] = znear;
+        d.depth = MESO_DEPTH_REVERSED;
+        d.clip_depth = MESO_CLIP_DEPTH_ZERO_TO_ONE;
+        gl.DepthFunc(GL_GREATER);
+    }
+    const float clear_depth = knobs->reversed ? 0.0f : 1.0f;
+    gl.ClearColor(clear_rgb[0], clear_rgb[1], clear_rgb[2], 1.0f);
+    gl.Clear(GL_COLOR_BUFFER_BIT);
+    gl.ClearBufferfv(GL_DEPTH, 0, &clear_depth); /* glClearDepth is desktop only */
+
     d.shell.technique = knobs->technique;
     d.shell.slices = knobs->slices;
     d.shell.slice_interp = knobs->slice_interp;
@@ -609,6 +638,15 @@ int mesoinspect_preview(int argc, char** argv)
                         argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--depth") && val) {
+            const char* m = argv[++i];
+            if (!strcmp(m, "standard") || !strcmp(m, "reversed")) {
+                knobs.reversed = !strcmp(m, "reversed");
+            } else {
+                fprintf(stderr, "mesoinspect error: --depth expects standard or reversed, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", m);
+                return MESO_EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--zoom") && val) {
             knobs.zoom = strtod(argv[++i], &end);
             if (!end || *end || !(knobs.zoom >= 0.01 && knobs.zoom <= 1000)) {
@@ -658,7 +696,7 @@ int mesoinspect_preview(int argc, char** argv)
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
-                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
+                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") || !strcmp(a, "--depth") ||
                      !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") || !strcmp(a, "--api"))
                         ? "missing value for option"
                         : "unrecognized option",
