@@ -4,6 +4,8 @@
  * Loading follows sokol's X-macro table (STYLE.md §6) with one departure:
  * the table lives inside meso_rt, not in statics, so the library keeps no
  * global state. A missing entry point fails creation and names the function.
+ * The context is OpenGL 3.3 core or newer, or OpenGL ES 3.2 (told apart by
+ * GL_VERSION); rt_gl.h lists what both have.
  */
 #include "rt_internal.h"
 
@@ -91,6 +93,32 @@ static int load_gl(meso_rt* rt, meso_gl_get_proc_fn gpa)
     return missing == 0;
 }
 
+/* What the context offers beyond the required version: on ES the two
+ * texture extensions the uploads use when present, and on both APIs
+ * whether fragment shaders may write shader storage (the stats counters). */
+static void query_features(meso_rt* rt)
+{
+    mesoi_gl* gl = &rt->gl;
+    rt->norm16 = rt->float_linear = !rt->gles;
+    if (rt->gles) {
+        GLint n = 0;
+        gl->GetIntegerv(GL_NUM_EXTENSIONS, &n);
+        for (GLint i = 0; i < n; ++i) {
+            const char* e = (const char*)gl->GetStringi(GL_EXTENSIONS, (GLuint)i);
+            if (e && strcmp(e, "GL_EXT_texture_norm16") == 0)
+                rt->norm16 = 1;
+            if (e && strcmp(e, "GL_OES_texture_float_linear") == 0)
+                rt->float_linear = 1;
+        }
+    }
+    /* Fragment shader storage: OpenGL 4.3 guarantees 8 blocks, ES 3.1+ may have 0. */
+    GLint blocks = 0;
+    if (rt->gles || rt->gl_version >= 43)
+        gl->GetIntegerv(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS, &blocks);
+    rt->stats_ok = (rt->gles || rt->gl_version >= 43) && blocks > 0 && gl->MemoryBarrier &&
+                   (rt->gles || gl->GetBufferSubData);
+}
+
 meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
 {
     if (!out)
@@ -142,13 +170,15 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
     rt->gl_version = major * 10 + minor;
     rt->state_policy = desc->state_policy;
     rt->check_gl_errors = desc->check_gl_errors != 0;
-    if (rt->gl_version < 33) {
-        const GLubyte* s = rt->gl.GetString(GL_VERSION);
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_VERSION_TOO_OLD, "context reports \"%s\"",
-                  s ? (const char*)s : "(null)");
+    /* OpenGL ES says so at the start of GL_VERSION ("OpenGL ES 3.2 Mesa ..."). */
+    rt->gles = version && strncmp((const char*)version, "OpenGL ES", 9) == 0;
+    if (rt->gl_version < (rt->gles ? 32 : 33)) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_VERSION_TOO_OLD, "context reports \"%s\" (needs %s)",
+                  version ? (const char*)version : "(null)", rt->gles ? "OpenGL ES 3.2" : "OpenGL 3.3 core");
         meso_rt_destroy(rt);
         return MESO_ERR_GL;
     }
+    query_features(rt);
     meso_result pr = mesoi_mesh_program_create(rt);
     if (pr != MESO_OK) {
         meso_rt_destroy(rt);
@@ -159,8 +189,8 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
         return pr;
     }
     const GLubyte* renderer = rt->gl.GetString(GL_RENDERER);
-    mesoi_log(rt, MESO_LOG_INFO, MESO_LOGITEM_CONTEXT_CREATED, "OpenGL %d.%d, %s", major, minor,
-              renderer ? (const char*)renderer : "unknown renderer");
+    mesoi_log(rt, MESO_LOG_INFO, MESO_LOGITEM_CONTEXT_CREATED, "OpenGL %s%d.%d, %s", rt->gles ? "ES " : "", major,
+              minor, renderer ? (const char*)renderer : "unknown renderer");
     *out = rt;
     return MESO_OK;
 }
@@ -192,11 +222,16 @@ int meso_rt_gl_version(const meso_rt* rt)
     return rt ? rt->gl_version : 0;
 }
 
+int meso_rt_gl_is_es(const meso_rt* rt)
+{
+    return rt ? rt->gles : 0;
+}
+
 meso_result meso_rt_prepare(meso_rt* rt, uint32_t flags)
 {
     if (!rt || (flags & ~MESO_PREPARE_STATS))
         return MESO_ERR_INVALID_ARG;
-    for (int stats = 0; stats <= ((flags & MESO_PREPARE_STATS) && rt->gl_version >= 43 ? 1 : 0); ++stats) {
+    for (int stats = 0; stats <= ((flags & MESO_PREPARE_STATS) && rt->stats_ok ? 1 : 0); ++stats) {
         meso_result r = mesoi_shell_prepare(rt, stats);
         if (r == MESO_OK)
             r = mesoi_frusta_prepare(rt, stats);

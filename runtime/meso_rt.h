@@ -2,8 +2,8 @@
  * meso_rt.h — libmeso, the runtime: stream a .meso file and ray cast it with
  * OpenGL into the host's framebuffer and depth buffer.
  *
- * C11. Depends on nothing but OpenGL (3.3 core or newer) and what the host
- * passes in: its GL loader, and optionally an allocator, a logger and read
+ * C11. Depends on nothing but OpenGL (3.3 core or newer, or OpenGL ES 3.2;
+ * meso_rt_create tells them apart) and what the host passes in: its GL loader, and optionally an allocator, a logger and read
  * callbacks. No global state: every call takes a meso_rt context, and several
  * contexts may live side by side (one per GL context).
  *
@@ -41,7 +41,7 @@ typedef enum meso_log_level {
 #define MESO_LOG_ITEMS(X)                                                           \
     X(OK, "no error")                                                               \
     X(GL_ENTRY_POINT_MISSING, "a required OpenGL function was not found")          \
-    X(GL_VERSION_TOO_OLD, "OpenGL 3.3 core or newer is required")                   \
+    X(GL_VERSION_TOO_OLD, "OpenGL 3.3 core or newer, or OpenGL ES 3.2, is required") \
     X(GL_ERROR, "an OpenGL call raised an error")                                   \
     X(SHADER_COMPILE_FAILED, "a shader failed to compile")                          \
     X(PROGRAM_LINK_FAILED, "a shader program failed to link")                       \
@@ -98,20 +98,35 @@ typedef struct meso_rt meso_rt;
 
 /* Create a context: loads every GL entry point the runtime uses through
  * desc->gl_get_proc_address and checks the context is OpenGL 3.3 core or
- * newer. Fails with MESO_ERR_GL (logging GL_ENTRY_POINT_MISSING with the
+ * newer, or OpenGL ES 3.2 or newer (GL_VERSION starting "OpenGL ES"). The
+ * same shaders run on both, behind a version and precision prelude (ES:
+ * "#version 320 es", highp floats, ints and samplers). On ES:
+ *  - 16-bit normalised textures (U16 texture functions and distance maps,
+ *    cells' NRMM normals) need GL_EXT_texture_norm16. Without it they are
+ *    converted on the CPU to 32-bit floats (v / 65535: no precision lost)
+ *    where the texture is sampled nearest or GL_OES_texture_float_linear
+ *    is present, else (U16 texture functions, which are filtered linearly)
+ *    to 16-bit floats, which keep 11 significant bits: an error up to
+ *    2^-12 relative, about 2.4e-4 near 1, where 16 bits resolve 1.5e-5.
+ *  - draw stats need fragment shader storage blocks
+ *    (GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS > 0), else `supported` is 0.
+ * Fails with MESO_ERR_GL (logging GL_ENTRY_POINT_MISSING with the
  * function's name, or GL_VERSION_TOO_OLD), MESO_ERR_OUT_OF_MEMORY or
  * MESO_ERR_INVALID_ARG. On success *out must be destroyed. */
 MESO_API meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out);
 /* Release every GL object and all memory of the context. NULL is allowed. */
 MESO_API void meso_rt_destroy(meso_rt* rt);
 
-/* The context's GL version as major*10+minor (e.g. 45). */
+/* The context's GL version as major*10+minor (e.g. 45; 32 for ES 3.2). */
 MESO_API int meso_rt_gl_version(const meso_rt* rt);
+/* 1 when the context is OpenGL ES, 0 for desktop OpenGL (and for NULL). */
+MESO_API int meso_rt_gl_is_es(const meso_rt* rt);
 
 /* Shader pre-warm: compile and link every program meso_rt_draw may use now,
  * so that no draw compiles one (a first-draw hitch of tens of milliseconds
  * per program on a software rasteriser). Flags: MESO_PREPARE_STATS also the
- * work-counting variants (OpenGL 4.3 only). Programs already built are
+ * work-counting variants (OpenGL 4.3, or ES with fragment shader storage;
+ * elsewhere ignored). Programs already built are
  * kept. MESO_ERR_GL (logged) when one fails to build. The GL state is left
  * as it was. */
 #define MESO_PREPARE_STATS 1u
@@ -177,8 +192,9 @@ typedef enum meso_cells_mode {
     MESO_CELLS_REFRACT        /* §3.2.4: refraction through the cells, then the environment */
 } meso_cells_mode;
 
-/* Work counted by the shaders during one draw (needs OpenGL 4.3 for the
- * counters; on older contexts, and for MESH objects, `supported` is 0 and
+/* Work counted by the shaders during one draw (needs OpenGL 4.3, or ES
+ * with fragment shader storage blocks, for the counters; on other
+ * contexts, and for MESH objects, `supported` is 0 and
  * the counts are 0). */
 typedef struct meso_rt_draw_stats {
     int supported;
@@ -253,7 +269,7 @@ typedef enum meso_depth_convention {
 typedef enum meso_clip_depth {
     MESO_CLIP_DEPTH_NEGATIVE_ONE_TO_ONE = 0, /* OpenGL's default */
     MESO_CLIP_DEPTH_ZERO_TO_ONE              /* after glClipControl(..., GL_ZERO_TO_ONE) (OpenGL 4.5 or
-                                                ARB_clip_control) */
+                                                ARB_clip_control; ES: EXT_clip_control) */
 } meso_clip_depth;
 
 /* One draw. Zero-initialise it (`meso_rt_draw_desc d = {0};`) and set what
@@ -269,7 +285,8 @@ typedef struct meso_rt_draw_desc {
     float light_dir[3];        /* towards the light, world space [all zero: (0.3, 0.8, 0.5) normalised] */
     float albedo[3];           /* linear RGB [all zero: (0.80, 0.74, 0.66)]. Every kind writes linear
                                   colour: into an sRGB framebuffer (GL_SRGB8_ALPHA8 with
-                                  GL_FRAMEBUFFER_SRGB enabled) GL encodes it */
+                                  GL_FRAMEBUFFER_SRGB enabled; on ES, any sRGB attachment) GL
+                                  encodes it */
     meso_rt_draw_stats* stats; /* optional: filled after the draw (stalls the pipeline) [NULL] */
     meso_depth_convention depth; /* how proj maps depth [MESO_DEPTH_STANDARD] */
     meso_clip_depth clip_depth;  /* the context's clip control depth mode [NEGATIVE_ONE_TO_ONE] */
@@ -308,8 +325,8 @@ typedef struct meso_rt_draw_desc {
  * textures on units 0-4 (0-7 for slices), depth test (enabled) and mask
  * (written), the depth function only with desc->depth_func, culling (ray
  * casters: enabled, front faces culled, counter-clockwise front faces;
- * meshes: untouched), on OpenGL 4.3 with `stats` the shader storage buffer
- * binding; for two-pass slices also the draw framebuffer binding, the
+ * meshes: untouched), where stats are counted (OpenGL 4.3, ES 3.2 with
+ * fragment shader storage) the shader storage buffer binding; for two-pass slices also the draw framebuffer binding, the
  * viewport, blending and the depth function. Under MESO_STATE_RESTORE all of
  * it is queried first and put back before the call returns; under
  * MESO_STATE_HOST_OWNS none of it is queried or put back (and, with

@@ -10,7 +10,8 @@
  *   unit 1  MEMB  texture buffer R32UI over the sparse words (classes, rank,
  *                 records: the shader finds a MIXED tile's record with the
  *                 rank word plus a popcount, as FORMAT.md describes)
- *   unit 2  NRMM  3D texture RG16 (unorm), decoded in the shader
+ *   unit 2  NRMM  3D texture RG16 (unorm; RG32F of the same values on ES
+ *                 without GL_EXT_texture_norm16), decoded in the shader
  *   unit 3  COLR  3D texture SRGB8_ALPHA8 (fetches are linear)
  *   unit 4  the host's environment cube map, if it passes one
  * plus the base mesh's vertex array (the MESH chunk buffer, as rt_mesh.c
@@ -98,6 +99,16 @@ static meso_result upload_chunk_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint 
     void* data = NULL;
     size_t size = 0;
     meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
+    if (r == MESO_OK && internal == GL_RG16 && !rt->norm16) {
+        /* ES without GL_EXT_texture_norm16: the same values as RG32F (exact;
+         * fetched nearest, so no filtering needed). */
+        float* conv = mesoi_unorm16_to_float(rt, data, size / 2);
+        mesoi_rt_free(rt, data);
+        data = conv;
+        r = conv ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        internal = GL_RG32F;
+        type = GL_FLOAT;
+    }
     if (r == MESO_OK)
         r = upload_3d(rt, meso_file_chunk(f, (uint32_t)ci), data, internal, format, type, out);
     mesoi_rt_free(rt, data);
@@ -209,9 +220,8 @@ static const mesoi_program* cells_program(meso_rt* rt, int stats)
     mesoi_program* p = &rt->cells_programs[stats];
     if (p->id)
         return p;
-    char head[160];
-    snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_INSTANCE_MODEL 1\n", stats ? "430" : "330",
-             stats ? "#define MESO_STATS 1\n" : "");
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_INSTANCE_MODEL 1\n", mesoi_glsl_prelude(rt, stats));
     const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_cells_vert};
     const char* fs[4] = {head, mesoi_glsl_instance, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
     static const char* const samplers[UNIT_COUNT + 1] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env",

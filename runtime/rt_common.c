@@ -1,8 +1,9 @@
 /*
  * rt_common.c — what the object kinds share: streaming and checking a
- * chunk, texture and texture-buffer uploads, compiling and linking their
- * shaders, and a draw's matrices, light, GL state save/restore and work
- * counters.
+ * chunk, texture and texture-buffer uploads (with the formats OpenGL ES
+ * lacks converted), the prelude every shader starts with (desktop or ES),
+ * compiling and linking the shaders, and a draw's matrices, light, GL
+ * state save/restore and work counters (read back by mapping on ES).
  *
  * The GL state contract of meso_rt_draw (meso_rt.h) lives here: every draw,
  * of every kind, goes through mesoi_draw_begin / mesoi_draw_end. Under
@@ -69,7 +70,7 @@ static int dtype_gl(uint16_t dtype, GLenum* internal, GLenum* type)
         *type = GL_UNSIGNED_BYTE;
         return 1;
     case MESO_DTYPE_U16:
-        *internal = GL_R16;
+        *internal = GL_R16; /* = GL_R16_EXT of GL_EXT_texture_norm16 on ES */
         *type = GL_UNSIGNED_SHORT;
         return 1;
     case MESO_DTYPE_F32:
@@ -81,12 +82,36 @@ static int dtype_gl(uint16_t dtype, GLenum* internal, GLenum* type)
     }
 }
 
+float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count)
+{
+    float* f = mesoi_rt_alloc(rt, sizeof(float) * count);
+    if (!f)
+        return NULL;
+    const uint16_t* v = texels;
+    for (size_t i = 0; i < count; ++i)
+        f[i] = (float)v[i] / 65535.0f;
+    return f;
+}
+
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
                                 const void* data, GLuint* out)
 {
     GLenum internal, type;
     if (!dtype_gl(dtype, &internal, &type) || (!nearest && dtype == MESO_DTYPE_F32) || (!dims3 && dims[2] != 1))
         return MESO_ERR_UNSUPPORTED;
+    /* OpenGL ES without GL_EXT_texture_norm16 has no R16: U16 texels go up
+     * as floats, R32F (exact) where they are sampled nearest or R32F
+     * filters linearly (GL_OES_texture_float_linear), else R16F (11
+     * significant bits, meso_rt.h says what that costs). */
+    float* converted = NULL;
+    if (dtype == MESO_DTYPE_U16 && !rt->norm16) {
+        converted = mesoi_unorm16_to_float(rt, data, (size_t)dims[0] * dims[1] * dims[2]);
+        if (!converted)
+            return MESO_ERR_OUT_OF_MEMORY;
+        internal = nearest || rt->float_linear ? GL_R32F : GL_R16F;
+        type = GL_FLOAT;
+        data = converted;
+    }
     mesoi_gl* gl = &rt->gl;
     const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
     /* Refused before GL sees it: an invalid TexImage would raise an error
@@ -126,6 +151,7 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
     gl->GetTexLevelParameteriv(target, 0, GL_TEXTURE_WIDTH, &width);
     gl->BindTexture(target, (GLuint)prev_tex);
     mesoi_unpack_restore(rt, &unpack);
+    mesoi_rt_free(rt, converted);
     if (width != (GLint)dims[0]) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created", dims[0],
                   dims[1], dims[2]);
@@ -208,18 +234,24 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
     return mesoi_upload_end(rt, prev, MESO_OK, what);
 }
 
-/* The unpack state of glPixelStorei that TexImage reads, GL's defaults. */
+/* The unpack state of glPixelStorei that TexImage reads, GL's defaults.
+ * The last two are desktop only: OpenGL ES has neither (unpack_count). */
 static const GLenum unpack_names[] = {GL_UNPACK_ALIGNMENT, GL_UNPACK_ROW_LENGTH, GL_UNPACK_IMAGE_HEIGHT,
                                       GL_UNPACK_SKIP_PIXELS, GL_UNPACK_SKIP_ROWS, GL_UNPACK_SKIP_IMAGES,
                                       GL_UNPACK_SWAP_BYTES, GL_UNPACK_LSB_FIRST};
 static const GLint unpack_default[] = {1, 0, 0, 0, 0, 0, 0, 0}; /* alignment 1: texel rows are packed */
 enum { UNPACK_COUNT = (int)(sizeof(unpack_names) / sizeof(unpack_names[0])) };
 
+static int unpack_count(const meso_rt* rt)
+{
+    return rt->gles ? UNPACK_COUNT - 2 : UNPACK_COUNT;
+}
+
 void mesoi_unpack_default(meso_rt* rt, mesoi_unpack* u)
 {
     mesoi_gl* gl = &rt->gl;
     _Static_assert(UNPACK_COUNT <= (int)(sizeof(u->saved) / sizeof(u->saved[0])), "mesoi_unpack too small");
-    for (int i = 0; i < UNPACK_COUNT; ++i) {
+    for (int i = 0; i < unpack_count(rt); ++i) {
         gl->GetIntegerv(unpack_names[i], &u->saved[i]);
         if (u->saved[i] != unpack_default[i])
             gl->PixelStorei(unpack_names[i], unpack_default[i]);
@@ -232,7 +264,7 @@ void mesoi_unpack_default(meso_rt* rt, mesoi_unpack* u)
 
 void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u)
 {
-    for (int i = 0; i < UNPACK_COUNT; ++i)
+    for (int i = 0; i < unpack_count(rt); ++i)
         if (u->saved[i] != unpack_default[i])
             rt->gl.PixelStorei(unpack_names[i], u->saved[i]);
     if (u->pbo)
@@ -240,6 +272,23 @@ void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u)
 }
 
 /* >>shaders ---------------------------------------------------------------- */
+
+/* ES has no default precision for floats in fragment shaders nor for most
+ * sampler types; highp everywhere keeps the desktop arithmetic (IEEE
+ * single precision) and 32-bit integers. */
+#define ES_PRECISIONS                                                                                   \
+    "precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n"                         \
+    "precision highp sampler3D;\nprecision highp samplerCube;\nprecision highp samplerBuffer;\n"         \
+    "precision highp usampler3D;\nprecision highp usamplerBuffer;\nprecision highp isamplerBuffer;\n"
+
+const char* mesoi_glsl_prelude(const meso_rt* rt, int stats)
+{
+    static const char* const prelude[2][2] = {
+        {"#version 330 core\n", "#version 430 core\n#define MESO_STATS 1\n"},
+        {"#version 320 es\n" ES_PRECISIONS, "#version 320 es\n" ES_PRECISIONS "#define MESO_STATS 1\n"},
+    };
+    return prelude[rt->gles ? 1 : 0][stats ? 1 : 0];
+}
 
 /* 1 when the shader compiled (`program` 0) or the program linked (1); else
  * logs its info log under `name`, deletes it and returns 0. */
@@ -476,7 +525,7 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     memcpy(out->albedo, albedo, sizeof(albedo));
     if (d->albedo[0] != 0.0f || d->albedo[1] != 0.0f || d->albedo[2] != 0.0f)
         memcpy(out->albedo, d->albedo, sizeof(out->albedo));
-    out->stats = d->stats && rt->gl_version >= 43 && rt->gl.MemoryBarrier;
+    out->stats = d->stats && rt->stats_ok;
     return MESO_OK;
 }
 
@@ -585,7 +634,14 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
     if (s->stats) {
         uint32_t counts[3] = {0, 0, 0};
         gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), counts);
+        if (rt->gles) { /* ES has no glGetBufferSubData: map the buffer */
+            const void* mapped = gl->MapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), GL_MAP_READ_BIT);
+            if (mapped)
+                memcpy(counts, mapped, sizeof(counts));
+            gl->UnmapBuffer(GL_SHADER_STORAGE_BUFFER);
+        } else {
+            gl->GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), counts);
+        }
         stats->supported = 1;
         stats->fragments = counts[0];
         stats->steps = counts[1];

@@ -712,9 +712,9 @@ static const mesoi_program* frusta_program(meso_rt* rt, int stats)
     mesoi_program* p = &rt->frusta_programs[stats];
     if (p->id)
         return p;
-    char head[192];
-    snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_FRUSTA_TEXELS %d\n#define MESO_FRUSTA_CORNER0 %d\n",
-             stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "", TEXELS, CORNER0);
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_FRUSTA_TEXELS %d\n#define MESO_FRUSTA_CORNER0 %d\n",
+             mesoi_glsl_prelude(rt, stats), TEXELS, CORNER0);
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_frusta_common,
                          mesoi_glsl_frusta_vert};
     const char* fs[5] = {head, mesoi_glsl_instance, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common,

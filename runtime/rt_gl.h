@@ -3,8 +3,11 @@
  *
  * Every GL function the runtime calls is listed once in MESO_GL_FUNCS and
  * expanded into a table inside meso_rt (no statics, so several contexts can
- * coexist). Types come from Khronos' glcorearb.h, which declares no symbols
- * unless GL_GLEXT_PROTOTYPES is defined: the runtime links no GL library.
+ * coexist). MESO_GL_FUNCS holds what both OpenGL 3.3 core and OpenGL ES 3.2
+ * have; what only one API (or version) has is in MESO_GL_FUNCS_OPTIONAL.
+ * Types come from Khronos' glcorearb.h (the ES entry points used share its
+ * prototypes and enum values), which declares no symbols unless
+ * GL_GLEXT_PROTOTYPES is defined: the runtime links no GL library.
  */
 #ifndef MESO_RT_GL_H
 #define MESO_RT_GL_H
@@ -14,6 +17,7 @@
 /* X(type-suffix, name) → PFN<UPPER>PROC, member `name`. */
 #define MESO_GL_FUNCS(X)                                                     \
     X(PFNGLGETSTRINGPROC, GetString)                                         \
+    X(PFNGLGETSTRINGIPROC, GetStringi)                                       \
     X(PFNGLGETINTEGERVPROC, GetIntegerv)                                     \
     X(PFNGLGETERRORPROC, GetError)                                           \
     X(PFNGLENABLEPROC, Enable)                                               \
@@ -67,7 +71,8 @@
     X(PFNGLCULLFACEPROC, CullFace)                                           \
     X(PFNGLFRONTFACEPROC, FrontFace)                                         \
     X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                               \
-    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)                           \
+    X(PFNGLMAPBUFFERRANGEPROC, MapBufferRange)                               \
+    X(PFNGLUNMAPBUFFERPROC, UnmapBuffer)                                     \
     X(PFNGLVIEWPORTPROC, Viewport)                                           \
     X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                             \
     X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)                       \
@@ -82,8 +87,11 @@
     X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced)
 
 /* Entry points used only when the context has them (the stats counters of
- * OpenGL 4.3); missing ones are left NULL and never fail creation. */
-#define MESO_GL_FUNCS_OPTIONAL(X) X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)
+ * OpenGL 4.3 / ES 3.1; glGetBufferSubData, which OpenGL ES lacks: ES maps
+ * the buffer instead); missing ones are left NULL and never fail creation. */
+#define MESO_GL_FUNCS_OPTIONAL(X)              \
+    X(PFNGLMEMORYBARRIERPROC, MemoryBarrier) \
+    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)
 
 typedef struct mesoi_gl {
 #define MESO_X_MEMBER(type, name) type name;

@@ -55,6 +55,12 @@ struct meso_rt {
     void* log_user;
     mesoi_gl gl;
     int gl_version; /* major*10+minor */
+    int gles;       /* 1 on an OpenGL ES context (GL_VERSION "OpenGL ES ...") */
+    /* ES only (desktop: both 1, core since 3.0): GL_EXT_texture_norm16 (R16,
+     * RG16 textures) and GL_OES_texture_float_linear (linear R32F); without
+     * them the uploads convert (rt_common.c: upload formats). */
+    int norm16, float_linear;
+    int stats_ok; /* fragment shaders can count into a shader storage buffer (GL 4.3, or ES with fragment SSBOs) */
     meso_rt_state_policy state_policy;
     int check_gl_errors;
     mesoi_program mesh_program;
@@ -66,7 +72,7 @@ struct meso_rt {
     GLuint slice_tex[5];
     GLint slice_size[2];      /* its width and height: the viewport's */
     GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
-    GLuint stats_buffer; /* 3 counters (OpenGL 4.3 shader storage) */
+    GLuint stats_buffer; /* 3 counters (OpenGL 4.3 / ES 3.1 shader storage) */
     GLuint inst_buf, inst_tex; /* per-instance data of instanced draws (rt_instances.c), made on first use */
     size_t inst_capacity;      /* bytes in inst_buf */
     GLint inst_max_texels;     /* GL_MAX_TEXTURE_BUFFER_SIZE, asked on the first instanced draw */
@@ -191,7 +197,7 @@ typedef struct mesoi_draw {
     int reversed;               /* the near plane has the larger depth (MESO_DEPTH_REVERSED) */
     GLenum depth_func;          /* desc->depth_func, or 0 */
     int restore;                /* MESO_STATE_RESTORE */
-    int stats; /* the shaders count work (OpenGL 4.3 and desc->stats) */
+    int stats; /* the shaders count work (rt->stats_ok and desc->stats) */
     int units;
     GLenum target[MESOI_DRAW_MAX_UNITS];
     GLint prev_bind[MESOI_DRAW_MAX_UNITS];
@@ -217,6 +223,15 @@ void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* progr
  * "nothing drawn" (1, or 0 reversed). */
 GLenum mesoi_near_func(const mesoi_draw* s);
 float mesoi_far_clear(const mesoi_draw* s);
+
+/* rt_common.c: what every shader starts with: the #version line (desktop:
+ * "330 core", "430 core" with `stats`; ES: "320 es" and default precisions
+ * highp for floats, ints and every sampler type the shaders use), then
+ * "#define MESO_STATS 1" with `stats`. A static string. */
+const char* mesoi_glsl_prelude(const meso_rt* rt, int stats);
+/* An allocation of `count` floats v / 65535 from `count` host-order U16 texels, for contexts without 16-bit normalised textures
+ * (ES without GL_EXT_texture_norm16); NULL (logged) when out of memory. */
+float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count);
 
 /* rt_common.c: shaders. compile: one shader from `count` sources, 0
  * (logged with `name`) on failure; link: links and deletes the two shaders

@@ -17,11 +17,11 @@
 
 meso_result mesoi_mesh_program_create(meso_rt* rt)
 {
-    const char* vs[4] = {"#version 330 core\n#define MESO_INSTANCE_MODEL 1\n", MESOI_GLSL_VERTEX_STAGE,
+    const char* vs[5] = {mesoi_glsl_prelude(rt, 0), "#define MESO_INSTANCE_MODEL 1\n", MESOI_GLSL_VERTEX_STAGE,
                          mesoi_glsl_instance, mesoi_glsl_mesh_vert};
-    const char* fs[2] = {"#version 330 core\n", mesoi_glsl_mesh_frag};
+    const char* fs[2] = {mesoi_glsl_prelude(rt, 0), mesoi_glsl_mesh_frag};
     static const char* const samplers[1] = {"u_instances"}; /* unit 0: the instance data */
-    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "mesh_vert.glsl"),
+    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "mesh_vert.glsl"),
                               mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 2, "mesh_frag.glsl"), "mesh", samplers, 1)
                ? MESO_OK
                : MESO_ERR_GL;

@@ -421,9 +421,8 @@ static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, i
     mesoi_program* p = &rt->shell_programs[stats][t];
     if (p->id)
         return p;
-    char head[160];
-    snprintf(head, sizeof(head), "#version %s core\n%s#define MESO_TECHNIQUE %d\n", stats ? "430" : "330",
-             stats ? "#define MESO_STATS 1\n" : "", (int)t);
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n", mesoi_glsl_prelude(rt, stats), (int)t);
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_shell_common,
                          mesoi_glsl_shell_vert};
     const char* fs[6] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,

@@ -54,10 +54,10 @@ static const mesoi_program* slice_program(meso_rt* rt, int pass)
     mesoi_program* p = &rt->slice_programs[pass];
     if (p->id)
         return p;
-    char head[128];
+    char head[512];
     /* MESO_SINGLE: never instanced, instance.glsl leaves the uniforms as they are */
-    snprintf(head, sizeof(head),
-             "#version 330 core\n#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n#define MESO_SINGLE 1\n",
+    snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n#define MESO_SINGLE 1\n",
+             mesoi_glsl_prelude(rt, 0),
              (int)MESO_SHELL_SLICES, pass);
     const char* vs[5] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_shell_texfn,
                          mesoi_glsl_shell_slices_vert};

@@ -1,4 +1,5 @@
-// mesh_frag.glsl - prepended: #version. Two-sided Lambert with a little ambient; depth is the rasterised depth.
+// Two-sided Lambert with a little ambient; depth is the rasterised depth.
+// The runtime prepends the #version prelude (rt_common.c: mesoi_glsl_prelude).
 in vec3 v_normal;
 uniform vec3 u_light_dir; // world space, towards the light, normalised
 uniform vec3 u_albedo;

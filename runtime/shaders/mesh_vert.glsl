@@ -1,5 +1,6 @@
 // mesh_vert.glsl - base-mesh pass: positions and normals straight from the
-// MESH chunk buffer. Prepended: #version, instance.glsl (u_model).
+// MESH chunk buffer. Prepended: the #version prelude (rt_common.c:
+// mesoi_glsl_prelude), instance.glsl (u_model).
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 uniform mat4 u_view;

@@ -5,8 +5,8 @@
 //
 // The ray of a pixel starts on the near plane and points away from the eye,
 // in object space (runtime/reference/shell_reference.h: the references cast
-// the same rays). On OpenGL 4.3 with MESO_STATS the shaders count ray-cast
-// fragments, texture samples (g_steps) and hits.
+// the same rays). With MESO_STATS (OpenGL 4.3, ES with fragment storage)
+// the shaders count ray-cast fragments, texture samples (g_steps) and hits.
 
 uniform vec4 u_viewport;
 // The depth convention (meso_rt_draw_desc.depth, .clip_depth): NDC z of the

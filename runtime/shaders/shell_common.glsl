@@ -1,7 +1,7 @@
 // shell_common.glsl - shared by the shell vertex and fragment shaders.
-// The runtime prepends "#version", "#define MESO_TECHNIQUE n" (0 smooth,
-// 1 curved, 2 tetra, 3 segment only, 4 slices: shell_slices_*.glsl) and, on
-// OpenGL 4.3+, MESO_STATS.
+// The runtime prepends "#version" (and ES precisions), "#define MESO_TECHNIQUE n"
+// (0 smooth, 1 curved, 2 tetra, 3 segment only, 4 slices: shell_slices_*.glsl)
+// and, where stats are counted (OpenGL 4.3+, ES with fragment storage), MESO_STATS.
 // Every function mirrors runtime/reference/shell_map.c (double precision)
 // operation by operation; see runtime/reference/shell_map.h for the maths
 // and FORMAT.md sec. 7.2 for texture space.

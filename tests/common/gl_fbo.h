@@ -1,5 +1,7 @@
 /* gl_fbo.h — an offscreen RGBA8 + depth framebuffer on the headless EGL
- * context, for the GL tests and benchmarks (header-only, test code). */
+ * context, for the GL tests and benchmarks (header-only, test code). Uses
+ * only what OpenGL 3.3 core and OpenGL ES 3.2 share, plus reading depth
+ * back, which ES has through GL_NV_read_depth (Mesa offers it). */
 #ifndef MESO_TEST_GL_FBO_H
 #define MESO_TEST_GL_FBO_H
 
@@ -16,7 +18,7 @@
     X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage) X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
     X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers) X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers)        \
     X(PFNGLVIEWPORTPROC, Viewport) X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear)                     \
-    X(PFNGLREADPIXELSPROC, ReadPixels) X(PFNGLCLEARDEPTHPROC, ClearDepth) X(PFNGLFINISHPROC, Finish)
+    X(PFNGLREADPIXELSPROC, ReadPixels) X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) X(PFNGLFINISHPROC, Finish)
 
 typedef struct test_fbo {
 #define MESO_TEST_M(t, n) t n;
@@ -56,9 +58,10 @@ static inline int test_fbo_create(test_fbo* f, int w, int h)
 
 static inline void test_fbo_clear(test_fbo* f, float r, float g, float b)
 {
+    static const float far = 1.0f;
     f->ClearColor(r, g, b, 1.0f);
-    f->ClearDepth(1.0);
-    f->Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    f->Clear(GL_COLOR_BUFFER_BIT);
+    f->ClearBufferfv(GL_DEPTH, 0, &far); /* glClearDepth is desktop only */
 }
 
 /* Reads colour (RGBA8, row 0 at the bottom) and depth (floats) back. */

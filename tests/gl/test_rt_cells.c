@@ -32,6 +32,7 @@
 #include <unistd.h>
 
 #include "cell_reference.h"
+#include "gl_api.h"
 #include "gl_fbo.h"
 #include "gl_log.h"
 #include "meso_layout.h"
@@ -521,7 +522,7 @@ int main(int argc, char** argv)
     scene_w = W;
     scene_h = H;
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = test_egl_create(why, sizeof(why));
     CHECK_MSG(egl != NULL, "%s", why);
     ctx c;
     memset(&c, 0, sizeof(c));
@@ -538,6 +539,7 @@ int main(int argc, char** argv)
 #undef TEST_L
     const meso_rt_desc desc = {.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log};
     CHECK(meso_rt_create(&desc, &c.rt) == MESO_OK);
+    CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);
 

@@ -274,9 +274,10 @@ static meso_result render(ctx* c, meso_rt* rt, meso_rt_object o, int kind, int s
 {
     const int reversed = setup >= D_REVERSED_INFINITE;
     c->gl.ClipControl(GL_LOWER_LEFT, reversed ? GL_ZERO_TO_ONE : GL_NEGATIVE_ONE_TO_ONE);
+    const float clear_depth = reversed ? 0.0f : 1.0f;
     c->fbo.ClearColor(0.1f, 0.1f, 0.1f, 1.0f);
-    c->fbo.ClearDepth(reversed ? 0.0 : 1.0);
-    c->fbo.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    c->fbo.Clear(GL_COLOR_BUFFER_BIT);
+    c->fbo.ClearBufferfv(GL_DEPTH, 0, &clear_depth); /* glClearDepth is desktop only (gl_fbo.h) */
     c->gl.DepthFunc(reversed ? GL_GREATER : GL_LESS);
     d.depth = reversed ? MESO_DEPTH_REVERSED : MESO_DEPTH_STANDARD;
     d.clip_depth = reversed ? MESO_CLIP_DEPTH_ZERO_TO_ONE : MESO_CLIP_DEPTH_NEGATIVE_ONE_TO_ONE;
@@ -367,9 +368,10 @@ static void depth_conventions(ctx* c, meso_rt* rt, meso_rt_object* objs, const c
         }
         /* The host's function is honoured: GL_GREATER against a depth
          * cleared to 1 in the standard convention passes nothing. */
+        static const float far = 1.0f;
         c->fbo.ClearColor(0.1f, 0.1f, 0.1f, 1.0f);
-        c->fbo.ClearDepth(1.0);
-        c->fbo.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        c->fbo.Clear(GL_COLOR_BUFFER_BIT);
+        c->fbo.ClearBufferfv(GL_DEPTH, 0, &far);
         c->gl.DepthFunc(GL_GREATER);
         meso_rt_draw_desc d = view_desc(&cams[k], D_STANDARD);
         if (k == K_SLICES) {

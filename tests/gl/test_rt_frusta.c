@@ -28,6 +28,7 @@
  *    as background. Must be 0 everywhere, joints and branches included.
  * Tolerances: see check_close() below.
  * MESO_TEST_PNG=DIR writes each case's GL, reference and difference images. */
+#include "gl_api.h"
 #include "meso_clock.h"
 #include "test_util.h"
 
@@ -49,7 +50,8 @@ enum { W = 160, H = 120 };
 #define TEST_GLF(X)                                                                                              \
     X(PFNGLGETINTEGERVPROC, GetIntegerv) X(PFNGLISENABLEDPROC, IsEnabled) X(PFNGLENABLEPROC, Enable)             \
     X(PFNGLDISABLEPROC, Disable) X(PFNGLDEPTHFUNCPROC, DepthFunc) X(PFNGLCULLFACEPROC, CullFace)                 \
-    X(PFNGLACTIVETEXTUREPROC, ActiveTexture) X(PFNGLFRONTFACEPROC, FrontFace) X(PFNGLDEPTHMASKPROC, DepthMask)
+    X(PFNGLACTIVETEXTUREPROC, ActiveTexture) X(PFNGLFRONTFACEPROC, FrontFace) X(PFNGLDEPTHMASKPROC, DepthMask)   \
+    X(PFNGLGETERRORPROC, GetError)
 
 typedef struct test_gl {
 #define TEST_M(t, n) t n;
@@ -436,10 +438,12 @@ static void test_state_contract(ctx* c)
     meso_file* f = NULL;
     meso_error err;
     CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
+    test_gl* gl = &c->gl;
+    while (gl->GetError() != GL_NO_ERROR) {
+    }
     meso_rt_object obj;
     CHECK(meso_rt_load_object(c->rt, f, 1, &obj) == MESO_OK);
     meso_file_close(f);
-    test_gl* gl = &c->gl;
     gl->Disable(GL_DEPTH_TEST);
     gl->DepthFunc(GL_GEQUAL);
     gl->DepthMask(GL_FALSE);
@@ -466,6 +470,9 @@ static void test_state_contract(ctx* c)
     gl->GetIntegerv(GL_CURRENT_PROGRAM, &v);
     CHECK(v == 0);
     CHECK(!gl->IsEnabled(GL_DEPTH_TEST) && gl->IsEnabled(GL_CULL_FACE));
+    /* Neither the upload nor the draw raised a GL error (every query and
+     * call exists on the API the test runs on: desktop or ES). */
+    CHECK(gl->GetError() == GL_NO_ERROR);
     gl->Enable(GL_DEPTH_TEST);
     gl->DepthFunc(GL_LESS);
     gl->DepthMask(GL_TRUE);
@@ -544,7 +551,7 @@ int main(void)
     scene_w = W;
     scene_h = H;
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = test_egl_create(why, sizeof(why));
     CHECK_MSG(egl != NULL, "%s", why);
     ctx c = {0};
     CHECK(test_fbo_create(&c.fbo, W, H));
@@ -558,6 +565,7 @@ int main(void)
 #undef TEST_L
     const meso_rt_desc desc = {.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error, .log_user = &c.log};
     CHECK(meso_rt_create(&desc, &c.rt) == MESO_OK);
+    CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);
     texture height = make_height(64);

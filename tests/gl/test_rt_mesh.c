@@ -11,6 +11,7 @@
 #include "adapters.h"
 #include "camera.h"
 #include "egl_context.h"
+#include "gl_api.h"
 #include "mesh_chunk.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
@@ -21,7 +22,7 @@
     X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage) X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
     X(PFNGLVIEWPORTPROC, Viewport) X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear)                     \
     X(PFNGLREADPIXELSPROC, ReadPixels) X(PFNGLGETINTEGERVPROC, GetIntegerv) X(PFNGLISENABLEDPROC, IsEnabled)       \
-    X(PFNGLDEPTHFUNCPROC, DepthFunc) X(PFNGLDISABLEPROC, Disable) X(PFNGLCLEARDEPTHPROC, ClearDepth)
+    X(PFNGLDEPTHFUNCPROC, DepthFunc) X(PFNGLDISABLEPROC, Disable) X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)
 
 static struct {
 #define M(t, n) t n;
@@ -131,9 +132,10 @@ static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt)
     assert(meso_rt_object_bounds(rt, obj, lo, hi) == MESO_OK);
     assert(lo[0] == -1.0f && hi[2] == 1.0f);
 
+    static const float far = 1.0f;
     gl.ClearColor(0, 0, 0, 0);
-    gl.ClearDepth(1.0);
-    gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    gl.Clear(GL_COLOR_BUFFER_BIT);
+    gl.ClearBufferfv(GL_DEPTH, 0, &far); /* glClearDepth is desktop only */
     gl.Disable(GL_DEPTH_TEST);
     gl.DepthFunc(GL_GEQUAL); /* host state that draw must restore */
     meso_rt_draw_desc d = {.depth_func = GL_LESS}; /* the draw's own; GL_GEQUAL comes back after */
@@ -219,7 +221,7 @@ static void draco_needs_a_decoder(meso_rt* rt)
 int main(void)
 {
     char why[256];
-    meso_egl* e = meso_egl_create(why, sizeof(why));
+    meso_egl* e = test_egl_create(why, sizeof(why));
     if (!e)
         fprintf(stderr, "EGL: %s\n", why);
     assert(e);
@@ -234,6 +236,7 @@ int main(void)
     setup_fbo();
     meso_rt* rt;
     assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
+    assert(meso_rt_gl_is_es(rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     sphere_matches_analytic_coverage_and_depth(rt);
     draco_needs_a_decoder(rt);
     meso_rt_destroy(rt);

@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "adapters.h"
+#include "gl_api.h"
 #include "gl_fbo.h"
 #include "mesh_chunk.h"
 #include "meso_rt.h"
@@ -192,11 +193,12 @@ int main(void)
 {
     setvbuf(stdout, NULL, _IONBF, 0);
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = test_egl_create(why, sizeof(why));
     CHECK_MSG(egl != NULL, "%s", why);
     ctx c = {0};
     CHECK(test_fbo_create(&c.fbo, W, H));
     CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &c.rt) == MESO_OK);
+    CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     c.rgba = malloc((size_t)W * H * 4);
     c.depth = malloc(sizeof(float) * W * H);
     texture height = make_height(64), volume = make_volume(32, 16);

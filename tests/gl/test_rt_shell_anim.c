@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "camera.h"
+#include "gl_api.h"
 #include "gl_fbo.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
@@ -135,10 +136,11 @@ int main(int argc, char** argv)
     ctx c = {.mesobake = argv[1]};
     test_temp_dir(c.dir, sizeof(c.dir), "rt_shell_anim");
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = test_egl_create(why, sizeof(why));
     need(egl != NULL, "%s", why);
     CHECK(test_fbo_create(&c.fbo, W, H));
     CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &c.rt) == MESO_OK);
+    CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     const double eye[3] = {0.4, 2.6, 2.2}, at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
     meso_camera_look_at(c.view, eye, at, up);
     meso_camera_perspective(c.proj, 0.8, (double)W / H, 0.1, 10.0);

@@ -51,6 +51,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gl_api.h"
 #include "gl_fbo.h"
 #include "meso_rt.h"
 #include "shell_reference.h"
@@ -405,10 +406,11 @@ int main(int argc, char** argv)
     scene_w = W;
     scene_h = H;
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = test_egl_create(why, sizeof(why));
     CHECK_MSG(egl != NULL, "%s", why);
     CHECK(test_fbo_create(&c.fbo, W, H));
     CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &c.rt) == MESO_OK);
+    CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
 
     enum { SADDLE, SPOT, SPOT_INTERIOR, SPOT_ENVELOPE, TORUS, CASES };
     static const bake_case cases[CASES] = {

@@ -5,6 +5,7 @@
 #include <EGL/eglext.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 struct meso_egl {
     EGLDisplay dpy;
@@ -16,8 +17,28 @@ void (*meso_egl_proc(const char* name))(void)
     return eglGetProcAddress(name);
 }
 
+const char* meso_egl_api_name(meso_egl_api api)
+{
+    return api == MESO_EGL_GLES ? "gles" : "gl";
+}
+
+int meso_egl_api_parse(const char* name)
+{
+    if (name && strcmp(name, "gl") == 0)
+        return MESO_EGL_GL;
+    if (name && strcmp(name, "gles") == 0)
+        return MESO_EGL_GLES;
+    return -1;
+}
+
 meso_egl* meso_egl_create(char* why, int why_size)
 {
+    return meso_egl_create_api(MESO_EGL_GL, 0, why, why_size);
+}
+
+meso_egl* meso_egl_create_api(meso_egl_api api, int version, char* why, int why_size)
+{
+    const int es = api == MESO_EGL_GLES;
     PFNEGLGETPLATFORMDISPLAYEXTPROC get_display =
         (PFNEGLGETPLATFORMDISPLAYEXTPROC)(void (*)(void))eglGetProcAddress("eglGetPlatformDisplayEXT");
     EGLDisplay dpy = EGL_NO_DISPLAY;
@@ -32,30 +53,42 @@ meso_egl* meso_egl_create(char* why, int why_size)
         snprintf(why, (size_t)why_size, "eglInitialize failed: 0x%x", eglGetError());
         return NULL;
     }
-    const EGLint cfg_attr[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
+    const EGLint cfg_attr[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE,
+                               es ? EGL_OPENGL_ES3_BIT : EGL_OPENGL_BIT,
                                EGL_RED_SIZE, 8, EGL_GREEN_SIZE, 8, EGL_BLUE_SIZE, 8, EGL_NONE};
     EGLConfig cfg;
     EGLint n = 0;
     if (!eglChooseConfig(dpy, cfg_attr, &cfg, 1, &n) || n < 1) {
-        snprintf(why, (size_t)why_size, "eglChooseConfig found no OpenGL config");
+        snprintf(why, (size_t)why_size, "eglChooseConfig found no %s config", es ? "OpenGL ES 3" : "OpenGL");
         eglTerminate(dpy);
         return NULL;
     }
-    if (!eglBindAPI(EGL_OPENGL_API)) {
-        snprintf(why, (size_t)why_size, "eglBindAPI(EGL_OPENGL_API) failed");
+    if (!eglBindAPI(es ? EGL_OPENGL_ES_API : EGL_OPENGL_API)) {
+        snprintf(why, (size_t)why_size, "eglBindAPI(%s) failed", es ? "EGL_OPENGL_ES_API" : "EGL_OPENGL_API");
         eglTerminate(dpy);
         return NULL;
     }
-    static const EGLint versions[][2] = {{4, 5}, {3, 3}};
+    EGLint versions[2][2] = {{4, 5}, {3, 3}};
+    int tries = 2;
+    if (version > 0 || es) {
+        versions[0][0] = version > 0 ? version / 10 : 3;
+        versions[0][1] = version > 0 ? version % 10 : 2;
+        tries = 1;
+    }
     EGLContext ctx = EGL_NO_CONTEXT;
-    for (int i = 0; i < 2 && ctx == EGL_NO_CONTEXT; ++i) {
+    for (int i = 0; i < tries && ctx == EGL_NO_CONTEXT; ++i) {
+        /* The profile mask is desktop-only: an ES context ends the list there. */
         const EGLint ctx_attr[] = {EGL_CONTEXT_MAJOR_VERSION, versions[i][0], EGL_CONTEXT_MINOR_VERSION,
-                                   versions[i][1], EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                   versions[i][1], es ? EGL_NONE : EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                    EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
         ctx = eglCreateContext(dpy, cfg, EGL_NO_CONTEXT, ctx_attr);
     }
     if (ctx == EGL_NO_CONTEXT) {
-        snprintf(why, (size_t)why_size, "eglCreateContext (core 4.5 and 3.3) failed: 0x%x", eglGetError());
+        if (tries == 2)
+            snprintf(why, (size_t)why_size, "eglCreateContext (core 4.5 and 3.3) failed: 0x%x", eglGetError());
+        else
+            snprintf(why, (size_t)why_size, "eglCreateContext (%s %d.%d) failed: 0x%x", es ? "OpenGL ES" : "core",
+                     versions[0][0], versions[0][1], eglGetError());
         eglTerminate(dpy);
         return NULL;
     }

@@ -50,6 +50,7 @@ static const char* const usage_full =
     "           [--cells first|reflect|refract]    cells mode (default first), with\n"
     "           [--bounces N] [--cell-step S]      bounces and the linear search step\n"
     "           [--yaw D] [--pitch D] [--zoom Z]   camera\n"
+    "           [--api gl|gles]                    desktop OpenGL (default) or OpenGL ES 3.2\n"
     "           [--reference [--samples N]]        shells, frusta and cells by the exact\n"
     "                                              CPU references instead (no EGL)\n"
     "\n"

@@ -1,7 +1,8 @@
 /*
  * preview.c — `mesoinspect preview FILE -o OUT.png`: render a .meso file
  * headlessly with libmeso on an EGL surfaceless context (Mesa llvmpipe when
- * there is no GPU) and write a PNG.
+ * there is no GPU) and write a PNG. --api gles renders through an OpenGL
+ * ES 3.2 context instead of desktop OpenGL core (libmeso runs on both).
  *
  * The camera orbits the union of the objects' bounds (from the OBJT records)
  * at --yaw/--pitch, framed so the bounding sphere fills the view. The image
@@ -63,6 +64,7 @@ static const char* const usage_preview =
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
+    "      --api A         gl (default: desktop OpenGL core) or gles (OpenGL ES 3.2)\n"
     "      --technique T   shell technique: smooth (default), curved, tetra or slices\n"
     "                      (slice-based rendering, the Lp-averaged shells paper's section 5)\n"
     "      --slices N      slices: slice polygons per prism (2..1024, default 16)\n"
@@ -98,6 +100,7 @@ typedef struct preview_knobs {
     int has_time;
     double time; /* with has_time: seconds, for shells with stored frames */
     int reversed; /* --depth reversed: reversed-Z, 0..1 clip depth, infinite far plane */
+    int gles;    /* --api gles: an OpenGL ES 3.2 context */
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -303,7 +306,7 @@ done:
     X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage) X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus) X(PFNGLVIEWPORTPROC, Viewport)                        \
     X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear) X(PFNGLREADPIXELSPROC, ReadPixels)                  \
-    X(PFNGLCLEARDEPTHPROC, ClearDepth) X(PFNGLDEPTHFUNCPROC, DepthFunc)
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) X(PFNGLDEPTHFUNCPROC, DepthFunc)
 
 typedef struct preview_gl {
 #define M(t, n) t n;
@@ -324,9 +327,9 @@ static int render(const char* path, const char* out, int width, int height, uint
                   const preview_knobs* knobs)
 {
     char why[256];
-    meso_egl* egl = meso_egl_create(why, sizeof(why));
+    meso_egl* egl = meso_egl_create_api(knobs->gles ? MESO_EGL_GLES : MESO_EGL_GL, 0, why, sizeof(why));
     if (!egl) {
-        fprintf(stderr, "mesoinspect error: no headless OpenGL: %s\n", why);
+        fprintf(stderr, "mesoinspect error: no headless OpenGL%s: %s\n", knobs->gles ? " ES 3.2" : "", why);
         return MESO_EXIT_UNSUPPORTED;
     }
     preview_gl gl;
@@ -424,10 +427,12 @@ static int render(const char* path, const char* out, int width, int height, uint
         /* The same frustum, reversed-Z with the far plane at infinity:
          * NDC z = near / distance. */
         PFNGLCLIPCONTROLPROC clip_control = NULL;
-        void (*p)(void) = meso_egl_proc("glClipControl");
+        /* OpenGL ES has it as glClipControlEXT (GL_EXT_clip_control, which llvmpipe offers). */
+        void (*p)(void) = meso_egl_proc(knobs->gles ? "glClipControlEXT" : "glClipControl");
         memcpy(&clip_control, &p, sizeof(p));
-        if (!clip_control || meso_rt_gl_version(rt) < 45) {
-            fprintf(stderr, "mesoinspect error: --depth reversed needs glClipControl (OpenGL 4.5)\n");
+        if (!clip_control || (!knobs->gles && meso_rt_gl_version(rt) < 45)) {
+            fprintf(stderr, "mesoinspect error: --depth reversed needs glClipControl (OpenGL 4.5, or ES with "
+                            "GL_EXT_clip_control)\n");
             code = MESO_EXIT_UNSUPPORTED;
             goto done;
         }
@@ -439,9 +444,10 @@ static int render(const char* path, const char* out, int width, int height, uint
         d.clip_depth = MESO_CLIP_DEPTH_ZERO_TO_ONE;
         gl.DepthFunc(GL_GREATER);
     }
+    const float clear_depth = knobs->reversed ? 0.0f : 1.0f;
     gl.ClearColor(clear_rgb[0], clear_rgb[1], clear_rgb[2], 1.0f);
-    gl.ClearDepth(knobs->reversed ? 0.0 : 1.0);
-    gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    gl.Clear(GL_COLOR_BUFFER_BIT);
+    gl.ClearBufferfv(GL_DEPTH, 0, &clear_depth); /* glClearDepth is desktop only */
 
     d.shell.technique = knobs->technique;
     d.shell.slices = knobs->slices;
@@ -648,6 +654,14 @@ int mesoinspect_preview(int argc, char** argv)
                         argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--api") && val) {
+            const char* m = argv[++i];
+            if (strcmp(m, "gl") && strcmp(m, "gles")) {
+                fprintf(stderr, "mesoinspect error: --api expects gl or gles, got '%s'\nSee 'mesoinspect --help'.\n",
+                        m);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.gles = !strcmp(m, "gles");
         } else if (!strcmp(a, "--cells") && val) {
             const char* m = argv[++i];
             if (!strcmp(m, "first"))
@@ -683,7 +697,7 @@ int mesoinspect_preview(int argc, char** argv)
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
                      !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") || !strcmp(a, "--depth") ||
-                     !strcmp(a, "--slices") || !strcmp(a, "--slice-interp"))
+                     !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") || !strcmp(a, "--api"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
