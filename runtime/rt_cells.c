@@ -204,32 +204,39 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
 
 /* >>drawing ---------------------------------------------------------------- */
 
-static const mesoi_program* cells_program(meso_rt* rt, int stats)
+static const mesoi_program* cells_program(meso_rt* rt, int stats, meso_rt_pass pass)
 {
-    mesoi_program* p = &rt->cells_programs[stats];
+    mesoi_program* p = &rt->cells_programs[pass][stats];
     if (p->id)
         return p;
     char head[160];
     snprintf(head, sizeof(head), "#version %s core\n%suniform mat4 u_mvp;\nuniform mat4 u_inv_mvp;\n",
              stats ? "430" : "330", stats ? "#define MESO_STATS 1\n" : "");
     const char* vs[2] = {head, mesoi_glsl_cells_vert};
-    const char* fs[3] = {head, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
+    const char* pre[1] = {mesoi_glsl_raycast_common};
+    const char* fs[10] = {head};
+    char pass_text[64], fname[96];
+    int n = mesoi_frag_sources(rt, pass, fs, pre, 1, pass_text);
+    fs[n++] = mesoi_glsl_cells_frag;
     static const char* const samplers[UNIT_COUNT] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env"};
+    static const char* const names[MESO_PASS_COUNT] = {"cells", "cells depth", "cells gbuffer"};
+    const char* fname_used = mesoi_frag_name(rt, pass, "cells_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
     mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 2, "cells_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 3, "cells_frag.glsl"), "cells", samplers,
-                       UNIT_COUNT);
+                       fsh, names[pass], samplers, UNIT_COUNT);
     return p->id ? p : NULL;
 }
 
-meso_result mesoi_cells_prepare(meso_rt* rt, int stats)
+meso_result mesoi_cells_prepare(meso_rt* rt, int stats, meso_rt_pass pass)
 {
-    return cells_program(rt, stats) ? MESO_OK : MESO_ERR_GL;
+    return cells_program(rt, stats, pass) ? MESO_OK : MESO_ERR_GL;
 }
 
 void mesoi_cells_programs_destroy(meso_rt* rt)
 {
-    for (int st = 0; st < 2; ++st)
-        mesoi_program_delete(rt, &rt->cells_programs[st]);
+    for (int pass = 0; pass < MESO_PASS_COUNT; ++pass)
+        for (int st = 0; st < 2; ++st)
+            mesoi_program_delete(rt, &rt->cells_programs[pass][st]);
 }
 
 /* 1 when the near plane's rectangle (its bounding box in object space)
@@ -276,7 +283,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     meso_result r = mesoi_draw_prepare(rt, d, 1, &ds);
     if (r != MESO_OK)
         return r;
-    const mesoi_program* prog = cells_program(rt, ds.stats);
+    const mesoi_program* prog = cells_program(rt, ds.stats, ds.pass);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;

@@ -77,7 +77,11 @@
     X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                                     \
     X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                                 \
     X(PFNGLGETTEXLEVELPARAMETERIVPROC, GetTexLevelParameteriv)               \
-    X(PFNGLGETBUFFERPARAMETERIVPROC, GetBufferParameteriv)
+    X(PFNGLGETBUFFERPARAMETERIVPROC, GetBufferParameteriv)                   \
+    X(PFNGLCOLORMASKPROC, ColorMask)                                         \
+    X(PFNGLGETBOOLEANVPROC, GetBooleanv)                                     \
+    X(PFNGLGETUNIFORMBLOCKINDEXPROC, GetUniformBlockIndex)                   \
+    X(PFNGLUNIFORMBLOCKBINDINGPROC, UniformBlockBinding)
 
 /* Entry points used only when the context has them (the stats counters of
  * OpenGL 4.3); missing ones are left NULL and never fail creation. */

@@ -15,14 +15,29 @@
 #include <math.h>
 #include <string.h>
 
-meso_result mesoi_mesh_program_create(meso_rt* rt)
+/* The mesh program of `pass` (built on first use). */
+static const mesoi_program* mesh_program(meso_rt* rt, meso_rt_pass pass)
 {
-    const char* vsrc = mesoi_glsl_mesh_vert;
-    const char* fsrc = mesoi_glsl_mesh_frag;
-    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, &vsrc, 1, "mesh_vert.glsl"),
-                              mesoi_compile(rt, GL_FRAGMENT_SHADER, &fsrc, 1, "mesh_frag.glsl"), "mesh", NULL, 0)
-               ? MESO_OK
-               : MESO_ERR_GL;
+    mesoi_program* p = &rt->mesh_programs[pass];
+    if (p->id)
+        return p;
+    const char* vsrc = mesoi_glsl_mesh_vert; /* holds its #version */
+    const char* pre[2] = {"uniform mat4 u_mvp;\nuniform mat4 u_inv_mvp;\n", mesoi_glsl_raycast_common};
+    const char* fsrc[8] = {"#version 330 core\n"};
+    char pass_text[64], fname[96];
+    int n = mesoi_frag_sources(rt, pass, fsrc, pre, 2, pass_text);
+    fsrc[n++] = mesoi_glsl_mesh_frag;
+    static const char* const names[MESO_PASS_COUNT] = {"mesh", "mesh depth", "mesh gbuffer"};
+    const char* fname_used = mesoi_frag_name(rt, pass, "mesh_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fsrc, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, &vsrc, 1, "mesh_vert.glsl"),
+                       fsh, names[pass], NULL, 0);
+    return p->id ? p : NULL;
+}
+
+meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass)
+{
+    return mesh_program(rt, pass) ? MESO_OK : MESO_ERR_GL;
 }
 
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
@@ -92,9 +107,12 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     if (r != MESO_OK)
         return r;
     ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
+    const mesoi_program* prog = mesh_program(rt, ds.pass);
+    if (!prog)
+        return MESO_ERR_GL;
     /* Meshes are drawn with the host's culling, not the ray casters' back
      * faces (raycast 0). */
-    mesoi_draw_begin(rt, &ds, &rt->mesh_program, 0, 0, NULL, NULL);
+    mesoi_draw_begin(rt, &ds, prog, 0, 0, NULL, NULL);
     /* The light in world space, as the fragment shader takes it. */
     float light[3] = {0.3f, 0.8f, 0.5f};
     if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
@@ -103,7 +121,7 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     for (int k = 0; k < 3; ++k)
         light[k] /= len;
     mesoi_gl* gl = &rt->gl;
-    const GLint* u = rt->mesh_program.loc;
+    const GLint* u = prog->loc;
     gl->UniformMatrix4fv(u[MESOI_U_view], 1, GL_FALSE, d->view);
     gl->UniformMatrix4fv(u[MESOI_U_proj], 1, GL_FALSE, d->proj);
     gl->UniformMatrix4fv(u[MESOI_U_model], 1, GL_FALSE, ds.model);

@@ -200,6 +200,27 @@ static inline void check_close_colour(const char* what, metrics m, double colour
               m.coverage_mismatch, m.off_pixel, m.hit_err_px, m.colour_mae);
 }
 
+/* Looking at the box [lo, hi]'s centre from direction `dir`, dist_scale
+ * times the distance at which its bounding sphere fills a view of fovy;
+ * near plane at least zn_frac of that distance. */
+static inline camera camera_view_box(const double lo[3], const double hi[3], const double dir[3], double fovy,
+                                     double dist_scale, double zn_frac)
+{
+    double ctr[3], r = 0, dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (int k = 0; k < 3; ++k) {
+        ctr[k] = 0.5 * (lo[k] + hi[k]);
+        r += 0.25 * (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    }
+    r = sqrt(r);
+    const double dist = dist_scale * r / sin(fovy / 2);
+    camera cam = {.fovy = fovy, .zn = fmax(dist - 2 * r, zn_frac * dist), .zf = dist + 2 * r};
+    for (int k = 0; k < 3; ++k) {
+        cam.eye[k] = ctr[k] + dist * dir[k] / dl;
+        cam.at[k] = ctr[k];
+    }
+    return cam;
+}
+
 static inline void camera_matrices(const camera* c, float view[16], float proj[16])
 {
     const int W = scene_w, H = scene_h;

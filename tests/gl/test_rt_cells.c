@@ -115,19 +115,7 @@ static void unload(ctx* c, loaded* l)
  * distance at which its bounding sphere fills the view. */
 static camera view_box(const loaded* l, const double dir[3], double dist_scale)
 {
-    double c[3], r = 0, dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * (l->lo[k] + l->hi[k]);
-        r += 0.25 * (l->hi[k] - l->lo[k]) * (l->hi[k] - l->lo[k]);
-    }
-    r = sqrt(r);
-    const double fovy = 0.7, dist = dist_scale * r / sin(fovy / 2);
-    camera cam = {.fovy = fovy, .zn = fmax(dist - 2 * r, 0.01 * dist), .zf = dist + 2 * r};
-    for (int k = 0; k < 3; ++k) {
-        cam.eye[k] = c[k] + dist * dir[k] / dl;
-        cam.at[k] = c[k];
-    }
-    return cam;
+    return camera_view_box(l->lo, l->hi, dir, 0.7, dist_scale, 0.01);
 }
 
 typedef struct result {
