@@ -9,7 +9,8 @@
  * independent of the runtime's shaders:
  *  - depth: the depth pass's and the G-buffer pass's depth buffers equal
  *    the forward pass's bit for bit (same fragments, same gl_FragDepth), and
- *    the depth pass leaves the colour attachments as cleared;
+ *    the depth pass leaves the colour attachments as cleared and counts the
+ *    same ray-cast fragments and hits as forward (stats, OpenGL 4.3);
  *  - albedo: where hit, rgb = desc->albedo exactly (cells: the constant
  *    colour map's sRGB texel decoded with the sRGB formula, within 2e-3);
  *    a = 1 for meshes and cells, in [0.25, 1] for shells and frusta;
@@ -266,7 +267,9 @@ static void run_case(ctx* c, const loaded* l, const pcase* pc, const camera* cam
     const size_t n = (size_t)W * H;
 
     /* forward */
+    meso_rt_draw_stats fwd_stats, depth_stats;
     d.pass = MESO_PASS_FORWARD;
+    d.stats = &fwd_stats;
     CHECK_MSG(draw(c, c->rt, l->obj, &d) == MESO_OK, "%s: %s", pc->name, c->log.message);
     memcpy(c->fwd, c->c0, sizeof(float) * 4 * n);
     memcpy(c->fwd_depth, c->depth, sizeof(float) * n);
@@ -277,8 +280,16 @@ static void run_case(ctx* c, const loaded* l, const pcase* pc, const camera* cam
 
     /* depth: the same depth buffer, colour untouched */
     d.pass = MESO_PASS_DEPTH;
+    d.stats = &depth_stats;
     CHECK(draw(c, c->rt, l->obj, &d) == MESO_OK);
+    d.stats = NULL;
     CHECK_MSG(memcmp(c->depth, c->fwd_depth, sizeof(float) * n) == 0, "%s: depth pass depth differs", pc->name);
+    /* The same ray-cast fragments and hits (the work counters, OpenGL 4.3). */
+    CHECK(depth_stats.supported == fwd_stats.supported);
+    CHECK_MSG(depth_stats.fragments == fwd_stats.fragments && depth_stats.hits == fwd_stats.hits,
+              "%s: depth pass counted %llu fragments %llu hits, forward %llu %llu", pc->name,
+              (unsigned long long)depth_stats.fragments, (unsigned long long)depth_stats.hits,
+              (unsigned long long)fwd_stats.fragments, (unsigned long long)fwd_stats.hits);
     for (size_t i = 0; i < 4 * n; ++i)
         CHECK_MSG(c->c0[i] == sentinel[i % 4] && c->c1[i] == sentinel[i % 4], "%s: depth pass wrote colour",
                   pc->name);
@@ -424,9 +435,9 @@ static void run_case(ctx* c, const loaded* l, const pcase* pc, const camera* cam
     }
     CHECK_MSG(hook_err[0] <= 1e-6 && hook_err[1] <= 1e-6 && hook_err[2] <= 1e-5,
               "%s: hook off by %g (normal) %g (albedo) %g (view)", pc->name, hook_err[0], hook_err[1], hook_err[2]);
-    printf("%-18s covered %5ld  depth passes bit-equal  albedo err %.1e  deferred-forward %.1e  normals vs reference "
+    printf("%-18s covered %5ld  hits %6llu  depth passes bit-equal  albedo err %.1e  deferred-forward %.1e  normals vs reference "
            "(%ld px): median %.3f deg, 90%% %.3f deg  hook err %.1e %.1e %.1e\n",
-           pc->name, covered, max_albedo, max_recompute, compared, med, p90, hook_err[0], hook_err[1], hook_err[2]);
+           pc->name, covered, (unsigned long long)fwd_stats.hits, max_albedo, max_recompute, compared, med, p90, hook_err[0], hook_err[1], hook_err[2]);
 }
 
 static double srgb_decode(double c)
@@ -541,7 +552,7 @@ static void test_broken_hook(void)
     CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error,
                                          .log_user = &log, .shading_hook = hook_src},
                          &rt) == MESO_OK);
-    CHECK(meso_rt_prepare(rt, MESO_PREPARE_ALL_PASSES) == MESO_OK);
+    CHECK(meso_rt_prepare(rt, MESO_PREPARE_ALL_PASSES | MESO_PREPARE_STATS) == MESO_OK);
     CHECK(meso_rt_prepare(rt, 4u) == MESO_ERR_INVALID_ARG);
     meso_rt_destroy(rt);
 }
