@@ -100,25 +100,32 @@ typedef struct meso_rt_desc {
      * pixel's colour (a = 1) in place of the built-in Lambert term. Arguments,
      * all world space: albedo = the material colour times the built-in
      * occlusion factor (what MESO_PASS_GBUFFER writes as rgb * a); n_world the
-     * unit shading normal, facing the viewer (the G-buffer's normal);
-     * p_world the hit point; v_world the unit direction from the hit towards
-     * the eye. Called once per pixel; for cells in REFLECT / REFRACT modes at
-     * every traced hit (the environment terms are mixed in after). Not applied
-     * to MESO_SHELL_SEGMENT_ONLY (a diagnostic colour) nor to the two-pass
-     * slice variants (their colour is the built-in). The snippet is compiled
-     * right after the "#version 330 core" line and the runtime's #defines, before
-     * any runtime declaration: it may rely on GLSL 3.30 core built-ins and its
-     * own declarations only. Prefix its own global names with `hook_` (names
-     * starting u_, g_, s_, o_, v_, meso and MESO are the runtime's). Data from
-     * the host: constants in the snippet, or one uniform block it declares as
-     * `layout(std140) uniform MesoHook { ... };`, which every program is linked
-     * to uniform buffer binding point `shading_hook_binding`: the host binds
-     * its buffer there (glBindBufferBase(GL_UNIFORM_BUFFER, binding, buf))
-     * before drawing; libmeso never touches that binding. Plain `uniform`
-     * variables cannot be set through libmeso. A snippet that does not compile
-     * (checked at create with a one-line shader calling meso_shade) fails
-     * meso_rt_create with MESO_ERR_GL and a SHADER_COMPILE_FAILED log naming
-     * "shading hook". NULL: the built-in shading [NULL] */
+     * unit shading normal, facing the viewer (the G-buffer's normal); p_world
+     * the hit point; v_world the unit direction from the hit towards the eye.
+     * Called once per fragment that hits; for cells in REFLECT / REFRACT modes
+     * at every traced hit (the environment terms are mixed in after). Not
+     * applied to MESO_SHELL_SEGMENT_ONLY (a diagnostic colour) nor to the
+     * two-pass slice variants (their colour is the built-in).
+     * The snippet is compiled after the "#version 330 core" line, the
+     * runtime's #defines (and, for some kinds, its u_mvp / u_inv_mvp uniforms)
+     * and a "#line 1", so compile errors give the snippet's own line numbers;
+     * all other runtime code follows it. It may rely on GLSL 3.30 core
+     * built-ins and its own declarations only. The runtime's shaders define
+     * many unprefixed names (shade, solid, occlusion, ...): prefix every global
+     * name of the snippet but meso_shade with `hook_`.
+     * Data from the host: constants in the snippet, or one uniform block it
+     * declares as `layout(std140) uniform MesoHook { ... };`, which every
+     * program is linked to uniform buffer binding point shading_hook_binding:
+     * the host binds its buffer there (glBindBufferBase(GL_UNIFORM_BUFFER,
+     * binding, buf)) before drawing; libmeso never touches that binding. Plain
+     * `uniform` variables cannot be set through libmeso.
+     * Errors: a snippet that does not compile alone (checked at create with a
+     * one-line shader calling meso_shade) or clashes with the mesh shader
+     * (built at create) fails meso_rt_create with MESO_ERR_GL; one that
+     * clashes with another kind's shader fails that kind's first draw or
+     * meso_rt_prepare with MESO_ERR_GL. Each is logged as
+     * SHADER_COMPILE_FAILED naming "shading hook". NULL: the built-in
+     * shading [NULL] */
     const char* shading_hook;
     uint32_t shading_hook_binding; /* uniform buffer binding point of the hook's MesoHook block [0] */
 } meso_rt_desc;
@@ -313,8 +320,8 @@ typedef enum meso_rt_pass {
                               0.5 (a = 1) for UNORM and float attachments alike; and the exact depth.
                               Cells in REFLECT / REFRACT modes write their first hit's material and normal
                               (the reflected and refracted light is view-dependent: forward only).
-                              MESO_SHELL_SEGMENT_ONLY writes desc->albedo and the normal of the hull face
-                              its depth lies on */
+                              MESO_SHELL_SEGMENT_ONLY writes desc->albedo (a = 1) and the normal of the
+                              hull face its depth lies on */
     MESO_PASS_COUNT
 } meso_rt_pass;
 
