@@ -203,12 +203,13 @@ GLenum mesoi_near_func(const mesoi_draw* s);
 float mesoi_far_clear(const mesoi_draw* s);
 
 /* rt_common.c: the fragment shader's sources between the kind's head
- * ("#version", its #defines) and its own files: "#define MESO_PASS n",
- * the host's shading hook (forward only, "#define MESO_HOOK 1" before it)
- * and, after `pre` (the kind's common files, whose count is pre_count),
- * shaders/pass_out.glsl. Fills src[1 .. pre_count + 3] (src[0] is the
- * caller's head; pass_text is storage for the define) and returns the
- * number of sources filled, head included; the caller appends its own. */
+ * ("#version", its #defines) and its own file: "#define MESO_PASS n", the
+ * host's shading hook (forward only; "#define MESO_HOOK 1" and "#line 1"
+ * before it, a newline after), then `pre` (the kind's common files,
+ * pre_count of them) and shaders/pass_out.glsl. Fills src[1 .. pre_count + 4]
+ * (src[0] is the caller's head; pass_text is storage for the defines) and
+ * returns the number of sources filled, head included; the caller appends
+ * its own file. */
 int mesoi_frag_sources(const meso_rt* rt, meso_rt_pass pass, const char** src, const char* const* pre,
                        int pre_count, char pass_text[64]);
 /* The name a fragment shader is logged under: `file`, and "+ shading hook"

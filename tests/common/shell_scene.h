@@ -200,6 +200,22 @@ static inline void check_close_colour(const char* what, metrics m, double colour
               m.coverage_mismatch, m.off_pixel, m.hit_err_px, m.colour_mae);
 }
 
+/* Opens the file at `path`, which must hold exactly one object (aborts
+ * otherwise): its record into *rec, its bounds into lo and hi. */
+static inline meso_file* open_single_object(const char* path, meso_object_record* rec, double lo[3], double hi[3])
+{
+    meso_file* f = NULL;
+    meso_error err;
+    CHECK_MSG(meso_file_open_path(path, NULL, &f, &err) == MESO_OK, "%s", err.message);
+    uint32_t n = 0;
+    CHECK(meso_file_objects(f, rec, 1, &n, &err) == MESO_OK && n == 1);
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = rec->bbox_min[k];
+        hi[k] = rec->bbox_max[k];
+    }
+    return f;
+}
+
 /* Looking at the box [lo, hi]'s centre from direction `dir`, dist_scale
  * times the distance at which its bounding sphere fills a view of fovy;
  * near plane at least zn_frac of that distance. */

@@ -185,12 +185,9 @@ static loaded load(ctx* c, const char* path)
 {
     loaded l;
     memset(&l, 0, sizeof(l));
-    meso_file* f = NULL;
     meso_error err;
-    CHECK_MSG(meso_file_open_path(path, NULL, &f, &err) == MESO_OK, "%s", err.message);
     meso_object_record rec;
-    uint32_t n = 0;
-    CHECK(meso_file_objects(f, &rec, 1, &n, &err) == MESO_OK && n == 1);
+    meso_file* f = open_single_object(path, &rec, l.lo, l.hi);
     l.kind = (meso_object_kind)rec.kind;
     CHECK_MSG(meso_rt_load_object(c->rt, f, rec.id, &l.obj) == MESO_OK, "%s", c->log.message);
     CHECK_MSG(meso_rt_load_object(c->hooked, f, rec.id, &l.obj_hooked) == MESO_OK, "%s", c->log.message);
@@ -200,10 +197,6 @@ static loaded load(ctx* c, const char* path)
         CHECK(meso_ref_frusta_load(f, rec.id, &l.frusta, &err) == MESO_OK);
     if (l.kind == MESO_OBJECT_CELLS)
         CHECK(meso_ref_cells_load(f, rec.id, &l.cells, &err) == MESO_OK);
-    for (int k = 0; k < 3; ++k) {
-        l.lo[k] = rec.bbox_min[k];
-        l.hi[k] = rec.bbox_max[k];
-    }
     meso_file_close(f);
     return l;
 }
