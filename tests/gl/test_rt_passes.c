@@ -10,7 +10,8 @@
  *  - depth: the depth pass's and the G-buffer pass's depth buffers equal
  *    the forward pass's bit for bit (same fragments, same gl_FragDepth), and
  *    the depth pass leaves the colour attachments as cleared and counts the
- *    same ray-cast fragments and hits as forward (stats, OpenGL 4.3);
+ *    same ray-cast fragments and hits as forward (stats, OpenGL 4.3); under
+ *    reversed-Z too, over the pixels standard depth covers;
  *  - albedo: where hit, rgb = desc->albedo exactly (cells: the constant
  *    colour map's sRGB texel decoded with the sRGB formula, within 2e-3);
  *    a = 1 for meshes and cells, in [0.25, 1] for shells and frusta;
@@ -433,6 +434,41 @@ static void run_case(ctx* c, const loaded* l, const pcase* pc, const camera* cam
            pc->name, covered, (unsigned long long)fwd_stats.hits, max_albedo, max_recompute, compared, med, p90, hook_err[0], hook_err[1], hook_err[2]);
 }
 
+/* Reversed-Z (MESO_DEPTH_REVERSED, GL_GREATER, cleared to 0; proj with its
+ * z row negated): the depth and G-buffer passes still write the forward
+ * pass's depth buffer bit for bit, over the same pixels as standard depth. */
+static void reversed_check(ctx* c, const loaded* l, const pcase* pc, const camera* cam)
+{
+    meso_rt_draw_desc d = pc->d;
+    camera_matrices(cam, d.view, d.proj);
+    CHECK(draw(c, c->rt, l->obj, &d) == MESO_OK); /* standard depth, forward: the coverage */
+    memcpy(c->fwd_depth, c->depth, sizeof(float) * (size_t)W * H);
+    for (int col = 0; col < 4; ++col)
+        d.proj[4 * col + 2] = -d.proj[4 * col + 2];
+    d.depth = MESO_DEPTH_REVERSED;
+    d.depth_func = GL_GREATER;
+    const size_t n = (size_t)W * H;
+    float* first = malloc(sizeof(float) * n);
+    long covered = 0;
+    for (int p = 0; p < MESO_PASS_COUNT; ++p) {
+        const float zero = 0.0f;
+        c->gl.ClearBufferfv(GL_DEPTH, 0, &zero);
+        d.pass = (meso_rt_pass)p;
+        CHECK_MSG(meso_rt_draw(c->rt, l->obj, &d) == MESO_OK, "%s", c->log.message);
+        c->gl.ReadPixels(0, 0, W, H, GL_DEPTH_COMPONENT, GL_FLOAT, c->depth);
+        if (p == 0) {
+            memcpy(first, c->depth, sizeof(float) * n);
+            for (size_t i = 0; i < n; ++i) {
+                covered += c->depth[i] > 0.0f;
+                CHECK_MSG((c->depth[i] > 0.0f) == (c->fwd_depth[i] < 1.0f), "%s reversed: coverage differs", pc->name);
+            }
+        }
+        CHECK_MSG(memcmp(c->depth, first, sizeof(float) * n) == 0, "%s reversed: pass %d depth differs", pc->name, p);
+    }
+    printf("%-18s reversed-Z: %ld px, depth and G-buffer depth bit-equal to forward\n", pc->name, covered);
+    free(first);
+}
+
 static double srgb_decode(double c)
 {
     return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
@@ -464,6 +500,7 @@ static void test_kinds(ctx* c)
                           .ref_normals = t != MESO_SHELL_SEGMENT_ONLY && t != MESO_SHELL_TETRA,
                           .recompute = t != MESO_SHELL_SEGMENT_ONLY},
                  &cam);
+    reversed_check(c, &l, &(pcase){.name = "shell smooth", .kind = MESO_OBJECT_SHELL}, &cam);
     run_case(c, &l,
              &(pcase){.name = "shell mirrored", .kind = MESO_OBJECT_SHELL, .ref_normals = 1, .recompute = 1,
                       .d = {.albedo = {0.2f, 0.5f, 0.9f}}, .model = {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
@@ -481,6 +518,7 @@ static void test_kinds(ctx* c)
     cam = view_box(&l, dir);
     run_case(c, &l, &(pcase){.name = "frusta relief", .kind = MESO_OBJECT_FRUSTA, .ref_normals = 1, .recompute = 1},
              &cam);
+    reversed_check(c, &l, &(pcase){.name = "frusta relief", .kind = MESO_OBJECT_FRUSTA}, &cam);
     run_case(c, &l,
              &(pcase){.name = "frusta mirrored", .kind = MESO_OBJECT_FRUSTA, .ref_normals = 1, .recompute = 1,
                       .model = {-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}},
@@ -507,6 +545,7 @@ static void test_kinds(ctx* c)
     for (int k = 0; k < 3; ++k)
         cells.albedo[k] = srgb_decode(texel[k] / 255.0);
     run_case(c, &l, &cells, &cam);
+    reversed_check(c, &l, &cells, &cam);
     cells.name = "cells reflect";
     cells.recompute = 0; /* forward adds the reflections; the G-buffer holds the first hit */
     cells.d.cells = (meso_rt_cells_draw){.mode = MESO_CELLS_REFLECT, .bounces = 2};
