@@ -372,8 +372,9 @@ typedef struct meso_rt_draw_desc {
  * MESO_STATE_RESTORE the host's function, else GL_LESS (GL_GREATER
  * reversed); they fill no stats (supported = 0). Meshes are rasterised with
  * the host's face culling as it is. Shells, frusta and cells need the
- * inverse of proj · view · model: a singular one is refused with
- * MESO_ERR_INVALID_ARG (logged).
+ * inverse of proj · view · model (meshes too in MESO_PASS_GBUFFER and with a
+ * shading hook): a singular one is refused with MESO_ERR_INVALID_ARG
+ * (logged).
  *
  * GL state. A draw changes: the program, vertex array, active texture,
  * textures on units 0-4 (0-7 for slices), depth test (enabled) and mask

@@ -103,7 +103,10 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
 meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d)
 {
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, 0, &ds);
+    /* The G-buffer's normal faces the viewer and the hook takes the view
+     * direction and point: both unproject the fragment (mesh_frag.glsl). */
+    const int unproject = d->pass == MESO_PASS_GBUFFER || (d->pass == MESO_PASS_FORWARD && rt->hook);
+    meso_result r = mesoi_draw_prepare(rt, d, unproject, &ds);
     if (r != MESO_OK)
         return r;
     ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
