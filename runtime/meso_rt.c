@@ -119,6 +119,20 @@ static void query_features(meso_rt* rt)
                    (rt->gles || gl->GetBufferSubData);
 }
 
+/* The host's shading hook alone, called once with its documented
+ * signature: a broken snippet is reported here, named, rather than inside
+ * some kind's shader at its first draw. */
+static int hook_compiles(meso_rt* rt)
+{
+    const char* src[4] = {mesoi_glsl_prelude(rt, 0), "#line 1\n", rt->hook,
+                          "\nout vec4 meso_check;\nvoid main() { meso_check = vec4(meso_shade(vec3(0.5), "
+                          "vec3(0.0, 0.0, 1.0), vec3(0.0), vec3(0.0, 0.0, 1.0)), 1.0); }\n"};
+    const GLuint s = mesoi_compile(rt, GL_FRAGMENT_SHADER, src, 4, "shading hook (meso_rt_desc.shading_hook)");
+    if (s)
+        rt->gl.DeleteShader(s);
+    return s != 0;
+}
+
 meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
 {
     if (!out)
@@ -179,7 +193,21 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
         return MESO_ERR_GL;
     }
     query_features(rt);
-    meso_result pr = mesoi_mesh_program_create(rt);
+    rt->hook_binding = desc->shading_hook_binding;
+    if (desc->shading_hook) {
+        const size_t len = strlen(desc->shading_hook);
+        rt->hook = mesoi_rt_alloc(rt, len + 1);
+        if (!rt->hook) {
+            meso_rt_destroy(rt);
+            return MESO_ERR_OUT_OF_MEMORY;
+        }
+        memcpy(rt->hook, desc->shading_hook, len + 1);
+        if (!hook_compiles(rt)) {
+            meso_rt_destroy(rt);
+            return MESO_ERR_GL;
+        }
+    }
+    meso_result pr = mesoi_mesh_prepare(rt, MESO_PASS_FORWARD);
     if (pr != MESO_OK) {
         meso_rt_destroy(rt);
         return pr;
@@ -212,7 +240,9 @@ void meso_rt_destroy(meso_rt* rt)
     mesoi_frusta_programs_destroy(rt);
     mesoi_cells_programs_destroy(rt);
     mesoi_shell_programs_destroy(rt);
-    mesoi_program_delete(rt, &rt->mesh_program);
+    for (int pass = 0; pass < MESO_PASS_COUNT; ++pass)
+        mesoi_program_delete(rt, &rt->mesh_programs[pass]);
+    mesoi_rt_free(rt, rt->hook);
     meso_allocator a = rt->alloc;
     a.free_fn(rt, a.user);
 }
@@ -229,14 +259,20 @@ int meso_rt_gl_is_es(const meso_rt* rt)
 
 meso_result meso_rt_prepare(meso_rt* rt, uint32_t flags)
 {
-    if (!rt || (flags & ~MESO_PREPARE_STATS))
+    if (!rt || (flags & ~(MESO_PREPARE_STATS | MESO_PREPARE_ALL_PASSES)))
         return MESO_ERR_INVALID_ARG;
-    for (int stats = 0; stats <= ((flags & MESO_PREPARE_STATS) && rt->stats_ok ? 1 : 0); ++stats) {
-        meso_result r = mesoi_shell_prepare(rt, stats);
-        if (r == MESO_OK)
-            r = mesoi_frusta_prepare(rt, stats);
-        if (r == MESO_OK)
-            r = mesoi_cells_prepare(rt, stats);
+    const int passes = flags & MESO_PREPARE_ALL_PASSES ? MESO_PASS_COUNT : 1;
+    for (int pass = 0; pass < passes; ++pass) {
+        const meso_rt_pass p = (meso_rt_pass)pass;
+        meso_result r = mesoi_mesh_prepare(rt, p);
+        for (int stats = 0; r == MESO_OK && stats <= ((flags & MESO_PREPARE_STATS) && rt->stats_ok ? 1 : 0);
+             ++stats) {
+            r = mesoi_shell_prepare(rt, stats, p);
+            if (r == MESO_OK)
+                r = mesoi_frusta_prepare(rt, stats, p);
+            if (r == MESO_OK)
+                r = mesoi_cells_prepare(rt, stats, p);
+        }
         if (r != MESO_OK)
             return r;
     }

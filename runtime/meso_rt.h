@@ -92,6 +92,42 @@ typedef struct meso_rt_desc {
                              glGetError; failed uploads are still found (from the texture or buffer
                              GL made) and refused [0] */
     int prepare;          /* 1: meso_rt_prepare(rt, 0) inside create, so no draw compiles a shader [0] */
+    /* Shading hook: GLSL 3.30 source (copied at create) that defines
+     *
+     *     vec3 meso_shade(vec3 albedo, vec3 n_world, vec3 p_world, vec3 v_world);
+     *
+     * Every MESO_PASS_FORWARD fragment shader then returns its value as the
+     * pixel's colour (a = 1) in place of the built-in Lambert term. Arguments,
+     * all world space: albedo = the material colour times the built-in
+     * occlusion factor (what MESO_PASS_GBUFFER writes as rgb * a); n_world the
+     * unit shading normal, facing the viewer (the G-buffer's normal); p_world
+     * the hit point; v_world the unit direction from the hit towards the eye.
+     * Called once per fragment that hits; for cells in REFLECT / REFRACT modes
+     * at every traced hit (the environment terms are mixed in after). Not
+     * applied to MESO_SHELL_SEGMENT_ONLY (a diagnostic colour) nor to the
+     * two-pass slice variants (their colour is the built-in).
+     * The snippet is compiled after the "#version 330 core" line, the
+     * runtime's #defines (and, for some kinds, its u_mvp / u_inv_mvp uniforms)
+     * and a "#line 1", so compile errors give the snippet's own line numbers;
+     * all other runtime code follows it. It may rely on GLSL 3.30 core
+     * built-ins and its own declarations only. The runtime's shaders define
+     * many unprefixed names (shade, solid, occlusion, ...): prefix every global
+     * name of the snippet but meso_shade with `hook_`.
+     * Data from the host: constants in the snippet, or one uniform block it
+     * declares as `layout(std140) uniform MesoHook { ... };`, which every
+     * program is linked to uniform buffer binding point shading_hook_binding:
+     * the host binds its buffer there (glBindBufferBase(GL_UNIFORM_BUFFER,
+     * binding, buf)) before drawing; libmeso never touches that binding. Plain
+     * `uniform` variables cannot be set through libmeso.
+     * Errors: a snippet that does not compile alone (checked at create with a
+     * one-line shader calling meso_shade) or clashes with the mesh shader
+     * (built at create) fails meso_rt_create with MESO_ERR_GL; one that
+     * clashes with another kind's shader fails that kind's first draw or
+     * meso_rt_prepare with MESO_ERR_GL. Each is logged as
+     * SHADER_COMPILE_FAILED naming "shading hook". NULL: the built-in
+     * shading [NULL] */
+    const char* shading_hook;
+    uint32_t shading_hook_binding; /* uniform buffer binding point of the hook's MesoHook block [0] */
 } meso_rt_desc;
 
 typedef struct meso_rt meso_rt;
@@ -126,10 +162,13 @@ MESO_API int meso_rt_gl_is_es(const meso_rt* rt);
  * so that no draw compiles one (a first-draw hitch of tens of milliseconds
  * per program on a software rasteriser). Flags: MESO_PREPARE_STATS also the
  * work-counting variants (OpenGL 4.3, or ES with fragment shader storage;
- * elsewhere ignored). Programs already built are
+ * elsewhere ignored); MESO_PREPARE_ALL_PASSES also the depth and G-buffer
+ * variants (meso_rt_pass). Programs already built are
  * kept. MESO_ERR_GL (logged) when one fails to build. The GL state is left
  * as it was. */
 #define MESO_PREPARE_STATS 1u
+#define MESO_PREPARE_ALL_PASSES 2u /* also the MESO_PASS_DEPTH and MESO_PASS_GBUFFER variants of every
+                                      kind (without it: MESO_PASS_FORWARD only) */
 MESO_API meso_result meso_rt_prepare(meso_rt* rt, uint32_t flags);
 
 /* >>objects --------------------------------------------------------------- */
@@ -272,6 +311,36 @@ typedef enum meso_clip_depth {
                                                 ARB_clip_control; ES: EXT_clip_control) */
 } meso_clip_depth;
 
+/* What a draw writes (meso_rt_draw_desc.pass). Every pass writes the same
+ * fragments with the same exact depth (tests/gl/test_rt_passes.c checks
+ * the depth buffers are equal bit for bit); each kind compiles one program
+ * variant per pass (lazily, or in meso_rt_prepare with
+ * MESO_PREPARE_ALL_PASSES).
+ *
+ * Built-in shading, which the G-buffer lets a deferred renderer redo:
+ * colour = albedo.rgb · albedo.a · (0.15 + 0.85 · max(0, n · l)), n the
+ * G-buffer normal, l the unit world-space light_dir; meshes are two-sided:
+ * |n · l| in place of max(0, n · l). */
+typedef enum meso_rt_pass {
+    MESO_PASS_FORWARD = 0, /* shaded colour into draw buffer 0 (the built-in Lambert or the shading hook) */
+    MESO_PASS_DEPTH,       /* depth only (shadow maps, depth pre-passes): colour writes are masked for the
+                              draw (glColorMask; put back under MESO_STATE_RESTORE, left masked under
+                              MESO_STATE_HOST_OWNS) and the fragment shaders compute no normal and no
+                              shading; cells trace only the first hit */
+    MESO_PASS_GBUFFER,     /* into the host's attachments, which it binds with glDrawBuffers before the
+                              draw: location 0 albedo: rgb the linear material colour (desc->albedo; for
+                              cells the colour map's texel at the hit), a the built-in occlusion factor
+                              (shells and relief frusta 0.25 + 0.75 w, w the hit's height in the shell or
+                              relief layer; 1 for meshes, balls, smooth frusta and cells); location 1 the
+                              world-space unit shading normal, facing the viewer, encoded rgb = n · 0.5 +
+                              0.5 (a = 1) for UNORM and float attachments alike; and the exact depth.
+                              Cells in REFLECT / REFRACT modes write their first hit's material and normal
+                              (the reflected and refracted light is view-dependent: forward only).
+                              MESO_SHELL_SEGMENT_ONLY writes desc->albedo (a = 1) and the normal of the
+                              hull face its depth lies on */
+    MESO_PASS_COUNT
+} meso_rt_pass;
+
 /* One draw. Zero-initialise it (`meso_rt_draw_desc d = {0};`) and set what
  * differs from the defaults; designated initialisers read as
  * `{.view = ..., .proj = ..., .shell = {.technique = MESO_SHELL_CURVED}}`. */
@@ -294,6 +363,9 @@ typedef struct meso_rt_draw_desc {
                                     0: the host's, left as it is [0] */
     int32_t viewport[4];         /* the host's viewport (x, y, width, height), which the ray casters
                                     need; all zero: queried from GL (a glGet per draw) [0] */
+    meso_rt_pass pass;           /* what the draw writes; MESO_SHELL_SLICES supports DEPTH and GBUFFER with
+                                    MESO_SLICE_NONE only (the two-pass variants are refused with
+                                    MESO_ERR_UNSUPPORTED, logged) [MESO_PASS_FORWARD] */
     meso_rt_shell_draw shell;   /* read for shells only */
     meso_rt_frusta_draw frusta; /* read for frusta only */
     meso_rt_cells_draw cells;   /* read for cells only */
@@ -302,7 +374,8 @@ typedef struct meso_rt_draw_desc {
 /* Draw an object into the host's currently bound framebuffer and viewport,
  * with depth testing and depth writes under the host's depth function (or
  * desc->depth_func), so it sorts against the host's own geometry under
- * either depth convention. Shells and frusta write the exact depth of the
+ * either depth convention. desc->pass chooses what is written besides the
+ * depth: shaded colour, nothing, or the G-buffer (meso_rt_pass). Shells and frusta write the exact depth of the
  * ray's hit, and render correctly with the camera inside the shell or a
  * frustum (they rasterise back faces of their bounding geometry and see the
  * inner wall). Cells write the exact depth of the first hit; their rays
@@ -318,12 +391,14 @@ typedef struct meso_rt_draw_desc {
  * MESO_STATE_RESTORE the host's function, else GL_LESS (GL_GREATER
  * reversed); they fill no stats (supported = 0). Meshes are rasterised with
  * the host's face culling as it is. Shells, frusta and cells need the
- * inverse of proj · view · model: a singular one is refused with
- * MESO_ERR_INVALID_ARG (logged).
+ * inverse of proj · view · model (meshes too in MESO_PASS_GBUFFER and with a
+ * shading hook): a singular one is refused with MESO_ERR_INVALID_ARG
+ * (logged).
  *
  * GL state. A draw changes: the program, vertex array, active texture,
  * textures on units 0-4 (0-7 for slices), depth test (enabled) and mask
- * (written), the depth function only with desc->depth_func, culling (ray
+ * (written), the colour mask in MESO_PASS_DEPTH (all masked), the depth
+ * function only with desc->depth_func, culling (ray
  * casters: enabled, front faces culled, counter-clockwise front faces;
  * meshes: untouched), where stats are counted (OpenGL 4.3, ES 3.2 with
  * fragment shader storage) the shader storage buffer binding; for two-pass slices also the draw framebuffer binding, the

@@ -215,32 +215,39 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
 
 /* >>drawing ---------------------------------------------------------------- */
 
-static const mesoi_program* cells_program(meso_rt* rt, int stats)
+static const mesoi_program* cells_program(meso_rt* rt, int stats, meso_rt_pass pass)
 {
-    mesoi_program* p = &rt->cells_programs[stats];
+    mesoi_program* p = &rt->cells_programs[pass][stats];
     if (p->id)
         return p;
     char head[512];
     snprintf(head, sizeof(head), "%s#define MESO_INSTANCE_MODEL 1\n", mesoi_glsl_prelude(rt, stats));
     const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_cells_vert};
-    const char* fs[4] = {head, mesoi_glsl_instance, mesoi_glsl_raycast_common, mesoi_glsl_cells_frag};
+    const char* pre[2] = {mesoi_glsl_instance, mesoi_glsl_raycast_common};
+    const char* fs[10] = {head};
+    char pass_text[64], fname[96];
+    int n = mesoi_frag_sources(rt, pass, fs, pre, 2, pass_text);
+    fs[n++] = mesoi_glsl_cells_frag;
     static const char* const samplers[UNIT_COUNT + 1] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env",
                                                          "u_instances"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "cells_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 4, "cells_frag.glsl"), "cells", samplers,
-                       UNIT_COUNT + 1);
+    static const char* const names[MESO_PASS_COUNT] = {"cells", "cells depth", "cells gbuffer"};
+    const char* fname_used = mesoi_frag_name(rt, pass, "cells_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "cells_vert.glsl"), fsh, names[pass],
+                       samplers, UNIT_COUNT + 1);
     return p->id ? p : NULL;
 }
 
-meso_result mesoi_cells_prepare(meso_rt* rt, int stats)
+meso_result mesoi_cells_prepare(meso_rt* rt, int stats, meso_rt_pass pass)
 {
-    return cells_program(rt, stats) ? MESO_OK : MESO_ERR_GL;
+    return cells_program(rt, stats, pass) ? MESO_OK : MESO_ERR_GL;
 }
 
 void mesoi_cells_programs_destroy(meso_rt* rt)
 {
-    for (int st = 0; st < 2; ++st)
-        mesoi_program_delete(rt, &rt->cells_programs[st]);
+    for (int pass = 0; pass < MESO_PASS_COUNT; ++pass)
+        for (int st = 0; st < 2; ++st)
+            mesoi_program_delete(rt, &rt->cells_programs[pass][st]);
 }
 
 /* 1 when the near plane's rectangle (its bounding box in object space)
@@ -277,17 +284,13 @@ static void env_rotation(const mesoi_draw* ds, float rot[9])
             rot[3 * col + row] = (float)(ds->model[4 * col + row] / ds->model_scale);
 }
 
-/* An instance's rotation (texels 10-12) and whether its rays start at the
- * near plane (ORed into *user). */
+/* Whether an instance's rays start at the near plane (ORed into *user);
+ * its rotation is its model's (texels 10-13) over the scale
+ * (instance.glsl). */
 static meso_result instance_cells(meso_rt* rt, mesoi_object* o, const mesoi_draw* ds, const meso_rt_draw_desc* d,
                                   const meso_rt_instance* in, uint32_t index, float* texels, void* user)
 {
-    (void)rt, (void)d, (void)in, (void)index;
-    float rot[9];
-    env_rotation(ds, rot);
-    for (int col = 0; col < 3; ++col)
-        for (int row = 0; row < 3; ++row)
-            texels[40 + 4 * col + row] = rot[3 * col + row];
+    (void)rt, (void)d, (void)in, (void)index, (void)texels;
     *(int*)user |= near_plane_in_grid(ds, o->cells);
     return MESO_OK;
 }
@@ -311,7 +314,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     meso_result r = mesoi_draw_prepare(rt, d, 1, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
-    const mesoi_program* prog = cells_program(rt, ds.stats);
+    const mesoi_program* prog = cells_program(rt, ds.stats, ds.pass);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;

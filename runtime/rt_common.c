@@ -9,7 +9,8 @@
  * of every kind, goes through mesoi_draw_begin / mesoi_draw_end. Under
  * MESO_STATE_RESTORE they save and restore the program, vertex array,
  * active texture and the bindings of the units the kind uses, depth
- * test/func/mask, culling and the shader storage binding of the counters;
+ * test/func/mask, culling, the shader storage binding of the counters and,
+ * in the depth pass, the colour mask;
  * under MESO_STATE_HOST_OWNS they query nothing and restore nothing
  * (meso_rt_draw_list, rt_instances.c, saves and restores once around its
  * items and draws them under MESO_STATE_HOST_OWNS). The
@@ -19,6 +20,7 @@
  */
 #include "mat4_inverse.h"
 #include "rt_internal.h"
+#include "shaders_embedded.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -335,6 +337,29 @@ GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name)
     return built(rt, p, 1, name) ? p : 0;
 }
 
+int mesoi_frag_sources(const meso_rt* rt, meso_rt_pass pass, const char** src, const char* const* pre,
+                       int pre_count, char pass_text[64])
+{
+    const int hook = pass == MESO_PASS_FORWARD && rt->hook;
+    snprintf(pass_text, 64, "#define MESO_PASS %d\n%s", (int)pass, hook ? "#define MESO_HOOK 1\n#line 1\n" : "");
+    int n = 1;
+    src[n++] = pass_text;
+    src[n++] = hook ? rt->hook : "";
+    src[n++] = hook ? "\n" : ""; /* a snippet without a final newline */
+    for (int i = 0; i < pre_count; ++i)
+        src[n++] = pre[i];
+    src[n++] = mesoi_glsl_pass_out;
+    return n;
+}
+
+const char* mesoi_frag_name(const meso_rt* rt, meso_rt_pass pass, const char* file, char buf[96])
+{
+    if (pass != MESO_PASS_FORWARD || !rt->hook)
+        return file;
+    snprintf(buf, 96, "%s + shading hook (meso_rt_desc.shading_hook)", file);
+    return buf;
+}
+
 static const char* const uniform_names[MESOI_U_COUNT] = {
 #define MESOI_X_NAME(name) "u_" #name,
     MESOI_UNIFORMS(MESOI_X_NAME)
@@ -351,6 +376,10 @@ GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, c
         return 0;
     for (int u = 0; u < MESOI_U_COUNT; ++u)
         p->loc[u] = gl->GetUniformLocation(p->id, uniform_names[u]);
+    /* The shading hook's data (meso_rt_desc.shading_hook_binding). */
+    const GLuint block = rt->hook ? gl->GetUniformBlockIndex(p->id, "MesoHook") : GL_INVALID_INDEX;
+    if (block != GL_INVALID_INDEX)
+        gl->UniformBlockBinding(p->id, block, rt->hook_binding);
     if (sampler_count > 0) { /* units never change: set once */
         GLint prev = 0;
         gl->GetIntegerv(GL_CURRENT_PROGRAM, &prev);
@@ -369,8 +398,9 @@ int mesoi_program_owned(const meso_rt* rt, GLuint id)
     const struct {
         const mesoi_program* p;
         size_t n;
-    } lists[] = {{&rt->mesh_program, 1}, MESOI_PROGRAMS(rt->shell_programs), MESOI_PROGRAMS(rt->frusta_programs),
-                 MESOI_PROGRAMS(rt->cells_programs), MESOI_PROGRAMS(rt->slice_programs)};
+    } lists[] = {MESOI_PROGRAMS(rt->mesh_programs), MESOI_PROGRAMS(rt->shell_programs),
+                 MESOI_PROGRAMS(rt->frusta_programs), MESOI_PROGRAMS(rt->cells_programs),
+                 MESOI_PROGRAMS(rt->slice_programs)};
 #undef MESOI_PROGRAMS
     for (size_t l = 0; l < sizeof(lists) / sizeof(lists[0]); ++l)
         for (size_t i = 0; i < lists[l].n; ++i)
@@ -481,10 +511,10 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
     if ((unsigned)d->depth > MESO_DEPTH_REVERSED || (unsigned)d->clip_depth > MESO_CLIP_DEPTH_ZERO_TO_ONE ||
-        d->viewport[2] < 0 || d->viewport[3] < 0) {
+        d->viewport[2] < 0 || d->viewport[3] < 0 || (unsigned)d->pass >= MESO_PASS_COUNT) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                  "meso_rt_draw: depth %d, clip_depth %d or viewport %dx%d out of range", (int)d->depth,
-                  (int)d->clip_depth, (int)d->viewport[2], (int)d->viewport[3]);
+                  "meso_rt_draw: depth %d, clip_depth %d, viewport %dx%d or pass %d out of range", (int)d->depth,
+                  (int)d->clip_depth, (int)d->viewport[2], (int)d->viewport[3], (int)d->pass);
         return MESO_ERR_INVALID_ARG;
     }
     double view[16], proj[16];
@@ -526,6 +556,7 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     if (d->albedo[0] != 0.0f || d->albedo[1] != 0.0f || d->albedo[2] != 0.0f)
         memcpy(out->albedo, d->albedo, sizeof(out->albedo));
     out->stats = d->stats && rt->stats_ok;
+    out->pass = d->pass;
     return MESO_OK;
 }
 
@@ -569,6 +600,7 @@ void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
     }
     if (s->instanced)
         gl->Uniform1i(p->loc[MESOI_U_instance_base], 0);
+    gl->UniformMatrix4fv(p->loc[MESOI_U_model], 1, GL_FALSE, s->model); /* pass_out.glsl: world space */
 }
 
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,
@@ -588,7 +620,11 @@ void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, 
         s->prev_cull = gl->IsEnabled(GL_CULL_FACE);
         if (s->stats)
             gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &s->prev_ssbo);
+        if (s->pass == MESO_PASS_DEPTH)
+            gl->GetBooleanv(GL_COLOR_WRITEMASK, s->prev_color_mask);
     }
+    if (s->pass == MESO_PASS_DEPTH) /* the depth shaders have no colour output: nothing undefined lands */
+        gl->ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     if (rt->check_gl_errors)
         while (gl->GetError() != GL_NO_ERROR) {
         }
@@ -665,6 +701,9 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
         gl->DepthMask(s->prev_mask ? GL_TRUE : GL_FALSE);
         gl->CullFace((GLenum)s->prev_cull_mode);
         gl->FrontFace((GLenum)s->prev_front);
+        if (s->pass == MESO_PASS_DEPTH)
+            gl->ColorMask(s->prev_color_mask[0], s->prev_color_mask[1], s->prev_color_mask[2],
+                          s->prev_color_mask[3]);
         if (!s->prev_test)
             gl->Disable(GL_DEPTH_TEST);
         if (s->prev_cull) /* the kind may have changed it after begin */

@@ -707,9 +707,9 @@ meso_result meso_rt_frusta_rest_pose(const meso_rt* rt, meso_rt_object h, float*
 /* >>drawing ---------------------------------------------------------------- */
 
 /* With or without the work counters (atomics cost time). */
-static const mesoi_program* frusta_program(meso_rt* rt, int stats)
+static const mesoi_program* frusta_program(meso_rt* rt, int stats, meso_rt_pass pass)
 {
-    mesoi_program* p = &rt->frusta_programs[stats];
+    mesoi_program* p = &rt->frusta_programs[pass][stats];
     if (p->id)
         return p;
     char head[512];
@@ -717,24 +717,30 @@ static const mesoi_program* frusta_program(meso_rt* rt, int stats)
              mesoi_glsl_prelude(rt, stats), TEXELS, CORNER0);
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_frusta_common,
                          mesoi_glsl_frusta_vert};
-    const char* fs[5] = {head, mesoi_glsl_instance, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common,
-                         mesoi_glsl_frusta_frag};
+    const char* pre[3] = {mesoi_glsl_instance, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common};
+    const char* fs[10] = {head};
+    char pass_text[64], fname[96];
+    int n = mesoi_frag_sources(rt, pass, fs, pre, 3, pass_text);
+    fs[n++] = mesoi_glsl_frusta_frag;
     static const char* const samplers[UNIT_COUNT + 1] = {"u_prims", "u_relief", "u_instances"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "frusta_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 5, "frusta_frag.glsl"), "frusta", samplers,
-                       UNIT_COUNT + 1);
+    static const char* const names[MESO_PASS_COUNT] = {"frusta", "frusta depth", "frusta gbuffer"};
+    const char* fname_used = mesoi_frag_name(rt, pass, "frusta_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "frusta_vert.glsl"), fsh, names[pass],
+                       samplers, UNIT_COUNT + 1);
     return p->id ? p : NULL;
 }
 
-meso_result mesoi_frusta_prepare(meso_rt* rt, int stats)
+meso_result mesoi_frusta_prepare(meso_rt* rt, int stats, meso_rt_pass pass)
 {
-    return frusta_program(rt, stats) ? MESO_OK : MESO_ERR_GL;
+    return frusta_program(rt, stats, pass) ? MESO_OK : MESO_ERR_GL;
 }
 
 void mesoi_frusta_programs_destroy(meso_rt* rt)
 {
-    for (int st = 0; st < 2; ++st)
-        mesoi_program_delete(rt, &rt->frusta_programs[st]);
+    for (int pass = 0; pass < MESO_PASS_COUNT; ++pass)
+        for (int st = 0; st < 2; ++st)
+            mesoi_program_delete(rt, &rt->frusta_programs[pass][st]);
 }
 
 /* An instance's pose slot: the first primitive of its texels (texel 9.x). */
@@ -762,7 +768,7 @@ meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     meso_result r = mesoi_draw_prepare(rt, d, 1, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
-    const mesoi_program* prog = frusta_program(rt, ds.stats);
+    const mesoi_program* prog = frusta_program(rt, ds.stats, ds.pass);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;

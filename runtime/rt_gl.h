@@ -84,7 +84,11 @@
     X(PFNGLGETTEXLEVELPARAMETERIVPROC, GetTexLevelParameteriv)               \
     X(PFNGLGETBUFFERPARAMETERIVPROC, GetBufferParameteriv)                   \
     X(PFNGLDRAWARRAYSINSTANCEDPROC, DrawArraysInstanced)                     \
-    X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced)
+    X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced)                   \
+    X(PFNGLCOLORMASKPROC, ColorMask)                                         \
+    X(PFNGLGETBOOLEANVPROC, GetBooleanv)                                     \
+    X(PFNGLGETUNIFORMBLOCKINDEXPROC, GetUniformBlockIndex)                   \
+    X(PFNGLUNIFORMBLOCKBINDINGPROC, UniformBlockBinding)
 
 /* Entry points used only when the context has them (the stats counters of
  * OpenGL 4.3 / ES 3.1; glGetBufferSubData, which OpenGL ES lacks: ES maps

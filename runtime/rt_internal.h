@@ -63,11 +63,17 @@ struct meso_rt {
     int stats_ok; /* fragment shaders can count into a shader storage buffer (GL 4.3, or ES with fragment SSBOs) */
     meso_rt_state_policy state_policy;
     int check_gl_errors;
-    mesoi_program mesh_program;
-    mesoi_program shell_programs[2][MESO_SHELL_TECHNIQUE_COUNT]; /* [stats][technique], built on first use */
-    mesoi_program frusta_programs[2];                            /* [stats], built on first use */
-    mesoi_program cells_programs[2];                             /* [stats], built on first use */
-    mesoi_program slice_programs[5]; /* MESO_SHELL_SLICES, per pass (shell_slices_frag.glsl SLICE_PASS) */
+    /* Programs per meso_rt_pass (shaders/pass_out.glsl MESO_PASS), built on
+     * first use or in meso_rt_prepare. */
+    mesoi_program mesh_programs[MESO_PASS_COUNT];
+    mesoi_program shell_programs[MESO_PASS_COUNT][2][MESO_SHELL_TECHNIQUE_COUNT]; /* [pass][stats][technique] */
+    mesoi_program frusta_programs[MESO_PASS_COUNT][2];                            /* [pass][stats] */
+    mesoi_program cells_programs[MESO_PASS_COUNT][2];                             /* [pass][stats] */
+    /* MESO_SHELL_SLICES: [pass][shell_slices_frag.glsl SLICE_PASS]; passes
+     * other than forward have SLICE_PASS 0 (MESO_SLICE_NONE) only. */
+    mesoi_program slice_programs[MESO_PASS_COUNT][5];
+    char* hook;            /* meso_rt_desc.shading_hook, copied; NULL: built-in shading */
+    GLuint hook_binding;   /* meso_rt_desc.shading_hook_binding */
     GLuint slice_fbo[2];      /* the two-pass slice variants' offscreen target (rt_slices.c) */
     GLuint slice_tex[5];
     GLint slice_size[2];      /* its width and height: the viewport's */
@@ -117,10 +123,10 @@ void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count);
 void mesoi_shell_programs_destroy(meso_rt* rt);
-/* Build every shell program (stats: the counting variants; without, the
- * slice passes too): meso_rt_prepare. */
-meso_result mesoi_shell_prepare(meso_rt* rt, int stats);
-meso_result mesoi_slices_prepare(meso_rt* rt); /* rt_slices.c */
+/* Build every shell program of `pass` (stats: the counting variants;
+ * without, the slice programs of the pass too): meso_rt_prepare. */
+meso_result mesoi_shell_prepare(meso_rt* rt, int stats, meso_rt_pass pass);
+meso_result mesoi_slices_prepare(meso_rt* rt, meso_rt_pass pass); /* rt_slices.c */
 
 /* rt_frusta.c */
 meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
@@ -128,7 +134,7 @@ void mesoi_frusta_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                               uint32_t count);
 void mesoi_frusta_programs_destroy(meso_rt* rt);
-meso_result mesoi_frusta_prepare(meso_rt* rt, int stats);
+meso_result mesoi_frusta_prepare(meso_rt* rt, int stats, meso_rt_pass pass);
 /* meso_rt_frusta_set_pose without the upload: the pose rebuild and the
  * bounding geometry on the host copy (tests/bench time the two parts). */
 meso_result mesoi_frusta_pose_host(meso_rt* rt, meso_rt_object obj, const float* node_positions, uint32_t node_count);
@@ -139,7 +145,7 @@ void mesoi_cells_release(meso_rt* rt, mesoi_object* o);
 meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count);
 void mesoi_cells_programs_destroy(meso_rt* rt);
-meso_result mesoi_cells_prepare(meso_rt* rt, int stats);
+meso_result mesoi_cells_prepare(meso_rt* rt, int stats, meso_rt_pass pass);
 
 /* rt_common.c: chunks and uploads */
 /* Index of the finest-level chunk of `type` for `object`, or -1. */
@@ -176,7 +182,8 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
  * binds the textures, the counters and `program` with its common uniforms
  * u_mvp, u_inv_mvp, u_viewport, u_light_obj, u_albedo, u_depth_ndc; sets
  * depth test and writes (and desc->depth_func when given), the empty vertex
- * array, and for ray casters (`raycast`) front-face culling) → the kind's
+ * array, for ray casters (`raycast`) front-face culling, and in the depth
+ * pass the colour mask off) → the kind's
  * own state, uniforms and draw call → end (reads the counters; restores
  * under MESO_STATE_RESTORE; checks GL errors only when the context was
  * created with check_gl_errors). */
@@ -198,6 +205,8 @@ typedef struct mesoi_draw {
     GLenum depth_func;          /* desc->depth_func, or 0 */
     int restore;                /* MESO_STATE_RESTORE */
     int stats; /* the shaders count work (rt->stats_ok and desc->stats) */
+    meso_rt_pass pass; /* desc->pass */
+    GLboolean prev_color_mask[4]; /* MESO_PASS_DEPTH under MESO_STATE_RESTORE */
     int units;
     GLenum target[MESOI_DRAW_MAX_UNITS];
     GLint prev_bind[MESOI_DRAW_MAX_UNITS];
@@ -232,6 +241,19 @@ const char* mesoi_glsl_prelude(const meso_rt* rt, int stats);
 /* An allocation of `count` floats v / 65535 from `count` host-order U16 texels, for contexts without 16-bit normalised textures
  * (ES without GL_EXT_texture_norm16); NULL (logged) when out of memory. */
 float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count);
+/* rt_common.c: the fragment shader's sources between the kind's head
+ * ("#version", its #defines) and its own file: "#define MESO_PASS n", the
+ * host's shading hook (forward only; "#define MESO_HOOK 1" and "#line 1"
+ * before it, a newline after), then `pre` (the kind's common files,
+ * pre_count of them) and shaders/pass_out.glsl. Fills src[1 .. pre_count + 4]
+ * (src[0] is the caller's head; pass_text is storage for the defines) and
+ * returns the number of sources filled, head included; the caller appends
+ * its own file. */
+int mesoi_frag_sources(const meso_rt* rt, meso_rt_pass pass, const char** src, const char* const* pre,
+                       int pre_count, char pass_text[64]);
+/* The name a fragment shader is logged under: `file`, and "+ shading hook"
+ * when the host's hook is compiled into it (buf holds the text). */
+const char* mesoi_frag_name(const meso_rt* rt, meso_rt_pass pass, const char* file, char buf[96]);
 
 /* rt_common.c: shaders. compile: one shader from `count` sources, 0
  * (logged with `name`) on failure; link: links and deletes the two shaders
@@ -263,7 +285,7 @@ void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u);
  * at attribute 0, normals at 1, the chunk's own layout). Cells use it for
  * their base mesh. */
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
-meso_result mesoi_mesh_program_create(meso_rt* rt);
+meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass); /* builds the pass's program */
 meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count);
 

@@ -13,18 +13,35 @@
 #include "shaders_embedded.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
-meso_result mesoi_mesh_program_create(meso_rt* rt)
+/* The mesh program of `pass` (built on first use). */
+static const mesoi_program* mesh_program(meso_rt* rt, meso_rt_pass pass)
 {
-    const char* vs[5] = {mesoi_glsl_prelude(rt, 0), "#define MESO_INSTANCE_MODEL 1\n", MESOI_GLSL_VERTEX_STAGE,
-                         mesoi_glsl_instance, mesoi_glsl_mesh_vert};
-    const char* fs[2] = {mesoi_glsl_prelude(rt, 0), mesoi_glsl_mesh_frag};
+    mesoi_program* p = &rt->mesh_programs[pass];
+    if (p->id)
+        return p;
+    char head[512];
+    snprintf(head, sizeof(head), "%s#define MESO_INSTANCE_MODEL 1\n", mesoi_glsl_prelude(rt, 0));
+    const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_mesh_vert};
+    const char* pre[2] = {mesoi_glsl_instance, mesoi_glsl_raycast_common};
+    const char* fsrc[8] = {head};
+    char pass_text[64], fname[96];
+    int n = mesoi_frag_sources(rt, pass, fsrc, pre, 2, pass_text);
+    fsrc[n++] = mesoi_glsl_mesh_frag;
+    static const char* const names[MESO_PASS_COUNT] = {"mesh", "mesh depth", "mesh gbuffer"};
     static const char* const samplers[1] = {"u_instances"}; /* unit 0: the instance data */
-    return mesoi_program_init(rt, &rt->mesh_program, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "mesh_vert.glsl"),
-                              mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 2, "mesh_frag.glsl"), "mesh", samplers, 1)
-               ? MESO_OK
-               : MESO_ERR_GL;
+    const char* fname_used = mesoi_frag_name(rt, pass, "mesh_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fsrc, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "mesh_vert.glsl"), fsh, names[pass],
+                       samplers, 1);
+    return p->id ? p : NULL;
+}
+
+meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass)
+{
+    return mesh_program(rt, pass) ? MESO_OK : MESO_ERR_GL;
 }
 
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
@@ -91,17 +108,24 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
                             uint32_t count)
 {
     mesoi_draw ds;
-    meso_result r = mesoi_draw_prepare(rt, d, 0, inst != NULL, &ds);
+    /* The G-buffer's normal faces the viewer and the hook takes the view
+     * direction and point: both unproject the fragment (mesh_frag.glsl). */
+    const int unproject = d->pass == MESO_PASS_GBUFFER || (d->pass == MESO_PASS_FORWARD && rt->hook);
+    meso_result r = mesoi_draw_prepare(rt, d, unproject, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
     ds.stats = 0; /* the mesh shaders count nothing: stats come back unsupported */
+    const mesoi_program* prog = mesh_program(rt, ds.pass);
+    if (!prog)
+        return MESO_ERR_GL;
     static const GLenum targets[1] = {GL_TEXTURE_BUFFER};
     GLuint bind[1] = {0};
-    if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, 0, NULL, NULL, &bind[0])) != MESO_OK)
+    if (inst &&
+        (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, unproject, NULL, NULL, &bind[0])) != MESO_OK)
         return r;
     /* Meshes are drawn with the host's culling, not the ray casters' back
      * faces (raycast 0). */
-    mesoi_draw_begin(rt, &ds, &rt->mesh_program, 0, inst ? 1 : 0, targets, bind);
+    mesoi_draw_begin(rt, &ds, prog, 0, inst ? 1 : 0, targets, bind);
     /* The light in world space, as the fragment shader takes it. */
     float light[3] = {0.3f, 0.8f, 0.5f};
     if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)
@@ -110,7 +134,7 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     for (int k = 0; k < 3; ++k)
         light[k] /= len;
     mesoi_gl* gl = &rt->gl;
-    const GLint* u = rt->mesh_program.loc;
+    const GLint* u = prog->loc;
     gl->UniformMatrix4fv(u[MESOI_U_view], 1, GL_FALSE, d->view);
     gl->UniformMatrix4fv(u[MESOI_U_proj], 1, GL_FALSE, d->proj);
     gl->UniformMatrix4fv(u[MESOI_U_model], 1, GL_FALSE, ds.model);

@@ -416,38 +416,46 @@ meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_
 static const char* const shell_samplers[SHELL_UNIT_COUNT + 1] = {"u_verts", "u_index", "u_height", "u_volume",
                                                                  "u_dist", "u_instances"};
 
-static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, int stats)
+static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, int stats, meso_rt_pass pass)
 {
-    mesoi_program* p = &rt->shell_programs[stats][t];
+    mesoi_program* p = &rt->shell_programs[pass][stats][t];
     if (p->id)
         return p;
     char head[512];
     snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n", mesoi_glsl_prelude(rt, stats), (int)t);
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_shell_common,
                          mesoi_glsl_shell_vert};
-    const char* fs[6] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
-                         mesoi_glsl_shell_texfn, mesoi_glsl_shell_frag};
-    static const char* const names[MESO_SHELL_TECHNIQUE_COUNT] = {"shell smooth", "shell curved", "shell tetra",
-                                                                  "shell segment"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 6, "shell_frag.glsl"), names[t], shell_samplers,
-                       SHELL_UNIT_COUNT + 1);
+    const char* pre[4] = {mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
+                          mesoi_glsl_shell_texfn};
+    const char* fs[10] = {head};
+    char pass_text[64], fname[96];
+    int n = mesoi_frag_sources(rt, pass, fs, pre, 4, pass_text);
+    fs[n++] = mesoi_glsl_shell_frag;
+    static const char* const names[MESO_PASS_COUNT][MESO_SHELL_TECHNIQUE_COUNT] = {
+        {"shell smooth", "shell curved", "shell tetra", "shell segment"},
+        {"shell smooth depth", "shell curved depth", "shell tetra depth", "shell segment depth"},
+        {"shell smooth gbuffer", "shell curved gbuffer", "shell tetra gbuffer", "shell segment gbuffer"}};
+    const char* fname_used = mesoi_frag_name(rt, pass, "shell_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_vert.glsl"), fsh, names[pass][t],
+                       shell_samplers, SHELL_UNIT_COUNT + 1);
     return p->id ? p : NULL;
 }
 
-meso_result mesoi_shell_prepare(meso_rt* rt, int stats)
+meso_result mesoi_shell_prepare(meso_rt* rt, int stats, meso_rt_pass pass)
 {
     for (int t = 0; t < MESO_SHELL_TECHNIQUE_COUNT; ++t)
-        if (t != MESO_SHELL_SLICES && !shell_program(rt, (meso_shell_technique)t, stats))
+        if (t != MESO_SHELL_SLICES && !shell_program(rt, (meso_shell_technique)t, stats, pass))
             return MESO_ERR_GL;
-    return stats ? MESO_OK : mesoi_slices_prepare(rt);
+    return stats ? MESO_OK : mesoi_slices_prepare(rt, pass);
 }
 
 void mesoi_shell_programs_destroy(meso_rt* rt)
 {
-    for (int st = 0; st < 2; ++st)
-        for (int t = 0; t < MESO_SHELL_TECHNIQUE_COUNT; ++t)
-            mesoi_program_delete(rt, &rt->shell_programs[st][t]);
+    for (int pass = 0; pass < MESO_PASS_COUNT; ++pass)
+        for (int st = 0; st < 2; ++st)
+            for (int t = 0; t < MESO_SHELL_TECHNIQUE_COUNT; ++t)
+                mesoi_program_delete(rt, &rt->shell_programs[pass][st][t]);
     if (rt->empty_vao)
         rt->gl.DeleteVertexArrays(1, &rt->empty_vao);
     if (rt->stats_buffer)
@@ -563,7 +571,7 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     meso_result r = mesoi_draw_prepare(rt, d, 1, inst != NULL, &ds);
     if (r != MESO_OK)
         return r;
-    const mesoi_program* prog = shell_program(rt, k->technique, ds.stats);
+    const mesoi_program* prog = shell_program(rt, k->technique, ds.stats, ds.pass);
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;

@@ -49,9 +49,11 @@ enum { TEX_A_T1 = 0, TEX_A_COLOUR, TEX_A_DEPTH, TEX_B_COLOUR, TEX_B_DEPTH, TEX_C
 /* Units: the shell's five (rt_shell.c), then the target's two inputs. */
 enum { UNIT_FIRST = SHELL_UNIT_COUNT, UNIT_SECOND, SLICE_UNITS };
 
-static const mesoi_program* slice_program(meso_rt* rt, int pass)
+/* Slice pass `pass` (SLICE_PASS) of draw pass `mpass`: SLICE_PASS 0 writes
+ * through pass_out.glsl, the others have their own outputs (forward only). */
+static const mesoi_program* slice_program(meso_rt* rt, meso_rt_pass mpass, int pass)
 {
-    mesoi_program* p = &rt->slice_programs[pass];
+    mesoi_program* p = &rt->slice_programs[mpass][pass];
     if (p->id)
         return p;
     char head[512];
@@ -61,22 +63,29 @@ static const mesoi_program* slice_program(meso_rt* rt, int pass)
              (int)MESO_SHELL_SLICES, pass);
     const char* vs[5] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_shell_texfn,
                          mesoi_glsl_shell_slices_vert};
-    const char* fs[6] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
-                         mesoi_glsl_shell_texfn, mesoi_glsl_shell_slices_frag};
-    static const char* const names[PASS_COUNT] = {"slices none", "slices first pass", "slices normal",
-                                                  "slices texcoord", "slices composite"};
+    const char* pre[4] = {mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
+                          mesoi_glsl_shell_texfn};
+    const char* fs[10] = {head, pre[0], pre[1], pre[2], pre[3]};
+    char pass_text[64], fname[96];
+    int n = pass == PASS_NONE ? mesoi_frag_sources(rt, mpass, fs, pre, 4, pass_text) : 5;
+    fs[n++] = mesoi_glsl_shell_slices_frag;
+    static const char* const names[MESO_PASS_COUNT][PASS_COUNT] = {
+        {"slices none", "slices first pass", "slices normal", "slices texcoord", "slices composite"},
+        {"slices none depth"},
+        {"slices none gbuffer"}};
     static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
                                                       "u_dist",  "u_first", "u_second"};
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_slices_vert.glsl"),
-                       mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, 6, "shell_slices_frag.glsl"), names[pass], samplers,
-                       SLICE_UNITS);
+    const char* fname_used = mesoi_frag_name(rt, mpass, "shell_slices_frag.glsl", fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_slices_vert.glsl"), fsh,
+                       names[mpass][pass], samplers, SLICE_UNITS);
     return p->id ? p : NULL;
 }
 
-meso_result mesoi_slices_prepare(meso_rt* rt)
+meso_result mesoi_slices_prepare(meso_rt* rt, meso_rt_pass mpass)
 {
-    for (int pass = 0; pass < PASS_COUNT; ++pass)
-        if (!slice_program(rt, pass))
+    for (int pass = 0; pass < (mpass == MESO_PASS_FORWARD ? PASS_COUNT : 1); ++pass)
+        if (!slice_program(rt, mpass, pass))
             return MESO_ERR_GL;
     return MESO_OK;
 }
@@ -94,8 +103,9 @@ static void target_free(meso_rt* rt)
 
 void mesoi_slices_destroy(meso_rt* rt)
 {
-    for (int p = 0; p < PASS_COUNT; ++p)
-        mesoi_program_delete(rt, &rt->slice_programs[p]);
+    for (int m = 0; m < MESO_PASS_COUNT; ++m)
+        for (int p = 0; p < PASS_COUNT; ++p)
+            mesoi_program_delete(rt, &rt->slice_programs[m][p]);
     target_free(rt);
 }
 
@@ -180,9 +190,16 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     if (r != MESO_OK)
         return r;
     const int two_pass = k->slice_interp != MESO_SLICE_NONE;
+    if (two_pass && ds.pass != MESO_PASS_FORWARD) {
+        /* Their depth is the interpolated crossing, composited through the
+         * offscreen target: not a depth-only or G-buffer draw. */
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw: MESO_SHELL_SLICES draws depth and G-buffer passes with MESO_SLICE_NONE only");
+        return MESO_ERR_UNSUPPORTED;
+    }
     const int second = k->slice_interp == MESO_SLICE_NORMAL ? PASS_NORMAL : PASS_TEXCOORD;
-    const mesoi_program* prog = slice_program(rt, two_pass ? PASS_FIRST : PASS_NONE);
-    if (!prog || (two_pass && (!slice_program(rt, second) || !slice_program(rt, PASS_COMPOSITE))))
+    const mesoi_program* prog = slice_program(rt, ds.pass, two_pass ? PASS_FIRST : PASS_NONE);
+    if (!prog || (two_pass && (!slice_program(rt, ds.pass, second) || !slice_program(rt, ds.pass, PASS_COMPOSITE))))
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
     static const GLenum unit_target[SLICE_UNITS] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
@@ -239,7 +256,7 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     gl->BindTexture(GL_TEXTURE_2D, rt->slice_tex[TEX_A_T1]);
     gl->ActiveTexture(GL_TEXTURE0 + UNIT_SECOND);
     gl->BindTexture(GL_TEXTURE_2D, rt->slice_tex[TEX_A_DEPTH]);
-    use_pass(rt, &ds, slice_program(rt, second), s, k, local);
+    use_pass(rt, &ds, slice_program(rt, ds.pass, second), s, k, local);
     gl->DrawArrays(GL_TRIANGLES, 0, count);
 
     /* 3: composite into the host's framebuffer with its depth test. */
@@ -252,7 +269,7 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     gl->BindTexture(GL_TEXTURE_2D, rt->slice_tex[TEX_A_COLOUR]);
     gl->ActiveTexture(GL_TEXTURE0 + UNIT_SECOND);
     gl->BindTexture(GL_TEXTURE_2D, rt->slice_tex[TEX_B_COLOUR]);
-    use_pass(rt, &ds, slice_program(rt, PASS_COMPOSITE), s, k, ds.viewport);
+    use_pass(rt, &ds, slice_program(rt, ds.pass, PASS_COMPOSITE), s, k, ds.viewport);
     gl->DrawArrays(GL_TRIANGLES, 0, 3);
     return mesoi_draw_end(rt, &ds, NULL, "slices");
 }

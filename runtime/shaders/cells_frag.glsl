@@ -19,7 +19,7 @@
 
 in vec3 v_pos;
 in vec3 v_nrm;
-out vec4 o_color;
+// Outputs per pass (o_color, o_albedo, o_normal; emit): pass_out.glsl.
 
 uniform usampler3D u_tile;
 uniform usamplerBuffer u_memb;
@@ -289,10 +289,27 @@ vec3 shading_normal(ivec3 v, vec3 f)
     return dot(m, f) > 0.0 ? m : f;
 }
 
+// The colour map's texel of voxel v (linear: the texture is sRGB).
+vec3 colr(ivec3 v)
+{
+    return texelFetch(u_colr, v - (v / u_res) * u_res, 0).rgb;
+}
+
 vec3 shade(ivec3 v, vec3 n)
 {
-    vec3 c = texelFetch(u_colr, v - (v / u_res) * u_res, 0).rgb;
+    vec3 c = colr(v);
     return c * (0.15 + 0.85 * max(0.0, dot(n, u_light_obj)));
+}
+
+// Forward shading at a hit p of voxel v, normal n, reached by direction u:
+// the built-in Lambert, or the host's hook (pass_out.glsl).
+vec3 lit(ivec3 v, vec3 n, vec3 p, vec3 u)
+{
+#ifdef MESO_HOOK
+    return meso_shade(colr(v), world_normal(n), world_point(p), world_view(u));
+#else
+    return shade(v, n);
+#endif
 }
 
 vec3 env(vec3 u)
@@ -379,9 +396,13 @@ void main()
         return;
     }
     vec3 p = p0 + h.s * rd;
-    vec3 n = shading_normal(h.vox, f);
-    vec3 col = shade(h.vox, n);
     write_depth(p);
+#if MESO_PASS == MESO_PASS_GBUFFER // the first hit's material and normal; no bounces
+    vec3 n = shading_normal(h.vox, f);
+    emit_obj(vec3(0.0), colr(h.vox), 1.0, n, p, rd);
+#elif MESO_PASS == MESO_PASS_FORWARD
+    vec3 n = shading_normal(h.vox, f);
+    vec3 col = lit(h.vox, n, p, rd);
 
     if (u_mode == 1 && h.axis >= 0) { // sec. 3.2.3 Algorithm 3.2
         vec3 u = rd;
@@ -400,7 +421,7 @@ void main()
             o = o + hb.s_lo * r; // the next ray starts on the empty side
             vec3 fb = face_against(hb.axis, r);
             vec3 nb = shading_normal(hb.vox, fb);
-            col += w * (1.0 - u_refl) * shade(hb.vox, nb);
+            col += w * (1.0 - u_refl) * lit(hb.vox, nb, p, r);
             w *= u_refl;
             u = r;
             r = reflect(u, nb);
@@ -436,5 +457,6 @@ void main()
         col = (1.0 - u_tau) * col + u_tau * env(u);
     }
     o_color = vec4(col, 1.0);
+#endif
     finish(true);
 }

@@ -48,7 +48,7 @@
 // h; caps and balls use their true normals. Depth: the hit's own.
 
 flat in int v_prim;
-out vec4 o_color;
+// Outputs per pass (o_color, o_albedo, o_normal; emit): pass_out.glsl.
 
 uniform sampler2D u_relief;  // RELF heights (value / max)
 uniform ivec2 u_relief_size; // texels; (0, 0) without relief
@@ -358,7 +358,9 @@ void ball_main(int prim, vec3 ro, vec3 rd)
         return;
     }
     vec3 p = o + t * rd;
-    o_color = vec4(shade(p / s.w, 1.0, rd), 1.0);
+#if MESO_PASS != MESO_PASS_DEPTH
+    emit_obj(shade(p / s.w, 1.0, rd), u_albedo, 1.0, facing(p, rd), s.xyz + p, rd);
+#endif
     write_depth(s.xyz + p);
     finish(true);
 }
@@ -424,6 +426,7 @@ void frustum_main(int prim, vec3 ro, vec3 rd)
         return;
     }
     vec3 op = o + s_hit * rd;
+#if MESO_PASS != MESO_PASS_DEPTH
     ConePoint P = cone_point(F, op);
     vec3 n;
     if (kind == K_PLANE0)
@@ -434,7 +437,9 @@ void frustum_main(int prim, vec3 ro, vec3 rd)
         n = relief_normal(F, P);
     else
         n = eq8_normal(F, P);
-    o_color = vec4(shade(n, F.D > 0.0 ? P.w : 1.0, rd), 1.0);
+    float w = F.D > 0.0 ? P.w : 1.0;
+    emit_obj(shade(n, w, rd), u_albedo, occlusion(w), facing(n, rd), F.c0 + op, rd);
+#endif
     write_depth(F.c0 + op);
     finish(true);
 }

@@ -12,9 +12,10 @@
 // v_instance). Layout (rt_instances.c writes it):
 //   0-3  object -> clip (columns)      4-7  clip -> object (columns)
 //   8    light_obj.xyz, err_scale      9    prim_base, -, -, -
-//   10-13 model (mesh: object -> world columns; cells: 10-12 the rotation)
-// Vertex stages fetch 0-3 and 9, fragment stages 0-8; 10-13 only where the
-// runtime defines MESO_INSTANCE_MODEL (meshes, cells).
+//   10-13 model (object -> world columns)
+// Vertex stages fetch 0-3 and 9, fragment stages 0-8; 10-13 where the
+// runtime defines MESO_INSTANCE_MODEL (meshes, cells) and in fragment
+// stages of the depth-free passes that need world space (G-buffer, hook).
 // The same shader code serves both: main() calls instance_begin() first,
 // and after it the names u_mvp, u_inv_mvp, u_light_obj, u_err_scale,
 // u_env_rot and u_model stand for the selected values (macros below), so
@@ -87,9 +88,11 @@ void instance_begin()
     g_light_obj = t8.xyz;
     g_err_scale = t8.w;
 #endif
-#ifdef MESO_INSTANCE_MODEL
+#if defined(MESO_INSTANCE_MODEL) || (!defined(MESO_STAGE_VERTEX) && (MESO_PASS != 0 || defined(MESO_HOOK)))
+    // Meshes and cells always; every kind's fragments where pass_out.glsl
+    // turns normals and points to world space (G-buffer, shading hook).
     g_model = instance_mat4(b + 10);
-    g_env_rot = mat3(g_model);
+    g_env_rot = mat3(g_model) / length(g_model[0].xyz);
 #endif
 }
 

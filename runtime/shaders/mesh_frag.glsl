@@ -1,12 +1,21 @@
 // Two-sided Lambert with a little ambient; depth is the rasterised depth.
-// The runtime prepends the #version prelude (rt_common.c: mesoi_glsl_prelude).
+// The runtime prepends the #version prelude (rt_common.c: mesoi_glsl_prelude),
+// instance.glsl (u_mvp, u_inv_mvp, u_model of the draw or the instance),
+// raycast_common.glsl (for the pixel's ray: the view direction and the world
+// point the shading hook takes) and pass_out.glsl (rt_mesh.c).
 in vec3 v_normal;
 uniform vec3 u_light_dir; // world space, towards the light, normalised
 uniform vec3 u_albedo;
-out vec4 o_color;
 void main()
 {
+    instance_begin();
+#if MESO_PASS != MESO_PASS_DEPTH
     vec3 n = normalize(v_normal);
     float lambert = abs(dot(n, u_light_dir));
-    o_color = vec4(u_albedo * (0.15 + 0.85 * lambert), 1.0);
+    vec3 ro, rd;
+    fragment_ray(ro, rd);
+    vec3 v = world_view(rd);
+    vec3 p = world_point(unproject(gl_FragCoord.xy, window_to_ndc(gl_FragCoord.z)));
+    emit(u_albedo * (0.15 + 0.85 * lambert), u_albedo, 1.0, dot(n, v) < 0.0 ? -n : n, p, v);
+#endif
 }

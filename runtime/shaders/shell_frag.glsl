@@ -23,7 +23,7 @@
 
 flat in int v_prism;
 flat in int v_tet;
-out vec4 o_color;
+// Outputs per pass (o_color, o_albedo, o_normal; emit): pass_out.glsl.
 
 // The texture function, tex_st and shade: shell_texfn.glsl.
 uniform sampler3D u_dist;
@@ -329,9 +329,11 @@ void main()
     if (hit) {
         vec3 q = mix(q0, q1, f);
         vec3 p = ro + (te + f * (tx - te)) * rd;
+#if MESO_PASS != MESO_PASS_DEPTH
         mat3 J = M * inverse(Tm); // world = X0 + J (texture - C0)
         vec3 n = transpose(inverse(J)) * tex_gradient(q);
-        o_color = vec4(shade(n, q.z, rd), 1.0);
+        emit_obj(shade(n, q.z, rd), u_albedo, occlusion(q.z), facing(n, rd), p, rd);
+#endif
         write_depth(p);
     }
     finish(hit);
@@ -407,7 +409,13 @@ void main()
     vec3 q0 = hull_point_to_texture(P, ro + tmin * rd, fmin, range);
     vec3 q1 = hull_point_to_texture(P, ro + tmax * rd, fmax, range);
 #if MESO_TECHNIQUE == 3
-    o_color = vec4(q0.z, q1.z, 0.5, 1.0);
+#if MESO_PASS == MESO_PASS_FORWARD
+    o_color = vec4(q0.z, q1.z, 0.5, 1.0); // a diagnostic: entry and exit w (no shading, no hook)
+#elif MESO_PASS == MESO_PASS_GBUFFER
+    // The hull face the depth lies on (fmax), facing the viewer.
+    vec3 hn = facing(cross(T[3 * fmax + 1] - T[3 * fmax], T[3 * fmax + 2] - T[3 * fmax]), rd);
+    emit_obj(vec3(0.0), u_albedo, 1.0, hn, ro + tmax * rd, rd);
+#endif
     write_depth(ro + tmax * rd);
     finish(true);
     return;
@@ -528,9 +536,11 @@ void main()
             }
         }
         vec3 p = phi(P, hi);
+#if MESO_PASS != MESO_PASS_DEPTH
         vec3 g = tex_gradient(vec3(tex_st(P, hi.xy), whi));
         vec3 n = mapped_normal(P, curved ? vec3(hi.xy, whi) : hi, g, curved);
-        o_color = vec4(shade(n, whi, rd), 1.0);
+        emit_obj(shade(n, whi, rd), u_albedo, occlusion(whi), facing(n, rd), p, rd);
+#endif
         write_depth(p);
     }
     finish(hit);

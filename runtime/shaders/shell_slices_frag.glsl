@@ -55,9 +55,10 @@ in vec3 v_pos;
 #if SLICE_PASS == 1
 layout(location = 0) out vec4 o_tex;   // (s, t', w, a)
 layout(location = 1) out vec4 o_color; // colour, window depth
-#else
+#elif SLICE_PASS != 0
 out vec4 o_color;
 #endif
+// SLICE_PASS 0 writes through pass_out.glsl (emit), in every meso_rt_pass.
 
 uniform sampler2D u_first;  // pass 2/3: T1; pass 4: the first pass's colour and depth
 uniform sampler2D u_second; // pass 2/3: Z1 (depth); pass 4: the second pass's colour and depth
@@ -109,10 +110,13 @@ void main()
 #if SLICE_PASS <= 1
     if (a < 0.0)
         discard;
-    vec3 col = shade(slice_normal(P, v_q, v_stw), v_stw.z, rd);
 #if SLICE_PASS == 0
-    o_color = vec4(col, 1.0);
+#if MESO_PASS != MESO_PASS_DEPTH
+    vec3 n = slice_normal(P, v_q, v_stw);
+    emit_obj(shade(n, v_stw.z, rd), u_albedo, occlusion(v_stw.z), facing(n, rd), v_pos, rd);
+#endif
 #else
+    vec3 col = shade(slice_normal(P, v_q, v_stw), v_stw.z, rd);
     o_tex = vec4(v_stw, a);
     o_color = vec4(col, gl_FragCoord.z);
 #endif

@@ -200,6 +200,43 @@ static inline void check_close_colour(const char* what, metrics m, double colour
               m.coverage_mismatch, m.off_pixel, m.hit_err_px, m.colour_mae);
 }
 
+/* Opens the file at `path`, which must hold exactly one object (aborts
+ * otherwise): its record into *rec, its bounds into lo and hi. */
+static inline meso_file* open_single_object(const char* path, meso_object_record* rec, double lo[3], double hi[3])
+{
+    meso_file* f = NULL;
+    meso_error err;
+    CHECK_MSG(meso_file_open_path(path, NULL, &f, &err) == MESO_OK, "%s", err.message);
+    uint32_t n = 0;
+    CHECK(meso_file_objects(f, rec, 1, &n, &err) == MESO_OK && n == 1);
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = rec->bbox_min[k];
+        hi[k] = rec->bbox_max[k];
+    }
+    return f;
+}
+
+/* Looking at the box [lo, hi]'s centre from direction `dir`, dist_scale
+ * times the distance at which its bounding sphere fills a view of fovy;
+ * near plane at least zn_frac of that distance. */
+static inline camera camera_view_box(const double lo[3], const double hi[3], const double dir[3], double fovy,
+                                     double dist_scale, double zn_frac)
+{
+    double ctr[3], r = 0, dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (int k = 0; k < 3; ++k) {
+        ctr[k] = 0.5 * (lo[k] + hi[k]);
+        r += 0.25 * (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    }
+    r = sqrt(r);
+    const double dist = dist_scale * r / sin(fovy / 2);
+    camera cam = {.fovy = fovy, .zn = fmax(dist - 2 * r, zn_frac * dist), .zf = dist + 2 * r};
+    for (int k = 0; k < 3; ++k) {
+        cam.eye[k] = ctr[k] + dist * dir[k] / dl;
+        cam.at[k] = ctr[k];
+    }
+    return cam;
+}
+
 static inline void camera_matrices(const camera* c, float view[16], float proj[16])
 {
     const int W = scene_w, H = scene_h;

@@ -88,18 +88,12 @@ static loaded load(ctx* c, const char* path)
 {
     loaded l;
     memset(&l, 0, sizeof(l));
-    meso_file* f = NULL;
     meso_error err;
-    CHECK_MSG(meso_file_open_path(path, NULL, &f, &err) == MESO_OK, "%s", err.message);
     meso_object_record rec;
-    uint32_t n = 0;
-    CHECK(meso_file_objects(f, &rec, 1, &n, &err) == MESO_OK && n == 1 && rec.kind == MESO_OBJECT_CELLS);
+    meso_file* f = open_single_object(path, &rec, l.lo, l.hi);
+    CHECK(rec.kind == MESO_OBJECT_CELLS);
     CHECK_MSG(meso_rt_load_object(c->rt, f, rec.id, &l.obj) == MESO_OK, "%s", c->log.message);
     CHECK_MSG(meso_ref_cells_load(f, rec.id, &l.ref, &err) == MESO_OK, "%s", err.message);
-    for (int k = 0; k < 3; ++k) {
-        l.lo[k] = rec.bbox_min[k];
-        l.hi[k] = rec.bbox_max[k];
-    }
     meso_file_close(f);
     return l;
 }
@@ -116,19 +110,7 @@ static void unload(ctx* c, loaded* l)
  * distance at which its bounding sphere fills the view. */
 static camera view_box(const loaded* l, const double dir[3], double dist_scale)
 {
-    double c[3], r = 0, dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * (l->lo[k] + l->hi[k]);
-        r += 0.25 * (l->hi[k] - l->lo[k]) * (l->hi[k] - l->lo[k]);
-    }
-    r = sqrt(r);
-    const double fovy = 0.7, dist = dist_scale * r / sin(fovy / 2);
-    camera cam = {.fovy = fovy, .zn = fmax(dist - 2 * r, 0.01 * dist), .zf = dist + 2 * r};
-    for (int k = 0; k < 3; ++k) {
-        cam.eye[k] = c[k] + dist * dir[k] / dl;
-        cam.at[k] = c[k];
-    }
-    return cam;
+    return camera_view_box(l->lo, l->hi, dir, 0.7, dist_scale, 0.01);
 }
 
 typedef struct result {

@@ -81,19 +81,12 @@ static camera auto_camera(const uint8_t* file, size_t size, const double dir[3],
     uint32_t n = 0;
     CHECK(meso_file_objects(f, &rec, 1, &n, &err) == MESO_OK && n == 1);
     meso_file_close(f);
-    double c[3], r = 0, dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    double lo[3], hi[3];
     for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * (rec.bbox_min[k] + rec.bbox_max[k]);
-        r += 0.25 * (rec.bbox_max[k] - rec.bbox_min[k]) * (rec.bbox_max[k] - rec.bbox_min[k]);
+        lo[k] = rec.bbox_min[k];
+        hi[k] = rec.bbox_max[k];
     }
-    r = sqrt(r);
-    const double dist = dist_scale * r / sin(fovy / 2);
-    camera cam = {.fovy = fovy, .zn = fmax(dist - 2 * r, 0.02 * dist), .zf = dist + 2 * r};
-    for (int k = 0; k < 3; ++k) {
-        cam.eye[k] = c[k] + dist * dir[k] / dl;
-        cam.at[k] = c[k];
-    }
-    return cam;
+    return camera_view_box(lo, hi, dir, fovy, dist_scale, 0.02);
 }
 
 

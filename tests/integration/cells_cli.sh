@@ -4,7 +4,8 @@
 # fully, the chunks and report keys the issue names, -j 1 = -j 2 byte for
 # byte, the tile-map and colour variants, and bad input (a coded error, a
 # non-zero exit, no output file); mesoinspect preview of a cells object
-# with libmeso and with the exact reference, in all three modes.
+# with libmeso and with the exact reference, in all three modes, and of
+# libmeso's depth and G-buffer passes (--pass).
 # usage: cells_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE]
 set -u
 bake=$1 inspect=$2 data=$3 probe=${4:-}
@@ -113,7 +114,25 @@ if [ -n "$probe" ]; then
     fi
   done
 fi
-for opt in "--cells magic" "--bounces 9" "--cell-step -1" "--zoom 0"; do
+# --pass (libmeso's passes, meso_rt_draw_desc.pass): depth as grey (the
+# object lit, nearest 255 .. farthest 32; background 0), the G-buffer as three
+# files beside the named one, which is not written; not with --reference.
+if [ -n "$probe" ] && "$inspect" preview "$tmp/sphere.meso" -o "$tmp/pd.png" --size 64x64 --zoom 1.6 \
+    --pass depth >/dev/null 2>&1; then
+  px=$("$probe" "$tmp/pd.png")
+  check "preview --pass depth: corner is 0" test "$(echo "$px" | sed -n 2p)" = "0 0 0 255"
+  check "preview --pass depth: centre grey in 32..255" awk -v a="$(echo "$px" | sed -n 6p)" \
+    'BEGIN { split(a, x, " "); exit !(x[1] == x[2] && x[2] == x[3] && x[1] >= 32) }'
+  "$inspect" preview "$tmp/sphere.meso" -o "$tmp/g.png" --size 64x64 --zoom 1.6 --pass gbuffer >/dev/null 2>&1
+  check "preview --pass gbuffer: exit 0" test $? = 0
+  check "preview --pass gbuffer: g-albedo, g-normal, g-depth written, g.png not" \
+    sh -c "test -s '$tmp/g-albedo.png' -a -s '$tmp/g-normal.png' -a -s '$tmp/g-depth.png' -a ! -e '$tmp/g.png'"
+  check "preview --pass gbuffer: depth file = --pass depth" cmp -s "$tmp/g-depth.png" "$tmp/pd.png"
+  # The centre's normal faces the camera (yaw 30, pitch 20: towards +z mostly).
+  check "preview --pass gbuffer: centre normal faces the camera" awk -v a="$("$probe" "$tmp/g-normal.png" | sed -n 6p)" \
+    'BEGIN { split(a, x, " "); exit !(x[3] > 200 && x[1] > 128 && x[2] > 128) }'
+fi
+for opt in "--cells magic" "--bounces 9" "--cell-step -1" "--zoom 0" "--pass magic" "--pass depth --reference"; do
   # shellcheck disable=SC2086
   "$inspect" preview "$tmp/sphere.meso" -o "$tmp/never.png" $opt >/dev/null 2>&1
   check "preview $opt: usage error (exit 1), no PNG" sh -c "test $? = 1 && ! test -e '$tmp/never.png'"

@@ -14,6 +14,10 @@
  * instead: no EGL, the same camera, light, clear colour and 2x2 box filter,
  * so the two PNGs compare pixel by pixel. Several objects are composited by
  * depth (the nearest sample wins, as GL_LESS).
+ *
+ * --pass depth | gbuffer draws libmeso's other passes (meso_rt_pass): the
+ * depth buffer as grey, or one PNG per G-buffer attachment plus the depth,
+ * all staged and published together.
  */
 #include <errno.h>
 #include <math.h>
@@ -33,21 +37,43 @@
 #include "frustum_reference.h"
 #include "shell_reference.h"
 
-/* The PNG goes to a staged output (cli_output.h) and is published whole. */
-static int write_png(const char* out, const uint8_t* img, int width, int height)
+/* The PNGs go to staged outputs (cli_output.h), published together and
+ * whole once all are written. */
+static int write_pngs(const char* const* outs, const uint8_t* const* imgs, int n, int width, int height)
 {
-    meso_output* o = NULL;
-    int code = mi_stage_output(out, &o);
-    if (code != MESO_EXIT_OK)
-        return code;
-    char why[256];
-    /* Row 0 of the image is the bottom, as glReadPixels'. */
-    if (meso_png_write_rgba8(o->temp, img, width, height, 1, why, sizeof(why)) != 0) {
-        cli_outputs_discard();
-        mi_error("cannot write '%s': %s", out, why);
-        return MESO_EXIT_IO;
+    for (int i = 0; i < n; ++i) {
+        meso_output* o = NULL;
+        int code = mi_stage_output(outs[i], &o);
+        if (code != MESO_EXIT_OK) {
+            cli_outputs_discard();
+            return code;
+        }
+        char why[256];
+        /* Row 0 of the image is the bottom, as glReadPixels'. */
+        if (meso_png_write_rgba8(o->temp, imgs[i], width, height, 1, why, sizeof(why)) != 0) {
+            cli_outputs_discard();
+            mi_error("cannot write '%s': %s", outs[i], why);
+            return MESO_EXIT_IO;
+        }
     }
     return mi_publish_outputs();
+}
+
+static int write_png(const char* out, const uint8_t* img, int width, int height)
+{
+    return write_pngs(&out, &img, 1, width, height);
+}
+
+/* --pass gbuffer's files: OUT.png -> OUT-albedo.png, OUT-normal.png,
+ * OUT-depth.png (a name without .png gets the suffix appended). */
+static const char* const gbuffer_parts[3] = {"albedo", "normal", "depth"};
+static void gbuffer_paths(const char* out, char paths[3][4096])
+{
+    size_t stem = strlen(out);
+    if (stem >= 4 && !strcmp(out + stem - 4, ".png"))
+        stem -= 4;
+    for (int i = 0; i < 3; ++i)
+        snprintf(paths[i], 4096, "%.*s-%s.png", (int)(stem < 4000 ? stem : 4000), out, gbuffer_parts[i]);
 }
 
 static const char* const usage_preview =
@@ -86,6 +112,17 @@ static const char* const usage_preview =
     "                      events after it (0..8, default 2)\n"
     "      --cell-step S   cells: the thesis's linear search at S tile-map voxels a step\n"
     "                      (default 0: exact voxel traversal; the reference is always exact)\n"
+    "      --pass P        what libmeso draws (meso_rt_draw_desc.pass; not with --reference):\n"
+    "                      forward (default): the shaded image;\n"
+    "                      depth: the depth-only pass, written as a greyscale PNG of linear\n"
+    "                      eye depth (distance along the view axis): 255 at the nearest hit,\n"
+    "                      32 at the farthest, linear in between, 0 where nothing was hit\n"
+    "                      (then 2x2 box-filtered like the colour);\n"
+    "                      gbuffer: the G-buffer pass into OUT-albedo.png (linear albedo as\n"
+    "                      stored, no sRGB encoding), OUT-normal.png (world-space normal,\n"
+    "                      rgb = n * 0.5 + 0.5) and OUT-depth.png (as depth) beside OUT.png,\n"
+    "                      which is not written; background: the forward clear colour.\n"
+    "                      Slices: with --slice-interp none only\n"
     "  -h, --help          this help\n";
 
 /* The options that change the drawing. */
@@ -101,6 +138,7 @@ typedef struct preview_knobs {
     double time; /* with has_time: seconds, for shells with stored frames */
     int reversed; /* --depth reversed: reversed-Z, 0..1 clip depth, infinite far plane */
     int gles;    /* --api gles: an OpenGL ES 3.2 context */
+    meso_rt_pass pass;
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -306,7 +344,8 @@ done:
     X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage) X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus) X(PFNGLVIEWPORTPROC, Viewport)                        \
     X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear) X(PFNGLREADPIXELSPROC, ReadPixels)                  \
-    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) X(PFNGLDEPTHFUNCPROC, DepthFunc)
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) X(PFNGLDEPTHFUNCPROC, DepthFunc)                                       \
+    X(PFNGLDRAWBUFFERSPROC, DrawBuffers) X(PFNGLREADBUFFERPROC, ReadBuffer)
 
 typedef struct preview_gl {
 #define M(t, n) t n;
@@ -321,6 +360,29 @@ static void on_log(void* user, meso_log_level level, meso_log_item item, const c
         return;
     fprintf(stderr, "mesoinspect %s: libmeso: %s%s%s\n", level == MESO_LOG_ERROR ? "error" : "warning",
             meso_log_item_string(item), message ? ": " : "", message ? message : "");
+}
+
+/* The depth buffer (2 width x 2 height window depths, standard convention)
+ * as grey RGBA8: eye depth (along the view axis) from proj, 255 at the
+ * nearest hit, 32 at the farthest, 0 where nothing was hit (--help). */
+static void depth_grey(const float* depth, const float proj[16], size_t n, uint8_t* px)
+{
+    double dmin = INFINITY, dmax = -INFINITY;
+    for (size_t i = 0; i < n; ++i)
+        if (depth[i] < 1.0f) {
+            const double dist = proj[14] / (2.0 * depth[i] - 1.0 + proj[10]);
+            dmin = fmin(dmin, dist);
+            dmax = fmax(dmax, dist);
+        }
+    for (size_t i = 0; i < n; ++i) {
+        uint8_t g = 0;
+        if (depth[i] < 1.0f) {
+            const double dist = proj[14] / (2.0 * depth[i] - 1.0 + proj[10]);
+            g = (uint8_t)lrint(dmax > dmin ? 32.0 + 223.0 * (dmax - dist) / (dmax - dmin) : 255.0);
+        }
+        px[4 * i] = px[4 * i + 1] = px[4 * i + 2] = g;
+        px[4 * i + 3] = 255;
+    }
 }
 
 static int render(const char* path, const char* out, int width, int height, uint32_t only, double yaw, double pitch,
@@ -346,6 +408,7 @@ static int render(const char* path, const char* out, int width, int height, uint
     meso_rt* rt = NULL;
     meso_file* f = NULL;
     uint8_t *px = NULL, *img = NULL;
+    float* depth = NULL;
     meso_rt_object objs[256];
     int nobj = 0;
     if (missing) {
@@ -405,16 +468,20 @@ static int render(const char* path, const char* out, int width, int height, uint
     }
 
     const int W = 2 * width, H = 2 * height;
-    GLuint fbo, rb[2];
+    GLuint fbo, rb[3];
     gl.GenFramebuffers(1, &fbo);
     gl.BindFramebuffer(GL_FRAMEBUFFER, fbo);
-    gl.GenRenderbuffers(2, rb);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, rb[0]);
-    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, W, H);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
-    gl.BindRenderbuffer(GL_RENDERBUFFER, rb[1]);
-    gl.RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, W, H);
-    gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+    gl.GenRenderbuffers(3, rb);
+    /* The G-buffer pass draws into two UNORM attachments (albedo, normal). */
+    const GLenum attach[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_DEPTH_ATTACHMENT};
+    for (int i = 0; i < 3; ++i) {
+        if (i == 1 && knobs->pass != MESO_PASS_GBUFFER)
+            continue;
+        gl.BindRenderbuffer(GL_RENDERBUFFER, rb[i]);
+        gl.RenderbufferStorage(GL_RENDERBUFFER, i == 2 ? GL_DEPTH_COMPONENT32F : GL_RGBA8, W, H);
+        gl.FramebufferRenderbuffer(GL_FRAMEBUFFER, attach[i], GL_RENDERBUFFER, rb[i]);
+    }
+    gl.DrawBuffers(knobs->pass == MESO_PASS_GBUFFER ? 2 : 1, attach);
     if (gl.CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
         fprintf(stderr, "mesoinspect error: cannot create a %dx%d framebuffer\n", W, H);
         code = MESO_EXIT_INTERNAL;
@@ -455,27 +522,47 @@ static int render(const char* path, const char* out, int width, int height, uint
     d.cells.mode = knobs->cell_mode;
     d.cells.bounces = knobs->cell_bounces;
     d.cells.step = knobs->cell_step;
+    d.pass = knobs->pass;
     for (int i = 0; i < nobj; ++i)
         if (meso_rt_draw(rt, objs[i], &d) != MESO_OK) {
             code = MESO_EXIT_INTERNAL;
             goto done;
         }
-    px = malloc((size_t)W * (size_t)H * 4);
-    img = malloc((size_t)width * (size_t)height * 4);
-    if (!px || !img) {
+    const size_t full = (size_t)W * (size_t)H, small = (size_t)width * (size_t)height * 4;
+    px = malloc(full * 4);
+    img = malloc(3 * small);
+    depth = malloc(full * sizeof(float));
+    if (!px || !img || !depth) {
         fprintf(stderr, "mesoinspect error: out of memory\n");
         code = MESO_EXIT_INTERNAL;
         goto done;
     }
-    gl.ReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, px);
-    box_filter(px, img, width, height);
-    if ((code = write_png(out, img, width, height)) != MESO_EXIT_OK)
+    /* forward: the colour; depth: the depth as grey; gbuffer: albedo,
+     * normal and depth as grey, three files. */
+    const int files = knobs->pass == MESO_PASS_GBUFFER ? 3 : 1;
+    gl.ReadPixels(0, 0, W, H, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+    for (int i = 0; i < files; ++i) {
+        if (knobs->pass == MESO_PASS_DEPTH || i == 2) {
+            depth_grey(depth, d.proj, full, px);
+        } else {
+            gl.ReadBuffer(attach[i]);
+            gl.ReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, px);
+        }
+        box_filter(px, img + (size_t)i * small, width, height);
+    }
+    char paths[3][4096];
+    gbuffer_paths(out, paths);
+    const char* const outs[3] = {paths[0], paths[1], paths[2]};
+    const uint8_t* const imgs[3] = {img, img + small, img + 2 * small};
+    if ((code = files == 3 ? write_pngs(outs, imgs, 3, width, height) : write_png(out, img, width, height)) !=
+        MESO_EXIT_OK)
         goto done;
-    gl.DeleteRenderbuffers(2, rb);
+    gl.DeleteRenderbuffers(3, rb);
     gl.DeleteFramebuffers(1, &fbo);
 done:
     free(px);
     free(img);
+    free(depth);
     meso_file_close(f);
     meso_rt_destroy(rt);
     meso_egl_destroy(egl);
@@ -691,13 +778,27 @@ int mesoinspect_preview(int argc, char** argv)
                 return MESO_EXIT_USAGE;
             }
             knobs.cell_step = (float)st;
+        } else if (!strcmp(a, "--pass") && val) {
+            const char* m = argv[++i];
+            if (!strcmp(m, "forward"))
+                knobs.pass = MESO_PASS_FORWARD;
+            else if (!strcmp(m, "depth"))
+                knobs.pass = MESO_PASS_DEPTH;
+            else if (!strcmp(m, "gbuffer"))
+                knobs.pass = MESO_PASS_GBUFFER;
+            else {
+                fprintf(stderr, "mesoinspect error: --pass expects forward, depth or gbuffer, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", m);
+                return MESO_EXIT_USAGE;
+            }
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "mesoinspect error: %s '%s'\nSee 'mesoinspect --help'.\n",
                     (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--size") || !strcmp(a, "--object") ||
                      !strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--technique") ||
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
-                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") || !strcmp(a, "--depth") ||
-                     !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") || !strcmp(a, "--api"))
+                     !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
+                     !strcmp(a, "--depth") || !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") ||
+                     !strcmp(a, "--api") || !strcmp(a, "--pass"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
@@ -713,9 +814,18 @@ int mesoinspect_preview(int argc, char** argv)
         fputs(usage_preview, stderr);
         return MESO_EXIT_USAGE;
     }
-    const int checked = mi_check_output(out);
-    if (checked != MESO_EXIT_OK)
-        return checked;
+    if (reference && knobs.pass != MESO_PASS_FORWARD) {
+        fprintf(stderr, "mesoinspect error: --pass depth and gbuffer are libmeso's passes, not the reference's\n"
+                        "See 'mesoinspect --help'.\n");
+        return MESO_EXIT_USAGE;
+    }
+    char paths[3][4096];
+    gbuffer_paths(out, paths);
+    for (int i = 0; i < (knobs.pass == MESO_PASS_GBUFFER ? 3 : 1); ++i) {
+        const int checked = mi_check_output(knobs.pass == MESO_PASS_GBUFFER ? paths[i] : out);
+        if (checked != MESO_EXIT_OK)
+            return checked;
+    }
     knobs.technique = technique;
     const int valid = preview_validate(file);
     if (valid != MESO_EXIT_OK)
