@@ -411,6 +411,44 @@ static void test_refusals(ctx* c, meso_rt_object mesh, meso_rt_object shell)
     same(c, "mirrored shell instances = separate mirrored draws");
 }
 
+/* The passes and the shading hook see each instance's model in their
+ * fragment stages (world normals, world points): depth-only and G-buffer
+ * (albedo attachment and depth) instanced = separate draws, and forward
+ * with hooks that paint the world normal and the world point. */
+static void test_passes(ctx* c, const meso_rt_object* objs)
+{
+    static const char* const kinds[4] = {"mesh", "shell", "frusta", "cells"};
+    for (int k = 0; k < 4; ++k)
+        for (int pass = MESO_PASS_DEPTH; pass <= MESO_PASS_GBUFFER; ++pass) {
+            meso_rt_draw_desc d = c->desc;
+            d.pass = (meso_rt_pass)pass;
+            char what[96];
+            snprintf(what, sizeof(what), "%s %s pass: instanced = separate draws", kinds[k],
+                     pass == MESO_PASS_DEPTH ? "depth" : "G-buffer");
+            instanced_vs_separate(c, objs[k], &d, what);
+        }
+    static const char* const hooks[2] = {
+        "vec3 meso_shade(vec3 a, vec3 n, vec3 p, vec3 v) { return 0.5 + 0.5 * n; }\n",
+        "vec3 meso_shade(vec3 a, vec3 n, vec3 p, vec3 v) { return fract(0.7 * p + 0.5); }\n"};
+    static const char* const names[4] = {"mesh", "shell", "frusta", "cells"};
+    meso_rt* plain = c->rt;
+    for (int h = 0; h < 2; ++h) {
+        CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .log_fn = on_log_error,
+                                             .log_user = &c->log, .shading_hook = hooks[h]},
+                             &c->rt) == MESO_OK);
+        for (int k = 0; k < 4; ++k) {
+            const meso_rt_object o = load(c, names[k]);
+            char what[96];
+            snprintf(what, sizeof(what), "%s, hook painting the world %s: instanced = separate draws", kinds[k],
+                     h ? "point" : "normal");
+            instanced_vs_separate(c, o, &c->desc, what);
+            meso_rt_release_object(c->rt, o);
+        }
+        meso_rt_destroy(c->rt);
+    }
+    c->rt = plain;
+}
+
 int main(int argc, char** argv)
 {
     setvbuf(stdout, NULL, _IONBF, 0);
@@ -468,6 +506,7 @@ int main(int argc, char** argv)
     test_list(&c, objs, 4);
     test_list_state(&c, objs, 4);
     test_refusals(&c, objs[0], objs[1]);
+    test_passes(&c, objs);
 
     for (int i = 0; i < 4; ++i)
         meso_rt_release_object(c.rt, objs[i]);
