@@ -106,11 +106,14 @@ typedef struct meso_rt_desc {
      * at every traced hit (the environment terms are mixed in after). Not
      * applied to MESO_SHELL_SEGMENT_ONLY (a diagnostic colour) nor to the
      * two-pass slice variants (their colour is the built-in).
-     * The snippet is compiled after the "#version 330 core" line, the
-     * runtime's #defines (and, for some kinds, its u_mvp / u_inv_mvp uniforms)
-     * and a "#line 1", so compile errors give the snippet's own line numbers;
-     * all other runtime code follows it. It may rely on GLSL 3.30 core
-     * built-ins and its own declarations only. The runtime's shaders define
+     * The snippet is compiled after the runtime's prelude — "#version 330
+     * core" ("430 core" for the work-counting variants), or on OpenGL ES
+     * "#version 320 es" with highp default precisions — its #defines and a
+     * "#line 1", so compile errors give the snippet's own line numbers; all
+     * other runtime code follows it. It may rely on built-ins common to
+     * GLSL 3.30 core and GLSL ES 3.20 (write it to both if the host runs
+     * both: ES has no implicit int-to-float conversions) and its own
+     * declarations only. The runtime's shaders define
      * many unprefixed names (shade, solid, occlusion, ...): prefix every global
      * name of the snippet but meso_shade with `hook_`.
      * Data from the host: constants in the snippet, or one uniform block it
@@ -398,14 +401,23 @@ typedef struct meso_rt_draw_desc {
  * GL state. A draw changes: the program, vertex array, active texture,
  * textures on units 0-4 (0-7 for slices), depth test (enabled) and mask
  * (written), the colour mask in MESO_PASS_DEPTH (all masked), the depth
- * function only with desc->depth_func, culling (ray
- * casters: enabled, front faces culled, counter-clockwise front faces;
- * meshes: untouched), where stats are counted (OpenGL 4.3, ES 3.2 with
- * fragment shader storage) the shader storage buffer binding; for two-pass slices also the draw framebuffer binding, the
- * viewport, blending and the depth function. Under MESO_STATE_RESTORE all of
- * it is queried first and put back before the call returns; under
- * MESO_STATE_HOST_OWNS none of it is queried or put back (and, with
- * desc->viewport given, the draw makes no glGet call at all). The uniform
+ * function only with desc->depth_func, culling (shells and frusta:
+ * enabled, front faces culled; cells: back faces culled, or culling off
+ * when the camera is inside the tile grid; slices: off; the front face
+ * counter-clockwise, clockwise under a mirroring model; meshes: the host's
+ * culling, with the front face turned over under a mirroring model), where
+ * stats are counted (OpenGL 4.3, ES 3.2 with fragment shader storage) the
+ * generic shader storage buffer binding and indexed binding 0; for two-pass
+ * slices also the draw framebuffer binding, the viewport, blending and the
+ * depth function. Under MESO_STATE_RESTORE all of it is queried first and
+ * put back before the call returns; under MESO_STATE_HOST_OWNS none of it
+ * is queried or put back (and, with desc->viewport given, the draw makes
+ * no glGet call at all, except: two-pass slices read the draw framebuffer
+ * binding they composite into, and an instanced draw of an animated shell
+ * uploads its frames as meso_rt_shell_set_time does). A mirroring mesh
+ * under MESO_STATE_HOST_OWNS takes the host's front face to be GL's
+ * counter-clockwise default. A depth-only draw under MESO_STATE_HOST_OWNS
+ * leaves colour writes masked: the host turns them back on. The uniform
  * locations of every program are looked up once, when it links. The GL
  * error queue is read only with meso_rt_desc.check_gl_errors (then errors
  * are logged as GL_ERROR and returned as MESO_ERR_GL, never fatal). */
@@ -475,7 +487,10 @@ typedef struct meso_rt_draw_item {
  * restore as in meso_rt_draw). An item that fails is logged and skipped,
  * the others are drawn, and the first failure is returned. Refused before
  * anything is drawn (MESO_ERR_INVALID_ARG): NULL items or common, count 0,
- * an item with a stale handle or instance_count without instances. */
+ * an item with a stale handle or instance_count without instances. Work
+ * counters (`stats`) are filled per draw: items sharing common's stats
+ * leave in it the counts of the last of them drawn (in sorted order); give
+ * an item its own knobs for its own counts. */
 MESO_API meso_result meso_rt_draw_list(meso_rt* rt, const meso_rt_draw_item* items, uint32_t count,
                                        const meso_rt_draw_desc* common);
 

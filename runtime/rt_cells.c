@@ -69,6 +69,19 @@ static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* 
                              GLenum format, GLenum type, GLuint* out)
 {
     mesoi_gl* gl = &rt->gl;
+    /* Refused before GL sees it, so the host's error queue stays its own. */
+    GLint limit = 0;
+    gl->GetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &limit);
+    for (int k = 0; k < 3; ++k)
+        if (c->dims[k] == 0 || c->dims[k] > (uint32_t)limit) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
+                      "cells: a %ux%ux%u texture exceeds this context's limit of %d texels a side", c->dims[0],
+                      c->dims[1], c->dims[2], (int)limit);
+            *out = 0;
+            return MESO_ERR_GL;
+        }
+    GLint prev_tex = 0;
+    gl->GetIntegerv(GL_TEXTURE_BINDING_3D, &prev_tex);
     mesoi_unpack unpack;
     mesoi_unpack_default(rt, &unpack);
     gl->GenTextures(1, out);
@@ -80,7 +93,7 @@ static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* 
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAX_LEVEL, 0);
     GLint width = 0; /* no level 0: GL refused it (the error queue stays the host's) */
     gl->GetTexLevelParameteriv(GL_TEXTURE_3D, 0, GL_TEXTURE_WIDTH, &width);
-    gl->BindTexture(GL_TEXTURE_3D, 0);
+    gl->BindTexture(GL_TEXTURE_3D, (GLuint)prev_tex);
     mesoi_unpack_restore(rt, &unpack);
     if (width != (GLint)c->dims[0]) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "cells: a %ux%ux%u texture could not be created",

@@ -125,6 +125,7 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
                       "a %ux%ux%u texture exceeds this context's limit of %d texels a side", dims[0], dims[1],
                       dims[2], (int)limit);
+            mesoi_rt_free(rt, converted);
             *out = 0;
             return MESO_ERR_GL;
         }
@@ -187,7 +188,8 @@ GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t
 {
     mesoi_gl* gl = &rt->gl;
     GLuint tex = 0;
-    GLint stored = 0;
+    GLint stored = 0, prev_tex = 0;
+    gl->GetIntegerv(GL_TEXTURE_BINDING_BUFFER, &prev_tex); /* the active unit's: the host's */
     gl->GenBuffers(1, buf);
     gl->BindBuffer(GL_TEXTURE_BUFFER, *buf);
     gl->BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)size, data, GL_DYNAMIC_DRAW);
@@ -195,7 +197,7 @@ GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t
     gl->GenTextures(1, &tex);
     gl->BindTexture(GL_TEXTURE_BUFFER, tex);
     gl->TexBuffer(GL_TEXTURE_BUFFER, format, *buf);
-    gl->BindTexture(GL_TEXTURE_BUFFER, 0);
+    gl->BindTexture(GL_TEXTURE_BUFFER, (GLuint)prev_tex);
     gl->BindBuffer(GL_TEXTURE_BUFFER, 0);
     if ((size_t)stored != size) { /* out of memory: no store; the error queue stays the host's */
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %zu-byte buffer could not be created", size);
@@ -511,10 +513,12 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
     if ((unsigned)d->depth > MESO_DEPTH_REVERSED || (unsigned)d->clip_depth > MESO_CLIP_DEPTH_ZERO_TO_ONE ||
-        d->viewport[2] < 0 || d->viewport[3] < 0 || (unsigned)d->pass >= MESO_PASS_COUNT) {
+        d->viewport[2] < 0 || d->viewport[3] < 0 || (unsigned)d->pass >= MESO_PASS_COUNT ||
+        (d->depth_func && (d->depth_func < GL_NEVER || d->depth_func > GL_ALWAYS))) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
-                  "meso_rt_draw: depth %d, clip_depth %d, viewport %dx%d or pass %d out of range", (int)d->depth,
-                  (int)d->clip_depth, (int)d->viewport[2], (int)d->viewport[3], (int)d->pass);
+                  "meso_rt_draw: depth %d, clip_depth %d, viewport %dx%d, pass %d or depth_func 0x%04x out of range",
+                  (int)d->depth, (int)d->clip_depth, (int)d->viewport[2], (int)d->viewport[3], (int)d->pass,
+                  (unsigned)d->depth_func);
         return MESO_ERR_INVALID_ARG;
     }
     double view[16], proj[16];
@@ -580,6 +584,26 @@ static GLenum binding_of(GLenum target)
     }
 }
 
+void mesoi_ssbo_save(meso_rt* rt, mesoi_ssbo* b)
+{
+    mesoi_gl* gl = &rt->gl;
+    gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &b->generic);
+    gl->GetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 0, &b->indexed);
+    gl->GetInteger64i_v(GL_SHADER_STORAGE_BUFFER_START, 0, &b->start);
+    gl->GetInteger64i_v(GL_SHADER_STORAGE_BUFFER_SIZE, 0, &b->size);
+}
+
+void mesoi_ssbo_restore(meso_rt* rt, const mesoi_ssbo* b)
+{
+    mesoi_gl* gl = &rt->gl;
+    if (b->indexed && b->size > 0)
+        gl->BindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, (GLuint)b->indexed, (GLintptr)b->start,
+                            (GLsizeiptr)b->size);
+    else
+        gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, (GLuint)b->indexed);
+    gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)b->generic); /* after: BindBufferBase sets it too */
+}
+
 void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
 {
     mesoi_gl* gl = &rt->gl;
@@ -619,7 +643,7 @@ void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, 
         s->prev_test = gl->IsEnabled(GL_DEPTH_TEST);
         s->prev_cull = gl->IsEnabled(GL_CULL_FACE);
         if (s->stats)
-            gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &s->prev_ssbo);
+            mesoi_ssbo_save(rt, &s->prev_ssbo);
         if (s->pass == MESO_PASS_DEPTH)
             gl->GetBooleanv(GL_COLOR_WRITEMASK, s->prev_color_mask);
     }
@@ -683,7 +707,7 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
         stats->steps = counts[1];
         stats->hits = counts[2];
         if (s->restore)
-            gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)s->prev_ssbo);
+            mesoi_ssbo_restore(rt, &s->prev_ssbo);
     } else if (stats) {
         memset(stats, 0, sizeof(*stats));
     }

@@ -83,6 +83,9 @@
     X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                                 \
     X(PFNGLGETTEXLEVELPARAMETERIVPROC, GetTexLevelParameteriv)               \
     X(PFNGLGETBUFFERPARAMETERIVPROC, GetBufferParameteriv)                   \
+    X(PFNGLGETINTEGERI_VPROC, GetIntegeri_v)                                 \
+    X(PFNGLGETINTEGER64I_VPROC, GetInteger64i_v)                             \
+    X(PFNGLBINDBUFFERRANGEPROC, BindBufferRange)                   \
     X(PFNGLDRAWARRAYSINSTANCEDPROC, DrawArraysInstanced)                     \
     X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced)                   \
     X(PFNGLCOLORMASKPROC, ColorMask)                                         \

@@ -195,8 +195,9 @@ static const GLenum list_bindings[4] = {GL_TEXTURE_BINDING_BUFFER, GL_TEXTURE_BI
                                         GL_TEXTURE_BINDING_CUBE_MAP};
 
 typedef struct list_state {
-    GLint program, vao, func, mask, active, cull_mode, front, ssbo, tex_buffer;
-    GLboolean test, cull;
+    GLint program, vao, func, mask, active, cull_mode, front, tex_buffer;
+    mesoi_ssbo ssbo;
+    GLboolean test, cull, color_mask[4];
     GLint bind[MESOI_DRAW_MAX_UNITS][4];
 } list_state;
 
@@ -211,9 +212,9 @@ static void list_save(meso_rt* rt, list_state* s)
     gl->GetIntegerv(GL_CULL_FACE_MODE, &s->cull_mode);
     gl->GetIntegerv(GL_FRONT_FACE, &s->front);
     gl->GetIntegerv(GL_TEXTURE_BUFFER_BINDING, &s->tex_buffer);
-    s->ssbo = 0;
-    if (rt->gl_version >= 43)
-        gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &s->ssbo);
+    if (rt->stats_ok)
+        mesoi_ssbo_save(rt, &s->ssbo);
+    gl->GetBooleanv(GL_COLOR_WRITEMASK, s->color_mask); /* the depth pass masks colour */
     s->test = gl->IsEnabled(GL_DEPTH_TEST);
     s->cull = gl->IsEnabled(GL_CULL_FACE);
     for (int u = 0; u < MESOI_DRAW_MAX_UNITS; ++u) {
@@ -239,8 +240,9 @@ static void list_restore(meso_rt* rt, const list_state* s)
     gl->CullFace((GLenum)s->cull_mode);
     gl->FrontFace((GLenum)s->front);
     gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)s->tex_buffer);
-    if (rt->gl_version >= 43)
-        gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)s->ssbo);
+    if (rt->stats_ok)
+        mesoi_ssbo_restore(rt, &s->ssbo);
+    gl->ColorMask(s->color_mask[0], s->color_mask[1], s->color_mask[2], s->color_mask[3]);
     (s->test ? gl->Enable : gl->Disable)(GL_DEPTH_TEST);
     (s->cull ? gl->Enable : gl->Disable)(GL_CULL_FACE);
 }

@@ -188,6 +188,14 @@ meso_result mesoi_buffer_update(meso_rt* rt, GLuint buf, const void* data, size_
  * under MESO_STATE_RESTORE; checks GL errors only when the context was
  * created with check_gl_errors). */
 #define MESOI_DRAW_MAX_UNITS 8
+/* The shader storage bindings the stats counters take over: the generic one
+ * and indexed binding 0 with its range (mesoi_ssbo_save / _restore). */
+typedef struct mesoi_ssbo {
+    GLint generic, indexed;
+    GLint64 start, size;
+} mesoi_ssbo;
+void mesoi_ssbo_save(meso_rt* rt, mesoi_ssbo* b);
+void mesoi_ssbo_restore(meso_rt* rt, const mesoi_ssbo* b);
 typedef struct mesoi_draw {
     double pv[16];              /* proj · view */
     double light_world[3];      /* towards the light, world space (not normalised) */
@@ -210,7 +218,8 @@ typedef struct mesoi_draw {
     int units;
     GLenum target[MESOI_DRAW_MAX_UNITS];
     GLint prev_bind[MESOI_DRAW_MAX_UNITS];
-    GLint prev_program, prev_vao, prev_func, prev_mask, prev_active, prev_cull_mode, prev_front, prev_ssbo;
+    GLint prev_program, prev_vao, prev_func, prev_mask, prev_active, prev_cull_mode, prev_front;
+    mesoi_ssbo prev_ssbo;
     GLboolean prev_test, prev_cull;
 } mesoi_draw;
 meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need_inverse, int instanced,

@@ -126,6 +126,11 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     /* Meshes are drawn with the host's culling, not the ray casters' back
      * faces (raycast 0). */
     mesoi_draw_begin(rt, &ds, prog, 0, inst ? 1 : 0, targets, bind);
+    /* A mirroring model turns the triangles' winding over: the host's
+     * front faces (under MESO_STATE_HOST_OWNS taken to be counter-clockwise,
+     * GL's default) become the other winding for this draw. */
+    if (ds.mirrored)
+        rt->gl.FrontFace(ds.restore && ds.prev_front == GL_CW ? GL_CCW : GL_CW);
     /* The light in world space, as the fragment shader takes it. */
     float light[3] = {0.3f, 0.8f, 0.5f};
     if (d->light_dir[0] != 0.0f || d->light_dir[1] != 0.0f || d->light_dir[2] != 0.0f)

@@ -209,7 +209,15 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
                                       s->tex_kind == 2 ? s->func_tex : 0, 0, 0, 0};
     mesoi_draw_begin(rt, &ds, prog, 0, SLICE_UNITS, unit_target, bind);
     gl->Disable(GL_CULL_FACE); /* slices are seen from both sides */
-    const GLsizei count = 3 * (GLsizei)(slices + 6) * (GLsizei)s->triangle_count;
+    const int64_t count64 = 3 * (int64_t)(slices + 6) * (int64_t)s->triangle_count;
+    if (count64 > INT32_MAX) { /* a GLsizei: refused before GL raises GL_INVALID_VALUE */
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw: %d slices of %u prisms are more than one draw call holds", slices,
+                  s->triangle_count);
+        mesoi_draw_end(rt, &ds, NULL, "slices");
+        return MESO_ERR_INVALID_ARG;
+    }
+    const GLsizei count = (GLsizei)count64;
     if (!two_pass) {
         use_pass(rt, &ds, prog, s, k, ds.viewport);
         gl->DrawArrays(GL_TRIANGLES, 0, count);

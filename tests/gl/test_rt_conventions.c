@@ -24,8 +24,12 @@
  *    unpack buffer) neither corrupts uploads (images equal those loaded
  *    under GL's defaults) nor is changed by them;
  *  - model matrices: a mirroring one draws the mirror image (pixel columns
- *    flipped, light in the mirror plane); a non-uniform scale is refused
+ *    flipped, light in the mirror plane; meshes under the host's back-face
+ *    culling); a non-uniform scale is refused
  *    with MESO_ERR_INVALID_ARG and a logged reason;
+ *  - a bad depth function is refused with nothing in the host's error
+ *    queue; the host's colour mask survives depth-only draws and draw lists,
+ *    its shader storage binding 0 a draw that counts work;
  *  - sRGB framebuffers: libmeso writes linear colour, so drawn into an
  *    GL_SRGB8_ALPHA8 target with GL_FRAMEBUFFER_SRGB on, each pixel decodes
  *    to the linear (RGBA8) render's value.
@@ -49,7 +53,9 @@ enum { W = 96, H = 72 };
     X(PFNGLENABLEPROC, Enable) X(PFNGLGETERRORPROC, GetError) X(PFNGLPIXELSTOREIPROC, PixelStorei)                  \
     X(PFNGLGENBUFFERSPROC, GenBuffers) X(PFNGLBINDBUFFERPROC, BindBuffer) X(PFNGLBUFFERDATAPROC, BufferData)       \
     X(PFNGLDELETEBUFFERSPROC, DeleteBuffers) X(PFNGLDISABLEPROC, Disable)                                          \
-    X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)
+    X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus) X(PFNGLCULLFACEPROC, CullFace)                       \
+    X(PFNGLGETBOOLEANVPROC, GetBooleanv) X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                               \
+    X(PFNGLGETINTEGERI_VPROC, GetIntegeri_v)
 
 typedef struct extra_gl {
 #define M(t, n) t n;
@@ -527,6 +533,12 @@ static void model_matrices(ctx* c, meso_rt* rt, meso_rt_object* objs, const came
         meso_rt_draw_desc d = view_desc(&cam, D_STANDARD);
         d.light_dir[1] = 0.8f;
         d.light_dir[2] = 0.6f;
+        /* Meshes keep the host's culling: back faces culled, which a
+         * mirroring model must not turn into front faces. */
+        if (k == K_MESH) {
+            c->gl.Enable(GL_CULL_FACE);
+            c->gl.CullFace(GL_BACK);
+        }
         image plain;
         assert(render(c, rt, objs[k], k, D_STANDARD, d, &plain) == MESO_OK);
         for (int i = 0; i < 16; ++i)
@@ -536,6 +548,7 @@ static void model_matrices(ctx* c, meso_rt* rt, meso_rt_object* objs, const came
         assert(render(c, rt, objs[k], k, D_STANDARD, d, &img) == MESO_OK);
         int coverage, colour, covered;
         compare(&plain, &img, 1, &coverage, &colour, &covered);
+        c->gl.Disable(GL_CULL_FACE);
         fprintf(stderr, "    %-13s mirrored: covered %d, coverage differs %d, colour differs %d\n", kind_name[k],
                 covered, coverage, colour);
         assert(covered > 300 && coverage <= covered * 3 / 1000 && colour <= covered * 3 / 1000);
@@ -546,6 +559,51 @@ static void model_matrices(ctx* c, meso_rt* rt, meso_rt_object* objs, const came
         assert(meso_rt_draw(rt, objs[k], &d) == MESO_ERR_INVALID_ARG);
         assert(strstr(c->log, "model matrix") != NULL);
     }
+}
+
+/* What a draw must leave alone or refuse: a bad depth function (refused,
+ * nothing in the host's error queue), the host's colour mask after
+ * depth-only draws and draw lists, its indexed shader storage binding 0
+ * after a draw that counts work. */
+static void host_state_kept(ctx* c, meso_rt* rt, meso_rt_object* objs, const camera* cams)
+{
+    extra_gl* gl = &c->gl;
+    meso_rt_draw_desc d = view_desc(&cams[K_FRUSTA], D_STANDARD);
+    d.depth_func = 0x1234;
+    assert(meso_rt_draw(rt, objs[K_FRUSTA], &d) == MESO_ERR_INVALID_ARG && strstr(c->log, "depth_func"));
+    assert(gl->GetError() == GL_NO_ERROR);
+    d.depth_func = 0;
+    d.pass = MESO_PASS_DEPTH;
+    GLboolean mask[4];
+    assert(meso_rt_draw(rt, objs[K_FRUSTA], &d) == MESO_OK);
+    gl->GetBooleanv(GL_COLOR_WRITEMASK, mask);
+    assert(mask[0] && mask[1] && mask[2] && mask[3]);
+    const meso_rt_draw_item items[2] = {{.object = objs[K_FRUSTA]}, {.object = objs[K_CELLS]}};
+    assert(meso_rt_draw_list(rt, items, 2, &d) == MESO_OK);
+    gl->GetBooleanv(GL_COLOR_WRITEMASK, mask);
+    assert(mask[0] && mask[1] && mask[2] && mask[3]);
+    /* The work counters take shader storage binding 0 for the draw. */
+    GLuint host = 0;
+    gl->GenBuffers(1, &host);
+    gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, host);
+    gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    meso_rt_draw_stats stats;
+    d.pass = MESO_PASS_FORWARD;
+    d.stats = &stats;
+    assert(meso_rt_draw(rt, objs[K_FRUSTA], &d) == MESO_OK && stats.supported && stats.hits > 0);
+    GLint indexed = 0, generic = -1;
+    gl->GetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 0, &indexed);
+    gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &generic);
+    assert(indexed == (GLint)host && generic == 0);
+    assert(meso_rt_draw_list(rt, items, 1, &d) == MESO_OK && stats.supported);
+    gl->GetIntegeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 0, &indexed);
+    gl->GetIntegerv(GL_SHADER_STORAGE_BUFFER_BINDING, &generic);
+    assert(indexed == (GLint)host && generic == 0);
+    gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
+    gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    gl->DeleteBuffers(1, &host);
+    assert(gl->GetError() == GL_NO_ERROR);
+    fprintf(stderr, "    bad depth_func refused; colour mask and shader storage binding 0 kept\n");
 }
 
 static double srgb_decode(double s)
@@ -635,6 +693,8 @@ int main(int argc, char** argv)
     error_queue_and_unpack(&c, cams);
     fprintf(stderr, "  model_matrices ...\n");
     model_matrices(&c, rt, objs, cams);
+    fprintf(stderr, "  host_state_kept ...\n");
+    host_state_kept(&c, rt, objs, cams);
     fprintf(stderr, "  srgb_framebuffer ...\n");
     srgb_framebuffer(&c, rt, objs, cams);
     meso_rt_destroy(rt);

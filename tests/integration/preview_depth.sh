@@ -47,6 +47,15 @@ for row in "mesh mesh 5" "shell shell 5" "curved shell 5 --technique curved" \
     test "${differing:-99999}" -le $((128 * 128 * permille / 1000))
 done
 
+# The depth pass's picture (grey = eye depth) under both conventions.
+"$inspect" preview "$tmp/shell.meso" -o "$tmp/zs.png" --size 128x128 --pass depth >/dev/null 2>&1 &&
+  "$inspect" preview "$tmp/shell.meso" -o "$tmp/zr.png" --size 128x128 --pass depth --depth reversed >/dev/null 2>&1
+check "--pass depth: written under both conventions" test $? = 0
+out=$("$probe" --diff "$tmp/zs.png" "$tmp/zr.png")
+echo "     depth pass: $out"
+check "--pass depth --depth reversed: the same eye-depth picture (5 per mille)" \
+  test "${out% *}" -le $((128 * 128 * 5 / 1000))
+
 "$inspect" preview "$tmp/shell.meso" -o "$tmp/bad.png" --depth sideways >/dev/null 2>"$tmp/err"
 check "--depth sideways: usage error (exit 1)" test $? = 1
 check "--depth sideways: says what it expects" grep -q "standard or reversed" "$tmp/err"

@@ -362,24 +362,35 @@ static void on_log(void* user, meso_log_level level, meso_log_item item, const c
             meso_log_item_string(item), message ? ": " : "", message ? message : "");
 }
 
-/* The depth buffer (2 width x 2 height window depths, standard convention)
- * as grey RGBA8: eye depth (along the view axis) from proj, 255 at the
- * nearest hit, 32 at the farthest, 0 where nothing was hit (--help). */
-static void depth_grey(const float* depth, const float proj[16], size_t n, uint8_t* px)
+/* Eye depth (along the view axis) of window depth z under proj: standard
+ * (-1..1 clip depth, GL_LESS) or, with `reversed`, preview's reversed-Z
+ * projection (0..1 clip depth, NDC z = near / depth, proj[14] = near).
+ * Negative where nothing was hit (the cleared far value). */
+static double eye_depth(float z, const float proj[16], int reversed)
+{
+    if (reversed)
+        return z > 0.0f ? proj[14] / z : -1.0;
+    return z < 1.0f ? proj[14] / (2.0 * z - 1.0 + proj[10]) : -1.0;
+}
+
+/* The depth buffer (2 width x 2 height window depths) as grey RGBA8: eye
+ * depth from proj, 255 at the nearest hit, 32 at the farthest, 0 where
+ * nothing was hit (--help). */
+static void depth_grey(const float* depth, const float proj[16], int reversed, size_t n, uint8_t* px)
 {
     double dmin = INFINITY, dmax = -INFINITY;
-    for (size_t i = 0; i < n; ++i)
-        if (depth[i] < 1.0f) {
-            const double dist = proj[14] / (2.0 * depth[i] - 1.0 + proj[10]);
+    for (size_t i = 0; i < n; ++i) {
+        const double dist = eye_depth(depth[i], proj, reversed);
+        if (dist >= 0.0) {
             dmin = fmin(dmin, dist);
             dmax = fmax(dmax, dist);
         }
+    }
     for (size_t i = 0; i < n; ++i) {
         uint8_t g = 0;
-        if (depth[i] < 1.0f) {
-            const double dist = proj[14] / (2.0 * depth[i] - 1.0 + proj[10]);
+        const double dist = eye_depth(depth[i], proj, reversed);
+        if (dist >= 0.0)
             g = (uint8_t)lrint(dmax > dmin ? 32.0 + 223.0 * (dmax - dist) / (dmax - dmin) : 255.0);
-        }
         px[4 * i] = px[4 * i + 1] = px[4 * i + 2] = g;
         px[4 * i + 3] = 255;
     }
@@ -543,7 +554,7 @@ static int render(const char* path, const char* out, int width, int height, uint
     gl.ReadPixels(0, 0, W, H, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
     for (int i = 0; i < files; ++i) {
         if (knobs->pass == MESO_PASS_DEPTH || i == 2) {
-            depth_grey(depth, d.proj, full, px);
+            depth_grey(depth, d.proj, knobs->reversed, full, px);
         } else {
             gl.ReadBuffer(attach[i]);
             gl.ReadPixels(0, 0, W, H, GL_RGBA, GL_UNSIGNED_BYTE, px);
