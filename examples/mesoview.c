@@ -4,7 +4,7 @@
  *
  *   mesoview [FILE.meso] [--size WxH] [--frames N] [--screenshot OUT.png]
  *            [--technique smooth|curved|tetra|segment|slices] [--slices N]
- *            [--slice-interp none|normal|texcoord] [--error-px E] [--animate]
+ *            [--slice-interp none|normal|texcoord] [--slice-axis view|levels] [--error-px E] [--animate]
  *
  * Mouse: drag to orbit, scroll to zoom. Keys: Esc quits, S saves a
  * screenshot (mesoview.png); 1-5 pick the shell technique (5: slices,
@@ -49,6 +49,8 @@ static const char* const usage =
     "  --technique T       shells: smooth (default), curved, tetra, segment or slices\n"
     "  --slices N          slices: slice polygons per prism (2..1024, default 16)\n"
     "  --slice-interp I    slices: texcoord (default), normal or none\n"
+    "  --slice-axis X      slices: view (default: per prism the family the view crosses most\n"
+    "                      densely) or levels (always the levels of constant w)\n"
     "  --error-px E        shells: image-space error bound in pixels (default 1)\n"
     "  --animate           start with the animation on (shells twist and play stored texture\n"
     "                      frames, frusta sway)\n"
@@ -57,6 +59,7 @@ static const char* const usage =
     "\n"
     "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png,\n"
     "1-5 technique (smooth curved tetra segment slices), I slice interpolation,\n"
+    "X slice axis (view / levels), "
     ", . slice count, [ ] error bound, - = step limit,\n"
     "B bisection steps, D distance map on/off, A animation on/off,\n"
     "M cells mode, N cells bounces, L cells linear search on/off\n";
@@ -87,6 +90,8 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
         sh->technique = (meso_shell_technique)(key - GLFW_KEY_1);
     else if (key == GLFW_KEY_I)
         sh->slice_interp = (meso_slice_interp)((sh->slice_interp + 1) % MESO_SLICE_INTERP_COUNT);
+    else if (key == GLFW_KEY_X)
+        sh->slice_axis = (meso_slice_axis)((sh->slice_axis + 1) % MESO_SLICE_AXIS_COUNT);
     else if (key == GLFW_KEY_COMMA)
         sh->slices = sh->slices > 4 ? sh->slices / 2 : 2;
     else if (key == GLFW_KEY_PERIOD)
@@ -398,6 +403,13 @@ int main(int argc, char** argv)
                 return 1;
             }
             kn.d.shell.slice_interp = (meso_slice_interp)found;
+        } else if (!strcmp(a, "--slice-axis") && i + 1 < argc) {
+            const char* m = argv[++i];
+            if (strcmp(m, "view") && strcmp(m, "levels")) {
+                fprintf(stderr, "mesoview error: --slice-axis expects view or levels, got '%s'\n", m);
+                return 1;
+            }
+            kn.d.shell.slice_axis = strcmp(m, "view") ? MESO_SLICE_AXIS_LEVELS : MESO_SLICE_AXIS_VIEW;
         } else if (!strcmp(a, "--error-px") && i + 1 < argc) {
             kn.d.shell.error_px = (float)atof(argv[++i]);
             if (!(kn.d.shell.error_px > 0.0f)) {

@@ -227,6 +227,17 @@ typedef enum meso_slice_interp {
     MESO_SLICE_INTERP_COUNT
 } meso_slice_interp;
 
+/* Which way MESO_SHELL_SLICES cuts each prism (papers/volume-textures-lp-averaged-shells.md §5:
+ * "slices are oriented in the direction closest to the view direction", Figure 11). */
+typedef enum meso_slice_axis {
+    MESO_SLICE_AXIS_VIEW = 0, /* per prism and draw, the family of slices the view ray through the prism's
+                                 centre crosses most densely: the levels w = m/(slices-1), or the planes of
+                                 constant barycentric λ_i = m/slices, one family per corner (runtime/shaders/
+                                 shell_slices_vert.glsl); at grazing views the in-plane families take over */
+    MESO_SLICE_AXIS_LEVELS,   /* always the levels (cheaper: 3 vertices a slice; blurs at grazing views) */
+    MESO_SLICE_AXIS_COUNT
+} meso_slice_axis;
+
 /* How cells objects are ray traced (papers/cell-based-object-representation.md §3.2). */
 typedef enum meso_cells_mode {
     MESO_CELLS_FIRST_HIT = 0, /* §3.2.2: the first inside cell's boundary, shaded */
@@ -261,9 +272,10 @@ typedef struct meso_rt_shell_draw {
     float uv_scale;      /* multiplies the baked texture coordinates (tiling) [1] */
     int no_distance_map; /* 1: march at fixed_step instead of sphere tracing the distance map [0] */
     float fixed_step;    /* texture-space step without a distance map [1/256] */
-    int slices;          /* MESO_SHELL_SLICES: slice polygons per prism, at levels w = m / (slices - 1),
-                            2..1024 [16] */
+    int slices;          /* MESO_SHELL_SLICES: slice polygons per prism (along the chosen family: levels
+                            w = m / (slices - 1), or λ_i = m / slices), 2..1024 [16] */
     meso_slice_interp slice_interp; /* MESO_SHELL_SLICES [MESO_SLICE_TEXCOORD] */
+    meso_slice_axis slice_axis;     /* MESO_SHELL_SLICES [MESO_SLICE_AXIS_VIEW] */
 } meso_rt_shell_draw;
 
 /* MESO_OBJECT_FRUSTA (papers/relief-mapped-conical-frusta.md §3: the relief

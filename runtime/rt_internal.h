@@ -28,7 +28,7 @@ typedef struct mesoi_object {
     X(mvp) X(inv_mvp) X(viewport) X(light_obj) X(albedo) X(depth_ndc) /* every kind (mesoi_draw_begin) */ \
     X(view) X(proj) X(model) X(light_dir)                              /* mesh */                          \
     X(uv_scale) X(tex_kind) X(has_dist) X(tex_size) X(err_scale) X(max_steps) X(bisect_steps)             \
-    X(segment_steps) X(fixed_step) X(min_step) X(slices) X(prism_count) /* shell, slices */                \
+    X(segment_steps) X(fixed_step) X(min_step) X(slices) X(slice_axis) X(prism_count) /* shell, slices */                \
     X(relief_size) X(relief_steps)                                     /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
     X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) /* cells */                              \

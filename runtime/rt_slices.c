@@ -6,13 +6,14 @@
  * say what was decided where the paper's text is garbled (slice levels
  * m/(M−1), α − ½ for height fields, the t3 formula checked, p3 on the ray).
  *
- * Slicing: every prism is cut at M levels of constant w (its own layers),
- * plus its three side walls. The paper slices a hexahedron "in the
- * direction closest to the view direction"; a shell prism is thin along w
- * and the levels are the only slices whose texture coordinates are exact
- * under linear interpolation (Φ is affine in (u, v) on a level), so the
- * levels are always used. View-aligned slices would need Φ⁻¹ per fragment —
- * the ray casters' cost — and are not done.
+ * Slicing (MESO_SLICE_AXIS_VIEW, the paper's "direction closest to the view
+ * direction"): per prism and draw, the family of slices the view ray crosses
+ * most densely — levels of constant w, or planes of constant barycentric
+ * λ_i across corner i — plus the prism's faces that are not slices of that
+ * family; MESO_SLICE_AXIS_LEVELS always takes the levels. Which family and
+ * why "densest" rather than "closest by angle": shell_slices_vert.glsl.
+ * Slicing along the view direction itself (view-aligned planes) would need
+ * Φ⁻¹ per fragment — the ray casters' cost — and is not done.
  *
  * Passes:
  *  - MESO_SLICE_NONE: one pass into the host's framebuffer, alpha test
@@ -167,6 +168,7 @@ static void use_pass(meso_rt* rt, const mesoi_draw* ds, const mesoi_program* p, 
     gl->Uniform1i(p->loc[MESOI_U_tex_kind], s->tex_kind);
     gl->Uniform3fv(p->loc[MESOI_U_tex_size], 1, s->tex_size);
     gl->Uniform1i(p->loc[MESOI_U_slices], k->slices > 0 ? k->slices : 16);
+    gl->Uniform1i(p->loc[MESOI_U_slice_axis], (GLint)k->slice_axis);
     gl->Uniform1f(p->loc[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(p->loc[MESOI_U_prism_count], (GLint)s->triangle_count);
 }
@@ -178,9 +180,11 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     if (d->stats)
         memset(d->stats, 0, sizeof(*d->stats));
     const int slices = k->slices > 0 ? k->slices : 16;
-    if (slices < 2 || slices > 1024 || (unsigned)k->slice_interp >= MESO_SLICE_INTERP_COUNT) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: slices %d (2..1024), interp %d",
-                  k->slices, (int)k->slice_interp);
+    if (slices < 2 || slices > 1024 || (unsigned)k->slice_interp >= MESO_SLICE_INTERP_COUNT ||
+        (unsigned)k->slice_axis >= MESO_SLICE_AXIS_COUNT) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                  "meso_rt_draw: slices %d (2..1024), interp %d, axis %d", k->slices, (int)k->slice_interp,
+                  (int)k->slice_axis);
         return MESO_ERR_INVALID_ARG;
     }
     meso_rt_draw_desc dd = *d;
@@ -209,7 +213,10 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
                                       s->tex_kind == 2 ? s->func_tex : 0, 0, 0, 0};
     mesoi_draw_begin(rt, &ds, prog, 0, SLICE_UNITS, unit_target, bind);
     gl->Disable(GL_CULL_FACE); /* slices are seen from both sides */
-    const int64_t count64 = 3 * (int64_t)(slices + 6) * (int64_t)s->triangle_count;
+    /* Triangles a prism: levels, M slices and 3 side quads; the view
+     * family, 2 per slice (a level uses one) and 2 caps and 3 side quads. */
+    const int64_t per_prism = k->slice_axis == MESO_SLICE_AXIS_LEVELS ? slices + 6 : 2 * (int64_t)slices + 8;
+    const int64_t count64 = 3 * per_prism * (int64_t)s->triangle_count;
     if (count64 > INT32_MAX) { /* a GLsizei: refused before GL raises GL_INVALID_VALUE */
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
                   "meso_rt_draw: %d slices of %u prisms are more than one draw call holds", slices,

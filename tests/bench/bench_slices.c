@@ -12,10 +12,14 @@
  *                    its step limit (max_steps) 4..64;
  *  slices_angle.csv  the same errors as the view leaves the slices' normal
  *                    (elevation 90° = looking along the directors) for
- *                    texcoord@16, none@64 and smooth ray casting;
+ *                    texcoord@16, none@64 (slices along the view's family,
+ *                    the default; _levels: always the levels) and smooth
+ *                    ray casting;
  *  slices_fig12.png  side by side: no interpolation at 64 slices, normal
  *                    and texture-coordinate interpolation at 16, smooth ray
- *                    casting, and the exact reference.
+ *                    casting, and the exact reference;
+ *  slices_axis.png   at 15° elevation, texcoord@16 sliced along the view's
+ *                    family and along the levels, and the exact reference.
  *
  * usage: bench_slices RESULTS_DIR [quick]   (quick: 200x200, fewer points)
  * Image 400x400 (the paper's is 800x800; llvmpipe on 2 shared cores).
@@ -102,6 +106,36 @@ static void put_row(FILE* f, const char* method, const char* knob, double value,
            r.n.median_deg);
 }
 
+/* The n draws of ds, then the reference, side by side into path. */
+static void strip_png(bench* b, meso_rt_object obj, const meso_rt_draw_desc* ds, int n, const meso_ref_image* ref,
+                      uint8_t* rgba, const char* path)
+{
+    const int S = scene_w, cols = n + 1;
+    uint8_t* strip = malloc((size_t)cols * S * S * 4);
+    for (int k = 0; k < cols; ++k) {
+        if (k < n) {
+            meso_rt_draw_desc d = ds[k];
+            memcpy(d.view, b->view, sizeof(d.view));
+            memcpy(d.proj, b->proj, sizeof(d.proj));
+            test_fbo_clear(&b->fbo, 0, 0, 0);
+            CHECK(meso_rt_draw(b->rt, obj, &d) == MESO_OK);
+            test_fbo_read(&b->fbo, rgba, NULL);
+        } else {
+            for (size_t i = 0; i < (size_t)S * S; ++i) {
+                for (int c = 0; c < 3; ++c)
+                    rgba[4 * i + (size_t)c] =
+                        ref->coverage[i] ? (uint8_t)lround(255.0 * fmin(ref->rgb[3 * i + (size_t)c], 1.0)) : 0;
+                rgba[4 * i + 3] = 255;
+            }
+        }
+        for (int y = 0; y < S; ++y)
+            memcpy(strip + ((size_t)y * cols * S + (size_t)k * S) * 4, rgba + (size_t)y * S * 4, (size_t)S * 4);
+    }
+    char why[256];
+    CHECK(meso_png_write_rgba8(path, strip, cols * S, S, 1, why, sizeof(why)) == 0);
+    free(strip);
+}
+
 int main(int argc, char** argv)
 {
     if (argc < 2) {
@@ -164,31 +198,8 @@ int main(int argc, char** argv)
         const meso_rt_draw_desc ds[4] = {slices(MESO_SLICE_NONE, 64), slices(MESO_SLICE_NORMAL, 16),
                                          slices(MESO_SLICE_TEXCOORD, 16),
                                          {.shell = {.technique = MESO_SHELL_SMOOTH}}};
-        uint8_t* strip = malloc((size_t)5 * S * S * 4);
-        for (int k = 0; k < 5; ++k) {
-            if (k < 4) {
-                meso_rt_draw_desc d = ds[k];
-                memcpy(d.view, b.view, sizeof(d.view));
-                memcpy(d.proj, b.proj, sizeof(d.proj));
-                test_fbo_clear(&b.fbo, 0, 0, 0);
-                CHECK(meso_rt_draw(b.rt, obj, &d) == MESO_OK);
-                test_fbo_read(&b.fbo, rgba, NULL);
-            } else {
-                for (size_t i = 0; i < (size_t)S * S; ++i) {
-                    for (int c = 0; c < 3; ++c)
-                        rgba[4 * i + (size_t)c] = ref.coverage[i]
-                                                      ? (uint8_t)lround(255.0 * fmin(ref.rgb[3 * i + (size_t)c], 1.0))
-                                                      : 0;
-                    rgba[4 * i + 3] = 255;
-                }
-            }
-            for (int y = 0; y < S; ++y)
-                memcpy(strip + ((size_t)y * 5 * S + (size_t)k * S) * 4, rgba + (size_t)y * S * 4, (size_t)S * 4);
-        }
         snprintf(path, sizeof(path), "%s/slices_fig12.png", argv[1]);
-        char why[256];
-        CHECK(meso_png_write_rgba8(path, strip, 5 * S, S, 1, why, sizeof(why)) == 0);
-        free(strip);
+        strip_png(&b, obj, ds, 4, &ref, rgba, path);
     }
 
     /* The view angle. */
@@ -199,12 +210,7 @@ int main(int argc, char** argv)
                  "ms_min\n");
     static const double elevations[] = {90, 75, 60, 45, 30, 15};
     for (int e = 0; e < (quick ? 2 : 6); ++e) {
-        const double el = elevations[e] * M_PI / 180.0, dist = 2.3;
-        /* Azimuth as icospheres_camera's; a hair off the pole at 90°, where look_at's up is degenerate. */
-        const double ce = fmax(cos(el), 1e-3), az = atan2(0.7, 0.5);
-        b.cam.eye[0] = 0.5 + dist * ce * cos(az);
-        b.cam.eye[2] = 0.5 + dist * ce * sin(az);
-        b.cam.eye[1] = 0.5 + dist * sin(el);
+        b.cam = icospheres_camera_at(elevations[e]);
         camera_matrices(&b.cam, b.view, b.proj);
         meso_ref_image_free(&ref);
         reference(&rs, &b, &ref);
@@ -212,10 +218,28 @@ int main(int argc, char** argv)
                 measure(&b, obj, slices(MESO_SLICE_TEXCOORD, 16), &ref, rgba, depth));
         put_row(out, "none64", "elevation_deg", elevations[e],
                 measure(&b, obj, slices(MESO_SLICE_NONE, 64), &ref, rgba, depth));
+        meso_rt_draw_desc lv = slices(MESO_SLICE_TEXCOORD, 16);
+        lv.shell.slice_axis = MESO_SLICE_AXIS_LEVELS;
+        put_row(out, "texcoord16_levels", "elevation_deg", elevations[e], measure(&b, obj, lv, &ref, rgba, depth));
+        lv = slices(MESO_SLICE_NONE, 64);
+        lv.shell.slice_axis = MESO_SLICE_AXIS_LEVELS;
+        put_row(out, "none64_levels", "elevation_deg", elevations[e], measure(&b, obj, lv, &ref, rgba, depth));
         put_row(out, "smooth", "elevation_deg", elevations[e],
                 measure(&b, obj, (meso_rt_draw_desc){0}, &ref, rgba, depth));
     }
     fclose(out);
+
+    /* The slicing family at 15°: the view's family, the levels, reference. */
+    {
+        b.cam = icospheres_camera_at(15.0);
+        camera_matrices(&b.cam, b.view, b.proj);
+        meso_ref_image_free(&ref);
+        reference(&rs, &b, &ref);
+        meso_rt_draw_desc ds[2] = {slices(MESO_SLICE_TEXCOORD, 16), slices(MESO_SLICE_TEXCOORD, 16)};
+        ds[1].shell.slice_axis = MESO_SLICE_AXIS_LEVELS;
+        snprintf(path, sizeof(path), "%s/slices_axis.png", argv[1]);
+        strip_png(&b, obj, ds, 2, &ref, rgba, path);
+    }
 
     free(rgba);
     free(depth);

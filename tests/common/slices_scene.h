@@ -69,6 +69,20 @@ static inline camera icospheres_camera(void)
     return c;
 }
 
+/* The same distance and azimuth at `elevation_deg` above the slices' plane
+ * (90 = looking down the directors; a hair off the pole, where look_at's up
+ * is degenerate). */
+static inline camera icospheres_camera_at(double elevation_deg)
+{
+    camera c = icospheres_camera();
+    const double el = elevation_deg * M_PI / 180.0, dist = 2.3;
+    const double ce = fmax(cos(el), 1e-3), az = atan2(0.7, 0.5);
+    c.eye[0] = 0.5 + dist * ce * cos(az);
+    c.eye[2] = 0.5 + dist * ce * sin(az);
+    c.eye[1] = 0.5 + dist * sin(el);
+    return c;
+}
+
 typedef struct normal_error {
     double mean_deg, median_deg;
 } normal_error;

@@ -7,8 +7,9 @@
 # two images must agree: the ray casters at all but 0.5 % of the pixels
 # (float rounding of the unprojected rays at silhouettes), rasterised slices
 # at all but 2 % (ties between coincident slice fragments follow the depth
-# rounding; tests/gl/test_rt_conventions.c says the same per pixel). A bad
-# --depth is a usage error (exit 1) that writes nothing.
+# rounding; tests/gl/test_rt_conventions.c says the same per pixel), with
+# either --slice-axis. A bad --depth or --slice-axis is a usage error
+# (exit 1) that writes nothing.
 set -u
 bake=$1
 inspect=$2
@@ -31,7 +32,8 @@ check "bakes succeed" test $? = 0
 
 # name file allowed-per-mille [preview options]
 for row in "mesh mesh 5" "shell shell 5" "curved shell 5 --technique curved" \
-           "slices shell 20 --technique slices" "frusta frusta 5" "cells cells 5"; do
+           "slices shell 20 --technique slices" "slices-levels shell 20 --technique slices --slice-axis levels" \
+           "frusta frusta 5" "cells cells 5"; do
   set -- $row
   name=$1 file=$2 permille=$3
   shift 3
@@ -60,4 +62,8 @@ check "--pass depth --depth reversed: the same eye-depth picture (5 per mille)" 
 check "--depth sideways: usage error (exit 1)" test $? = 1
 check "--depth sideways: says what it expects" grep -q "standard or reversed" "$tmp/err"
 check "--depth sideways: writes nothing" test ! -e "$tmp/bad.png"
+"$inspect" preview "$tmp/shell.meso" -o "$tmp/bad.png" --technique slices --slice-axis diagonal >/dev/null 2>"$tmp/err"
+check "--slice-axis diagonal: usage error (exit 1)" test $? = 1
+check "--slice-axis diagonal: says what it expects" grep -q "view or levels" "$tmp/err"
+check "--slice-axis diagonal: writes nothing" test ! -e "$tmp/bad.png"
 exit $fail

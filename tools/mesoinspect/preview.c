@@ -95,6 +95,8 @@ static const char* const usage_preview =
     "                      (slice-based rendering, the Lp-averaged shells paper's section 5)\n"
     "      --slices N      slices: slice polygons per prism (2..1024, default 16)\n"
     "      --slice-interp I  slices: texcoord (default: the paper's two passes), normal or none\n"
+    "      --slice-axis X  slices: view (default: per prism the family of slices the view\n"
+    "                      crosses most densely) or levels (always the levels of constant w)\n"
     "      --depth D       standard (default: GL_LESS, clip depth -1..1, a far plane) or\n"
     "                      reversed (reversed-Z: GL_GREATER, glClipControl 0..1, no far\n"
     "                      plane), drawn through libmeso's depth conventions; the images\n"
@@ -130,6 +132,7 @@ typedef struct preview_knobs {
     meso_shell_technique technique;
     int slices;
     meso_slice_interp slice_interp;
+    meso_slice_axis slice_axis;
     meso_cells_mode cell_mode;
     int cell_bounces;
     float cell_step;
@@ -530,6 +533,7 @@ static int render(const char* path, const char* out, int width, int height, uint
     d.shell.technique = knobs->technique;
     d.shell.slices = knobs->slices;
     d.shell.slice_interp = knobs->slice_interp;
+    d.shell.slice_axis = knobs->slice_axis;
     d.cells.mode = knobs->cell_mode;
     d.cells.bounces = knobs->cell_bounces;
     d.cells.step = knobs->cell_step;
@@ -719,6 +723,17 @@ int mesoinspect_preview(int argc, char** argv)
                                 "See 'mesoinspect --help'.\n", m);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--slice-axis") && val) {
+            const char* m = argv[++i];
+            if (!strcmp(m, "view"))
+                knobs.slice_axis = MESO_SLICE_AXIS_VIEW;
+            else if (!strcmp(m, "levels"))
+                knobs.slice_axis = MESO_SLICE_AXIS_LEVELS;
+            else {
+                fprintf(stderr, "mesoinspect error: --slice-axis expects view or levels, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", m);
+                return MESO_EXIT_USAGE;
+            }
         } else if (!strcmp(a, "--reference")) {
             reference = 1;
         } else if (!strcmp(a, "--samples") && val) {
@@ -809,7 +824,7 @@ int mesoinspect_preview(int argc, char** argv)
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
                      !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
                      !strcmp(a, "--depth") || !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") ||
-                     !strcmp(a, "--api") || !strcmp(a, "--pass"))
+                     !strcmp(a, "--slice-axis") || !strcmp(a, "--api") || !strcmp(a, "--pass"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
