@@ -18,6 +18,11 @@
  *  slices_fig12.png  side by side: no interpolation at 64 slices, normal
  *                    and texture-coordinate interpolation at 16, smooth ray
  *                    casting, and the exact reference;
+ *  slices_thin.csv   a thin shell (the bundled sphere, 12 % thick, the
+ *                    domes height field, 640x480): texcoord@16 and none@32
+ *                    sliced along the view's family and along the levels at
+ *                    60° and 10° elevation - what the view's family costs
+ *                    (twice the vertices a prism) where the levels do well;
  *  slices_axis.png   at 15° elevation, texcoord@16 sliced along the view's
  *                    family and along the levels, and the exact reference.
  *
@@ -30,6 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "adapters.h"
 #include "bench_gl.h"
 #include "egl_context.h"
 #include "gl_fbo.h"
@@ -136,6 +142,63 @@ static void strip_png(bench* b, meso_rt_object obj, const meso_rt_draw_desc* ds,
     free(strip);
 }
 
+/* slices_thin.csv (see the header). */
+static void thin_shell(bench* b, const char* dir, int quick)
+{
+    meso_mesh m;
+    meso_error err;
+    CHECK(meso_openmesh_read(MESO_TEST_DATA "/sphere.obj", &m, NULL, &err) == MESO_OK);
+    planar_uvs(&m, 2.0);
+    texture height = make_height(64);
+    size_t size;
+    uint8_t* file = shell_file(&m, 0.12, &height, 1, &size);
+    meso_file* f = NULL;
+    CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
+    meso_rt_object obj;
+    CHECK(meso_rt_load_object(b->rt, f, 1, &obj) == MESO_OK);
+    meso_ref_shell rs;
+    CHECK(meso_ref_shell_load(f, 1, &rs, &err) == MESO_OK);
+    meso_file_close(f);
+    const int w = quick ? 320 : 640, h = quick ? 240 : 480;
+    bench_set_size(b, w, h);
+    uint8_t* rgba = malloc((size_t)w * h * 4);
+    float* depth = malloc(sizeof(float) * (size_t)w * h);
+    char path[1024];
+    snprintf(path, sizeof(path), "%s/slices_thin.csv", dir);
+    FILE* out = fopen(path, "w");
+    CHECK(out);
+    fprintf(out, "method,knob,value,ms,coverage_mismatch,hit_err_px,colour_mae,normal_mean_deg,normal_median_deg,"
+                 "ms_min\n");
+    static const double elevations[] = {60, 10};
+    for (int e = 0; e < 2; ++e) {
+        const double el = elevations[e] * M_PI / 180.0;
+        b->cam = (camera){.at = {0, 0, 0}, .fovy = 0.75, .zn = 0.3, .zf = 10};
+        b->cam.eye[0] = 2.2 * cos(el) * 0.6;
+        b->cam.eye[2] = 2.2 * cos(el) * 0.8;
+        b->cam.eye[1] = 2.2 * sin(el);
+        camera_matrices(&b->cam, b->view, b->proj);
+        meso_ref_image ref;
+        reference(&rs, b, &ref);
+        static const char* const names[4] = {"texcoord16", "texcoord16_levels", "none32", "none32_levels"};
+        for (int k = 0; k < 4; ++k) {
+            meso_rt_draw_desc d = slices(k < 2 ? MESO_SLICE_TEXCOORD : MESO_SLICE_NONE, k < 2 ? 16 : 32);
+            d.shell.slice_axis = (k & 1) ? MESO_SLICE_AXIS_LEVELS : MESO_SLICE_AXIS_VIEW;
+            put_row(out, names[k], "elevation_deg", elevations[e], measure(b, obj, d, &ref, rgba, depth));
+        }
+        put_row(out, "smooth", "elevation_deg", elevations[e],
+                measure(b, obj, (meso_rt_draw_desc){0}, &ref, rgba, depth));
+        meso_ref_image_free(&ref);
+    }
+    fclose(out);
+    free(rgba);
+    free(depth);
+    meso_ref_shell_free(&rs);
+    meso_rt_release_object(b->rt, obj);
+    free(file);
+    free(height.texels);
+    meso_mesh_free(&m);
+}
+
 int main(int argc, char** argv)
 {
     if (argc < 2) {
@@ -240,6 +303,8 @@ int main(int argc, char** argv)
         snprintf(path, sizeof(path), "%s/slices_axis.png", argv[1]);
         strip_png(&b, obj, ds, 2, &ref, rgba, path);
     }
+
+    thin_shell(&b, argv[1], quick);
 
     free(rgba);
     free(depth);
