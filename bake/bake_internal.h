@@ -55,6 +55,11 @@ typedef struct mesoi_chunk {
     size_t size;
 } mesoi_chunk;
 
+/* The output from a writer holding the objects' chunks: adds META, RPRT and
+ * the OBJT chunk of `object_count` records, and takes the writer (*writer is
+ * NULL afterwards, on failure too). */
+meso_result mesoi_output_finish(const cJSON* meta, const cJSON* report, const meso_object_record* objects,
+                                uint32_t object_count, meso_writer** writer, meso_bake_output** out, meso_error* err);
 /* META, RPRT (both compact JSON: deterministic, no timings), the one-object
  * OBJT and `chunks`, in that order, into a new output. The chunks are copied. */
 meso_result mesoi_output_build(const cJSON* meta, const cJSON* report, const meso_object_record* object,

@@ -197,28 +197,34 @@ struct meso_bake_output {
     size_t size;         /* of the file */
 };
 
-meso_result mesoi_output_build(const cJSON* meta, const cJSON* report, const meso_object_record* object,
-                               const mesoi_chunk* chunks, int count, meso_bake_output** out, meso_error* err)
+meso_result mesoi_output_finish(const cJSON* meta, const cJSON* report, const meso_object_record* objects,
+                                uint32_t object_count, meso_writer** writer, meso_bake_output** out, meso_error* err)
 {
     *out = NULL;
     meso_bake_output* o = calloc(1, sizeof(*o));
     char* meta_s = cJSON_PrintUnformatted(meta);
     char* rep_s = cJSON_PrintUnformatted(report);
-    uint8_t objt[MESO_OBJT_RECORD_SIZE];
-    meso_object_record_encode(object, objt);
-    meso_result r = o && meta_s && rep_s ? meso_writer_create(NULL, &o->writer) : MESO_ERR_OUT_OF_MEMORY;
+    uint8_t* objt = malloc((size_t)MESO_OBJT_RECORD_SIZE * (object_count ? object_count : 1));
+    meso_result r = o && meta_s && rep_s && objt ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    if (o)
+        o->writer = *writer; /* the output owns the writer from here, whatever happens */
+    else
+        meso_writer_destroy(*writer);
+    *writer = NULL;
+    for (uint32_t i = 0; r == MESO_OK && i < object_count; ++i)
+        meso_object_record_encode(&objects[i], objt + (size_t)MESO_OBJT_RECORD_SIZE * i);
+    /* The file-wide chunks go first in the file whenever they are added
+     * (the writer orders META, OBJT, RPRT, then the rest). */
     if (r == MESO_OK)
         r = meso_writer_add(o->writer, &(meso_chunk_desc){.type = MESO_CHUNK_META}, meta_s, strlen(meta_s), err);
     if (r == MESO_OK)
         r = meso_writer_add(o->writer, &(meso_chunk_desc){.type = MESO_CHUNK_RPRT}, rep_s, strlen(rep_s), err);
     if (r == MESO_OK)
         r = meso_writer_add(o->writer, &(meso_chunk_desc){.type = MESO_CHUNK_OBJT, .flags = MESO_CHUNK_FLAG_REQUIRED},
-                            objt, sizeof(objt), err);
-    for (int i = 0; i < count && r == MESO_OK; ++i)
-        r = meso_writer_add(o->writer, &chunks[i].desc, chunks[i].data, chunks[i].size, err);
+                            objt, (size_t)MESO_OBJT_RECORD_SIZE * object_count, err);
     if (r == MESO_OK)
         r = meso_writer_finish(o->writer, NULL, 0, &o->size);
-    if (r == MESO_OK && rep_s) {
+    if (r == MESO_OK) {
         o->report_json = malloc(strlen(rep_s) + 1);
         r = o->report_json ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
         if (o->report_json)
@@ -226,6 +232,7 @@ meso_result mesoi_output_build(const cJSON* meta, const cJSON* report, const mes
     }
     cJSON_free(meta_s);
     cJSON_free(rep_s);
+    free(objt);
     if (r != MESO_OK) {
         meso_bake_output_free(o);
         return r == MESO_ERR_OUT_OF_MEMORY && !(err && err->message[0])
@@ -234,6 +241,22 @@ meso_result mesoi_output_build(const cJSON* meta, const cJSON* report, const mes
     }
     *out = o;
     return MESO_OK;
+}
+
+meso_result mesoi_output_build(const cJSON* meta, const cJSON* report, const meso_object_record* object,
+                               const mesoi_chunk* chunks, int count, meso_bake_output** out, meso_error* err)
+{
+    *out = NULL;
+    meso_writer* w = NULL;
+    meso_result r = meso_writer_create(NULL, &w);
+    for (int i = 0; i < count && r == MESO_OK; ++i)
+        r = meso_writer_add(w, &chunks[i].desc, chunks[i].data, chunks[i].size, err);
+    if (r == MESO_OK)
+        return mesoi_output_finish(meta, report, object, 1, &w, out, err);
+    meso_writer_destroy(w);
+    return r == MESO_ERR_OUT_OF_MEMORY && !(err && err->message[0])
+               ? meso_bake_fail(err, r, 0, "writing the .meso file: out of memory")
+               : r;
 }
 
 size_t meso_bake_output_size(const meso_bake_output* o)

@@ -128,6 +128,7 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  *   there (3400 a request from the options, 3401.. sizes input files dictate).
  * Batch manifests (mesobake batch, tools/mesobake/batch.h): 3450..3469,
  *   listed there.
+ * Packing .meso files (meso_bake_pack, below): 3480..3489.
  * (The bake/ headers named are the library's sources, not installed.) */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
 #define MESO_BAKE_ISSUE_REORIENTED 3250u /* a warning */
@@ -471,6 +472,34 @@ MESO_BAKE_API meso_bake_frusta_options meso_bake_frusta_defaults(void);
  * object (SKEL, FRUS, FSEG, BALL, RELF). */
 MESO_BAKE_API meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output** out,
                                            meso_bake_frusta_report* report, meso_error* err);
+
+/* >>pack -------------------------------------------------------------------- */
+
+#define MESO_BAKE_MAX_PACK_INPUTS 4096u
+
+typedef struct meso_bake_pack_options {
+    meso_bake_common common;   /* max_memory bounds the inputs' total size (all held until written) */
+    const char* const* inputs; /* .meso paths, 1..MESO_BAKE_MAX_PACK_INPUTS, in output order */
+    uint32_t input_count;
+} meso_bake_pack_options;
+
+typedef struct meso_bake_pack_report {
+    uint32_t inputs, objects, chunks;
+    uint32_t renamed;  /* objects whose name was taken and got "~k" (warning E3482) */
+    uint64_t bytes_in; /* the inputs' total size */
+} meso_bake_pack_report;
+
+/* `mesobake pack`: every object of every input, verified in full, into one
+ * file; objects numbered 1..N in input order, chunks copied as stored (only
+ * their object id changes), names made unique, each input's META and RPRT
+ * kept per object in the new ones (bake/bake_pack.c says why). Issue codes:
+ *   3480 no inputs or too many          3482 (a warning) a name was taken
+ *   3481 an input holds no object       3483 an input has a file-wide chunk
+ *                                            other than META, RPRT, OBJT
+ * (3484..3489 reserved), and the input's own issue (FORMAT.md codes,
+ * prefixed with its file name) when it fails full validation. */
+MESO_BAKE_API meso_result meso_bake_pack(const meso_bake_pack_options* o, meso_bake_output** out,
+                                         meso_bake_pack_report* report, meso_error* err);
 
 /* >>parsing ----------------------------------------------------------------- */
 

@@ -84,5 +84,6 @@ int cmd_shell(int argc, char** argv);
 int cmd_frusta(int argc, char** argv);
 int cmd_cells(int argc, char** argv);
 int cmd_batch(int argc, char** argv);
+int cmd_pack(int argc, char** argv);
 
 #endif

@@ -20,6 +20,8 @@ static const char* const usage_short =
     "  shell    build a fold-free shell (base mesh + directors) over a mesh\n"
     "  frusta   skin a skeleton (SWC, text, or one extracted from a mesh) with conical frusta\n"
     "  cells    fill a mesh with tiled cells: tile map, membership, normal and colour maps\n"
+    "  batch    bake a manifest of jobs, cached, locally or on Slurm\n"
+    "  pack     several .meso files into one, each object kept as its own\n"
     "\n"
     "Run 'mesobake --help' or 'mesobake <command> --help' for all options.\n";
 
@@ -34,6 +36,8 @@ static const char* const usage_full =
     "  shell    build a fold-free shell (base mesh + directors) over a mesh\n"
     "  frusta   skin a skeleton (SWC, text, or one extracted from a mesh) with conical frusta\n"
     "  cells    fill a mesh with tiled cells: tile map, membership, normal and colour maps\n"
+    "  batch    bake a manifest of jobs, cached, locally or on Slurm\n"
+    "  pack     several .meso files into one, each object kept as its own\n"
     "\n"
     MESOBAKE_HELP_EXIT_CODES
     "Outputs (-o, --report) are written atomically and together: a failed or\n"
@@ -70,6 +74,8 @@ int main(int argc, char** argv)
         return cmd_cells(argc - 2, argv + 2);
     if (!strcmp(cmd, "batch"))
         return cmd_batch(argc - 2, argv + 2);
+    if (!strcmp(cmd, "pack"))
+        return cmd_pack(argc - 2, argv + 2);
     if (cmd[0] == '-')
         return usage_error("unrecognized option '%s'", cmd);
     return usage_error("unknown command '%s'", cmd);
