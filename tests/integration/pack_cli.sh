@@ -7,7 +7,7 @@
 # dims, sizes and CRC32C, from 'mesoinspect info') equal to its source
 # chunk's; the file valid in full; each object drawn by libmeso from the
 # packed file the same as from its own file (mesoinspect preview --object,
-# pixel for pixel); determinism; a packed file packs again. Bad input: a
+# pixel for pixel, by id and by name); determinism; a packed file packs again. Bad input: a
 # damaged input (one payload byte flipped), a missing one, a non-.meso
 # file, no input, the output named as an input: each refused with its exit
 # code and a message naming the file, nothing written.
@@ -73,6 +73,15 @@ for f in "$@"; do
   check "object $id ($f): drawn from the packed file as from its own (differing pixels, max: $out)" \
     test $a = 0 -a $b = 0 -a "${out% *}" = 0
 done
+
+# Addressable by name too: the frusta object by its name is the frusta object by its id.
+"$inspect" preview "$tmp/scene.meso" --object 4 -o "$tmp/by_id.png" --size 96x72 >/dev/null 2>&1 &&
+  "$inspect" preview "$tmp/scene.meso" --object saguaro.skel -o "$tmp/by_name.png" --size 96x72 >/dev/null 2>&1
+check "preview --object NAME draws the object of that name" cmp -s "$tmp/by_id.png" "$tmp/by_name.png"
+"$inspect" preview "$tmp/scene.meso" --object no_such_name -o "$tmp/none.png" >/dev/null 2>"$tmp/err"
+check "preview --object with an unknown name: usage error (exit 1)" test $? = 1
+check "... listing the file's objects" grep -q "4 'saguaro.skel'" "$tmp/err"
+check "... and writing nothing" test ! -e "$tmp/none.png"
 
 # 3. Deterministic; a packed file packs again (objects 7 and 8 after 1..6).
 # shellcheck disable=SC2086

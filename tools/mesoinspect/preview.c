@@ -86,7 +86,8 @@ static const char* const usage_preview =
     "  -o, --output FILE   PNG to write (atomically; a symbolic link is written through,\n"
     "                      a device, FIFO or directory refused)\n"
     "      --size WxH      image size (default 512x512)\n"
-    "      --object ID     draw only this object\n"
+    "      --object ID     draw only this object (its id, or its name as 'mesoinspect info'\n"
+    "                      lists it)\n"
     "      --yaw DEG       camera azimuth around +y (default 30)\n"
     "      --pitch DEG     camera elevation (default 20)\n"
     "      --zoom Z        move the camera Z times closer (default 1: the bounds fill the view)\n"
@@ -188,6 +189,27 @@ static uint8_t unorm8(float c)
     return (uint8_t)lrintf(fminf(fmaxf(c, 0.0f), 1.0f) * 255.0f);
 }
 
+/* Every OBJT record of `f` (malloc'd, *count of them; a file without OBJT has
+ * none). NULL and a message on stderr when the table cannot be read. */
+static meso_object_record* all_records(meso_file* f, uint32_t* count, meso_result* r)
+{
+    meso_error err;
+    *count = 0;
+    if ((*r = meso_file_objects(f, NULL, 0, count, &err)) == MESO_OK) {
+        meso_object_record* recs = calloc(*count ? *count : 1, sizeof(*recs));
+        if (!recs) {
+            *r = MESO_ERR_OUT_OF_MEMORY;
+            fprintf(stderr, "mesoinspect error: out of memory\n");
+            return NULL;
+        }
+        if ((*r = meso_file_objects(f, recs, *count, count, &err)) == MESO_OK)
+            return recs;
+        free(recs);
+    }
+    fprintf(stderr, "mesoinspect error: %s\n", err.message);
+    return NULL;
+}
+
 #define PREVIEW_MAX_REF 64 /* shell, frusta and cells objects the reference renders */
 
 /* One object the reference renders. */
@@ -204,6 +226,7 @@ static int render_reference(const char* path, const char* out, int width, int he
     int code = MESO_EXIT_OK;
     meso_file* f = NULL;
     ref_object* objs = calloc(PREVIEW_MAX_REF, sizeof(*objs));
+    meso_object_record* recs = NULL;
     int nobj = 0;
     uint8_t *px = NULL, *img = NULL;
     float* zbuf = NULL;
@@ -224,14 +247,13 @@ static int render_reference(const char* path, const char* out, int width, int he
     /* The framing covers what the GL preview would draw (meshes, shells,
      * frusta and cells), so the two images share a camera. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    meso_object_record recs[256];
     uint32_t count = 0;
-    if ((r = meso_file_objects(f, recs, 256, &count, &err)) != MESO_OK) {
-        fprintf(stderr, "mesoinspect error: %s\n", err.message);
+    recs = all_records(f, &count, &r);
+    if (!recs) {
         code = meso_exit_for(r);
         goto done;
     }
-    for (uint32_t i = 0; i < count && i < 256; ++i) {
+    for (uint32_t i = 0; i < count; ++i) {
         const meso_object_record* rec = &recs[i];
         if ((only && rec->id != only) ||
             (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL && rec->kind != MESO_OBJECT_FRUSTA &&
@@ -328,6 +350,7 @@ done:
         meso_ref_cells_free(&objs[s].cells);
     }
     free(objs);
+    free(recs);
     free(px);
     free(img);
     free(zbuf);
@@ -423,7 +446,8 @@ static int render(const char* path, const char* out, int width, int height, uint
     meso_file* f = NULL;
     uint8_t *px = NULL, *img = NULL;
     float* depth = NULL;
-    meso_rt_object objs[256];
+    meso_rt_object* objs = NULL;
+    meso_object_record* recs = NULL;
     int nobj = 0;
     if (missing) {
         fprintf(stderr, "mesoinspect error: the GL context lacks framebuffer objects\n");
@@ -446,14 +470,14 @@ static int render(const char* path, const char* out, int width, int height, uint
     }
     /* Every object of the OBJT table (or just --object). */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    meso_object_record recs[256];
     uint32_t count = 0;
-    if ((r = meso_file_objects(f, recs, 256, &count, &err)) != MESO_OK) {
-        fprintf(stderr, "mesoinspect error: %s\n", err.message);
-        code = meso_exit_for(r);
+    recs = all_records(f, &count, &r);
+    objs = recs ? calloc(count ? count : 1, sizeof(*objs)) : NULL;
+    if (!objs) {
+        code = meso_exit_for(recs ? MESO_ERR_OUT_OF_MEMORY : r);
         goto done;
     }
-    for (uint32_t i = 0; i < count && i < 256; ++i) {
+    for (uint32_t i = 0; i < count; ++i) {
         const meso_object_record* rec = &recs[i];
         if (only && rec->id != only)
             continue;
@@ -578,12 +602,44 @@ done:
     free(px);
     free(img);
     free(depth);
+    free(recs);
+    free(objs);
     meso_file_close(f);
     meso_rt_destroy(rt);
     meso_egl_destroy(egl);
     return code;
 }
 #endif
+
+/* The id of the object named `name` in `path` (already validated): exit 0,
+ * or a usage error naming the file's objects when none has that name. */
+static int object_by_name(const char* path, const char* name, unsigned long* id)
+{
+    meso_file* f = NULL;
+    meso_error err;
+    meso_result r = meso_file_open_path(path, NULL, &f, &err);
+    if (r != MESO_OK) {
+        fprintf(stderr, "mesoinspect error: %s: %s\n", path, err.message);
+        return meso_exit_for(r);
+    }
+    uint32_t count = 0;
+    meso_object_record* recs = all_records(f, &count, &r);
+    meso_file_close(f);
+    if (!recs)
+        return meso_exit_for(r);
+    *id = 0;
+    for (uint32_t i = 0; i < count && !*id; ++i)
+        if (!strcmp(recs[i].name, name))
+            *id = recs[i].id;
+    if (!*id) {
+        fprintf(stderr, "mesoinspect error: %s: no object named '%s'; its objects:", path, name);
+        for (uint32_t i = 0; i < count; ++i)
+            fprintf(stderr, "%s %u '%s'", i ? "," : "", recs[i].id, recs[i].name);
+        fprintf(stderr, "\n");
+    }
+    free(recs);
+    return *id ? MESO_EXIT_OK : MESO_EXIT_USAGE;
+}
 
 /* "WxH", each 1..8192; digits only, so nothing can overflow or wrap
  * (sscanf's %d would, and 4294967297 became 1). */
@@ -651,6 +707,7 @@ int mesoinspect_preview(int argc, char** argv)
     const char *file = NULL, *out = NULL;
     int width = 512, height = 512;
     unsigned long only = 0;
+    const char* only_name = NULL;
     double yaw = 30, pitch = 20;
     meso_shell_technique technique = MESO_SHELL_SMOOTH;
     preview_knobs knobs = {.cell_bounces = 2, .zoom = 1.0};
@@ -673,8 +730,16 @@ int mesoinspect_preview(int argc, char** argv)
             }
         } else if (!strcmp(a, "--object") && val) {
             errno = 0;
+            only_name = NULL;
             only = strtoul(argv[++i], &end, 10);
-            if (!end || *end || errno || argv[i][0] < '0' || argv[i][0] > '9' || only == 0 || only > UINT32_MAX) {
+            if (argv[i][0] < '0' || argv[i][0] > '9') {
+                only = 0, only_name = argv[i]; /* a name (OBJT names are UTF-8, at most 31 bytes) */
+                if (!argv[i][0] || strlen(argv[i]) > 31) {
+                    fprintf(stderr, "mesoinspect error: --object expects an id >= 1 or a name of 1..31 bytes, "
+                                    "got '%s'\nSee 'mesoinspect --help'.\n", argv[i]);
+                    return MESO_EXIT_USAGE;
+                }
+            } else if (!end || *end || errno || only == 0 || only > UINT32_MAX) {
                 fprintf(stderr, "mesoinspect error: --object expects an object id >= 1, got '%s'\n"
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;
@@ -856,6 +921,11 @@ int mesoinspect_preview(int argc, char** argv)
     const int valid = preview_validate(file);
     if (valid != MESO_EXIT_OK)
         return valid;
+    if (only_name) {
+        const int found = object_by_name(file, only_name, &only);
+        if (found != MESO_EXIT_OK)
+            return found;
+    }
     if (reference)
         return render_reference(file, out, width, height, (uint32_t)only, yaw, pitch,
                                 technique == MESO_SHELL_CURVED, (int)samples, &knobs);
