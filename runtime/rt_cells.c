@@ -237,18 +237,13 @@ static const mesoi_program* cells_program(meso_rt* rt, int stats, meso_rt_pass p
     snprintf(head, sizeof(head), "%s#define MESO_INSTANCE_MODEL 1\n", mesoi_glsl_prelude(rt, stats));
     const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_cells_vert};
     const char* pre[2] = {mesoi_glsl_instance, mesoi_glsl_raycast_common};
-    const char* fs[10] = {head};
-    char pass_text[64], fname[96];
-    int n = mesoi_frag_sources(rt, pass, fs, pre, 2, pass_text);
-    fs[n++] = mesoi_glsl_cells_frag;
     static const char* const samplers[UNIT_COUNT + 1] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env",
                                                          "u_instances"};
     static const char* const names[MESO_PASS_COUNT] = {"cells", "cells depth", "cells gbuffer"};
-    const char* fname_used = mesoi_frag_name(rt, pass, "cells_frag.glsl", fname);
-    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "cells_vert.glsl"), fsh, names[pass],
-                       samplers, UNIT_COUNT + 1);
-    return p->id ? p : NULL;
+    const mesoi_program_src src = {.vs = vs, .vs_count = 4, .vs_file = "cells_vert.glsl", .pre = pre,
+                                   .pre_count = 2, .frag = mesoi_glsl_cells_frag, .frag_file = "cells_frag.glsl",
+                                   .name = names[pass], .samplers = samplers, .sampler_count = UNIT_COUNT + 1};
+    return mesoi_program_build(rt, p, pass, &src);
 }
 
 meso_result mesoi_cells_prepare(meso_rt* rt, int stats, meso_rt_pass pass)

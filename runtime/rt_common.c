@@ -393,6 +393,28 @@ GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, c
     return p->id;
 }
 
+const mesoi_program* mesoi_program_build(meso_rt* rt, mesoi_program* p, meso_rt_pass pass,
+                                         const mesoi_program_src* src)
+{
+    enum { MAX_FS = 16 };
+    const char* fs[MAX_FS] = {src->vs[0]};
+    char pass_text[64], fname[96];
+    int n = 1;
+    if (src->pre_count > MAX_FS - 6)
+        return NULL;
+    if (src->own_outputs)
+        for (int i = 0; i < src->pre_count; ++i)
+            fs[n++] = src->pre[i];
+    else
+        n = mesoi_frag_sources(rt, pass, fs, src->pre, src->pre_count, pass_text);
+    fs[n++] = src->frag;
+    const char* fname_used = src->own_outputs ? src->frag_file : mesoi_frag_name(rt, pass, src->frag_file, fname);
+    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
+    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, src->vs, src->vs_count, src->vs_file), fsh,
+                       src->name, src->samplers, src->sampler_count);
+    return p->id ? p : NULL;
+}
+
 int mesoi_program_owned(const meso_rt* rt, GLuint id)
 {
     /* Every program array of struct meso_rt, whatever its dimensions. */

@@ -718,17 +718,12 @@ static const mesoi_program* frusta_program(meso_rt* rt, int stats, meso_rt_pass 
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_frusta_common,
                          mesoi_glsl_frusta_vert};
     const char* pre[3] = {mesoi_glsl_instance, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common};
-    const char* fs[10] = {head};
-    char pass_text[64], fname[96];
-    int n = mesoi_frag_sources(rt, pass, fs, pre, 3, pass_text);
-    fs[n++] = mesoi_glsl_frusta_frag;
     static const char* const samplers[UNIT_COUNT + 1] = {"u_prims", "u_relief", "u_instances"};
     static const char* const names[MESO_PASS_COUNT] = {"frusta", "frusta depth", "frusta gbuffer"};
-    const char* fname_used = mesoi_frag_name(rt, pass, "frusta_frag.glsl", fname);
-    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "frusta_vert.glsl"), fsh, names[pass],
-                       samplers, UNIT_COUNT + 1);
-    return p->id ? p : NULL;
+    const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "frusta_vert.glsl", .pre = pre,
+                                   .pre_count = 3, .frag = mesoi_glsl_frusta_frag, .frag_file = "frusta_frag.glsl",
+                                   .name = names[pass], .samplers = samplers, .sampler_count = UNIT_COUNT + 1};
+    return mesoi_program_build(rt, p, pass, &src);
 }
 
 meso_result mesoi_frusta_prepare(meso_rt* rt, int stats, meso_rt_pass pass)

@@ -275,6 +275,27 @@ GLuint mesoi_link(meso_rt* rt, GLuint vs, GLuint fs, const char* name);
 GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, const char* name,
                           const char* const* samplers, int sampler_count);
 void mesoi_program_delete(meso_rt* rt, mesoi_program* p);
+
+/* What one kind's program for one draw pass is made of (mesoi_program_build). */
+typedef struct mesoi_program_src {
+    const char* const* vs; /* vertex shader sources; vs[0] is the head (prelude and defines), shared */
+    int vs_count;
+    const char* vs_file;   /* the name compile errors are logged under */
+    const char* const* pre; /* the kind's common files for the fragment shader */
+    int pre_count;
+    const char* frag;      /* the kind's fragment file, last */
+    const char* frag_file;
+    int own_outputs;       /* 1: the fragment file declares its outputs (no pass defines, hook or
+                              pass_out.glsl: the slices' offscreen passes) */
+    const char* name;      /* the program, in logs */
+    const char* const* samplers; /* samplers[i] on unit i */
+    int sampler_count;
+} mesoi_program_src;
+/* Compiles and links `src` into *p for draw pass `pass` (fragment shader:
+ * the head, mesoi_frag_sources' pass defines, hook, pre and pass_out.glsl,
+ * then the kind's file). Returns p, or NULL (logged) on failure. */
+const mesoi_program* mesoi_program_build(meso_rt* rt, mesoi_program* p, meso_rt_pass pass,
+                                         const mesoi_program_src* src);
 /* 1 when `id` is one of the context's programs. */
 int mesoi_program_owned(const meso_rt* rt, GLuint id);
 

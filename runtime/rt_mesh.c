@@ -26,17 +26,12 @@ static const mesoi_program* mesh_program(meso_rt* rt, meso_rt_pass pass)
     snprintf(head, sizeof(head), "%s#define MESO_INSTANCE_MODEL 1\n", mesoi_glsl_prelude(rt, 0));
     const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_mesh_vert};
     const char* pre[2] = {mesoi_glsl_instance, mesoi_glsl_raycast_common};
-    const char* fsrc[8] = {head};
-    char pass_text[64], fname[96];
-    int n = mesoi_frag_sources(rt, pass, fsrc, pre, 2, pass_text);
-    fsrc[n++] = mesoi_glsl_mesh_frag;
     static const char* const names[MESO_PASS_COUNT] = {"mesh", "mesh depth", "mesh gbuffer"};
     static const char* const samplers[1] = {"u_instances"}; /* unit 0: the instance data */
-    const char* fname_used = mesoi_frag_name(rt, pass, "mesh_frag.glsl", fname);
-    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fsrc, n, fname_used);
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 4, "mesh_vert.glsl"), fsh, names[pass],
-                       samplers, 1);
-    return p->id ? p : NULL;
+    const mesoi_program_src src = {.vs = vs, .vs_count = 4, .vs_file = "mesh_vert.glsl", .pre = pre, .pre_count = 2,
+                                   .frag = mesoi_glsl_mesh_frag, .frag_file = "mesh_frag.glsl", .name = names[pass],
+                                   .samplers = samplers, .sampler_count = 1};
+    return mesoi_program_build(rt, p, pass, &src);
 }
 
 meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass)

@@ -427,19 +427,15 @@ static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, i
                          mesoi_glsl_shell_vert};
     const char* pre[4] = {mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
                           mesoi_glsl_shell_texfn};
-    const char* fs[10] = {head};
-    char pass_text[64], fname[96];
-    int n = mesoi_frag_sources(rt, pass, fs, pre, 4, pass_text);
-    fs[n++] = mesoi_glsl_shell_frag;
     static const char* const names[MESO_PASS_COUNT][MESO_SHELL_TECHNIQUE_COUNT] = {
         {"shell smooth", "shell curved", "shell tetra", "shell segment"},
         {"shell smooth depth", "shell curved depth", "shell tetra depth", "shell segment depth"},
         {"shell smooth gbuffer", "shell curved gbuffer", "shell tetra gbuffer", "shell segment gbuffer"}};
-    const char* fname_used = mesoi_frag_name(rt, pass, "shell_frag.glsl", fname);
-    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_vert.glsl"), fsh, names[pass][t],
-                       shell_samplers, SHELL_UNIT_COUNT + 1);
-    return p->id ? p : NULL;
+    const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "shell_vert.glsl", .pre = pre,
+                                   .pre_count = 4, .frag = mesoi_glsl_shell_frag, .frag_file = "shell_frag.glsl",
+                                   .name = names[pass][t], .samplers = shell_samplers,
+                                   .sampler_count = SHELL_UNIT_COUNT + 1};
+    return mesoi_program_build(rt, p, pass, &src);
 }
 
 meso_result mesoi_shell_prepare(meso_rt* rt, int stats, meso_rt_pass pass)

@@ -66,21 +66,17 @@ static const mesoi_program* slice_program(meso_rt* rt, meso_rt_pass mpass, int p
                          mesoi_glsl_shell_slices_vert};
     const char* pre[4] = {mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
                           mesoi_glsl_shell_texfn};
-    const char* fs[10] = {head, pre[0], pre[1], pre[2], pre[3]};
-    char pass_text[64], fname[96];
-    int n = pass == PASS_NONE ? mesoi_frag_sources(rt, mpass, fs, pre, 4, pass_text) : 5;
-    fs[n++] = mesoi_glsl_shell_slices_frag;
     static const char* const names[MESO_PASS_COUNT][PASS_COUNT] = {
         {"slices none", "slices first pass", "slices normal", "slices texcoord", "slices composite"},
         {"slices none depth"},
         {"slices none gbuffer"}};
     static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
                                                       "u_dist",  "u_first", "u_second"};
-    const char* fname_used = mesoi_frag_name(rt, mpass, "shell_slices_frag.glsl", fname);
-    const GLuint fsh = mesoi_compile(rt, GL_FRAGMENT_SHADER, fs, n, fname_used);
-    mesoi_program_init(rt, p, mesoi_compile(rt, GL_VERTEX_SHADER, vs, 5, "shell_slices_vert.glsl"), fsh,
-                       names[mpass][pass], samplers, SLICE_UNITS);
-    return p->id ? p : NULL;
+    const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "shell_slices_vert.glsl", .pre = pre,
+                                   .pre_count = 4, .frag = mesoi_glsl_shell_slices_frag,
+                                   .frag_file = "shell_slices_frag.glsl", .own_outputs = pass != PASS_NONE,
+                                   .name = names[mpass][pass], .samplers = samplers, .sampler_count = SLICE_UNITS};
+    return mesoi_program_build(rt, p, mpass, &src);
 }
 
 meso_result mesoi_slices_prepare(meso_rt* rt, meso_rt_pass mpass)
