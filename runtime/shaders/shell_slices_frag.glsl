@@ -34,10 +34,17 @@
 //     outside, else the first pass's, into the host's framebuffer with its
 //     depth test.
 // The paper renders extra slices in front and behind when the first or last
-// slice is inside; here a pixel whose first inside fragment has no slice
+// slice is inside. Here a pixel whose first inside fragment has no slice
 // outside in front of it (solid reaching the top level, or entered through
 // a side wall with nothing outside before it) keeps pass 1's colour and
-// depth: no interpolation, never a hole.
+// depth: no interpolation, never a hole. Extra slices are not rendered,
+// decided: a shell's texture function is defined on the shell only (a
+// volume clamps in w, a height field's a = h - w never crosses between the
+// cap and a level above it), so a slice beyond a cap cannot bracket a
+// crossing; where solid reaches a face, the surface is the face itself -
+// the exact reference's ray meets the solid at the prism's boundary there
+// (runtime/reference/shell_reference.c, march_prism), which is the first
+// slice inside, drawn as pass 1 draws it.
 // Texture coordinates from different charts cannot be interpolated (a uv
 // seam between the two slices' prisms, or prisms without uvs, each its own
 // chart). The test: t1 read in the chart of t2's prism (prism_coords, then
