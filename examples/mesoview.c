@@ -557,11 +557,15 @@ int main(int argc, char** argv)
         if (frame % 10 == 0 || kn.changed) {
             char title[256];
             snprintf(title, sizeof(title),
-                     "mesoview  %s%s%s%.0d  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
+                     "mesoview  %s%s%s%.0d%s  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
                      technique_names[kn.d.shell.technique],
                      kn.d.shell.technique == MESO_SHELL_SLICES ? " " : "",
                      kn.d.shell.technique == MESO_SHELL_SLICES ? interp_names[kn.d.shell.slice_interp] : "",
-                     kn.d.shell.technique == MESO_SHELL_SLICES ? kn.d.shell.slices : 0, kn.d.shell.error_px,
+                     kn.d.shell.technique == MESO_SHELL_SLICES ? kn.d.shell.slices : 0,
+                     kn.d.shell.technique == MESO_SHELL_SLICES && kn.d.shell.slice_axis == MESO_SLICE_AXIS_LEVELS
+                         ? " levels"
+                         : "",
+                     kn.d.shell.error_px,
                      kn.d.shell.max_steps,
                      kn.d.shell.bisection_steps, kn.d.shell.no_distance_map ? "  no-dist" : "",
                      kn.animate ? "  animated" : "", cell_mode_names[kn.d.cells.mode], kn.d.cells.bounces,
