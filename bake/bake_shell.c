@@ -21,6 +21,7 @@
 #include "lp_distance.h"
 #include "mesh_check.h"
 #include "mesh_chunk.h"
+#include "meso_clock.h"
 #include "shell_hybrid.h"
 #include "shell_validate.h"
 
@@ -101,11 +102,14 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
 /* Refuse what no shell can be built on, before any work: the topology
  * (mesh_check.h) and, with CGAL, a surface that intersects itself. */
 static meso_result require_shellable(const meso_mesh* m, const char* path, double diag, meso_mesh_topology* topo,
-                                     meso_error* err)
+                                     meso_bake_shell_report* rep, meso_error* err)
 {
+    double t = meso_seconds();
     meso_result r = meso_mesh_topology_compute(m, 1e-14 * diag * diag, topo, err);
     if (r == MESO_OK)
         r = meso_mesh_topology_require_shellable(topo, path, err);
+    rep->seconds_topology = meso_seconds() - t;
+    t = meso_seconds();
 #if MESO_HAVE_CGAL
     if (r == MESO_OK) {
         const uint32_t nv = m->vertex_count;
@@ -124,6 +128,7 @@ static meso_result require_shellable(const meso_mesh* m, const char* path, doubl
                                path, (unsigned long long)c.pairs);
     }
 #endif
+    rep->seconds_check = meso_seconds() - t;
     return r;
 }
 
@@ -183,6 +188,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
     s->lp_mask = calloc(nv, 1);
     s->lp_side = calloc(nv, 1);
     meso_result r = s->normals && s->d && s->lp_mask && s->lp_side ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    double t = meso_seconds();
     if (r == MESO_OK)
         r = meso_vertex_normals(m, s->normals, err);
     if (r == MESO_OK)
@@ -192,6 +198,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
         r = meso_lp_field_create(s->fs.positions, s->fs.vertex_count, s->fs.indices, s->fs.triangle_count, &lo_opt,
                                  &s->field, err);
     }
+    s->rep->seconds_field = meso_seconds() - t;
     const meso_trace_options topt = {.thickness = h_side, .angle_tol = a->angle_tol_deg * M_PI / 180.0,
                                      .theta = a->theta, .smooth_iterations = a->smooth,
                                      .progress = s->run.common.progress ? mesoi_run_tick : NULL,
@@ -203,11 +210,14 @@ static meso_result directors(shell_bake* s, meso_error* err)
         mesoi_run_stage(&s->run, "directors", f0, f1 - 0.05, NULL);
         meso_hybrid_stats hs;
         float* dl = s->d + 3 * (size_t)nv * (size_t)layer;
+        t = meso_seconds();
         r = meso_shell_side_directors(s->field, m, s->normals, sign, &topt, a->directors, s->run.common.threads, dl,
                                       s->lp_side, &hs, &ts, err);
         for (uint32_t v = 0; v < nv; ++v)
             s->lp_mask[v] |= s->lp_side[v];
         s->rep->hybrid_rounds += hs.rounds;
+        s->rep->seconds_directors += meso_seconds() - t;
+        s->rep->seconds_directors_checks += hs.seconds_checks;
         if (r == MESO_OK)
             mesoi_run_stage(&s->run, "directors", f1 - 0.05, f1,
                             "directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations (%.0f ms)",
@@ -215,7 +225,9 @@ static meso_result directors(shell_bake* s, meso_error* err)
                             hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations, mesoi_run_ms(&s->run));
         if (r == MESO_OK && !a->no_repair) {
             uint32_t shortened = 0, rounds = 0, left = 0;
-            r = meso_shell_repair(m, dl, sign, 30, &shortened, &rounds, &left, err);
+            t = meso_seconds();
+            r = meso_shell_repair(m, dl, sign, 30, s->run.common.threads, &shortened, &rounds, &left, err);
+            s->rep->seconds_repair += meso_seconds() - t;
             s->rep->vertices_shortened += shortened;
             if (r == MESO_OK)
                 mesoi_run_stage(&s->run, "repair", f1, f1,
@@ -425,17 +437,21 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         return r;
     const meso_bake_shell_options* a = &s.a;
     mesoi_run_begin(&s.run, &a->common);
+    double t = meso_seconds();
     /* The texture first: a bad spec fails before any mesh work. */
     if (a->texture)
         r = mesoi_shell_texture_prepare(&s.run, a, &s.tx, err);
     if (r == MESO_OK)
         r = mesoi_load_input(&s.run, a->input, a->mesh, &s.m, &s.rep->fixes, err);
     const double diag = r == MESO_OK ? meso_mesh_bounds(&s.m, s.lo, s.hi) : 0;
+    s.rep->seconds_load = meso_seconds() - t;
     s.h = a->thickness > 0 ? a->thickness : a->thickness_rel * diag;
     if (r == MESO_OK)
-        r = require_shellable(&s.m, a->input ? a->input : MESOI_MEMORY_INPUT, diag, &s.topo, err);
+        r = require_shellable(&s.m, a->input ? a->input : MESOI_MEMORY_INPUT, diag, &s.topo, s.rep, err);
+    t = meso_seconds();
     if (r == MESO_OK && a->texture)
         r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
+    s.rep->seconds_texture = meso_seconds() - t;
     meso_bake_shell_report* rep = s.rep;
     rep->vertices = s.m.vertex_count;
     rep->triangles = s.m.triangle_count;
@@ -460,10 +476,14 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
                         s.tx.seam_vertices, s.m.vertex_count + s.tx.seam_vertices);
     if (r == MESO_OK)
         r = directors(&s, err);
+    t = meso_seconds();
     if (r == MESO_OK)
         r = validate(&s, err);
+    rep->seconds_validate = meso_seconds() - t;
+    t = meso_seconds();
     if (r == MESO_OK)
         r = assemble(&s, out, err);
+    rep->seconds_assemble = meso_seconds() - t;
     shell_free(&s);
     if (r == MESO_OK)
         mesoi_run_done(&s.run);

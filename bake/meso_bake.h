@@ -105,6 +105,8 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  *   3102 face refers to a missing vertex       3112 duplicated faces
  *                                              3113 degenerate faces
  *                                              3114 the surface intersects itself
+ *   3115 mesobake shell: the baked shell keeps inverted prisms or
+ *        intersections (exit 8 unless --allow-defects)
  * Texture functions (mesobake shell --texture, bake/texture_function.h):
  *   3120 the texture SPEC does not parse       3122 texture file content unusable
  *   3121 texture file missing or unreadable    3123 .vdb: no such float grid, or empty
@@ -131,6 +133,7 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  * Packing .meso files (meso_bake_pack, below): 3480..3489.
  * (The bake/ headers named are the library's sources, not installed.) */
 #define MESO_BAKE_ISSUE_UNREADABLE 3100u
+#define MESO_BAKE_ISSUE_SHELL_DEFECTS 3115u
 #define MESO_BAKE_ISSUE_REORIENTED 3250u /* a warning */
 
 /* Fill an error struct (printf-style message; err may be NULL). Returns `r`.
@@ -377,6 +380,16 @@ typedef struct meso_bake_shell_report {
     uint64_t dist_solid_cells;
     uint32_t seam_vertices;             /* vertices split off at uv seams */
     int planar_uvs;                     /* 1: the mesh had no uvs (warning); projected */
+    /* Wall-clock seconds per stage (in the --report file, not stored in the
+     * .meso file, which stays the same bake after bake): load (read, check
+     * and fix the mesh; the texture function), topology (edges, boundary),
+     * check (the base's self-intersection test), texture (uvs, seams),
+     * field (normals, boundary strip, Barnes-Hut tree), directors (tracing
+     * and the hybrid rounds, of which directors_checks in the rounds' exact
+     * checks), repair, validate (the final exact validation), assemble
+     * (encoding the output). All layers of an envelope summed. */
+    double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,
+        seconds_directors_checks, seconds_repair, seconds_validate, seconds_assemble;
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

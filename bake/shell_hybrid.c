@@ -7,9 +7,11 @@
  * part of the surface: the bunny's ear over its back). The exact checks of
  * shell_validate.c find both and name the faces; a vertex keeps its normal
  * only if no face around it fails in the final shell. The price is one exact
- * validation per round (CGAL box intersection + exact predicates), and that
- * is not cheaper than tracing the Lp field everywhere: on the subdivided
- * bunny (tests/bench/results/shell_size.csv) hybrid takes 0.78-1.28x the
+ * check per round (CGAL box intersection + exact predicates; since issue 15
+ * only of the faces whose directors moved, shell_checker.h). Before that
+ * change every round checked the whole mesh, and hybrid was not cheaper
+ * than tracing the Lp field everywhere: on the subdivided
+ * bunny (tests/bench/results/shell_size.csv) hybrid took 0.78-1.28x the
  * time of lp (86 s against 68 s at 423k triangles, 2-12 rounds) and the
  * two shells keep the same thickness. Hybrid is the default for the shell
  * it draws — plain normal offsets wherever they are provably safe, the
@@ -21,47 +23,17 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "adapters.h"
-#include "shell_validate.h"
+#include "shell_checker.h"
 
 meso_result meso_shell_bad_faces(const meso_mesh* m, const float* d, int sign, uint8_t* bad, uint32_t* count,
                                  meso_error* err)
 {
-    const uint32_t nt = m->triangle_count;
-    meso_result r = meso_shell_count_inverted(m, d, sign, bad, NULL, NULL, err);
-    if (r != MESO_OK)
-        return r;
-    for (uint32_t f = 0; f < nt; ++f)
-        bad[f] = bad[f] ? 1 : 0;
-#if MESO_HAVE_CGAL
-    const uint32_t nv = m->vertex_count;
-    double* base = malloc(sizeof(double) * 3 * (size_t)nv);
-    double* top = malloc(sizeof(double) * 3 * (size_t)nv);
-    uint8_t* flags_top = calloc(nt ? nt : 1, 1);
-    uint8_t* flags_base = calloc(nt ? nt : 1, 1);
-    if (!base || !top || !flags_top || !flags_base) {
-        free(base), free(top), free(flags_top), free(flags_base);
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "shell check: out of memory");
-    }
-    for (size_t i = 0; i < 3 * (size_t)nv; ++i) {
-        base[i] = m->positions[i];
-        top[i] = (double)m->positions[i] + (double)d[i];
-    }
-    meso_cgal_intersection_count c;
-    r = meso_cgal_self_intersections_mark(top, nv, m->indices, nt, flags_top, &c, err);
+    meso_shell_checker* c = NULL;
+    meso_result r = meso_shell_checker_create(m, sign, 1, &c, err);
     if (r == MESO_OK)
-        r = meso_cgal_cross_intersections_mark(top, base, nv, m->indices, nt, flags_top, flags_base, &c, err);
-    for (uint32_t f = 0; r == MESO_OK && f < nt; ++f)
-        bad[f] |= flags_top[f] | flags_base[f];
-    free(base), free(top), free(flags_top), free(flags_base);
-    if (r != MESO_OK)
-        return r;
-#endif
-    uint32_t n = 0;
-    for (uint32_t f = 0; f < nt; ++f)
-        n += bad[f];
-    *count = n;
-    return MESO_OK;
+        r = meso_shell_checker_bad_faces(c, d, bad, count, err);
+    meso_shell_checker_destroy(c);
+    return r;
 }
 
 /* Laplacian smoothing of the directors of the masked vertices: each becomes
@@ -203,11 +175,14 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
             memcpy(raw, d, sizeof(float) * 3 * (size_t)nv);
         uint32_t nbad = 0;
         const int rings = rings_for(m, opt->thickness);
+        meso_shell_checker* ck = NULL;
+        if (r == MESO_OK)
+            r = meso_shell_checker_create(m, sign, threads, &ck, err);
         while (r == MESO_OK) {
             memcpy(d, raw, sizeof(float) * 3 * (size_t)nv);
             if (smooth && hs->vertices_lp && (r = smooth_directors(m, d, mask, smooth, err)) != MESO_OK)
                 break;
-            r = meso_shell_bad_faces(m, d, sign, bad, &nbad, err);
+            r = meso_shell_checker_bad_faces(ck, d, bad, &nbad, err);
             if (r != MESO_OK || nbad == 0)
                 break;
             hs->rounds++;
@@ -222,6 +197,8 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
         }
         hs->vertices_lp = 0; /* recounted below */
         hs->bad_faces_left = nbad;
+        hs->seconds_checks = ck ? meso_shell_checker_seconds(ck) : 0;
+        meso_shell_checker_destroy(ck);
         free(raw);
     }
     for (uint32_t v = 0; v < nv; ++v)
@@ -277,8 +254,8 @@ static int feasible_direction(const meso_mesh* m, const uint32_t* first, const u
     return 0;
 }
 
-meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, uint32_t* shortened,
-                              uint32_t* rounds, uint32_t* bad_left, meso_error* err)
+meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
+                              uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left, meso_error* err)
 {
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     uint8_t* bad = calloc(nt ? nt : 1, 1);
@@ -307,9 +284,10 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
         }
     free(fill);
     uint32_t nbad = 0, round = 0;
-    meso_result r = MESO_OK;
-    for (;;) {
-        r = meso_shell_bad_faces(m, d, sign, bad, &nbad, err);
+    meso_shell_checker* ck = NULL;
+    meso_result r = meso_shell_checker_create(m, sign, threads, &ck, err);
+    while (r == MESO_OK) {
+        r = meso_shell_checker_bad_faces(ck, d, bad, &nbad, err);
         if (r != MESO_OK || nbad == 0 || round == max_rounds)
             break;
         memset(now, 0, nv);
@@ -351,6 +329,7 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
     *shortened = n;
     *rounds = round;
     *bad_left = nbad;
+    meso_shell_checker_destroy(ck);
     free(bad), free(touched), free(now), free(first), free(faces);
     return r;
 }

@@ -13,6 +13,7 @@ typedef struct meso_hybrid_stats {
     uint32_t vertices_normal; /* vertices that kept normal displacement */
     uint32_t rounds;          /* validate-and-grow rounds */
     uint32_t bad_faces_left;  /* faces still failing after the last round */
+    double seconds_checks;    /* of the directors' time: the exact checks of the rounds (shell_checker.h) */
 } meso_hybrid_stats;
 
 /* Faces whose prism (base + w d) is not provably valid: det J not proven
@@ -42,8 +43,10 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
  * max_rounds pass. Shorter directors can only remove folds and collisions
  * that the thickness caused; they give up thickness locally, which the
  * report then shows (thickness_ratio_min/mean). *shortened counts the
- * vertices touched, *bad_left the faces still bad at the end. */
-meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, uint32_t* shortened,
-                              uint32_t* rounds, uint32_t* bad_left, meso_error* err);
+ * vertices touched, *bad_left the faces still bad at the end. Each round
+ * re-checks only the faces whose directors moved (shell_checker.h), on
+ * `threads` threads (<= 0: all cores; the result does not depend on it). */
+meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
+                              uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left, meso_error* err);
 
 #endif

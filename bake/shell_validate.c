@@ -235,21 +235,42 @@ meso_result meso_shell_validate(const meso_mesh* base, const float* directors, c
         xyz[j] = base->positions[j];
         off[j] = (double)base->positions[j] + (double)directors[j];
     }
-    meso_cgal_intersection_count c;
-    r = meso_cgal_self_intersections(xyz, base->vertex_count, base->indices, base->triangle_count, &c, err);
-    if (r == MESO_OK) {
-        out->base_self_intersections = c.pairs;
-        out->degenerate_base_triangles = c.degenerate_a;
-        r = meso_cgal_self_intersections(off, base->vertex_count, base->indices, base->triangle_count, &c, err);
+    /* The three counts are independent: one thread each (OpenMP sections,
+     * all cores; each count is sequential and exact, so the result does not
+     * depend on the thread count). The first failure in this order is
+     * returned. */
+    meso_cgal_intersection_count c[3];
+    meso_result rs[3];
+    meso_error es[3];
+    memset(es, 0, sizeof(es));
+    const uint32_t nv = base->vertex_count, nt = base->triangle_count;
+#ifdef _OPENMP
+#pragma omp parallel sections
+#endif
+    {
+#ifdef _OPENMP
+#pragma omp section
+#endif
+        rs[0] = meso_cgal_self_intersections(xyz, nv, base->indices, nt, &c[0], &es[0]);
+#ifdef _OPENMP
+#pragma omp section
+#endif
+        rs[1] = meso_cgal_self_intersections(off, nv, base->indices, nt, &c[1], &es[1]);
+#ifdef _OPENMP
+#pragma omp section
+#endif
+        rs[2] = meso_cgal_cross_intersections(off, xyz, nv, base->indices, nt, &c[2], &es[2]);
     }
+    for (int k = 0; k < 3 && r == MESO_OK; ++k)
+        if ((r = rs[k]) != MESO_OK && err)
+            *err = es[k];
     if (r == MESO_OK) {
-        out->offset_self_intersections = c.pairs;
-        out->degenerate_offset_triangles = c.degenerate_a;
-        r = meso_cgal_cross_intersections(off, xyz, base->vertex_count, base->indices, base->triangle_count, &c,
-                                          err);
+        out->base_self_intersections = c[0].pairs;
+        out->degenerate_base_triangles = c[0].degenerate_a;
+        out->offset_self_intersections = c[1].pairs;
+        out->degenerate_offset_triangles = c[1].degenerate_a;
+        out->offset_base_intersections = c[2].pairs;
     }
-    if (r == MESO_OK)
-        out->offset_base_intersections = c.pairs;
     free(xyz);
     return r;
 #else

@@ -74,6 +74,24 @@ meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, const double
                                                const uint32_t* indices, uint32_t triangle_count, uint8_t* flags_a,
                                                uint8_t* flags_b, meso_cgal_intersection_count* out, meso_error* err);
 
+/* The intersecting pairs of a shell's offset surface `top` (self, by the
+ * soup rules above: adjacency from the indices) and of `top` against the
+ * base surface `base` (cross, as meso_cgal_cross_intersections), limited to
+ * pairs with a triangle in `changed` (per triangle, 1 = its top moved; NULL
+ * = every triangle): self pairs with at least one changed triangle, cross
+ * pairs whose top triangle changed. What the incremental checks of
+ * shell_checker.c need. Pairs are returned as malloc'd arrays of (a, b)
+ * index pairs (self: a < b; cross: a on top, b on the base), sorted, so the
+ * result does not depend on `threads` (1..; the work is split over that
+ * many threads). Zero-area triangles are skipped. Free with free(). */
+typedef struct meso_cgal_pairs {
+    uint32_t* pairs; /* 2 * count indices */
+    size_t count;
+} meso_cgal_pairs;
+meso_result meso_cgal_shell_pairs(const double* top, const double* base, uint32_t vertex_count,
+                                  const uint32_t* indices, uint32_t triangle_count, const uint8_t* changed,
+                                  int threads, meso_cgal_pairs* self, meso_cgal_pairs* cross, meso_error* err);
+
 /* Curve skeleton of a closed triangle mesh by mean curvature flow
  * (CGAL::Mean_curvature_flow_skeletonization: medially centred, 500
  * iterations at most, min edge length 0.002 x bbox diagonal, and the two

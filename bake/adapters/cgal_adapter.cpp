@@ -121,11 +121,15 @@ template <class T, class U> bool operator!=(const Allocator<T>&, const Allocator
 
 #include <boost/iterator/function_output_iterator.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <exception>
 #include <memory>
 #include <new>
+#include <thread>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -262,12 +266,14 @@ bool pair_intersects(const Soup& a, uint32_t sa, const Soup& b, uint32_t tb, boo
     return !cross;
 }
 
-// Boxes of the non-degenerate triangles; info = (set << 32) | triangle.
-uint32_t make_boxes(const Soup& s, uint32_t triangle_count, uint64_t set, std::vector<Box>& boxes)
+// Boxes of the non-degenerate triangles t with keep[t] (keep NULL: all);
+// info = (set << 32) | triangle. Returns the number of degenerate ones skipped.
+uint32_t boxes_of(const Soup& s, uint32_t triangle_count, const uint8_t* keep, uint64_t set, std::vector<Box>& boxes)
 {
     uint32_t degenerate_count = 0;
-    boxes.reserve(triangle_count);
     for (uint32_t t = 0; t < triangle_count; ++t) {
+        if (keep && !keep[t])
+            continue;
         if (degenerate(s, t)) {
             ++degenerate_count;
             continue;
@@ -276,6 +282,12 @@ uint32_t make_boxes(const Soup& s, uint32_t triangle_count, uint64_t set, std::v
         boxes.push_back(Box(s.point(ix[0]).bbox() + s.point(ix[1]).bbox() + s.point(ix[2]).bbox(), (set << 32) | t));
     }
     return degenerate_count;
+}
+
+uint32_t make_boxes(const Soup& s, uint32_t triangle_count, uint64_t set, std::vector<Box>& boxes)
+{
+    boxes.reserve(triangle_count);
+    return boxes_of(s, triangle_count, nullptr, set, boxes);
 }
 
 std::vector<const Box*> box_pointers(const std::vector<Box>& boxes)
@@ -440,6 +452,177 @@ extern "C" meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, c
                                                           meso_cgal_intersection_count* out, meso_error* err)
 {
     return cross_intersections(xyz_a, xyz_b, vertex_count, indices, triangle_count, flags_a, flags_b, out, err);
+}
+
+// >>shell pairs ----------------------------------------------------------
+// meso_cgal_shell_pairs: the changed triangles' boxes against all boxes, the
+// changed set split over threads (each with its own copy of the box pointers,
+// which box_intersection_d reorders), the pairs sorted at the end.
+namespace {
+typedef std::vector<std::pair<uint32_t, uint32_t>> Pair_list;
+
+// One thread's share: the changed boxes [lo, hi) against every top box
+// (self) and every base box (cross).
+void shell_pairs_part(const Soup& top, const Soup& base, const std::vector<Box>& changed_boxes, size_t lo, size_t hi,
+                      const std::vector<Box>& top_boxes, const std::vector<Box>& base_boxes, const uint8_t* changed,
+                      Pair_list& self, Pair_list& cross)
+{
+    std::vector<const Box*> a, b = box_pointers(top_boxes), c = box_pointers(base_boxes);
+    for (size_t i = lo; i < hi; ++i)
+        a.push_back(&changed_boxes[i]);
+    std::vector<const Box*> a2 = a;
+    auto on_self = [&](const Box* x, const Box* y) {
+        if (x->info() >> 32)
+            std::swap(x, y);
+        const uint32_t f = (uint32_t)x->info(), g = (uint32_t)y->info();
+        // f is changed; a pair of two changed triangles is met twice: keep f < g.
+        if (f == g || ((!changed || changed[g]) && g < f))
+            return;
+        if (pair_intersects(top, f, top, g, false))
+            self.push_back(std::make_pair(f, g));
+    };
+    auto on_cross = [&](const Box* x, const Box* y) {
+        if (x->info() >> 32)
+            std::swap(x, y);
+        const uint32_t s = (uint32_t)x->info(), t = (uint32_t)y->info();
+        if (pair_intersects(top, s, base, t, true))
+            cross.push_back(std::make_pair(s, t));
+    };
+    CGAL::box_intersection_d<CGAL::Sequential_tag>(a.begin(), a.end(), b.begin(), b.end(), on_self,
+                                                   std::ptrdiff_t(2000));
+    CGAL::box_intersection_d<CGAL::Sequential_tag>(a2.begin(), a2.end(), c.begin(), c.end(), on_cross,
+                                                   std::ptrdiff_t(2000));
+}
+
+// Drop from `boxes` those that cannot meet any of `near`: a box meets another
+// only if they share a point, so they share the grid cell of that point; the
+// grid's cell is the largest extent of a `near` box. Boxes spanning more than
+// 64 cells are kept unexamined. Keeps the order. Why: box_intersection_d
+// sorts both sets, and a round changes a few thousand faces of a million.
+void near_boxes(const std::vector<Box>& near, std::vector<Box>& boxes)
+{
+    double cell = 0;
+    for (const Box& x : near)
+        for (int k = 0; k < 3; ++k)
+            cell = std::max(cell, x.max_coord(k) - x.min_coord(k));
+    if (near.empty()) {
+        boxes.clear();
+        return;
+    }
+    if (!(cell > 0) || !std::isfinite(cell))
+        return;
+    auto key = [](int64_t i, int64_t j, int64_t k) {
+        return (uint64_t)(i * 73856093) ^ (uint64_t)(j * 19349663) ^ (uint64_t)(k * 83492791);
+    };
+    auto range = [cell](const Box& x, int k, int64_t& lo, int64_t& hi) {
+        lo = (int64_t)std::floor(x.min_coord(k) / cell);
+        hi = (int64_t)std::floor(x.max_coord(k) / cell);
+    };
+    std::unordered_set<uint64_t> cells;
+    for (const Box& x : near) {
+        int64_t lo[3], hi[3];
+        for (int k = 0; k < 3; ++k)
+            range(x, k, lo[k], hi[k]);
+        for (int64_t i = lo[0]; i <= hi[0]; ++i)
+            for (int64_t j = lo[1]; j <= hi[1]; ++j)
+                for (int64_t k = lo[2]; k <= hi[2]; ++k)
+                    cells.insert(key(i, j, k));
+    }
+    size_t n = 0;
+    for (const Box& x : boxes) {
+        int64_t lo[3], hi[3];
+        for (int k = 0; k < 3; ++k)
+            range(x, k, lo[k], hi[k]);
+        bool keep = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > 64;
+        for (int64_t i = lo[0]; !keep && i <= hi[0]; ++i)
+            for (int64_t j = lo[1]; !keep && j <= hi[1]; ++j)
+                for (int64_t k = lo[2]; !keep && k <= hi[2]; ++k)
+                    keep = cells.count(key(i, j, k)) != 0;
+        if (keep)
+            boxes[n++] = x;
+    }
+    boxes.erase(boxes.begin() + (std::ptrdiff_t)n, boxes.end());
+}
+
+bool to_c_pairs(Pair_list& l, meso_cgal_pairs* out)
+{
+    std::sort(l.begin(), l.end());
+    out->count = l.size();
+    out->pairs = (uint32_t*)malloc(sizeof(uint32_t) * 2 * (l.empty() ? 1 : l.size()));
+    if (!out->pairs)
+        return false;
+    for (size_t i = 0; i < l.size(); ++i) {
+        out->pairs[2 * i] = l[i].first;
+        out->pairs[2 * i + 1] = l[i].second;
+    }
+    return true;
+}
+} // namespace
+
+extern "C" meso_result meso_cgal_shell_pairs(const double* top, const double* base, uint32_t vertex_count,
+                                             const uint32_t* indices, uint32_t triangle_count, const uint8_t* changed,
+                                             int threads, meso_cgal_pairs* self, meso_cgal_pairs* cross,
+                                             meso_error* err)
+{
+    *self = meso_cgal_pairs();
+    *cross = meso_cgal_pairs();
+    try {
+        if (!check_indices(indices, vertex_count, triangle_count, err))
+            return MESO_ERR_INVALID_ARG;
+        const Soup t = {top, indices}, b = {base, indices};
+        // Set 0: the changed top boxes (tested); set 1: every top box; set 2: base.
+        std::vector<Box> changed_boxes, top_boxes, base_boxes;
+        boxes_of(t, triangle_count, changed, 0, changed_boxes);
+        boxes_of(t, triangle_count, nullptr, 1, top_boxes);
+        boxes_of(b, triangle_count, nullptr, 2, base_boxes);
+        if (changed) {
+            near_boxes(changed_boxes, top_boxes);
+            near_boxes(changed_boxes, base_boxes);
+        }
+        const size_t n = changed_boxes.size();
+        const size_t parts = (size_t)std::max(1, std::min(threads, 64));
+        std::vector<Pair_list> selfs(parts), crosses(parts);
+        std::vector<std::exception_ptr> failed(parts);
+        std::vector<std::thread> pool;
+        for (size_t k = 0; k < parts; ++k) {
+            auto work = [&, k]() {
+                try {
+                    shell_pairs_part(t, b, changed_boxes, n * k / parts, n * (k + 1) / parts, top_boxes, base_boxes,
+                                     changed, selfs[k], crosses[k]);
+                } catch (...) {
+                    failed[k] = std::current_exception();
+                }
+            };
+            if (k + 1 < parts)
+                pool.emplace_back(work);
+            else
+                work();
+        }
+        for (std::thread& th : pool)
+            th.join();
+        for (const std::exception_ptr& e : failed)
+            if (e)
+                std::rethrow_exception(e);
+        Pair_list all_self, all_cross;
+        for (size_t k = 0; k < parts; ++k) {
+            all_self.insert(all_self.end(), selfs[k].begin(), selfs[k].end());
+            all_cross.insert(all_cross.end(), crosses[k].begin(), crosses[k].end());
+        }
+        if (!to_c_pairs(all_self, self) || !to_c_pairs(all_cross, cross)) {
+            free(self->pairs);
+            free(cross->pairs);
+            *self = meso_cgal_pairs();
+            *cross = meso_cgal_pairs();
+            return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");
+        }
+        return MESO_OK;
+    } catch (const std::bad_alloc&) {
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");
+    } catch (const std::exception& e) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: %s", e.what());
+    } catch (...) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: unknown exception");
+    }
 }
 
 // >>skeleton -------------------------------------------------------------

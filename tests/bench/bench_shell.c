@@ -288,7 +288,7 @@ static void side_repair(const shell_ctx* c, int sign, float* d, side_result* out
 {
     meso_error err = {0};
     const double t = meso_seconds();
-    check(meso_shell_repair(&c->m, d, sign, REPAIR_ROUNDS, &out->shortened, &out->repair_rounds, &out->bad_left,
+    check(meso_shell_repair(&c->m, d, sign, REPAIR_ROUNDS, THREADS, &out->shortened, &out->repair_rounds, &out->bad_left,
                             &err),
           "repair", &err);
     out->t_repair = meso_seconds() - t;

@@ -3,6 +3,7 @@
 # mesobake command and for mesoinspect: each failure kind exits with its
 # documented code, stderr names the problem, and no output file appears.
 #   1 command-line error   2 IO failure   3 invalid input file
+#   8 a shell left with defects (mesobake shell without --allow-defects)
 #   (4 internal errors and 5, a missing adapter, cannot be provoked on
 #   purpose in a full build: they are not rows here.)
 # Every malformed input is generated in the test's temp dir.
@@ -155,6 +156,10 @@ row 3 "garbage.meso" "info: not a .meso file" "$inspect" info "$tmp/garbage.meso
 row 3 "truncated.meso" "validate: truncated .meso" "$inspect" validate "$tmp/truncated.meso"
 row 3 "truncated.meso" "preview: truncated .meso" "$inspect" preview "$tmp/truncated.meso" -o "$tmp/out.png"
 row 3 "garbage.meso" "diff: not a .meso file" "$inspect" diff "$tmp/garbage.meso" "$tmp/good.meso"
+
+# --- 8: a shell left with defects -------------------------------------------------
+row 8 "E3115.*inverted prisms" "shell --no-repair over spot (inverted prisms left)" \
+  "$bake" shell -i "$data/spot_low_resolution.obj" -o "$tmp/out.meso" --no-repair
 
 # --- the documented Draco range is the accepted one -----------------------------
 for bits in 1,2,1 30,30,30 14,10,12; do

@@ -1,6 +1,7 @@
 #!/bin/sh
 # mesobake shell from the command line: byte-identical output for -j 1 and
-# -j 2, the report's keys, and bad input (the defective meshes MAKE_DEFECTIVE
+# -j 2, the report's keys, exit 8 for a shell left with defects unless
+# --allow-defects, and bad input (the defective meshes MAKE_DEFECTIVE
 # generates, see tests/common/defective_meshes.h, plus small ones written
 # here): a coded error, a non-zero exit, and no output file.
 # usage: shell_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR MAKE_DEFECTIVE
@@ -40,6 +41,28 @@ for mesh in spot_low_resolution blub_fish_low_resolution torus sphere; do
       check "$mesh $1 $2: $key = 0" grep -q "\"$key\":[[:space:]]*0," "$tmp/goal.json"
     done
   done
+done
+
+# Defects left (--no-repair on spot: inverted prisms): exit 8, E3115, no
+# .meso, but the --report file, which says what is left; --allow-defects
+# writes the shell, exit 0.
+rm -f "$tmp/nr.meso" "$tmp/nr.json"
+"$bake" shell -i "$data/spot_low_resolution.obj" -o "$tmp/nr.meso" --no-repair --report "$tmp/nr.json" \
+  >/dev/null 2>"$tmp/nr.err"
+rc=$?
+check "--no-repair with defects: exit 8 (got $rc)" test "$rc" = 8
+check "--no-repair with defects: E3115 names them" grep -q "E3115.*inverted prisms" "$tmp/nr.err"
+check "--no-repair with defects: no output" test ! -e "$tmp/nr.meso"
+check "--no-repair with defects: report written, output_written false" \
+  grep -q '"output_written":[[:space:]]*false' "$tmp/nr.json"
+check "--no-repair with defects: report counts inverted prisms" \
+  sh -c "grep -q '\"inverted_prisms\":[[:space:]]*[1-9]' '$tmp/nr.json'"
+"$bake" shell -i "$data/spot_low_resolution.obj" -o "$tmp/nr.meso" --no-repair --allow-defects >/dev/null 2>&1
+rc=$?
+check "--no-repair --allow-defects: exit 0 (got $rc)" test "$rc" = 0
+check "--no-repair --allow-defects: writes the shell" test -s "$tmp/nr.meso"
+for key in seconds_field seconds_directors seconds_repair seconds_validate; do
+  check "report has \"$key\"" grep -q "\"$key\":" "$tmp/r.json"
 done
 
 refuse() { # DESCRIPTION EXPECTED_EXIT INPUT

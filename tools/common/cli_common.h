@@ -14,6 +14,7 @@ enum {
     MESO_EXIT_UNSUPPORTED = 5, /* not supported in this build */
     MESO_EXIT_JOBS_FAILED = 6, /* mesobake batch: at least one job failed */
     MESO_EXIT_DIFFERENT = 7,   /* diff found a difference */
+    MESO_EXIT_DEFECTS = 8,     /* mesobake shell: the shell keeps inverted prisms or intersections */
 };
 
 /* Exit code for a failed library call. */

@@ -134,7 +134,7 @@ static int is_flag(const char* command, const char* s)
 {
     static const char* const common[] = {"-v", "--verbose", "-h", "--help"};
     static const char* const mesh[] = {"--draco"};
-    static const char* const shell[] = {"--repair", "--no-repair"};
+    static const char* const shell[] = {"--repair", "--no-repair", "--allow-defects"};
     static const char* const frusta[] = {"--no-fit", "--keep-cap-intersections"};
     for (size_t k = 0; k < sizeof common / sizeof common[0]; ++k)
         if (!strcmp(s, common[k]))
@@ -143,7 +143,7 @@ static int is_flag(const char* command, const char* s)
                               : !strcmp(command, "shell")  ? shell
                               : !strcmp(command, "frusta") ? frusta
                                                            : NULL;
-    const size_t n = list == mesh ? 1 : list ? 2 : 0;
+    const size_t n = list == mesh ? 1 : list == shell ? 3 : list ? 2 : 0;
     for (size_t k = 0; k < n; ++k)
         if (!strcmp(s, list[k]))
             return 1;

@@ -75,7 +75,8 @@ int path_option(const char* opt, const char* value, const char** in, const char*
 
 /* Stage the --report file (when `report_path` is not NULL), then publish
  * every staged output; on any failure nothing is published. */
-static int publish_outputs(const char* report_path, const char* report_json, size_t file_size, double seconds)
+static int publish_outputs(const char* report_path, const char* report_json, size_t file_size, double seconds,
+                           const finish_extra* x)
 {
     meso_error err = {0};
     meso_result r = MESO_OK;
@@ -83,8 +84,13 @@ static int publish_outputs(const char* report_path, const char* report_json, siz
     if (report_path && !report)
         r = MESO_ERR_OUT_OF_MEMORY;
     if (report) {
-        cJSON_AddNumberToObject(report, "bytes", (double)file_size);
+        if (x && x->refuse)
+            cJSON_AddBoolToObject(report, "output_written", 0);
+        else
+            cJSON_AddNumberToObject(report, "bytes", (double)file_size);
         cJSON_AddNumberToObject(report, "seconds_total", seconds);
+        if (x && x->add_report)
+            x->add_report(report, x->user);
         char* s = cJSON_Print(report);
         size_t n = s ? strlen(s) : 0;
         meso_output* o = NULL;
@@ -167,7 +173,20 @@ void cli_progress(void* user, const meso_bake_progress* p)
 int finish_bake(meso_result r, const meso_error* err, meso_bake_output* o, const char* out, const char* report,
                 double t0, const char* detail)
 {
+    return finish_bake_ex(r, err, o, out, report, t0, detail, NULL);
+}
+
+int finish_bake_ex(meso_result r, const meso_error* err, meso_bake_output* o, const char* out, const char* report,
+                   double t0, const char* detail, const finish_extra* x)
+{
     meso_error werr = {0};
+    if (r == MESO_OK && x && x->refuse) {
+        /* Only the report: it says what is left. */
+        const int code = publish_outputs(report, meso_bake_output_report_json(o), 0, meso_seconds() - t0, x);
+        meso_bake_output_free(o);
+        err_print(x->refuse);
+        return code == MESO_EXIT_OK ? x->refuse_exit : code;
+    }
     if (r == MESO_OK) {
         meso_output* staged = NULL;
         err = &werr;
@@ -183,7 +202,7 @@ int finish_bake(meso_result r, const meso_error* err, meso_bake_output* o, const
     }
     const size_t file_size = meso_bake_output_size(o);
     const double t_end = meso_seconds();
-    const int code = publish_outputs(report, meso_bake_output_report_json(o), file_size, t_end - t0);
+    const int code = publish_outputs(report, meso_bake_output_report_json(o), file_size, t_end - t0, x);
     meso_bake_output_free(o);
     if (verbose && code == MESO_EXIT_OK)
         fprintf(stderr, "mesobake: wrote %s: %zu bytes%s (%.0f ms total)\n", out, file_size, detail ? detail : "",

@@ -24,7 +24,8 @@ void print_help(const char* usage);
 #define MESOBAKE_HELP_EXIT_CODES                                                                                 \
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input file\n"                        \
     "            (mesh, skeleton, texture, volume), 4 internal error, 5 not supported in\n"                      \
-    "            this build (a missing adapter).\n"
+    "            this build (a missing adapter), 8 shell: the shell keeps inverted prisms or\n"                  \
+    "            intersections (nothing written but --report; --allow-defects writes it).\n"
 
 /* "mesobake error: ..." on stderr. */
 void err_msg(const char* fmt, ...) CLI_PRINTF(1, 2);
@@ -48,6 +49,21 @@ void cli_progress(void* user, const meso_bake_progress* p);
  * published. Frees `o`. Returns the exit code. */
 int finish_bake(meso_result r, const meso_error* err, meso_bake_output* o, const char* out, const char* report,
                 double t0, const char* detail);
+struct cJSON;
+/* finish_bake with what a command adds: add_report(report, user), when not
+ * NULL, adds keys to the --report file only (timings: they are not in the
+ * .meso file); with refuse set (a bake that succeeded but must not be
+ * written, e.g. a shell with defects) `out` is not written, the --report
+ * file is, with "output_written": false, the error is printed and the exit
+ * code is refuse_exit. */
+typedef struct finish_extra {
+    void (*add_report)(struct cJSON* report, const void* user);
+    const void* user;
+    const meso_error* refuse;
+    int refuse_exit;
+} finish_extra;
+int finish_bake_ex(meso_result r, const meso_error* err, meso_bake_output* o, const char* out, const char* report,
+                   double t0, const char* detail, const finish_extra* x);
 
 /* Refuse, before any work, an -o or --report that cannot be replaced
  * (meso_output_check). `report` may be NULL. Returns an exit code. */

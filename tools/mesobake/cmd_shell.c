@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "cli_util.h"
 
 static const char* const usage_shell =
@@ -41,7 +43,12 @@ static const char* const usage_shell =
     "      --no-repair         keep directors that still fold or collide (default: --repair,\n"
     "                          which shortens them locally until the shell is valid; the\n"
     "                          report says how much thickness that gave up)\n"
-    "  -j, --threads N         threads (default: all cores); the output does not depend on N\n"
+    "      --allow-defects     write the shell even if inverted prisms or intersections are\n"
+    "                          left (default: such a bake exits 8, E3115, and writes only\n"
+    "                          the --report file, which says what is left)\n"
+    "  -j, --threads N         threads (default: all cores); the output does not depend on N\n";
+/* (in three parts: one literal would pass the 4095 characters C11 promises) */
+static const char* const usage_shell_texture =
     "Texture function (what the shell holds; without one the whole shell is solid):\n"
     "      --texture SPEC      height:FILE.png        height field (8/16-bit; grey or first channel;\n"
     "                                                 the bottom image row is t = 0)\n"
@@ -66,7 +73,6 @@ static const char* const usage_shell =
     "                          resolution in s, t (8..128) and, in w, half a volume's depth or,\n"
     "                          for a height field, about one cell per typical height step)\n"
     "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n";
-/* (in two parts: one literal would pass the 4095 characters C11 promises) */
 static const char* const usage_shell_end =
     "      --time T            seconds: sample a time-dependent texture (boil) at T (default 0)\n"
     "      --frames N          store N frames (1..256) at T + k / FPS, looped (FORMAT.md 7.2\n"
@@ -84,6 +90,7 @@ static const char* const usage_shell_end =
 
 typedef struct shell_args {
     const char *out, *report;
+    int allow_defects;
     meso_bake_shell_options o;
 } shell_args;
 
@@ -160,6 +167,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
             fputs(usage_shell, stdout);
+            fputs(usage_shell_texture, stdout);
             print_help(usage_shell_end);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
@@ -167,6 +175,9 @@ static int parse_args(int argc, char** argv, shell_args* a)
             continue;
         } else if (!strcmp(s, "--repair") || !strcmp(s, "--no-repair")) {
             o->no_repair = s[2] != 'r';
+            continue;
+        } else if (!strcmp(s, "--allow-defects")) {
+            a->allow_defects = 1;
             continue;
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
@@ -247,6 +258,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         o->thickness = 0; /* from --thickness-rel once the mesh is known */
     if (!o->input || !a->out) {
         fputs(usage_shell, stderr);
+        fputs(usage_shell_texture, stderr);
         fputs(usage_shell_end, stderr);
         return MESO_EXIT_USAGE;
     }
@@ -254,6 +266,23 @@ static int parse_args(int argc, char** argv, shell_args* a)
         (o->dist_res[0] || o->dist_dtype != MESO_DTYPE_U8 || o->tiling[0] != 1.0 || o->tiling[1] != 1.0))
         return usage_error("%s", "--tiling, --dist-res and --dist-type need --texture");
     return check_outputs(a->out, a->report);
+}
+
+/* The per-stage seconds of the bake, in the --report file only. */
+static void stage_seconds(struct cJSON* report, const void* user)
+{
+    const meso_bake_shell_report* r = user;
+    const struct {
+        const char* key;
+        double v;
+    } t[] = {{"seconds_load", r->seconds_load},         {"seconds_topology", r->seconds_topology},
+             {"seconds_check", r->seconds_check},       {"seconds_texture", r->seconds_texture},
+             {"seconds_field", r->seconds_field},       {"seconds_directors", r->seconds_directors},
+             {"seconds_directors_checks", r->seconds_directors_checks},
+             {"seconds_repair", r->seconds_repair},     {"seconds_validate", r->seconds_validate},
+             {"seconds_assemble", r->seconds_assemble}};
+    for (size_t k = 0; k < sizeof t / sizeof t[0]; ++k)
+        cJSON_AddNumberToObject(report, t[k].key, t[k].v);
 }
 
 int cmd_shell(int argc, char** argv)
@@ -265,6 +294,23 @@ int cmd_shell(int argc, char** argv)
     const double t0 = meso_seconds();
     meso_error err = {0};
     meso_bake_output* baked = NULL;
-    const meso_result r = meso_bake_shell(&a.o, &baked, NULL, &err);
-    return finish_bake(r, &err, baked, a.out, a.report, t0, NULL);
+    meso_bake_shell_report rep;
+    const meso_result r = meso_bake_shell(&a.o, &baked, &rep, &err);
+    /* Defects left (--no-repair, or what repair could not fix): not written
+     * unless asked for; the report still is, and says what is left. */
+    meso_error defects = {0};
+    const uint64_t left = (uint64_t)rep.inverted_prisms + rep.offset_self_intersections + rep.offset_base_intersections;
+    if (r == MESO_OK && left && !a.allow_defects) {
+        defects.code = MESO_BAKE_ISSUE_SHELL_DEFECTS;
+        defects.result = MESO_ERR_CORRUPT;
+        defects.chunk = -1;
+        snprintf(defects.message, sizeof defects.message,
+                 "%s: shell left with %u inverted prisms, %llu offset self- and %llu offset/base intersections%s; "
+                 "nothing written (--allow-defects writes it)",
+                 a.o.input, rep.inverted_prisms, (unsigned long long)rep.offset_self_intersections,
+                 (unsigned long long)rep.offset_base_intersections, a.o.no_repair ? " (--no-repair)" : "");
+    }
+    const finish_extra x = {.add_report = stage_seconds, .user = &rep, .refuse = defects.code ? &defects : NULL,
+                            .refuse_exit = MESO_EXIT_DEFECTS};
+    return finish_bake_ex(r, &err, baked, a.out, a.report, t0, NULL, &x);
 }
