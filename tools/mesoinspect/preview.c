@@ -632,7 +632,7 @@ static int object_by_name(const char* path, const char* name, unsigned long* id)
         if (!strcmp(recs[i].name, name))
             *id = recs[i].id;
     if (!*id) {
-        fprintf(stderr, "mesoinspect error: %s: no object named '%s'; its objects:", path, name);
+        fprintf(stderr, "mesoinspect error: --object: %s has no object named '%s'; its objects:", path, name);
         for (uint32_t i = 0; i < count; ++i)
             fprintf(stderr, "%s %u '%s'", i ? "," : "", recs[i].id, recs[i].name);
         fprintf(stderr, "\n");
