@@ -21,6 +21,7 @@
 #include "lp_distance.h"
 #include "mesh_check.h"
 #include "mesh_chunk.h"
+#include "shell_allowed.h"
 #include "shell_hybrid.h"
 #include "shell_validate.h"
 
@@ -90,6 +91,10 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
     cJSON_AddNumberToObject(rep, "offset_base_intersections", (double)s->offset_base_intersections);
     cJSON_AddNumberToObject(rep, "thickness_ratio_min", s->thickness_ratio_min);
     cJSON_AddNumberToObject(rep, "thickness_ratio_mean", s->thickness_ratio_mean);
+    cJSON_AddNumberToObject(rep, "allowed_ratio_min", s->allowed_ratio_min);
+    cJSON_AddNumberToObject(rep, "allowed_ratio_mean", s->allowed_ratio_mean);
+    cJSON_AddNumberToObject(rep, "vertices_below_half_allowed", s->vertices_below_half_allowed);
+    cJSON_AddNumberToObject(rep, "vertices_allowed_below_requested", s->vertices_allowed_below_requested);
     cJSON_AddNumberToObject(rep, "vertices_lp", s->vertices_lp);
     cJSON_AddNumberToObject(rep, "vertices_normal", s->vertices_normal);
     cJSON_AddNumberToObject(rep, "hybrid_rounds", s->hybrid_rounds);
@@ -274,6 +279,39 @@ static meso_result validate(shell_bake* s, meso_error* err)
                         (unsigned long long)val.offset_self_intersections,
                         (unsigned long long)val.offset_base_intersections, val.thickness_ratio_min,
                         val.thickness_ratio_mean, mesoi_run_ms(&s->run));
+    return r;
+}
+
+/* The thickness the geometry allows, per side, against the directors
+ * (shell_allowed.h): the report's allowed_* fields. */
+static meso_result allowed(shell_bake* s, meso_error* err)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const uint32_t nv = s->m.vertex_count;
+    const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    const double h_side = layers == 2 ? 0.5 * s->h : s->h;
+    double* al = malloc(sizeof(double) * (nv ? nv : 1));
+    meso_result r = al ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "allowed thickness: out of memory");
+    meso_shell_allowed_summary sum;
+    memset(&sum, 0, sizeof(sum));
+    for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
+        const int sign = (a->kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
+        r = meso_shell_allowed(&s->m, s->normals, sign, h_side, s->run.common.threads, al, err);
+        if (r == MESO_OK)
+            meso_shell_allowed_add(&s->m, s->d + 3 * (size_t)nv * (size_t)layer, al, h_side, &sum, NULL);
+    }
+    free(al);
+    meso_bake_shell_report* rep = s->rep;
+    rep->allowed_ratio_min = sum.counted ? sum.ratio_min : 0.0;
+    rep->allowed_ratio_mean = sum.counted ? sum.ratio_sum / sum.counted : 0.0;
+    rep->vertices_below_half_allowed = sum.below_half;
+    rep->vertices_allowed_below_requested = sum.limited;
+    if (r == MESO_OK)
+        mesoi_run_stage(&s->run, "allowed", 0.92, 0.92,
+                        "allowed thickness: %u vertices limited by the geometry; achieved/allowed min %.3f mean "
+                        "%.3f, %u below half (%.0f ms)",
+                        sum.limited, rep->allowed_ratio_min, rep->allowed_ratio_mean, sum.below_half,
+                        mesoi_run_ms(&s->run));
     return r;
 }
 
@@ -462,6 +500,8 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         r = directors(&s, err);
     if (r == MESO_OK)
         r = validate(&s, err);
+    if (r == MESO_OK)
+        r = allowed(&s, err);
     if (r == MESO_OK)
         r = assemble(&s, out, err);
     shell_free(&s);

@@ -366,6 +366,13 @@ typedef struct meso_bake_shell_report {
     uint32_t prisms, inverted_prisms, undecided_prisms;
     uint64_t offset_self_intersections, offset_base_intersections;
     double thickness_ratio_min, thickness_ratio_mean;
+    /* Thickness kept against what the geometry allows (bake/shell_allowed.h:
+     * allowed_v = min(requested, half the gap along the normal to the next
+     * part of the surface); ratio_v = min(1, |d_v| / allowed_v); an
+     * envelope counts each vertex once per layer): */
+    double allowed_ratio_min, allowed_ratio_mean;
+    uint32_t vertices_below_half_allowed;      /* ratio_v < 0.5 */
+    uint32_t vertices_allowed_below_requested; /* allowed_v < requested: the geometry sets the bound */
     uint32_t vertices_lp, vertices_normal, hybrid_rounds, vertices_shortened;
     uint64_t field_evaluations;
     uint32_t artificial_faces;
