@@ -6,7 +6,8 @@
  *   bench_shell accuracy  OUTDIR               -> OUTDIR/shell_accuracy.csv
  *   bench_shell thickness OUTDIR               -> OUTDIR/shell_thickness.csv
  *   bench_shell goals     OUTDIR MESOBAKE      -> OUTDIR/shell_goals.csv
- *   bench_shell all       OUTDIR MESOBAKE      (the four above)
+ *   bench_shell kept      OUTDIR               -> OUTDIR/shell_kept.csv, shell_kept_dist.csv
+ *   bench_shell all       OUTDIR MESOBAKE      (the five above)
  *
  * Meshes: tests/data/{saddle,spot_low_resolution,wingnut}.obj, all bundled.
  * The checked-in results had the Stanford bunny where wingnut (6090
@@ -42,6 +43,13 @@
  *   exterior and 5 % interior with its defaults (-j THREADS); the report's
  *   numbers, the exit code and the first stderr line (refusals). goal_met:
  *   no inverted prism, no offset self- and no offset/base intersection.
+ * kept: every closed mesh file of tests/data (or $MESO_BENCH_MESHES) at 10 %
+ *   exterior and 5 % interior, hybrid + repair as the CLI bakes them, against
+ *   the thickness the geometry allows (bake/shell_allowed.h): per mesh and
+ *   side the report's allowed_* numbers (shell_kept.csv) and the distribution
+ *   of achieved/allowed per vertex, the fraction of vertices below x for
+ *   x = 0, 0.02, .., 1 (shell_kept_dist.csv). Issue 15's goals: no vertex
+ *   below 0.5, mean >= 0.95.
  */
 #include "meso_clock.h"
 #include <cjson/cJSON.h>
@@ -61,6 +69,7 @@
 #include "adapters.h"
 #include "lp_distance.h"
 #include "mesh_check.h"
+#include "shell_allowed.h"
 #include "shell_hybrid.h"
 #include "shell_validate.h"
 #include "test_util.h"
@@ -576,6 +585,25 @@ static double jnum(const cJSON* o, const char* key)
     return cJSON_IsNumber(v) ? v->valuedouble : NAN;
 }
 
+/* The mesh files of goals_dir(), sorted (at most 256; free each). */
+static size_t mesh_files(char* names[256])
+{
+    DIR* dd = opendir(goals_dir());
+    if (!dd) {
+        fprintf(stderr, "bench_shell: %s: %s\n", goals_dir(), strerror(errno));
+        exit(1);
+    }
+    size_t n = 0;
+    for (struct dirent* e; (e = readdir(dd)) && n < 256;) {
+        const char* dot = strrchr(e->d_name, '.');
+        if (dot && (!strcmp(dot, ".obj") || !strcmp(dot, ".off") || !strcmp(dot, ".ply") || !strcmp(dot, ".stl")))
+            names[n++] = strdup(e->d_name);
+    }
+    closedir(dd);
+    qsort(names, n, sizeof(names[0]), cmp_str);
+    return n;
+}
+
 static void bench_goals(const char* dir, const char* mesobake)
 {
     static const char* const keys[] = {"prisms", "inverted_prisms", "undecided_prisms", "offset_self_intersections",
@@ -589,20 +617,8 @@ static void bench_goals(const char* dir, const char* mesobake)
     for (size_t k = 0; k < nk; ++k)
         fprintf(f, ",%s", keys[k]);
     fputs(",goal_met,note\n", f);
-    DIR* dd = opendir(goals_dir());
-    if (!dd) {
-        fprintf(stderr, "bench_shell: %s: %s\n", goals_dir(), strerror(errno));
-        exit(1);
-    }
     char* names[256];
-    size_t n = 0;
-    for (struct dirent* e; (e = readdir(dd)) && n < 256;) {
-        const char* dot = strrchr(e->d_name, '.');
-        if (dot && (!strcmp(dot, ".obj") || !strcmp(dot, ".off") || !strcmp(dot, ".ply") || !strcmp(dot, ".stl")))
-            names[n++] = strdup(e->d_name);
-    }
-    closedir(dd);
-    qsort(names, n, sizeof(names[0]), cmp_str);
+    const size_t n = mesh_files(names);
     char tmp[] = "/tmp/bench_shell_XXXXXX";
     if (!mkdtemp(tmp))
         die("mkdtemp", NULL);
@@ -668,10 +684,93 @@ static void bench_goals(const char* dir, const char* mesobake)
     fclose(f);
 }
 
+/* >>kept: achieved against allowed thickness on every closed mesh */
+#define KEPT_BINS 50
+
+static void bench_kept(const char* dir)
+{
+    char path[4096];
+    FILE* f = open_csv(dir, "shell_kept.csv", "w", path, sizeof(path));
+    FILE* fd = open_csv(dir, "shell_kept_dist.csv", "w", path, sizeof(path));
+    fputs("mesh,triangles,side,thickness_rel,vertices,vertices_allowed_below_requested,allowed_ratio_min,"
+          "allowed_ratio_mean,vertices_below_half_allowed,thickness_ratio_min,thickness_ratio_mean,inverted_prisms,"
+          "offset_self_intersections,offset_base_intersections,vertices_shortened,seconds_directors_repair,"
+          "seconds_allowed,smooth\n",
+          f);
+    fputs("mesh,side,x,vertices_below,fraction_below\n", fd);
+    char* names[256];
+    const size_t n = mesh_files(names);
+    for (size_t i = 0; i < n; ++i) {
+        char mp[4200], name[256];
+        snprintf(mp, sizeof(mp), "%s/%s", goals_dir(), names[i]);
+        snprintf(name, sizeof(name), "%s", names[i]);
+        *strrchr(name, '.') = 0;
+        for (int side = 0; side < 2; ++side) {
+            const int sign = side ? -1 : 1;
+            const double rel = side ? 0.05 : 0.10;
+            meso_mesh m;
+            load(mp, &m);
+            double lo[3], hi[3];
+            const double h = rel * meso_mesh_bounds(&m, lo, hi);
+            shell_ctx c;
+            ctx_init(&c, &m, h, 1, 0);
+            if (c.topo.boundary_edges) { /* open: no exterior or interior to keep */
+                ctx_free(&c);
+                break;
+            }
+            const uint32_t nv = c.m.vertex_count;
+            float* d = malloc(sizeof(float) * 3 * (size_t)nv);
+            double* al = malloc(sizeof(double) * (size_t)nv);
+            double* ratio = malloc(sizeof(double) * (size_t)nv);
+            if (!d || !al || !ratio)
+                die("out of memory", NULL);
+            side_result s;
+            memset(&s, 0, sizeof(s));
+            side_directors(&c, sign, MESO_DIRECTORS_HYBRID, d, &s);
+            side_repair(&c, sign, d, &s);
+            side_validate(&c, sign, d, &s);
+            meso_error err = {0};
+            const double t = meso_seconds();
+            check(meso_shell_allowed(&c.m, c.normals, sign, h, THREADS, al, &err), "allowed", &err);
+            const double t_allowed = meso_seconds() - t;
+            meso_shell_allowed_summary sum;
+            memset(&sum, 0, sizeof(sum));
+            meso_shell_allowed_add(&c.m, d, al, h, &sum, ratio);
+            const char* sname = side ? "interior" : "exterior";
+            fprintf(f, "%s,%u,%s,%.2f,%u,%u,%.4f,%.4f,%u,%.4f,%.4f,%u,%llu,%llu,%u,%.3f,%.4f,%d\n", name,
+                    c.m.triangle_count, sname, rel, sum.counted, sum.limited, sum.ratio_min,
+                    sum.counted ? sum.ratio_sum / sum.counted : 0.0, sum.below_half, s.rep.thickness_ratio_min,
+                    s.rep.thickness_ratio_mean, s.rep.inverted_prisms,
+                    (unsigned long long)s.rep.offset_self_intersections,
+                    (unsigned long long)s.rep.offset_base_intersections, s.shortened, s.t_dir + s.t_repair,
+                    t_allowed, smooth_rounds());
+            fflush(f);
+            /* (vertices used by no triangle have ratio 1: never below x <= 1) */
+            for (int b = 0; b <= KEPT_BINS; ++b) {
+                const double x = (double)b / KEPT_BINS;
+                uint32_t below = 0;
+                for (uint32_t v = 0; v < nv; ++v)
+                    below += ratio[v] < x;
+                fprintf(fd, "%s,%s,%.2f,%u,%.6g\n", name, sname, x, below,
+                        sum.counted ? (double)below / sum.counted : 0.0);
+            }
+            fflush(fd);
+            fprintf(stderr, "  %s %s: achieved/allowed mean %.4f min %.4f, %u below half, %u limited\n", name, sname,
+                    sum.counted ? sum.ratio_sum / sum.counted : 0.0, sum.ratio_min, sum.below_half, sum.limited);
+            free(d), free(al), free(ratio);
+            ctx_free(&c);
+        }
+    }
+    for (size_t i = 0; i < n; ++i)
+        free(names[i]);
+    fclose(f);
+    fclose(fd);
+}
+
 static int usage(void)
 {
     fputs("usage: bench_shell size OUTDIR [MAX_LEVEL] | accuracy OUTDIR | thickness OUTDIR |\n"
-          "       goals OUTDIR MESOBAKE | all OUTDIR MESOBAKE\n",
+          "       goals OUTDIR MESOBAKE | kept OUTDIR | all OUTDIR MESOBAKE\n",
           stderr);
     return 2;
 }
@@ -708,6 +807,11 @@ int main(int argc, char** argv)
             return usage();
         fprintf(stderr, "== goals\n");
         bench_goals(dir, argv[3]);
+        done = 1;
+    }
+    if (all || !strcmp(cmd, "kept")) {
+        fprintf(stderr, "== kept\n");
+        bench_kept(dir);
         done = 1;
     }
     return done ? 0 : usage();
