@@ -23,6 +23,7 @@
 #include "mesh_chunk.h"
 #include "shell_allowed.h"
 #include "shell_hybrid.h"
+#include "shell_regrow.h"
 #include "shell_validate.h"
 
 meso_bake_shell_options meso_bake_shell_defaults(void)
@@ -95,6 +96,7 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
     cJSON_AddNumberToObject(rep, "allowed_ratio_mean", s->allowed_ratio_mean);
     cJSON_AddNumberToObject(rep, "vertices_below_half_allowed", s->vertices_below_half_allowed);
     cJSON_AddNumberToObject(rep, "vertices_allowed_below_requested", s->vertices_allowed_below_requested);
+    cJSON_AddNumberToObject(rep, "vertices_regrown", s->vertices_regrown);
     cJSON_AddNumberToObject(rep, "vertices_lp", s->vertices_lp);
     cJSON_AddNumberToObject(rep, "vertices_normal", s->vertices_normal);
     cJSON_AddNumberToObject(rep, "hybrid_rounds", s->hybrid_rounds);
@@ -219,13 +221,27 @@ static meso_result directors(shell_bake* s, meso_error* err)
                             sign > 0 ? "outer" : "inner", meso_bake_directors_name(a->directors), hs.vertices_lp,
                             hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations, mesoi_run_ms(&s->run));
         if (r == MESO_OK && !a->no_repair) {
-            uint32_t shortened = 0, rounds = 0, left = 0;
-            r = meso_shell_repair(m, dl, sign, 30, &shortened, &rounds, &left, err);
-            s->rep->vertices_shortened += shortened;
+            uint32_t shortened = 0, rounds = 0, left = 0, grown = 0;
+            float* before = malloc(sizeof(float) * 3 * (size_t)nv); /* for regrow: the lengths repair took */
+            if (!before)
+                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
+            else
+                memcpy(before, dl, sizeof(float) * 3 * (size_t)nv);
+            if (r == MESO_OK)
+                r = meso_shell_repair(m, dl, sign, 30, &shortened, &rounds, &left, err);
             if (r == MESO_OK)
                 mesoi_run_stage(&s->run, "repair", f1, f1,
-                                "repair: %u vertices shortened in %u rounds, %u faces still bad",
-                                shortened, rounds, left);
+                                "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
+                                shortened, rounds, left, mesoi_run_ms(&s->run));
+            if (r == MESO_OK && shortened && !left) {
+                r = meso_shell_regrow(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, &grown, err);
+                if (r == MESO_OK)
+                    mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
+                                    grown, mesoi_run_ms(&s->run));
+            }
+            free(before);
+            s->rep->vertices_shortened += shortened;
+            s->rep->vertices_regrown += grown;
         }
     }
     uint32_t lp_count = 0;

@@ -373,6 +373,8 @@ typedef struct meso_bake_shell_report {
     double allowed_ratio_min, allowed_ratio_mean;
     uint32_t vertices_below_half_allowed;      /* ratio_v < 0.5 */
     uint32_t vertices_allowed_below_requested; /* allowed_v < requested: the geometry sets the bound */
+    uint32_t vertices_regrown;                 /* directors repair shortened and regrow lengthened again
+                                                  (bake/shell_regrow.h) */
     uint32_t vertices_lp, vertices_normal, hybrid_rounds, vertices_shortened;
     uint64_t field_evaluations;
     uint32_t artificial_faces;
