@@ -21,6 +21,7 @@ check "-j 1 and -j 2 give byte-identical files" cmp -s "$tmp/j1.meso" "$tmp/j2.m
 check "the file validates fully" "$inspect" validate --full "$tmp/j1.meso" >/dev/null
 for key in prisms inverted_prisms offset_self_intersections thickness_ratio_min thickness_ratio_mean \
            allowed_ratio_min allowed_ratio_mean vertices_below_half_allowed vertices_allowed_below_requested \
+           vertices_regrown \
            vertices_lp vertices_normal seconds_total; do
   check "report has \"$key\"" grep -q "\"$key\":" "$tmp/r.json"
 done
@@ -66,6 +67,11 @@ check "torus exterior 0.1: all of the allowed kept" awk -v b="$(num allowed_rati
   --report "$tmp/goal.json" >/dev/null 2>&1
 check "spot exterior 0.1: the geometry limits some vertices" awk -v l="$(num vertices_allowed_below_requested)" \
   'BEGIN { exit !(l > 0) }'
+# Regrow (bake/shell_regrow.h) gives back length to directors repair
+# shortened, never more than repair took (the goal loop above checks the
+# shells stay valid with it).
+check "spot exterior 0.1: regrow lengthens some shortened directors" awk -v g="$(num vertices_regrown)" \
+  -v s="$(num vertices_shortened)" 'BEGIN { exit !(g > 0 && g <= s) }'
 
 refuse() { # DESCRIPTION EXPECTED_EXIT INPUT
   rm -f "$tmp/out.meso"
