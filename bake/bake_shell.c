@@ -233,7 +233,10 @@ static meso_result directors(shell_bake* s, meso_error* err)
                 mesoi_run_stage(&s->run, "repair", f1, f1,
                                 "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
                                 shortened, rounds, left, mesoi_run_ms(&s->run));
-            if (r == MESO_OK && shortened && !left) {
+            /* Not for envelopes: each layer is checked against the base
+             * only, and lengthening one can make top and bottom meet (spot's
+             * envelope did, tests/gl/test_rt_shell_baked.c). */
+            if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
                 r = meso_shell_regrow(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, &grown, err);
                 if (r == MESO_OK)
                     mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",

@@ -11,7 +11,9 @@
  * faces that fail, their moved directors go back and remember the failing
  * length, and the checks run again until no face fails. So every accepted
  * state is valid, and no director grows past its length before repair
- * (the field's choice, at most the requested thickness).
+ * (the field's choice, at most the requested thickness). A bake regrows
+ * exterior and interior shells; not envelopes, whose two layers are each
+ * checked against the base alone, so regrowing could make them meet.
  */
 #ifndef MESO_SHELL_REGROW_H
 #define MESO_SHELL_REGROW_H
