@@ -22,7 +22,9 @@
 #include "mesh_check.h"
 #include "mesh_chunk.h"
 #include "meso_clock.h"
+#include "shell_allowed.h"
 #include "shell_hybrid.h"
+#include "shell_regrow.h"
 #include "shell_validate.h"
 
 meso_bake_shell_options meso_bake_shell_defaults(void)
@@ -91,6 +93,11 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
     cJSON_AddNumberToObject(rep, "offset_base_intersections", (double)s->offset_base_intersections);
     cJSON_AddNumberToObject(rep, "thickness_ratio_min", s->thickness_ratio_min);
     cJSON_AddNumberToObject(rep, "thickness_ratio_mean", s->thickness_ratio_mean);
+    cJSON_AddNumberToObject(rep, "allowed_ratio_min", s->allowed_ratio_min);
+    cJSON_AddNumberToObject(rep, "allowed_ratio_mean", s->allowed_ratio_mean);
+    cJSON_AddNumberToObject(rep, "vertices_below_half_allowed", s->vertices_below_half_allowed);
+    cJSON_AddNumberToObject(rep, "vertices_allowed_below_requested", s->vertices_allowed_below_requested);
+    cJSON_AddNumberToObject(rep, "vertices_regrown", s->vertices_regrown);
     cJSON_AddNumberToObject(rep, "vertices_lp", s->vertices_lp);
     cJSON_AddNumberToObject(rep, "vertices_normal", s->vertices_normal);
     cJSON_AddNumberToObject(rep, "hybrid_rounds", s->hybrid_rounds);
@@ -224,15 +231,32 @@ static meso_result directors(shell_bake* s, meso_error* err)
                             sign > 0 ? "outer" : "inner", meso_bake_directors_name(a->directors), hs.vertices_lp,
                             hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations, mesoi_run_ms(&s->run));
         if (r == MESO_OK && !a->no_repair) {
-            uint32_t shortened = 0, rounds = 0, left = 0;
+            uint32_t shortened = 0, rounds = 0, left = 0, grown = 0;
+            float* before = malloc(sizeof(float) * 3 * (size_t)nv); /* for regrow: the lengths repair took */
+            if (!before)
+                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
+            else
+                memcpy(before, dl, sizeof(float) * 3 * (size_t)nv);
             t = meso_seconds();
-            r = meso_shell_repair(m, dl, sign, 30, s->run.common.threads, &shortened, &rounds, &left, err);
-            s->rep->seconds_repair += meso_seconds() - t;
-            s->rep->vertices_shortened += shortened;
+            if (r == MESO_OK)
+                r = meso_shell_repair(m, dl, sign, 30, s->run.common.threads, &shortened, &rounds, &left, err);
             if (r == MESO_OK)
                 mesoi_run_stage(&s->run, "repair", f1, f1,
-                                "repair: %u vertices shortened in %u rounds, %u faces still bad",
-                                shortened, rounds, left);
+                                "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
+                                shortened, rounds, left, mesoi_run_ms(&s->run));
+            /* Not for envelopes: each layer is checked against the base
+             * only, and lengthening one can make top and bottom meet (spot's
+             * envelope did, tests/gl/test_rt_shell_baked.c). */
+            if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
+                r = meso_shell_regrow(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, &grown, err);
+                if (r == MESO_OK)
+                    mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
+                                    grown, mesoi_run_ms(&s->run));
+            }
+            s->rep->seconds_repair += meso_seconds() - t; /* repair and regrow */
+            free(before);
+            s->rep->vertices_shortened += shortened;
+            s->rep->vertices_regrown += grown;
         }
     }
     uint32_t lp_count = 0;
@@ -286,6 +310,39 @@ static meso_result validate(shell_bake* s, meso_error* err)
                         (unsigned long long)val.offset_self_intersections,
                         (unsigned long long)val.offset_base_intersections, val.thickness_ratio_min,
                         val.thickness_ratio_mean, mesoi_run_ms(&s->run));
+    return r;
+}
+
+/* The thickness the geometry allows, per side, against the directors
+ * (shell_allowed.h): the report's allowed_* fields. */
+static meso_result allowed(shell_bake* s, meso_error* err)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const uint32_t nv = s->m.vertex_count;
+    const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    const double h_side = layers == 2 ? 0.5 * s->h : s->h;
+    double* al = malloc(sizeof(double) * (nv ? nv : 1));
+    meso_result r = al ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "allowed thickness: out of memory");
+    meso_shell_allowed_summary sum;
+    memset(&sum, 0, sizeof(sum));
+    for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
+        const int sign = (a->kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
+        r = meso_shell_allowed(&s->m, s->normals, sign, h_side, s->run.common.threads, al, err);
+        if (r == MESO_OK)
+            meso_shell_allowed_add(&s->m, s->d + 3 * (size_t)nv * (size_t)layer, al, h_side, &sum, NULL);
+    }
+    free(al);
+    meso_bake_shell_report* rep = s->rep;
+    rep->allowed_ratio_min = sum.counted ? sum.ratio_min : 0.0;
+    rep->allowed_ratio_mean = sum.counted ? sum.ratio_sum / sum.counted : 0.0;
+    rep->vertices_below_half_allowed = sum.below_half;
+    rep->vertices_allowed_below_requested = sum.limited;
+    if (r == MESO_OK)
+        mesoi_run_stage(&s->run, "allowed", 0.92, 0.92,
+                        "allowed thickness: %u vertices limited by the geometry; achieved/allowed min %.3f mean "
+                        "%.3f, %u below half (%.0f ms)",
+                        sum.limited, rep->allowed_ratio_min, rep->allowed_ratio_mean, sum.below_half,
+                        mesoi_run_ms(&s->run));
     return r;
 }
 
@@ -480,6 +537,10 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     if (r == MESO_OK)
         r = validate(&s, err);
     rep->seconds_validate = meso_seconds() - t;
+    t = meso_seconds();
+    if (r == MESO_OK)
+        r = allowed(&s, err);
+    rep->seconds_allowed = meso_seconds() - t;
     t = meso_seconds();
     if (r == MESO_OK)
         r = assemble(&s, out, err);

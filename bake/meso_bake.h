@@ -370,6 +370,15 @@ typedef struct meso_bake_shell_report {
     uint32_t prisms, inverted_prisms, undecided_prisms;
     uint64_t offset_self_intersections, offset_base_intersections;
     double thickness_ratio_min, thickness_ratio_mean;
+    /* Thickness kept against what the geometry allows (bake/shell_allowed.h:
+     * allowed_v = min(requested, half the gap along the normal to the next
+     * part of the surface); ratio_v = min(1, |d_v| / allowed_v); an
+     * envelope counts each vertex once per layer): */
+    double allowed_ratio_min, allowed_ratio_mean;
+    uint32_t vertices_below_half_allowed;      /* ratio_v < 0.5 */
+    uint32_t vertices_allowed_below_requested; /* allowed_v < requested: the geometry sets the bound */
+    uint32_t vertices_regrown;                 /* directors repair shortened and regrow lengthened again
+                                                  (bake/shell_regrow.h) */
     uint32_t vertices_lp, vertices_normal, hybrid_rounds, vertices_shortened;
     uint64_t field_evaluations;
     uint32_t artificial_faces;
@@ -386,10 +395,11 @@ typedef struct meso_bake_shell_report {
      * check (the base's self-intersection test), texture (uvs, seams),
      * field (normals, boundary strip, Barnes-Hut tree), directors (tracing
      * and the hybrid rounds, of which directors_checks in the rounds' exact
-     * checks), repair, validate (the final exact validation), assemble
-     * (encoding the output). All layers of an envelope summed. */
+     * checks), repair (and regrow), validate (the final exact validation),
+     * allowed (the allowed thickness, shell_allowed.h), assemble (encoding
+     * the output). All layers of an envelope summed. */
     double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,
-        seconds_directors_checks, seconds_repair, seconds_validate, seconds_assemble;
+        seconds_directors_checks, seconds_repair, seconds_validate, seconds_allowed, seconds_assemble;
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

@@ -8,6 +8,8 @@
 #   shell_thickness.png  inverted prisms + offset intersections vs thickness,
 #                        one panel per mesh and side, one line per method; bottom
 #                        row: thickness kept by repair (mean and min ratio)
+#   shell_kept.png       achieved / allowed thickness per vertex on every closed
+#                        mesh (distribution per mesh and side, mean per mesh)
 if (!exists("dir")) dir = "tests/bench/results"
 size_csv = dir."/shell_size.csv"
 acc_csv = dir."/shell_accuracy.csv"
@@ -124,3 +126,57 @@ do for [m in meshes] {
 }
 unset title
 unset multiplot
+
+# (d) ------------------------------------------------------------------------
+# shell_kept.png: achieved / allowed thickness per vertex (bake/shell_allowed.h)
+# on every closed mesh, hybrid + repair at 10 % exterior / 5 % interior:
+# the fraction of vertices below x (log; meshes that keep everything have
+# none and draw no line), and the mean per mesh against the goal 0.95.
+kept_csv = dir."/shell_kept.csv"
+dist_csv = dir."/shell_kept_dist.csv"
+if (system("test -s '".dist_csv."' && echo 1") eq "1") {
+    meshes = system("tail -n +2 '".kept_csv."' | cut -d, -f1 | uniq | tr '\\n' ' '")
+    nm = words(meshes)
+    kept_colors = "#1f77b4 #ff7f0e #2ca02c #d62728 #9467bd #8c564b #e377c2 #7f7f7f #bcbd22 #17becf #000000 #aec7e8 #ffbb78 #98df8a #ff9896 #c5b0d5"
+    if (cairo) { set terminal pngcairo size 1500,560 enhanced font "sans,10" } else { set terminal png size 1500,560 }
+    set output dir."/shell_kept.png"
+    set multiplot layout 1,3 title "Thickness kept against what the geometry allows (min(h, half the gap along the normal)): hybrid + repair + regrow, CLI defaults\n(wingnut: the CLI refuses it, its surface intersects itself; the bench bakes it anyway and its shells are not valid)"
+    unset logscale
+    unset xrange
+    unset yrange
+    set logscale y
+    set xrange [0:1]
+    set yrange [1e-4:1]
+    set format x "%g"
+    set format y "10^{%L}"
+    set ytics auto
+    set xlabel "achieved / allowed (per vertex, capped at 1)"
+    set ylabel "fraction of vertices below"
+    set arrow 1 from 0.5, graph 0 to 0.5, graph 1 nohead dt 2 lc rgb "black"
+    set label 3 "goal: none below 0.5" at 0.51, 2e-4 left
+    set key top left font ",8"
+    do for [side in "exterior interior"] {
+        set title side.(side eq "exterior" ? " — 10 % of the diagonal" : " — 5 % of the diagonal")
+        plot for [i=1:nm] rows(dist_csv, sprintf('$1 == "%s" && $2 == "%s" && $5 > 0', word(meshes,i), side)) \
+             using 3:5 with lines lw 2 lc rgb word(kept_colors, 1 + (i - 1) % 16) title word(meshes,i)
+    }
+    unset arrow 1
+    unset label 3
+    unset logscale y
+    set format y "%g"
+    set yrange [0.7:1.01]
+    set xrange [-0.5:nm - 0.5]
+    set xtics rotate by -40 font ",8" noenhanced
+    set xtics ("" 0)
+    do for [i=1:nm] { set xtics add (word(meshes,i) i - 1) }
+    set xlabel ""
+    set ylabel "mean achieved / allowed"
+    set title "mean per mesh (goal >= 0.95)"
+    set key bottom left
+    plot rows(kept_csv, '$3 == "exterior"') using ($0 - 0.15):8 with points pt 7 ps 1.2 lc rgb "#1f77b4" title "exterior 10 %", \
+         rows(kept_csv, '$3 == "interior"') using ($0 + 0.15):8 with points pt 5 ps 1.2 lc rgb "#d62728" title "interior 5 %", \
+         0.95 with lines dt 2 lc rgb "black" title "goal 0.95"
+    unset title
+    unset multiplot
+    set xtics norotate
+}

@@ -31,8 +31,11 @@ gnuplot -e "csv='$results/draco.csv'; png='$results/draco.png'" "$src/tests/benc
 echo "results in $results"
 
 # Shell directors (issue #4): ~15-20 min on 2 cores. Results:
-#   shell_size.csv, shell_accuracy.csv, shell_thickness.csv, shell_goals.csv
-#   and shell_size.png, shell_accuracy.png, shell_thickness.png
+#   shell_size.csv, shell_accuracy.csv, shell_thickness.csv, shell_goals.csv,
+#   shell_kept.csv, shell_kept_dist.csv
+#   and shell_size.png, shell_accuracy.png, shell_thickness.png, shell_kept.png
+# (goals and kept read tests/data, or the folder $MESO_BENCH_MESHES names;
+# the checked-in ones are of the shared closed meshes.)
 # Skip with MESO_BENCH_SKIP_SHELL=1; sizes up to level 4 (423k triangles) by
 # default, `bench_shell size DIR 5` adds 1.7M (much longer).
 if [ "${MESO_BENCH_SKIP_SHELL:-0}" != 1 ]; then

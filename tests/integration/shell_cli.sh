@@ -21,6 +21,8 @@ check "bake with -j 1 succeeds" test -s "$tmp/j1.meso"
 check "-j 1 and -j 2 give byte-identical files" cmp -s "$tmp/j1.meso" "$tmp/j2.meso"
 check "the file validates fully" "$inspect" validate --full "$tmp/j1.meso" >/dev/null
 for key in prisms inverted_prisms offset_self_intersections thickness_ratio_min thickness_ratio_mean \
+           allowed_ratio_min allowed_ratio_mean vertices_below_half_allowed vertices_allowed_below_requested \
+           vertices_regrown \
            vertices_lp vertices_normal seconds_total; do
   check "report has \"$key\"" grep -q "\"$key\":" "$tmp/r.json"
 done
@@ -29,6 +31,9 @@ check "SDIR and STHK chunks are present" sh -c "'$inspect' info '$tmp/j1.meso' |
 "$bake" shell -i "$data/saddle.obj" -o "$tmp/env.meso" --kind envelope >/dev/null 2>&1
 check "envelope shells of open surfaces bake" test -s "$tmp/env.meso"
 
+num() { # KEY: the number under KEY in $tmp/goal.json
+  sed -n "s/.*\"$1\":[[:space:]]*\([-+0-9.eE]*\).*/\1/p" "$tmp/goal.json"
+}
 # The issue's goal, on the bundled closed meshes: zero inverted prisms and
 # zero self- or base intersections at 10 % exterior and 5 % interior with the
 # defaults (hybrid + repair).
@@ -40,6 +45,16 @@ for mesh in spot_low_resolution blub_fish_low_resolution torus sphere; do
     for key in inverted_prisms offset_self_intersections offset_base_intersections; do
       check "$mesh $1 $2: $key = 0" grep -q "\"$key\":[[:space:]]*0," "$tmp/goal.json"
     done
+    # Thickness kept (bake/shell_allowed.h): allowed <= requested, so the
+    # ratio to the allowed is never below the ratio to the requested, and it
+    # is capped at 1 per vertex (1e-6: float directors of the requested
+    # length are a rounding over or under it); the counts count vertices.
+    check "$mesh $1 $2: thickness_ratio <= allowed_ratio <= 1" awk -v a="$(num allowed_ratio_min)" \
+      -v b="$(num allowed_ratio_mean)" -v c="$(num thickness_ratio_min)" -v d="$(num thickness_ratio_mean)" \
+      'BEGIN { exit !(a != "" && a >= c - 1e-6 && b >= d - 1e-6 && a <= b && b <= 1) }'
+    check "$mesh $1 $2: allowed counts <= vertices" awk -v h="$(num vertices_below_half_allowed)" \
+      -v l="$(num vertices_allowed_below_requested)" -v n="$(num vertices_normal)" -v p="$(num vertices_lp)" \
+      'BEGIN { exit !(h != "" && l != "" && h <= n + p && l <= n + p) }'
   done
 done
 
@@ -64,6 +79,21 @@ check "--no-repair --allow-defects: writes the shell" test -s "$tmp/nr.meso"
 for key in seconds_field seconds_directors seconds_repair seconds_validate; do
   check "report has \"$key\"" grep -q "\"$key\":" "$tmp/r.json"
 done
+# Where nothing limits the normal offset (sphere, torus at 10 % exterior:
+# every director keeps its full length) all of the allowed is kept; on spot
+# the geometry limits some vertices (its ears and legs face each other).
+"$bake" shell -i "$data/torus.obj" -o "$tmp/goal.meso" --thickness-rel 0.1 --report "$tmp/goal.json" >/dev/null 2>&1
+check "torus exterior 0.1: all of the allowed kept" awk -v b="$(num allowed_ratio_mean)" \
+  -v h="$(num vertices_below_half_allowed)" 'BEGIN { exit !(b > 0.9999 && h == 0) }'
+"$bake" shell -i "$data/spot_low_resolution.obj" -o "$tmp/goal.meso" --thickness-rel 0.1 \
+  --report "$tmp/goal.json" >/dev/null 2>&1
+check "spot exterior 0.1: the geometry limits some vertices" awk -v l="$(num vertices_allowed_below_requested)" \
+  'BEGIN { exit !(l > 0) }'
+# Regrow (bake/shell_regrow.h) gives back length to directors repair
+# shortened, never more than repair took (the goal loop above checks the
+# shells stay valid with it).
+check "spot exterior 0.1: regrow lengthens some shortened directors" awk -v g="$(num vertices_regrown)" \
+  -v s="$(num vertices_shortened)" 'BEGIN { exit !(g > 0 && g <= s) }'
 
 refuse() { # DESCRIPTION EXPECTED_EXIT INPUT
   rm -f "$tmp/out.meso"

@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "adapters.h"
+#include "test_mesh.h"
 #include "lp_distance.h"
 
 /* >>helpers ---------------------------------------------------------------- */
@@ -41,26 +42,6 @@ static void rng_unit(uint64_t* s, double v[3])
     double l = norm(v);
     for (int k = 0; k < 3; ++k)
         v[k] /= l;
-}
-
-/* Reads a mesh through the OpenMesh adapter; 0 when this build has none. */
-static int load_mesh(const char* path, meso_mesh* m)
-{
-#if MESO_HAVE_OPENMESH
-    meso_error err;
-    memset(&err, 0, sizeof(err));
-    uint32_t dropped = 0;
-    if (meso_openmesh_read(path, m, &dropped, &err) != MESO_OK) {
-        fprintf(stderr, "    cannot read %s: %s\n", path, err.message);
-        assert(!"a bundled mesh is missing or unreadable");
-    }
-    return 1;
-#else
-    (void)path;
-    (void)m;
-    fprintf(stderr, "    built without OpenMesh: skipping mesh-based checks\n");
-    return 0;
-#endif
 }
 
 static meso_lp_field* make_field(const meso_mesh* m, const meso_lp_options* o)
@@ -332,7 +313,7 @@ static void test_gradient_fd(void)
     assert(maxe3 < 1e-6 && maxe4 < 1e-5);
 
     meso_mesh m = {0};
-    if (!load_mesh(test_data("torus.obj"), &m))
+    if (!test_load_mesh(test_data("torus.obj"), &m))
         return;
     double maxm[2] = {0, 0};
     for (int pi = 0; pi < 2; ++pi) {
@@ -417,7 +398,7 @@ static void test_barnes_hut(void)
     static double pts[3 * NPTS];
     for (int mi = 0; mi < 2; ++mi) {
         meso_mesh m = {0};
-        if (!load_mesh(test_data(names[mi]), &m))
+        if (!test_load_mesh(test_data(names[mi]), &m))
             return;
         uint64_t s = 0xb4b4ULL + (uint64_t)mi;
         shell_points(&s, mi, pts, NPTS);
@@ -467,7 +448,7 @@ static void test_barnes_hut(void)
 static void test_symmetric_fields(void)
 {
     meso_mesh m = {0};
-    if (!load_mesh(test_data("sphere.obj"), &m))
+    if (!test_load_mesh(test_data("sphere.obj"), &m))
         return;
     uint64_t s = 0x5feeULL;
     for (int pi = 0; pi < 2; ++pi) {
@@ -495,7 +476,7 @@ static void test_symmetric_fields(void)
     }
     meso_mesh_free(&m);
 
-    if (!load_mesh(test_data("torus.obj"), &m))
+    if (!test_load_mesh(test_data("torus.obj"), &m))
         return;
     meso_lp_field* f = make_field(&m, NULL);
     double max_out = 0.0, max_in = 0.0;
@@ -526,7 +507,7 @@ static void test_symmetric_fields(void)
 static void test_far_field(void)
 {
     meso_mesh m = {0};
-    if (!load_mesh(test_data("torus.obj"), &m))
+    if (!test_load_mesh(test_data("torus.obj"), &m))
         return;
     uint64_t s = 0xfa4ULL;
     for (int pi = 0; pi < 2; ++pi) {
@@ -628,7 +609,7 @@ static void test_threads_and_speed(void)
      * aspect 100) stands in for the armadillo read before from outside the
      * repository, which may
      * not be bundled (Stanford's terms). Only determinism is asserted here. */
-    if (!load_mesh(test_data("wingnut.obj"), &m))
+    if (!test_load_mesh(test_data("wingnut.obj"), &m))
         return;
     double lo[3], hi[3], size = meso_mesh_bounds(&m, lo, hi);
     meso_lp_field* f = NULL;

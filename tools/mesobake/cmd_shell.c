@@ -280,7 +280,7 @@ static void stage_seconds(struct cJSON* report, const void* user)
              {"seconds_field", r->seconds_field},       {"seconds_directors", r->seconds_directors},
              {"seconds_directors_checks", r->seconds_directors_checks},
              {"seconds_repair", r->seconds_repair},     {"seconds_validate", r->seconds_validate},
-             {"seconds_assemble", r->seconds_assemble}};
+             {"seconds_allowed", r->seconds_allowed},   {"seconds_assemble", r->seconds_assemble}};
     for (size_t k = 0; k < sizeof t / sizeof t[0]; ++k)
         cJSON_AddNumberToObject(report, t[k].key, t[k].v);
 }

@@ -1,0 +1,36 @@
+/*
+ * shell_regrow.h — after repair: give back the length repair took and did
+ * not need (issue 15, "thickness kept"). Internal.
+ *
+ * Repair (shell_hybrid.h) shortens all three directors of every bad face by
+ * 0.8 a round, though often one of them alone caused the fault; and it
+ * stops at the first valid shell. Regrowing bisects, per vertex, between
+ * its length now (valid) and its length before repair: each round every
+ * shortened director tries the midpoint of what it has and the shortest
+ * length known to fail; the exact checks (meso_shell_bad_faces) name the
+ * faces that fail, their moved directors go back and remember the failing
+ * length, and the checks run again until no face fails. So every accepted
+ * state is valid, and no director grows past its length before repair
+ * (the field's choice, at most the requested thickness). A bake regrows
+ * exterior and interior shells; not envelopes, whose two layers are each
+ * checked against the base alone, so regrowing could make them meet.
+ */
+#ifndef MESO_SHELL_REGROW_H
+#define MESO_SHELL_REGROW_H
+
+#include <stdint.h>
+
+#include "meso_bake.h"
+
+/* Bisection rounds of a bake (bake_shell.c): the last step is 1/64 of what
+ * repair took. */
+#define MESO_SHELL_REGROW_ROUNDS 6
+
+/* d: the repaired directors (3 floats per vertex; side sign +1 exterior,
+ * −1 interior), grown in place; target: the directors before repair.
+ * Does nothing unless d passes the exact checks. rounds: bisection steps.
+ * *grown (may be NULL) counts the directors changed. Deterministic. */
+meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
+                              uint32_t* grown, meso_error* err);
+
+#endif /* MESO_SHELL_REGROW_H */
