@@ -22,6 +22,8 @@
 #include "mesh_guard.h"
 #include "mesh_weld.h"
 
+#if MESO_HAVE_GLTF /* else only meso_gltf_load, refusing */
+
 /* The growing soup: world positions, uvs (OBJ convention), triangles. */
 typedef struct soup {
     float* xyz;
@@ -524,6 +526,8 @@ static meso_result load_model(loader* L, const char* node_sel, meso_mesh* out, m
     return r;
 }
 
+#endif /* MESO_HAVE_GLTF */
+
 meso_result meso_gltf_load(const char* path, const char* node, uint64_t max_bytes, meso_mesh* out,
                            meso_mesh_materials* materials, uint32_t* dropped, meso_error* err)
 {
@@ -568,6 +572,7 @@ meso_result meso_gltf_load(const char* path, const char* node, uint64_t max_byte
 #else
     (void)node;
     (void)max_bytes;
+    (void)materials;
     return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0, "%s: glTF input needs the tinygltf adapter", path);
 #endif
 }
