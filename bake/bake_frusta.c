@@ -39,7 +39,7 @@ meso_bake_frusta_options meso_bake_frusta_defaults(void)
 
 static int is_mesh_path(const char* p)
 {
-    static const char* const ext[] = {".obj", ".off", ".ply", ".stl", ".om", ".drc"};
+    static const char* const ext[] = {".obj", ".off", ".ply", ".stl", ".om", ".drc", ".gltf", ".glb"};
     for (size_t i = 0; i < sizeof(ext) / sizeof(ext[0]); ++i)
         if (mesoi_has_suffix(p, ext[i]))
             return 1;

@@ -1,7 +1,8 @@
 /*
  * bake_load.c — the bake's inputs, checked before any stage sees them:
  * meshes by extension (bytes through the mesh guard, then OpenMesh or
- * Draco, then the checks every stage relies on and orientation outward),
+ * Draco; or a glTF scene through gltf_scene.c; then the checks every stage
+ * relies on and orientation outward),
  * whole files (provenance checksums, .drc), texture SPECs.
  */
 #include "bake_internal.h"
@@ -12,6 +13,7 @@
 #include <string.h>
 
 #include "adapters.h"
+#include "gltf_model.h"
 #include "mesh_check.h"
 #include "mesh_guard.h"
 #include "mesh_orient.h"
@@ -87,6 +89,25 @@ static meso_result check_mesh(const char* path, const meso_mesh* m, meso_error* 
     return MESO_OK;
 }
 
+/* What a reader refuses that the element checks do not see: faces on
+ * non-manifold edges (OpenMesh drops them) or on misoriented ones. For
+ * meshes that no reader built (in memory, glTF). */
+static meso_result check_structure(const char* what, meso_mesh* m, meso_error* err)
+{
+    meso_mesh_topology topo;
+    memset(&topo, 0, sizeof(topo));
+    meso_result r = meso_mesh_topology_compute(m, 0.0, &topo, err);
+    free(topo.boundary);
+    if (r == MESO_OK && topo.nonmanifold_edges)
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3110, "%s: %u non-manifold edges (face %u is on one)", what,
+                           topo.nonmanifold_edges, topo.first_bad_face);
+    else if (r == MESO_OK && topo.misoriented_edges)
+        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3111,
+                           "%s: %u edges are traversed the same way by both faces (face %u is on one)", what,
+                           topo.misoriented_edges, topo.first_bad_face);
+    return r;
+}
+
 /* Inside-out closed components are flipped with a warning (mesh_orient.h
  * says which, and why per component). */
 static meso_result orient_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_bake_mesh_fixes* fixes,
@@ -112,8 +133,27 @@ static meso_result orient_mesh(mesoi_bake_run* run, const char* path, meso_mesh*
     return MESO_OK;
 }
 
-static meso_result load_unchecked(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_bake_mesh_fixes* fixes,
-                                  meso_error* err)
+/* A glTF scene (gltf_model.h) welded into one mesh, then what a mesh from
+ * memory gets: the element and structure checks, orientation. */
+static meso_result load_gltf(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_mesh_materials* mats,
+                             meso_bake_mesh_fixes* fixes, meso_error* err)
+{
+    uint32_t dropped = 0;
+    meso_result r = meso_gltf_load(path, run->common.gltf_node, run->common.max_memory, m, mats, &dropped, err);
+    if (r != MESO_OK)
+        return r;
+    if (dropped)
+        mesoi_run_warning(run, 0, "%s: %u triangles with two corners at one position were dropped", path, dropped);
+    r = check_mesh(path, m, err);
+    if (r == MESO_OK)
+        r = check_structure(path, m, err);
+    if (r == MESO_OK)
+        r = orient_mesh(run, path, m, fixes, err);
+    return r;
+}
+
+static meso_result load_unchecked(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_mesh_materials* mats,
+                                  meso_bake_mesh_fixes* fixes, meso_error* err)
 {
     FILE* probe = fopen(path, "rb");
     if (!probe)
@@ -124,6 +164,8 @@ static meso_result load_unchecked(mesoi_bake_run* run, const char* path, meso_me
     if (meso_mesh_format_from_path(path) != MESO_MESH_FORMAT_UNKNOWN &&
         (r = meso_mesh_guard_check_file(path, run->common.max_memory, NULL, err)) != MESO_OK)
         return r;
+    if (mesoi_has_suffix(path, ".gltf") || mesoi_has_suffix(path, ".glb"))
+        return load_gltf(run, path, m, mats, fixes, err);
     if (mesoi_has_suffix(path, ".drc")) {
 #if MESO_HAVE_DRACO
         uint8_t* data;
@@ -147,7 +189,7 @@ static meso_result load_unchecked(mesoi_bake_run* run, const char* path, meso_me
               mesoi_has_suffix(path, ".stl") || mesoi_has_suffix(path, ".om")))
             return meso_bake_fail(err, MESO_ERR_CORRUPT, 3251,
                                   "%s: not a mesh file we can read: unknown extension (expected .obj .off .ply "
-                                  ".stl .om .drc)",
+                                  ".stl .om .drc .gltf .glb)",
                                   path);
         r = meso_openmesh_read(path, m, &dropped, err);
         if (r != MESO_OK)
@@ -172,8 +214,8 @@ static meso_result load_unchecked(mesoi_bake_run* run, const char* path, meso_me
     return r;
 }
 
-meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_bake_mesh_fixes* fixes,
-                            meso_error* err)
+static meso_result load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_mesh_materials* mats,
+                             meso_bake_mesh_fixes* fixes, meso_error* err)
 {
     meso_bake_mesh_fixes ignored;
     if (!fixes)
@@ -182,13 +224,23 @@ meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m,
     memset(m, 0, sizeof(*m));
     if (!path)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "no input mesh given");
-    meso_result r = load_unchecked(run, path, m, fixes, err);
+    if (mats)
+        memset(mats, 0, sizeof(*mats));
+    meso_result r = load_unchecked(run, path, m, mats, fixes, err);
     /* Every failure carries a code: 3100 for an input the readers reject. */
     if (r != MESO_OK && err && err->code == 0)
         err->code = r == MESO_ERR_IO ? 5004 : 3100;
-    if (r != MESO_OK)
+    if (r != MESO_OK) {
         meso_mesh_free(m);
+        meso_mesh_materials_free(mats);
+    }
     return r;
+}
+
+meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_bake_mesh_fixes* fixes,
+                            meso_error* err)
+{
+    return load_mesh(run, path, m, NULL, fixes, err);
 }
 
 /* A copy of `src`'s arrays into *m (zeroed first); 0 when out of memory. */
@@ -239,17 +291,7 @@ static meso_result load_memory(mesoi_bake_run* run, const meso_mesh* src, meso_m
         return r;
     if (!copy_mesh(src, m))
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", what);
-    meso_mesh_topology topo;
-    memset(&topo, 0, sizeof(topo));
-    r = meso_mesh_topology_compute(m, 0.0, &topo, err);
-    free(topo.boundary);
-    if (r == MESO_OK && topo.nonmanifold_edges)
-        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3110, "%s: %u non-manifold edges (face %u is on one)", what,
-                           topo.nonmanifold_edges, topo.first_bad_face);
-    else if (r == MESO_OK && topo.misoriented_edges)
-        r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3111,
-                           "%s: %u edges are traversed the same way by both faces (face %u is on one)", what,
-                           topo.misoriented_edges, topo.first_bad_face);
+    r = check_structure(what, m, err);
     if (r == MESO_OK)
         r = orient_mesh(run, what, m, fixes, err);
     return r;
@@ -284,6 +326,15 @@ meso_result meso_bake_load_mesh(const char* path, const meso_bake_common* c, mes
     mesoi_bake_run run;
     mesoi_run_begin(&run, c);
     return mesoi_load_mesh(&run, path, m, fixes, err);
+}
+
+meso_result meso_bake_load_mesh_materials(const char* path, const meso_bake_common* c, meso_mesh* m,
+                                          meso_mesh_materials* materials, meso_bake_mesh_fixes* fixes,
+                                          meso_error* err)
+{
+    mesoi_bake_run run;
+    mesoi_run_begin(&run, c);
+    return load_mesh(&run, path, m, materials, fixes, err);
 }
 
 meso_result meso_bake_texture_probe(const char* spec, const meso_bake_common* c, meso_bake_texture_info* info,

@@ -19,6 +19,17 @@ void meso_mesh_free(meso_mesh* m)
     memset(m, 0, sizeof(*m));
 }
 
+void meso_mesh_materials_free(meso_mesh_materials* m)
+{
+    if (!m)
+        return;
+    for (uint32_t i = 0; m->materials && i < m->material_count; ++i)
+        free(m->materials[i].rgba);
+    free(m->materials);
+    free(m->triangle_materials);
+    memset(m, 0, sizeof(*m));
+}
+
 double meso_mesh_face_normal(const meso_mesh* m, uint32_t f, double n[3])
 {
     const uint32_t* ix = m->indices + 3 * (size_t)f;

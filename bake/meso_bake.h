@@ -86,6 +86,26 @@ typedef struct meso_mesh {
     float* corner_uvs;
 } meso_mesh;
 
+/* A material's base colour (glTF pbrMetallicRoughness). */
+typedef struct meso_mesh_material {
+    float base_color_factor[4]; /* linear RGBA, default 1 */
+    uint32_t width, height;     /* base-colour texture size; 0 when none */
+    uint8_t* rgba;              /* width * height RGBA8 texels as stored (sRGB), first row first, or NULL */
+    uint32_t texcoord;          /* the TEXCOORD_n set the texture names (only TEXCOORD_0 is read) */
+} meso_mesh_material;
+
+/* The materials of a loaded mesh (glTF input; empty for other formats):
+ * triangle_materials[t] indexes `materials` for triangle t of the mesh as
+ * loaded (UINT32_MAX: none). Kept for colour work; no bake reads it yet. */
+typedef struct meso_mesh_materials {
+    uint32_t material_count;
+    meso_mesh_material* materials;
+    uint32_t* triangle_materials; /* triangle_count entries, or NULL */
+} meso_mesh_materials;
+
+/* Frees the arrays and zeroes the struct. NULL is allowed. */
+MESO_BAKE_API void meso_mesh_materials_free(meso_mesh_materials* m);
+
 /* Frees the arrays and zeroes the struct. NULL is allowed. */
 MESO_BAKE_API void meso_mesh_free(meso_mesh* m);
 
@@ -126,6 +146,7 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  *   3251 not a mesh file mesobake can read (unknown extension, e.g. /dev/null)
  *   3252 no triangles (an empty file, or not a mesh)
  * Skeletons, continued (bake/skeleton_swc.h): 3300..3349, listed there.
+ * glTF 2.0 input (bake/gltf_model.h): 3500..3519, listed there.
  * Limits up front, --max-memory (bake/memory_budget.h): 3400..3449, listed
  *   there (3400 a request from the options, 3401.. sizes input files dictate).
  * Batch manifests (mesobake batch, tools/mesobake/batch.h): 3450..3469,
@@ -178,6 +199,8 @@ typedef struct meso_bake_common {
     int threads;                    /* worker threads, 0 = all cores; never changes the bytes */
     meso_bake_progress_fn progress; /* stage lines, ticks and warnings; may be NULL */
     void* user;                     /* passed to `progress` */
+    const char* gltf_node;          /* glTF input: bake only this node's subtree (its name, else a
+                                       decimal index; mesobake --node); NULL: the whole scene */
 } meso_bake_common;
 
 /* >>load ------------------------------------------------------------------ */
@@ -193,7 +216,9 @@ typedef struct meso_bake_mesh_fixes {
 
 /* Load a mesh by extension: its bytes through the mesh guard (with
  * c->max_memory as the bound on what its header counts may make a reader
- * allocate), then OpenMesh (.obj .off .ply .stl .om) or Draco (.drc); then
+ * allocate), then OpenMesh (.obj .off .ply .stl .om) or Draco (.drc), or a
+ * glTF 2.0 scene (.gltf .glb: every triangle primitive in world space, or
+ * c->gltf_node's subtree, positions welded, bake/gltf_model.h); then
  * check it (finite coordinates, indices in range, nothing the reader had to
  * drop) and turn inside-out closed components outward (a WARNING through
  * c->progress). `c` and `fixes` may be NULL. On success the caller frees *m
@@ -202,6 +227,12 @@ typedef struct meso_bake_mesh_fixes {
  * needed adapter returns MESO_ERR_UNSUPPORTED. */
 MESO_BAKE_API meso_result meso_bake_load_mesh(const char* path, const meso_bake_common* c, meso_mesh* m,
                                               meso_bake_mesh_fixes* fixes, meso_error* err);
+/* The same, with the materials' base colour of a glTF input into
+ * *materials (zeroed for other formats; free with meso_mesh_materials_free;
+ * on failure it is zeroed). */
+MESO_BAKE_API meso_result meso_bake_load_mesh_materials(const char* path, const meso_bake_common* c, meso_mesh* m,
+                                                        meso_mesh_materials* materials,
+                                                        meso_bake_mesh_fixes* fixes, meso_error* err);
 
 /* A loaded skeleton (opaque). */
 typedef struct meso_bake_skeleton meso_bake_skeleton;

@@ -1,8 +1,8 @@
 /*
- * adapters.h — the C interface of the four C++ adapters.
+ * adapters.h — the C interface of the five C++ adapters.
  *
  * One adapter per library (openmesh_adapter.cpp, cgal_adapter.cpp,
- * openvdb_adapter.cpp, draco_adapter.cpp). Each is a thin translation layer:
+ * openvdb_adapter.cpp, draco_adapter.cpp, gltf_adapter.cpp). Each is a thin translation layer:
  * C arrays in, C arrays out, every exception caught at the extern "C"
  * boundary and returned as a meso_result with a message. No project logic
  * lives in them. An adapter whose library is missing is not compiled, and
@@ -11,6 +11,7 @@
 #ifndef MESO_ADAPTERS_H
 #define MESO_ADAPTERS_H
 
+#include "gltf_model.h"
 #include "meso_bake.h"
 
 #ifdef __cplusplus
@@ -180,6 +181,19 @@ meso_result meso_draco_encode(const meso_mesh* m, const meso_draco_options* opt,
                               meso_error* err);
 /* Decode a Draco mesh bitstream (also .drc files). */
 meso_result meso_draco_decode(const void* data, size_t size, meso_mesh* out, meso_error* err);
+
+/* >>gltf ---------------------------------------------------------------- */
+
+/* Parse the glTF 2.0 document at `path` (.gltf with external or data: URI
+ * buffers, or .glb, told apart by the magic) with tinygltf, reading its
+ * buffers and decoding its images (PNG, JPEG), into *out (gltf_model.h),
+ * unchecked. No file is larger than max_bytes, nor all of them together
+ * (0: MESO_MESH_GUARD_DEFAULT_MAX_BYTES; else code 3201). MESO_ERR_IO (5001)
+ * when `path` cannot be read, MESO_ERR_CORRUPT with code 3500 (JSON or
+ * schema) or 3501 (a buffer that cannot be read). Free *out with
+ * meso_gltf_model_free. */
+meso_result meso_gltf_read(const char* path, uint64_t max_bytes, meso_gltf_model* out, meso_error* err);
+void meso_gltf_model_free(meso_gltf_model* m);
 
 #ifdef __cplusplus
 }

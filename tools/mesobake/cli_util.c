@@ -137,10 +137,24 @@ int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad
     return 1;
 }
 
+static meso_bake_common* node_slot; /* where --node goes (cli_bake_common) */
+
+void cli_bake_common(meso_bake_common* c)
+{
+    c->progress = cli_progress;
+    node_slot = c;
+}
+
 int bake_option(const char* opt, const char* value, const char* const* valued, size_t count, const char** in,
                 const char** out, const char** report, uint64_t* max_memory, int* handled, int* code)
 {
     *handled = 0;
+    if (!strcmp(opt, "--node") && node_slot) {
+        *code = value ? 0 : usage_error("option '%s' needs a value", opt);
+        node_slot->gltf_node = value;
+        *handled = 1;
+        return *code == 0;
+    }
     if ((*code = option_value(opt, value, valued, count)) != 0)
         return 0;
     if (path_option(opt, value, in, out, report) || memory_option(opt, value, max_memory, code))

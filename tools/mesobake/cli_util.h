@@ -84,10 +84,18 @@ int path_option(const char* opt, const char* value, const char** in, const char*
 int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad);
 /* The start of every valued option of shell, frusta and cells: 0 after a
  * usage error's exit code in *code (unknown option, missing value); else 1,
- * with *code 0, and *handled 1 when `opt` was a path (-i, -o, --report) or
- * --max-memory and was stored, or 0 when the command parses it. */
+ * with *code 0, and *handled 1 when `opt` was a path (-i, -o, --report),
+ * --max-memory or --node (into cli_bake_common's slot) and was stored, or 0
+ * when the command parses it. */
 int bake_option(const char* opt, const char* value, const char* const* valued, size_t count, const char** in,
                 const char** out, const char** report, uint64_t* max_memory, int* handled, int* code);
+/* Every bake command's meso_bake_common before its options are parsed: the
+ * progress callback, and the slot bake_option fills from --node. */
+void cli_bake_common(meso_bake_common* c);
+/* The --help line of --node, shared by every command that takes a mesh. */
+#define NODE_OPTION_HELP \
+    "      --node NAME|INDEX   glTF input: only this node and its children (its world\n" \
+    "                          transform kept); default: every mesh of the scene\n"
 /* The --help line of --max-memory, shared by every bake command. */
 #define MEMORY_OPTION_HELP \
     "      --max-memory SIZE   refuse, before allocating, a bake whose memory estimate is larger\n" \

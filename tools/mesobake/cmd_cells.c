@@ -21,7 +21,8 @@ static const char* const usage_cells =
     "mesh at tiles x tile-res voxels per axis, with a normal and a colour map.\n"
     "\n"
     "Input / output:\n"
-    "  -i, --input FILE        mesh: .obj .off .ply .stl .om .drc\n"
+    "  -i, --input FILE        mesh: .obj .off .ply .stl .om .drc .gltf .glb\n"
+    NODE_OPTION_HELP
     "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
     "                          through, a device, FIFO or directory refused)\n"
     "Grid (a cube of tiles around the mesh, one voxel of padding):\n"
@@ -56,7 +57,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
 {
     *a = (cells_args){.o = meso_bake_cells_defaults()};
     meso_bake_cells_options* o = &a->o;
-    o->common.progress = cli_progress;
+    cli_bake_common(&o->common);
     o->tile_map = "voronoi";
     o->colour = "hash";
     o->voxelizer = "auto";

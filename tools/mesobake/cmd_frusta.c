@@ -26,7 +26,8 @@ static const char* const usage_frusta =
     "                                    the previous node; twist=DEG: the segment from the\n"
     "                                    parent to this node twists DEG degrees, replacing\n"
     "                                    --twist there)\n"
-    "                          a mesh    .obj .off .ply .stl .om: closed, one component;\n"
+    "                          a mesh    .obj .off .ply .stl .om .drc .gltf .glb: closed, one\n"
+    "                                    component (glTF: --node NAME|INDEX picks one node);\n"
     "                                    skeleton by mean-curvature flow (CGAL), radii\n"
     "                                    fitted to the mesh, simplified to --tolerance\n"
     "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
@@ -90,7 +91,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
 {
     *a = (frusta_args){.o = meso_bake_frusta_defaults()};
     meso_bake_frusta_options* o = &a->o;
-    o->common.progress = cli_progress;
+    cli_bake_common(&o->common);
     for (int i = 0; i < argc; ++i) {
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;

@@ -11,7 +11,9 @@ static const char* const usage_mesh =
     "normals (computed by OpenMesh) and texture coordinates when the file has them.\n"
     "\n"
     "Input / output:\n"
-    "  -i, --input FILE        mesh: .obj .off .ply .stl .om (OpenMesh) or .drc (Draco)\n"
+    "  -i, --input FILE        mesh: .obj .off .ply .stl .om (OpenMesh), .drc (Draco) or\n"
+    "                          .gltf .glb (glTF 2.0: every mesh of the scene, welded)\n"
+    NODE_OPTION_HELP
     "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
     "                          through, a device, FIFO or directory refused)\n"
     "      --name NAME         object name (default: the input's base name, 31 bytes max)\n"
@@ -69,6 +71,8 @@ int cmd_mesh(int argc, char** argv)
             o.input = argv[++i];
         } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_val) {
             out = argv[++i];
+        } else if (!strcmp(a, "--node") && has_val) {
+            o.common.gltf_node = argv[++i];
         } else if (!strcmp(a, "--name") && has_val) {
             o.name = argv[++i];
         } else if (!strcmp(a, "--report") && has_val) {
@@ -90,7 +94,7 @@ int cmd_mesh(int argc, char** argv)
         } else if (a[0] == '-' && a[1] != '\0') {
             int known = !strcmp(a, "-i") || !strcmp(a, "--input") || !strcmp(a, "-o") || !strcmp(a, "--output") ||
                         !strcmp(a, "--name") || !strcmp(a, "--report") || !strcmp(a, "--draco-bits") ||
-                        !strcmp(a, "--max-memory");
+                        !strcmp(a, "--max-memory") || !strcmp(a, "--node");
             return usage_error(known ? "option '%s' needs a value" : "unrecognized option '%s'", a);
         } else {
             return usage_error("unexpected argument '%s'", a);

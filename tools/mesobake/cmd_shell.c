@@ -24,7 +24,7 @@ static const char* const usage_shell =
     "exactly (inverted prisms, offset self-intersections) and reports the numbers.\n"
     "\n"
     "Input / output:\n"
-    "  -i, --input FILE        mesh: .obj .off .ply .stl .om or .drc; open surfaces are fine\n"
+    "  -i, --input FILE        mesh: .obj .off .ply .stl .om .drc .gltf .glb; open surfaces ok\n"
     "  -o, --output FILE       .meso file to write (atomically)\n"
     "Shell:\n"
     "      --thickness ABS     shell thickness in mesh units\n"
@@ -81,6 +81,7 @@ static const char* const usage_shell_end =
     "Reporting:\n"
     "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
     MEMORY_OPTION_HELP
+    NODE_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this help\n"
     "\n"
@@ -159,7 +160,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
 {
     *a = (shell_args){.o = meso_bake_shell_defaults()};
     meso_bake_shell_options* o = &a->o;
-    o->common.progress = cli_progress;
+    cli_bake_common(&o->common);
     int have_abs = 0, have_rel = 0, k;
     long n;
     for (int i = 0; i < argc; ++i) {
