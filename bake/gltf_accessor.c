@@ -100,6 +100,26 @@ static float component(const uint8_t* p, int type)
     }
 }
 
+/* An accessor without a bufferView reads as zeros (glTF 2.0 §3.6.2.3), so
+ * no byte of the file backs its count: it may not claim more elements of
+ * `elem` bytes than all the document's buffers hold, which keeps what it
+ * makes us allocate within what the mesh guard's budget let in (a 411-byte
+ * file claiming 1.5e8 vertices allocated 600 MB before the budget check). */
+static meso_result zeros_bound(const char* path, const meso_gltf_model* g, int index, const char* place, size_t elem,
+                               meso_error* err)
+{
+    const meso_gltf_accessor* a = &g->accessors[index];
+    size_t held = 0;
+    for (uint32_t b = 0; b < g->buffer_count; ++b)
+        held += g->buffers[b].size;
+    if (a->count > held / (elem ? elem : 1))
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, MESO_GLTF_ISSUE_BOUNDS,
+                              "%s: %s (accessors[%d]): %zu elements without a bufferView (zeros), more than the "
+                              "document's buffers hold (%zu bytes)",
+                              path, place, index, a->count, held);
+    return MESO_OK;
+}
+
 meso_result meso_gltf_read_floats(const char* path, const meso_gltf_model* g, int accessor, const char* place,
                                   int components, int allow_normalized, float** out, size_t* count, meso_error* err)
 {
@@ -119,6 +139,8 @@ meso_result meso_gltf_read_floats(const char* path, const meso_gltf_model* g, in
     const uint8_t* base;
     size_t stride;
     meso_result r = locate(path, g, accessor, place, &base, &stride, err);
+    if (r == MESO_OK && !base)
+        r = zeros_bound(path, g, accessor, place, component_size(ct) * (size_t)components, err);
     if (r != MESO_OK)
         return r;
     const size_t cs = component_size(ct);
@@ -151,6 +173,8 @@ meso_result meso_gltf_read_indices(const char* path, const meso_gltf_model* g, i
     const uint8_t* base;
     size_t stride;
     meso_result r = locate(path, g, accessor, place, &base, &stride, err);
+    if (r == MESO_OK && !base)
+        r = zeros_bound(path, g, accessor, place, component_size(ct), err);
     if (r != MESO_OK)
         return r;
     uint32_t* ix = calloc(a->count ? a->count : 1, sizeof(uint32_t));

@@ -435,7 +435,9 @@ static meso_result add_materials(loader* L, meso_mesh_materials* m)
         if (!img->pixels || img->width <= 0 || img->height <= 0 || (bpc != 1 && bpc != 2) || comps < 1 ||
             comps > 4 || img->size < texels * comps * bpc)
             return fail(L, MESO_GLTF_ISSUE_IMAGE,
-                        "baseColorTexture: images[%d] does not decode (PNG and JPEG are read)", place, im);
+                        "baseColorTexture: images[%d] does not decode (PNG and JPEG are read) or its pixels exceed "
+                        "the memory budget",
+                        place, im);
         if ((uint64_t)texels * 4 > L->max_bytes)
             return fail(L, MESO_MESH_GUARD_BUDGET, "images[%d]: %d texels exceed the memory budget", place, im,
                         (int)texels);

@@ -99,15 +99,60 @@ bool write_file(std::string* err, const std::string&, const std::vector<unsigned
     return false;
 }
 
+// Width and height from a PNG's IHDR or a JPEG's first SOF marker (the two
+// image formats of glTF 2.0 core); false for anything else or a truncated
+// header.
+bool image_size(const unsigned char* b, size_t n, uint64_t* w, uint64_t* h)
+{
+    static const unsigned char png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (n >= 24 && std::memcmp(b, png, 8) == 0 && std::memcmp(b + 12, "IHDR", 4) == 0) {
+        *w = (uint64_t)b[16] << 24 | (uint64_t)b[17] << 16 | (uint64_t)b[18] << 8 | b[19];
+        *h = (uint64_t)b[20] << 24 | (uint64_t)b[21] << 16 | (uint64_t)b[22] << 8 | b[23];
+        return true;
+    }
+    if (n < 4 || b[0] != 0xff || b[1] != 0xd8)
+        return false;
+    for (size_t i = 2; i + 9 < n;) {
+        if (b[i] != 0xff)
+            return false;
+        const unsigned char m = b[i + 1];
+        if (m == 0xff) { // fill byte
+            ++i;
+            continue;
+        }
+        const size_t len = (size_t)b[i + 2] << 8 | b[i + 3];
+        // SOF0..SOF15 except DHT (C4), JPG (C8) and DAC (CC)
+        if (m >= 0xc0 && m <= 0xcf && m != 0xc4 && m != 0xc8 && m != 0xcc) {
+            *h = (uint64_t)b[i + 5] << 8 | b[i + 6];
+            *w = (uint64_t)b[i + 7] << 8 | b[i + 8];
+            return true;
+        }
+        if (len < 2)
+            return false;
+        i += 2 + len;
+    }
+    return false;
+}
+
 // A texture that does not decode leaves its image empty (width 0): only a
-// base-colour texture in use is an error, and gltf_scene.c reports it.
+// base-colour texture in use is an error, and gltf_scene.c reports it. An
+// image is decoded only when its header says what it is and its RGBA8
+// pixels (counted as 16-bit RGBA) fit in what the memory budget has left (the budget counts them):
+// a 200 KB PNG of 8000 x 8000 would otherwise take 256 MB before any check.
 bool load_image(tinygltf::Image* image, const int index, std::string* err, std::string* warn, int req_width,
                 int req_height, const unsigned char* bytes, int size, void* user)
 {
+    ReadContext* ctx = static_cast<ReadContext*>(user);
+    uint64_t w = 0, h = 0;
+    const bool known = size > 0 && image_size(bytes, static_cast<size_t>(size), &w, &h);
+    const uint64_t need = w * h * 8; // up to 16-bit RGBA; w, h < 2^32: no overflow
     std::string ignored;
-    if (!tinygltf::LoadImageData(image, index, &ignored, warn, req_width, req_height, bytes, size, user)) {
+    if (!known || need > ctx->max_bytes - ctx->total ||
+        !tinygltf::LoadImageData(image, index, &ignored, warn, req_width, req_height, bytes, size, nullptr)) {
         image->width = image->height = image->component = image->bits = 0;
         image->image.clear();
+    } else {
+        ctx->total += need;
     }
     (void)err;
     return true;
@@ -318,7 +363,7 @@ extern "C" meso_result meso_gltf_read(const char* path, uint64_t max_bytes, meso
         tinygltf::TinyGLTF loader;
         tinygltf::FsCallbacks fs = {&file_exists, &keep_path, &read_file, &write_file, &ctx};
         loader.SetFsCallbacks(fs);
-        loader.SetImageLoader(&load_image, nullptr);
+        loader.SetImageLoader(&load_image, &ctx);
         std::string terr, twarn;
         const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
         const unsigned n = static_cast<unsigned>(bytes.size());

@@ -55,6 +55,8 @@ for cmd in mesh shell cells frusta; do
   refuse $cmd bad_index_type.gltf 3504
   refuse $cmd bad_accessor_bounds.gltf 3503
   refuse $cmd bad_view_bounds.gltf 3503
+  refuse $cmd bad_zeros_count.gltf 3503
+  refuse $cmd big_texture.gltf 3512 --max-memory 32M
   refuse $cmd bad_nan.gltf 3506
   refuse $cmd bad_cycle.gltf 3507
   refuse $cmd bad_two_parents.gltf 3507
@@ -76,4 +78,24 @@ check "sphere obj" "$bake" mesh -i "$data/sphere.obj" -o "$tmp/obj.meso"
 check "sphere glb" "$bake" mesh -i "$g/sphere.glb" -o "$tmp/glb.meso"
 check "same size" test "$(wc -c <"$tmp/obj.meso")" -eq "$(wc -c <"$tmp/glb.meso")"
 
+# big_texture.gltf itself is fine: it bakes within the default budget.
+check "big_texture.gltf bakes without --max-memory" "$bake" mesh -i "$g/big_texture.gltf" -o "$tmp/big.meso"
+rm -f "$tmp/big.meso"
+
+# mesobake batch keys a .gltf by the files it names too: box.bin edited (one
+# texture coordinate moved by a float's last bit) re-bakes the job;
+# untouched, it stays cached.
+mkdir -p "$tmp/b/out"
+cp "$g/box.gltf" "$g/box.bin" "$tmp/b/" 2>/dev/null
+for n in "$g"/*.png; do [ -e "$n" ] && cp "$n" "$tmp/b/"; done
+printf '{"jobs": [{"name": "box", "command": "mesh", "input": "box.gltf", "output": "out/box.meso"}]}\n' \
+  >"$tmp/b/m.json"
+top() { sed -n "s/.*\"$2\":[[:space:]]*\([0-9]*\).*/\1/p" "$1" | head -n 1; }
+"$bake" batch "$tmp/b/m.json" --cache "$tmp/cache" --report "$tmp/b1.json" >/dev/null 2>&1
+"$bake" batch "$tmp/b/m.json" --cache "$tmp/cache" --report "$tmp/b2.json" >/dev/null 2>&1
+check "batch: an unchanged .gltf and .bin stay cached" test "$(top "$tmp/b2.json" jobs_cached)" = 1
+# Byte 576 is the low byte of the first TEXCOORD_0 float (bufferViews[2]).
+printf '\001' | dd of="$tmp/b/box.bin" bs=1 seek=576 conv=notrunc 2>/dev/null
+"$bake" batch "$tmp/b/m.json" --cache "$tmp/cache" --report "$tmp/b3.json" >/dev/null 2>&1
+check "batch: box.bin edited re-bakes the .gltf's job" test "$(top "$tmp/b3.json" jobs_baked)" = 1
 exit $fail

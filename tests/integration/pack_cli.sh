@@ -83,6 +83,11 @@ check "preview --object with an unknown name: usage error (exit 1)" test $? = 1
 check "... listing the file's objects" grep -q "4 'saguaro.skel'" "$tmp/err"
 check "... and writing nothing" test ! -e "$tmp/none.png"
 
+# A name that starts with a digit is a name ("3d" is not an id).
+"$bake" mesh -i "$data/spot_low_resolution.obj" -o "$tmp/3d.meso" --name 3d >/dev/null 2>&1
+"$inspect" preview "$tmp/3d.meso" --object 3d -o "$tmp/3d.png" --size 32x24 >/dev/null 2>&1
+check "preview --object 3d: the object named 3d" test $? = 0 -a -s "$tmp/3d.png"
+
 # 3. Deterministic; a packed file packs again (objects 7 and 8 after 1..6).
 # shellcheck disable=SC2086
 "$bake" pack $ins -o "$tmp/again.meso" 2>/dev/null
@@ -110,6 +115,8 @@ printf '\377' | dd of="$tmp/damaged.meso" bs=1 seek=$((size - 100)) conv=notrunc
 refuse "a damaged input" 3 "damaged.meso:" "$tmp/mesh.meso" "$tmp/damaged.meso"
 refuse "a missing input" 2 "nothere.meso" "$tmp/mesh.meso" "$tmp/nothere.meso"
 refuse "a mesh file, not a .meso" 3 "sphere.obj" "$data/sphere.obj"
+"$bake" pack "$tmp/mesh.meso" -o "$tmp/bad.meso" -h >/dev/null 2>&1
+check "-h with inputs and -o: help only (exit 0), nothing written" test $? = 0 -a ! -e "$tmp/bad.meso"
 "$bake" pack -o "$tmp/bad.meso" >/dev/null 2>"$tmp/err"
 check "no input: usage error (exit 1)" test $? = 1
 check "no input: nothing written" test ! -e "$tmp/bad.meso"

@@ -185,6 +185,7 @@ static void test_malformed(void)
         {"gltf/bad_index_type.gltf", NULL, MESO_GLTF_ISSUE_TYPE, "primitives[0].indices (accessors[1])"},
         {"gltf/bad_accessor_bounds.gltf", NULL, MESO_GLTF_ISSUE_BOUNDS, "overrun bufferViews[0]"},
         {"gltf/bad_view_bounds.gltf", NULL, MESO_GLTF_ISSUE_BOUNDS, "bufferViews[1]"},
+        {"gltf/bad_zeros_count.gltf", NULL, MESO_GLTF_ISSUE_BOUNDS, "without a bufferView"},
         {"gltf/bad_nan.gltf", NULL, MESO_GLTF_ISSUE_NONFINITE, "meshes[0].primitives[0]: vertex 0"},
         {"gltf/bad_cycle.gltf", NULL, MESO_GLTF_ISSUE_GRAPH, "cycle"},
         {"gltf/bad_two_parents.gltf", NULL, MESO_GLTF_ISSUE_GRAPH, "two parents"},

@@ -27,9 +27,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
 #include <nettle/sha2.h>
 
 #include "cli_util.h"
@@ -94,7 +96,84 @@ static int is_regular(int dirfd, const char* path)
     return path[0] && fstatat(dirfd, path, &st, 0) == 0 && S_ISREG(st.st_mode);
 }
 
-/* `path` as a file the job reads: its name and the hash of its contents. */
+static int put_file(struct sha256_ctx* h, int dirfd, const char* path);
+
+static int hex_digit(char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
+
+/* A .gltf names more files than its own: buffers[].uri and images[].uri
+ * that are not data: URIs, relative to its folder (percent-escapes
+ * decoded, as tinygltf does). Each is hashed like an argument's file, so
+ * editing scene.bin changes the key; one that cannot be read goes in as
+ * "missing" (the bake itself reports it). A .gltf that does not parse adds
+ * nothing (the bake refuses it). Files above 256 MiB are not parsed here:
+ * their own hash already keys them, and glTF JSON that large is not a
+ * content pipeline's. */
+static int put_gltf_uris(struct sha256_ctx* h, int dirfd, const char* path)
+{
+    int fd = openat(dirfd, path, O_RDONLY | O_CLOEXEC);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0 || st.st_size > (256 << 20)) {
+        if (fd >= 0)
+            close(fd);
+        return 1;
+    }
+    char* text = malloc((size_t)st.st_size + 1);
+    ssize_t got = text ? read(fd, text, (size_t)st.st_size) : -1;
+    close(fd);
+    if (got != (ssize_t)st.st_size) {
+        free(text);
+        return text ? 1 : 0;
+    }
+    text[got] = 0;
+    cJSON* doc = cJSON_Parse(text);
+    free(text);
+    const char* slash = strrchr(path, '/');
+    const size_t dir_len = slash ? (size_t)(slash - path) + 1 : 0;
+    int ok = 1;
+    static const char* const arrays[2] = {"buffers", "images"};
+    for (int k = 0; k < 2 && ok; ++k) {
+        const cJSON* item;
+        cJSON_ArrayForEach(item, cJSON_GetObjectItemCaseSensitive(doc, arrays[k]))
+        {
+            const cJSON* uri = cJSON_GetObjectItemCaseSensitive(item, "uri");
+            if (!cJSON_IsString(uri) || !strncmp(uri->valuestring, "data:", 5))
+                continue;
+            const size_t n = strlen(uri->valuestring);
+            char* file = malloc(dir_len + n + 1);
+            if (!file) {
+                ok = 0;
+                break;
+            }
+            memcpy(file, path, dir_len);
+            size_t o = dir_len;
+            const char* u = uri->valuestring;
+            for (size_t i = 0; i < n; ++i) { /* %XX -> byte */
+                const int hi = i + 2 < n && u[i] == '%' ? hex_digit(u[i + 1]) : -1;
+                const int lo = hi >= 0 ? hex_digit(u[i + 2]) : -1;
+                if (lo >= 0) {
+                    file[o++] = (char)(hi * 16 + lo);
+                    i += 2;
+                } else {
+                    file[o++] = u[i];
+                }
+            }
+            file[o] = 0;
+            if (!is_regular(dirfd, file) || !put_file(h, dirfd, file)) {
+                put_str(h, "file", file);
+                put_str(h, "sha256", "missing");
+            }
+            free(file);
+        }
+    }
+    cJSON_Delete(doc);
+    return ok;
+}
+
+/* `path` as a file the job reads: its name and the hash of its contents
+ * (and of the files a .gltf names). */
 static int put_file(struct sha256_ctx* h, int dirfd, const char* path)
 {
     char digest[65];
@@ -102,6 +181,9 @@ static int put_file(struct sha256_ctx* h, int dirfd, const char* path)
         return 0;
     put_str(h, "file", path);
     put_str(h, "sha256", digest);
+    const size_t n = strlen(path);
+    if (n > 5 && !strcasecmp(path + n - 5, ".gltf"))
+        return put_gltf_uris(h, dirfd, path);
     return 1;
 }
 

@@ -41,8 +41,9 @@ int cmd_pack(int argc, char** argv)
         const char* a = argv[i];
         const int has_val = i + 1 < argc;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            print_help(usage_pack);
-            code = MESO_EXIT_OK;
+            print_help(usage_pack); /* help only, whatever else is on the line */
+            free(inputs);
+            return MESO_EXIT_OK;
         } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_val) {
             out = argv[++i];
         } else if (!strcmp(a, "--report") && has_val) {

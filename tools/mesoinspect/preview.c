@@ -193,7 +193,7 @@ static uint8_t unorm8(float c)
  * none). NULL and a message on stderr when the table cannot be read. */
 static meso_object_record* all_records(meso_file* f, uint32_t* count, meso_result* r)
 {
-    meso_error err;
+    meso_error err = {0};
     *count = 0;
     if ((*r = meso_file_objects(f, NULL, 0, count, &err)) == MESO_OK) {
         meso_object_record* recs = calloc(*count ? *count : 1, sizeof(*recs));
@@ -732,7 +732,8 @@ int mesoinspect_preview(int argc, char** argv)
             errno = 0;
             only_name = NULL;
             only = strtoul(argv[++i], &end, 10);
-            if (argv[i][0] < '0' || argv[i][0] > '9') {
+            /* all digits: an id; anything else ("3d.obj" too): a name */
+            if (argv[i][0] < '0' || argv[i][0] > '9' || !end || *end) {
                 only = 0, only_name = argv[i]; /* a name (OBJT names are UTF-8, at most 31 bytes) */
                 if (!argv[i][0] || strlen(argv[i]) > 31) {
                     fprintf(stderr, "mesoinspect error: --object expects an id >= 1 or a name of 1..31 bytes, "

@@ -263,6 +263,8 @@ def bad_cases():
     bad("bad_index_type.gltf", lambda g: g["accessors"][1].update(componentType=5126))
     bad("bad_accessor_bounds.gltf", lambda g: g["accessors"][0].update(count=9))
     bad("bad_view_bounds.gltf", lambda g: g["bufferViews"][1].update(byteOffset=4096))
+    # 150 million zero positions (no bufferView) claimed by a 1.6 KB file
+    bad("bad_zeros_count.gltf", lambda g: (g["accessors"][0].pop("bufferView"), g["accessors"][0].update(count=150000000)))
     bad("bad_nan.gltf", positions=[[float("nan"), 0.0, 0.0]] + [[x, y, z] for z in (-0.5, 0.5) for y in (-0.5, 0.5)
                                                                  for x in (-0.5, 0.5)][1:])
     bad("bad_cycle.gltf", lambda g: g["nodes"].extend([{"children": [2]}, {"children": [1]}]))
@@ -284,6 +286,25 @@ def bad_cases():
     bad("bad_empty.gltf", lambda g: g["nodes"][0].pop("mesh"))
     with open(os.path.join(OUT, "bad_not_json.gltf"), "w") as f:
         f.write("{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ \n")
+    big_texture()
+
+
+def big_texture():
+    """box.gltf with its base-colour PNG replaced by a 4096 x 4096 1-bit one
+    (2 KB): decoded it needs 16-64 MB, so --max-memory 32M must refuse it
+    before decoding."""
+    w = h = 4096
+    raw = b"".join(b"\x00" + b"\x00" * ((w + 7) // 8) for _ in range(h))
+
+    def chunk(t, d):
+        return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xffffffff)
+    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 1, 0, 0, 0, 0)) +
+           chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+    with open(os.path.join(OUT, "box.gltf")) as f:
+        g = json.load(f)
+    g["images"][0]["uri"] = "data:image/png;base64," + base64.b64encode(png).decode()
+    with open(os.path.join(OUT, "big_texture.gltf"), "w") as f:
+        json.dump(g, f, indent=1)
 
 
 if __name__ == "__main__":
