@@ -248,7 +248,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
              * only, and lengthening one can make top and bottom meet (spot's
              * envelope did, tests/gl/test_rt_shell_baked.c). */
             if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
-                r = meso_shell_regrow(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, &grown, err);
+                r = meso_shell_regrow(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, s->run.common.threads, &grown,
+                                      err);
                 if (r == MESO_OK)
                     mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
                                     grown, mesoi_run_ms(&s->run));

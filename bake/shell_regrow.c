@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shell_checker.h"
 #include "shell_hybrid.h"
 
 static double len3f(const float* v)
@@ -16,7 +17,7 @@ static double len3f(const float* v)
 }
 
 meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
-                              uint32_t* grown, meso_error* err)
+                              int threads, uint32_t* grown, meso_error* err)
 {
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     const size_t nd = 3 * (size_t)nv;
@@ -28,12 +29,17 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
     meso_result r = cand && orig && hi && bad && moved
                         ? MESO_OK
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "regrow: out of memory");
+    /* Each pass moves a few directors: the incremental checker re-tests only
+     * the faces around them, with the verdicts of a full check. */
+    meso_shell_checker* chk = NULL;
+    if (r == MESO_OK)
+        r = meso_shell_checker_create(m, sign, threads, &chk, err);
     uint32_t nbad = 0;
     if (r == MESO_OK) {
         memcpy(orig, d, sizeof(float) * nd);
         for (uint32_t v = 0; v < nv; ++v)
             hi[v] = len3f(target + 3 * (size_t)v);
-        r = meso_shell_bad_faces(m, d, sign, bad, &nbad, err);
+        r = meso_shell_checker_bad_faces(chk, d, bad, &nbad, err);
     }
     /* Only a valid shell is grown: every accepted state stays valid. */
     for (uint32_t round = 0; r == MESO_OK && nbad == 0 && round < rounds; ++round) {
@@ -60,7 +66,7 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
          * length) until no face fails; each pass sends at least one back,
          * so this ends, at worst where it started. */
         for (;;) {
-            r = meso_shell_bad_faces(m, cand, sign, bad, &nbad, err);
+            r = meso_shell_checker_bad_faces(chk, cand, bad, &nbad, err);
             if (r != MESO_OK || nbad == 0)
                 break;
             uint32_t back = 0;
@@ -91,6 +97,7 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
         n += memcmp(d + 3 * (size_t)v, orig + 3 * (size_t)v, 3 * sizeof(float)) != 0;
     if (grown)
         *grown = n;
+    meso_shell_checker_destroy(chk);
     free(cand), free(orig), free(hi), free(bad), free(moved);
     return r;
 }

@@ -28,9 +28,11 @@
 
 /* d: the repaired directors (3 floats per vertex; side sign +1 exterior,
  * −1 interior), grown in place; target: the directors before repair.
- * Does nothing unless d passes the exact checks. rounds: bisection steps.
+ * Does nothing unless d passes the exact checks (shell_checker.h, re-testing
+ * only the faces around the directors a pass moved). rounds: bisection
+ * steps. threads: the checks' (<= 0: all cores; never changes the result).
  * *grown (may be NULL) counts the directors changed. Deterministic. */
 meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
-                              uint32_t* grown, meso_error* err);
+                              int threads, uint32_t* grown, meso_error* err);
 
 #endif /* MESO_SHELL_REGROW_H */

@@ -317,7 +317,7 @@ static void side_repair(const shell_ctx* c, int sign, float* d, side_result* out
                             &err),
           "repair", &err);
     if (out->shortened && !out->bad_left)
-        check(meso_shell_regrow(&c->m, d, before, sign, MESO_SHELL_REGROW_ROUNDS, &out->regrown, &err), "regrow",
+        check(meso_shell_regrow(&c->m, d, before, sign, MESO_SHELL_REGROW_ROUNDS, THREADS, &out->regrown, &err), "regrow",
               &err);
     free(before);
     out->t_repair = meso_seconds() - t;
