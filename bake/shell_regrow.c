@@ -16,6 +16,46 @@ static double len3f(const float* v)
     return sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]);
 }
 
+/* Checks cand (d with the `moved` directors grown) and sends the moved
+ * corners of failing faces back to d until no face fails. A face with one
+ * moved corner blames it (hi = its failing length); with several, they go
+ * back unblamed, marked in `contested` (NULL: blame them all). On return
+ * cand passes the checks. */
+static meso_result settle(meso_shell_checker* chk, const meso_mesh* m, const float* d, float* cand, uint8_t* moved,
+                          double* hi, uint8_t* contested, uint8_t* bad, meso_error* err)
+{
+    const uint32_t nt = m->triangle_count;
+    for (;;) {
+        uint32_t nbad = 0;
+        meso_result r = meso_shell_checker_bad_faces(chk, cand, bad, &nbad, err);
+        if (r != MESO_OK || nbad == 0)
+            return r;
+        uint32_t back = 0;
+        for (uint32_t f = 0; f < nt; ++f) {
+            if (!bad[f])
+                continue;
+            const uint32_t* c = m->indices + 3 * (size_t)f;
+            const int movers = moved[c[0]] + moved[c[1]] + moved[c[2]];
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t v = c[k];
+                if (!moved[v])
+                    continue;
+                if (movers == 1 || !contested)
+                    hi[v] = len3f(cand + 3 * (size_t)v);
+                else
+                    contested[v] = 1;
+                memcpy(cand + 3 * (size_t)v, d + 3 * (size_t)v, 3 * sizeof(float));
+                moved[v] = 0;
+                ++back;
+            }
+        }
+        if (!back) { /* a bad face with no moved corner: cannot be, d was valid */
+            memcpy(cand, d, sizeof(float) * 3 * (size_t)m->vertex_count);
+            return MESO_OK;
+        }
+    }
+}
+
 meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
                               int threads, uint32_t* grown, meso_error* err)
 {
@@ -26,7 +66,24 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
     double* hi = malloc(sizeof(double) * (nv ? nv : 1)); /* per vertex: the shortest length known to fail */
     uint8_t* bad = calloc(nt ? nt : 1, 1);
     uint8_t* moved = calloc(nv ? nv : 1, 1);
-    meso_result r = cand && orig && hi && bad && moved
+    uint8_t* contested = calloc(nv ? nv : 1, 1);
+    uint8_t* taken = calloc(nt ? nt : 1, 1);
+    /* The faces around each vertex (CSR). */
+    uint32_t* vf_first = calloc((size_t)nv + 1, sizeof(uint32_t));
+    uint32_t* vf = malloc(sizeof(uint32_t) * (3 * (size_t)nt + 1));
+    for (size_t i = 0; vf_first && vf && i < 3 * (size_t)nt; ++i)
+        ++vf_first[m->indices[i] + 1];
+    for (uint32_t v = 0; vf_first && vf && v < nv; ++v)
+        vf_first[v + 1] += vf_first[v];
+    uint32_t* fill = vf_first && vf ? malloc(sizeof(uint32_t) * (nv ? nv : 1)) : NULL;
+    const int adjacency = fill != NULL;
+    if (fill) {
+        memcpy(fill, vf_first, sizeof(uint32_t) * nv);
+        for (size_t i = 0; i < 3 * (size_t)nt; ++i)
+            vf[fill[m->indices[i]]++] = (uint32_t)(i / 3);
+    }
+    free(fill);
+    meso_result r = cand && orig && hi && bad && moved && contested && taken && adjacency
                         ? MESO_OK
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "regrow: out of memory");
     /* Each pass moves a few directors: the incremental checker re-tests only
@@ -62,35 +119,52 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
         }
         if (!trying)
             break;
-        /* Directors of faces that fail go back (and remember the failing
-         * length) until no face fails; each pass sends at least one back,
-         * so this ends, at worst where it started. */
-        for (;;) {
-            r = meso_shell_checker_bad_faces(chk, cand, bad, &nbad, err);
-            if (r != MESO_OK || nbad == 0)
-                break;
-            uint32_t back = 0;
-            for (uint32_t f = 0; f < nt; ++f) {
-                if (!bad[f])
-                    continue;
-                for (int k = 0; k < 3; ++k) {
-                    const uint32_t v = m->indices[3 * (size_t)f + k];
-                    if (!moved[v])
-                        continue;
-                    hi[v] = len3f(cand + 3 * (size_t)v);
-                    memcpy(cand + 3 * (size_t)v, d + 3 * (size_t)v, 3 * sizeof(float));
-                    moved[v] = 0;
-                    ++back;
-                }
-            }
-            if (!back) { /* a bad face with no moved corner: cannot be, d was valid */
-                memcpy(cand, d, sizeof(float) * nd);
-                nbad = 0;
-                break;
-            }
-        }
+        /* Directors of faces that fail go back until no face fails; each
+         * pass sends at least one back, so this ends, at worst where it
+         * started. A failing face with one moved corner names the culprit:
+         * its failing length is remembered. One with several cannot tell
+         * which: they all go back without blame (contested) and try again
+         * below, one corner per face. */
+        r = settle(chk, m, d, cand, moved, hi, contested, bad, err);
         if (r == MESO_OK)
             memcpy(d, cand, sizeof(float) * nd);
+        /* The contested corners, in passes of corners that share no face
+         * (chosen in vertex order): now every failing face has one mover. */
+        for (;;) {
+            memset(taken, 0, nt ? nt : 1);
+            memcpy(cand, d, sizeof(float) * nd);
+            uint32_t picked = 0, chosen = 0;
+            for (uint32_t v = 0; r == MESO_OK && v < nv; ++v) {
+                moved[v] = 0;
+                if (!contested[v])
+                    continue;
+                int free_ = 1;
+                for (uint32_t i = vf_first[v]; i < vf_first[v + 1] && free_; ++i)
+                    free_ = !taken[vf[i]];
+                if (!free_)
+                    continue;
+                for (uint32_t i = vf_first[v]; i < vf_first[v + 1]; ++i)
+                    taken[vf[i]] = 1;
+                contested[v] = 0;
+                ++picked;
+                float* cv = cand + 3 * (size_t)v;
+                const double len = len3f(cv);
+                if (len <= 0.0 || hi[v] <= len * (1.0 + 1e-3))
+                    continue;
+                const double sc = 0.5 * (len + hi[v]) / len;
+                for (int k = 0; k < 3; ++k)
+                    cv[k] = (float)(cv[k] * sc);
+                moved[v] = 1;
+                ++chosen;
+            }
+            if (r != MESO_OK || !picked)
+                break;
+            if (!chosen)
+                continue;
+            r = settle(chk, m, d, cand, moved, hi, NULL, bad, err);
+            if (r == MESO_OK)
+                memcpy(d, cand, sizeof(float) * nd);
+        }
     }
     uint32_t n = 0;
     for (uint32_t v = 0; r == MESO_OK && v < nv; ++v)
@@ -98,6 +172,6 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
     if (grown)
         *grown = n;
     meso_shell_checker_destroy(chk);
-    free(cand), free(orig), free(hi), free(bad), free(moved);
+    free(cand), free(orig), free(hi), free(bad), free(moved), free(contested), free(taken), free(vf_first), free(vf);
     return r;
 }

@@ -7,9 +7,14 @@
  * stops at the first valid shell. Regrowing bisects, per vertex, between
  * its length now (valid) and its length before repair: each round every
  * shortened director tries the midpoint of what it has and the shortest
- * length known to fail; the exact checks (meso_shell_bad_faces) name the
- * faces that fail, their moved directors go back and remember the failing
- * length, and the checks run again until no face fails. So every accepted
+ * length known to fail; the exact checks (shell_checker.h) name the faces
+ * that fail and their moved directors go back, until no face fails. A
+ * failing face with one moved corner blames it (its failing length is
+ * remembered); one with several moved corners cannot say which, so those
+ * go back unblamed and try again in passes of corners that share no face
+ * (chosen in vertex order), where every failure has one culprit. Blaming
+ * all corners of a face, as a first version did, stopped innocent
+ * directors short. So every accepted
  * state is valid, and no director grows past its length before repair
  * (the field's choice, at most the requested thickness). A bake regrows
  * exterior and interior shells; not envelopes, whose two layers are each
