@@ -16,6 +16,19 @@ static double len3f(const float* v)
     return sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]);
 }
 
+/* Director cv grown to the middle of its length and hi (the shortest length
+ * known to fail); 0 when there is nothing left to try. */
+static int grow_half(float* cv, double hi)
+{
+    const double len = len3f(cv);
+    if (len <= 0.0 || hi <= len * (1.0 + 1e-3))
+        return 0;
+    const double s = 0.5 * (len + hi) / len;
+    for (int k = 0; k < 3; ++k)
+        cv[k] = (float)(cv[k] * s);
+    return 1;
+}
+
 /* Checks cand (d with the `moved` directors grown) and sends the moved
  * corners of failing faces back to d until no face fails. A face with one
  * moved corner blames it (hi = its failing length); with several, they go
@@ -106,16 +119,8 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
         memcpy(cand, d, sizeof(float) * nd);
         uint32_t trying = 0;
         for (uint32_t v = 0; v < nv; ++v) {
-            float* cv = cand + 3 * (size_t)v;
-            const double len = len3f(cv);
-            moved[v] = 0;
-            if (len <= 0.0 || hi[v] <= len * (1.0 + 1e-3))
-                continue;
-            const double s = 0.5 * (len + hi[v]) / len;
-            for (int k = 0; k < 3; ++k)
-                cv[k] = (float)(cv[k] * s);
-            moved[v] = 1;
-            ++trying;
+            moved[v] = (uint8_t)grow_half(cand + 3 * (size_t)v, hi[v]);
+            trying += moved[v];
         }
         if (!trying)
             break;
@@ -147,15 +152,8 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
                     taken[vf[i]] = 1;
                 contested[v] = 0;
                 ++picked;
-                float* cv = cand + 3 * (size_t)v;
-                const double len = len3f(cv);
-                if (len <= 0.0 || hi[v] <= len * (1.0 + 1e-3))
-                    continue;
-                const double sc = 0.5 * (len + hi[v]) / len;
-                for (int k = 0; k < 3; ++k)
-                    cv[k] = (float)(cv[k] * sc);
-                moved[v] = 1;
-                ++chosen;
+                moved[v] = (uint8_t)grow_half(cand + 3 * (size_t)v, hi[v]);
+                chosen += moved[v];
             }
             if (r != MESO_OK || !picked)
                 break;
