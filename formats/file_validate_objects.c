@@ -314,6 +314,30 @@ static void check_shell(obj_check* c)
 
 /* >>frusta (kind 4) --------------------------------------------------------- */
 
+/* The colour map (FORMAT.md §7.2 kind 4): at most one COLR chunk of the
+ * object (any lod), U8 x 4, W x H x 1. */
+static void frusta_colour(obj_check* c)
+{
+    int32_t first = -1;
+    for (uint32_t i = 0; i < c->f->chunk_count && !c->stop; i++) {
+        const meso_chunk_info* k = &c->f->chunks[i];
+        if (k->type != MESO_CHUNK_COLR || k->object != c->id)
+            continue;
+        if (first >= 0) {
+            ISSUE(c, MESO_ISSUE_FRUSTA_COLR, (int32_t)i, "frusta %u: a second COLR chunk (chunk %d; the first is %d)",
+                  c->id, (int)i, (int)first);
+            return;
+        }
+        first = (int32_t)i;
+        if (!rules_ok(c, first))
+            return;
+        if (k->dtype != MESO_DTYPE_U8 || k->components != 4 || k->dims[2] != 1)
+            ISSUE(c, MESO_ISSUE_FRUSTA_COLR, first,
+                  "frusta %u: COLR is dtype %u x %u, %u x %u x %u; must be U8 x 4, W x H x 1", c->id, k->dtype,
+                  k->components, k->dims[0], k->dims[1], k->dims[2]);
+    }
+}
+
 static void check_frusta(obj_check* c)
 {
     const int32_t fr = required(c, MESO_OBJECT_FRUSTA, MESO_CHUNK_FRUS);
@@ -326,6 +350,8 @@ static void check_frusta(obj_check* c)
             ISSUE(c, MESO_ISSUE_FRUSTA_RELF, re, "frusta %u: RELF is dtype %u x %u, must be U8 or U16 x 1", c->id,
                   q->dtype, q->components);
     }
+    if (!c->stop)
+        frusta_colour(c);
     if (fr < 0 || fs < 0 || sk < 0 || c->stop)
         return;
     uint8_t* frus = load(c, fr);
