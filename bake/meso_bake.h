@@ -459,7 +459,7 @@ typedef struct meso_bake_cells_options {
     double cell_size;      /* or: a tile's edge in mesh units (tiles must be 0) */
     uint32_t tile_res;     /* voxels per tile edge; 0 = the tile map's (32 for generators) */
     const char* tile_map;  /* voronoi[:SEEDS[:RNG]] | spheres[:N[:RADIUS]] | FILE.raw:R; NULL = "voronoi" */
-    const char* colour;    /* hash[:SEED] | FILE.raw:R; NULL = "hash" */
+    const char* colour;    /* hash[:SEED] | FILE.raw:R | from-mesh[:G]; NULL = "hash" */
     const char* voxelizer; /* auto | parity | vdb | winding; NULL = "auto" */
 } meso_bake_cells_options;
 

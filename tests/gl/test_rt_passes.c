@@ -43,7 +43,11 @@
  *    give MESO_ERR_UNSUPPORTED; the colour mask comes back;
  *  - a frusta colour map (mesobake frusta --relief-color): the G-buffer
  *    albedo against the source PNG at the analytic relief coordinates of
- *    each pixel's hit, mean error <= 2/255 in sRGB (test_frusta_color).
+ *    each pixel's hit, mean error <= 2/255 in sRGB (test_frusta_color);
+ *  - cells coloured from a glTF's base-colour texture (mesobake cells
+ *    --colour from-mesh): the albedo against the texture at the nearest
+ *    box point, mean <= 2/255 away from the box's edges
+ *    (test_cells_from_mesh).
  * MESO_TEST_PNG is not used: the numbers are printed per case. */
 #include "test_util.h"
 
@@ -55,6 +59,7 @@
 #include "egl_context.h"
 #include "frustum_reference.h"
 #include "gl_log.h"
+#include "meso_bake.h"
 #include "meso_rt.h"
 #include "png_io.h"
 #include "shell_reference.h"
@@ -557,6 +562,21 @@ static void test_kinds(ctx* c)
     unload(c, &l);
 }
 
+/* Draws `l` into the G-buffer from direction `dir`; inv = (proj view)^-1. */
+static void gbuffer_view(ctx* c, const loaded* l, const double dir[3], double inv[16])
+{
+    const camera cam = view_box(l, dir);
+    meso_rt_draw_desc d = {.pass = MESO_PASS_GBUFFER};
+    camera_matrices(&cam, d.view, d.proj);
+    CHECK(draw(c, c->rt, l->obj, &d) == MESO_OK);
+    double mvp[16] = {0};
+    for (int a = 0; a < 4; ++a)
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 4; ++k)
+                mvp[4 * a + r] += (double)d.proj[4 * k + r] * (double)d.view[4 * a + k];
+    CHECK(invert4(mvp, inv));
+}
+
 /* >>frusta colour ------------------------------------------------------------
  * A colour map on frusta (mesobake frusta --relief-color, FORMAT.md §7.2
  * kind 4 COLR) against the source PNG: one straight cylinder (two tips, so
@@ -599,16 +619,8 @@ static void test_frusta_color(ctx* c)
     CHECK(fabs(sg->r0 - sg->r1) < 1e-6 && !(sg->twist != 0));
 
     static const double dir[3] = {0.2, 0.6, 1.0};
-    const camera cam = view_box(&l, dir);
-    meso_rt_draw_desc d = {.pass = MESO_PASS_GBUFFER};
-    camera_matrices(&cam, d.view, d.proj);
-    CHECK(draw(c, c->rt, l.obj, &d) == MESO_OK);
-    double mvp[16] = {0}, inv[16];
-    for (int a = 0; a < 4; ++a)
-        for (int r = 0; r < 4; ++r)
-            for (int k = 0; k < 4; ++k)
-                mvp[4 * a + r] += (double)d.proj[4 * k + r] * (double)d.view[4 * a + k];
-    CHECK(invert4(mvp, inv));
+    double inv[16];
+    gbuffer_view(c, &l, dir, inv);
     double ax[3], h = 0, fz[3];
     for (int k = 0; k < 3; ++k) {
         ax[k] = sg->c1[k] - sg->c0[k];
@@ -700,6 +712,99 @@ static void test_frusta_color(ctx* c)
     unload(c, &l);
 }
 
+/* >>cells colour from the mesh -------------------------------------------------
+ * mesobake cells --colour from-mesh (FORMAT.md §7.2 kind 3, the TX3D colour
+ * grid) on tests/data/gltf/box.gltf (the unit box [-0.5, 0.5]^3, each face
+ * mapped to uv [0, 1]^2 as make_gltf.py builds it, a 4 x 4 PNG texture and
+ * a base-colour factor). At every G-buffer pixel whose hit p (unprojected
+ * from the depth buffer) is inside the box and nearer to one face than to
+ * any other by at least two grid spacings (away from the box's edges,
+ * where the nearest face and so the colour jumps), the albedo against the
+ * base colour at p's nearest box point: that face's uv, computed here from
+ * make_gltf.py's face table, the texture bilinear in linear colour
+ * (repeating, v = 0 its first row) times the factor. sRGB, mean <= 2/255. */
+static void test_cells_from_mesh(ctx* c)
+{
+    enum { G = 64 };
+    char path[512], args[700];
+    snprintf(path, sizeof(path), "%s/gltf/box.gltf", MESO_TEST_DATA);
+    snprintf(args, sizeof(args), "cells -i '%s' --tiles 4 --tile-res 16 --colour from-mesh:%d -j 2", path, G);
+    loaded l = load(c, bake(c, "cells_from_mesh", args));
+    CHECK(l.cells.grid[0] == G && l.cells.grid[1] == G && l.cells.grid[2] == G);
+    meso_mesh m;
+    meso_mesh_materials mats;
+    meso_error err;
+    CHECK_MSG(meso_bake_load_mesh_materials(path, NULL, &m, &mats, NULL, &err) == MESO_OK, "%s", err.message);
+    CHECK(mats.material_count == 1 && mats.materials[0].rgba && mats.materials[0].width == 4);
+    const meso_mesh_material* mt = &mats.materials[0];
+
+    static const double dir[3] = {0.35, 0.5, 1.0};
+    double inv[16];
+    gbuffer_view(c, &l, dir, inv);
+    /* make_gltf.py's faces: (normal axis, sign, u axis, v axis); u = p[ua] + 0.5, v = 0.5 - p[va]. */
+    static const int faces[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}, {1, 0, 2}, {2, 0, 1}, {2, 1, 0}};
+    const double spacing = (double)l.cells.tiles[0] * l.cells.res * l.cells.voxel / G;
+    double sum = 0, worst = 0, sum_all = 0;
+    long count = 0, covered = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + (size_t)x;
+            if (!(c->depth[i] < 1.0f))
+                continue;
+            double p[3];
+            unproject(inv, x, y, c->depth[i], p);
+            int best = -1;
+            double d1 = 1e30, d2 = 1e30;
+            for (int f = 0; f < 6; ++f) {
+                const int axis = faces[f][0];
+                const double dist = f % 2 == 0 ? 0.5 - p[axis] : p[axis] + 0.5;
+                if (dist < d1) {
+                    d2 = d1;
+                    d1 = dist;
+                    best = f;
+                } else if (dist < d2) {
+                    d2 = dist;
+                }
+            }
+            const double uv[2] = {p[faces[best][1]] + 0.5, 0.5 - p[faces[best][2]]};
+            double want[3];
+            for (int k = 0; k < 3; ++k) {
+                double xy[2], fr[2];
+                int i0[2], i1[2];
+                for (int a = 0; a < 2; ++a) {
+                    xy[a] = uv[a] * 4 - 0.5;
+                    const double fl = floor(xy[a]);
+                    fr[a] = xy[a] - fl;
+                    i0[a] = (((int)fl % 4) + 4) % 4;
+                    i1[a] = (i0[a] + 1) % 4;
+                }
+#define TEXEL(tx, ty) srgb_decode(mt->rgba[4 * ((ty) * 4 + (tx)) + k] / 255.0)
+                want[k] = mt->base_color_factor[k] *
+                          ((1 - fr[1]) * ((1 - fr[0]) * TEXEL(i0[0], i0[1]) + fr[0] * TEXEL(i1[0], i0[1])) +
+                           fr[1] * ((1 - fr[0]) * TEXEL(i0[0], i1[1]) + fr[0] * TEXEL(i1[0], i1[1])));
+#undef TEXEL
+            }
+            double e = 0;
+            for (int k = 0; k < 3; ++k)
+                e += fabs(255 * srgb_encode(want[k]) - 255 * srgb_encode(c->c0[4 * i + (size_t)k])) / 3;
+            ++covered;
+            sum_all += e;
+            if (!(d1 >= 0) || d2 - d1 < 2 * spacing)
+                continue; /* outside the box, or near an edge */
+            sum += e;
+            worst = fmax(worst, e);
+            ++count;
+        }
+    printf("cells from-mesh: %ld of %ld pixels away from the box's edges: error vs the texture mean %.3f / 255, "
+           "max %.2f / 255; all %ld pixels: mean %.3f / 255\n",
+           count, covered, sum / (double)count, worst, covered, sum_all / (double)covered);
+    CHECK_MSG(count > 2000, "only %ld pixels compared", count);
+    CHECK_MSG(sum / (double)count <= 2.0, "cells from-mesh: mean error %.3f / 255 > 2", sum / (double)count);
+    meso_mesh_materials_free(&mats);
+    meso_mesh_free(&m);
+    unload(c, &l);
+}
+
 static void test_broken_hook(void)
 {
     log_capture log = {0};
@@ -760,6 +865,7 @@ int main(int argc, char** argv)
     test_broken_hook();
     test_kinds(&c);
     test_frusta_color(&c);
+    test_cells_from_mesh(&c);
     meso_rt_destroy(c.rt);
     meso_rt_destroy(c.hooked);
     test_temp_dir_remove(c.dir);
