@@ -4,7 +4,9 @@
  * the base mesh, CELL, TILE, SPLT, MEMB, NRMM and COLR (FORMAT.md §7.2
  * kind 3, §7.8). Stages: tile map (tile_map.h) → split cells
  * (split_cells.h) → exact sparse voxelization and membership
- * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h).
+ * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h),
+ * and with `--colour from-mesh[:G]` the mesh's base colour as a TX3D colour
+ * grid (mesh_colour_grid.h; COLR then holds the default hash colours).
  * Error messages name the options as mesobake spells them (--tile-map ...).
  */
 #include "bake_internal.h"
@@ -18,6 +20,7 @@
 #include <cjson/cJSON.h>
 
 #include "cells_chunks.h"
+#include "mesh_colour_grid.h"
 #include "memory_budget.h"
 #include "mesh_check.h"
 #include "mesh_chunk.h"
@@ -234,9 +237,33 @@ static void report_json(cJSON* rep, const meso_bake_cells_report* s)
 }
 
 /* The file: META, RPRT, OBJT, then the base mesh and the cells chunks. */
+/* "from-mesh[:G]": 1 with *g (default MESO_MESH_COLOUR_GRID_DEFAULT), 0 for
+ * another SPEC, -1 for a bad G. */
+static int from_mesh_spec(const char* spec, uint32_t* g)
+{
+    if (strncmp(spec, "from-mesh", 9) != 0 || (spec[9] != 0 && spec[9] != ':'))
+        return 0;
+    *g = MESO_MESH_COLOUR_GRID_DEFAULT;
+    if (!spec[9])
+        return 1;
+    char* end = NULL;
+    const unsigned long v = strtoul(spec + 10, &end, 10);
+    if (spec[10] < '0' || spec[10] > '9' || *end || v < 2 || v > MESO_MESH_COLOUR_GRID_MAX)
+        return -1;
+    *g = (uint32_t)v;
+    return 1;
+}
+
+/* The mesh's colour grid (--colour from-mesh): dims and sRGB RGBA8 texels. */
+typedef struct colour_grid {
+    uint32_t dims[3];
+    uint8_t* rgba; /* NULL: none */
+} colour_grid;
+
 static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m, const meso_voxel_grid* g,
                             uint32_t R, const meso_split_cells* sc, const meso_cells_chunks* cc,
-                            const meso_bake_cells_report* s, meso_bake_output** out, meso_error* err)
+                            const colour_grid* cg, const meso_bake_cells_report* s, meso_bake_output** out,
+                            meso_error* err)
 {
     meso_mesh_chunk mesh_chunk = {0};
     meso_result r = meso_bake_mesh_chunk(m, NULL, &mesh_chunk, err);
@@ -260,7 +287,7 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     report_json(rep, s);
 
     const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED, S = sc->split_count;
-    mesoi_chunk chunks[7];
+    mesoi_chunk chunks[8];
     chunks[0] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
                                        .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
                               .data = mesh_chunk.data, .size = mesh_chunk.size};
@@ -272,8 +299,12 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
                             cc->memb_size);
     chunks[5] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, R, R, R, cc->nrmm, cc->nrmm_size);
     chunks[6] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, R, R, R, cc->colr, cc->colr_size);
+    int count = 7;
+    if (cg->rgba) /* the mesh's base colour (FORMAT.md 7.2 kind 3): replaces COLR's as the albedo */
+        chunks[count++] = typed_chunk(MESO_CHUNK_TX3D, 0, MESO_DTYPE_U8, 4, cg->dims[0], cg->dims[1], cg->dims[2],
+                                      cg->rgba, 4 * (size_t)cg->dims[0] * cg->dims[1] * cg->dims[2]);
     if (r == MESO_OK)
-        r = mesoi_output_build(meta, rep, &rec, chunks, 7, out, err);
+        r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     free(mesh_chunk.data);
@@ -318,7 +349,19 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
     const meso_voxelizer method = !strcmp(a->voxelizer, "winding") ? MESO_VOXELIZE_WINDING
                                   : !strcmp(a->voxelizer, "auto")  ? MESO_VOXELIZE_AUTO
                                                                    : MESO_VOXELIZE_PARITY;
-    meso_result r = mesoi_load_input(&run, a->input, a->mesh, &m, &s->fixes, err);
+    meso_mesh_materials mats = {0};
+    colour_grid cg = {{0, 0, 0}, NULL};
+    uint32_t cg_res = 0;
+    const int from_mesh = from_mesh_spec(a->colour, &cg_res);
+    if (from_mesh < 0)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_CELLS_ISSUE_COLOUR_SPEC,
+                              "--colour '%s': from-mesh:G takes G in 2..%u (samples along the longest side)", a->colour,
+                              MESO_MESH_COLOUR_GRID_MAX);
+    if (from_mesh && !a->input)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_MESH_COLOUR_ISSUE_NONE,
+                              "--colour from-mesh needs an input file (a glTF with a base colour)");
+    meso_result r = from_mesh ? mesoi_load_mesh_materials(&run, a->input, &m, &mats, &s->fixes, err)
+                              : mesoi_load_input(&run, a->input, a->mesh, &m, &s->fixes, err);
     if (r == MESO_OK && method == MESO_VOXELIZE_PARITY)
         r = require_closed(&m, a->input ? a->input : MESOI_MEMORY_INPUT, err);
     if (r == MESO_OK)
@@ -355,7 +398,20 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
                         (unsigned long long)mb.tiles_mixed, 1e3 * mb.seconds);
     t = meso_seconds();
     if (r == MESO_OK)
-        r = meso_cells_chunks_build(&tm, &sc, &mb, g.origin, g.voxel_size, a->colour, threads, &cc, err);
+        r = meso_cells_chunks_build(&tm, &sc, &mb, g.origin, g.voxel_size, from_mesh ? "hash" : a->colour, threads,
+                                    &cc, err);
+    if (r == MESO_OK && from_mesh) {
+        double ext[3];
+        for (int k = 0; k < 3; ++k)
+            ext[k] = (double)g.tiles[k] * R * g.voxel_size;
+        meso_mesh_colour_grid_dims(ext, cg_res, cg.dims);
+        cg.rgba = malloc(4 * (size_t)cg.dims[0] * cg.dims[1] * cg.dims[2]);
+        r = cg.rgba ? meso_mesh_colour_grid_build(&m, &mats, g.origin, ext, cg.dims, cg.rgba, err)
+                    : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "colour grid: out of memory");
+        if (r == MESO_OK)
+            mesoi_run_stage(&run, "colour grid", 0.95, 0.95, "mesh colour grid %ux%ux%u", cg.dims[0], cg.dims[1],
+                            cg.dims[2]);
+    }
     if (r == MESO_OK)
         mesoi_run_stage(&run, "normal and colour maps", 0.9, 0.9,
                         "normal and colour maps: %llu border voxels of %u^3 (%.0f ms)",
@@ -380,9 +436,11 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
         s->tile_map_bytes = cc.tile_size;
         s->normal_map_bytes = cc.nrmm_size;
         s->colour_map_bytes = cc.colr_size;
-        r = assemble(a, &m, &g, R, &sc, &cc, s, out, err);
+        r = assemble(a, &m, &g, R, &sc, &cc, &cg, s, out, err);
     }
     meso_cells_chunks_free(&cc);
+    free(cg.rgba);
+    meso_mesh_materials_free(&mats);
     meso_membership_free(&mb);
     meso_split_cells_free(&sc);
     meso_tile_map_free(&tm);

@@ -3,8 +3,9 @@
  * meso_bake_skeleton_load: a skeleton (SWC, the text format of
  * skeleton_swc.h, or one extracted from a closed mesh) skinned with conical
  * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
- * optional relief map (§3), as one .meso frusta object: SKEL, FRUS, FSEG,
- * BALL and RELF (FORMAT.md §7.2 kind 4).
+ * optional relief map (§3) and colour map (sampled at the relief
+ * coordinates), as one .meso frusta object: SKEL, FRUS, FSEG, BALL, RELF
+ * and COLR (FORMAT.md §7.2 kind 4).
  */
 #include "bake_internal.h"
 
@@ -15,6 +16,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "color_map.h"
 #include "frusta_chunks.h"
 #include "frustum_model.h"
 #include "memory_budget.h"
@@ -180,10 +182,10 @@ static void report_json(cJSON* rep, const meso_bake_frusta_report* s)
 }
 
 /* The file: META, RPRT, OBJT, SKEL, FRUS, FSEG, BALL (when there are balls),
- * RELF (with a relief). */
+ * RELF (with a relief), COLR (with a colour map). */
 static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
-                            const meso_texfn* relief, const meso_bake_frusta_report* s, meso_bake_output** out,
-                            meso_error* err)
+                            const meso_texfn* relief, const meso_color_map* color,
+                            const meso_bake_frusta_report* s, meso_bake_output** out, meso_error* err)
 {
     uint8_t *frus = NULL, *fseg = NULL, *ball = NULL;
     meso_result r = meso_frusta_object_encode(obj, &frus, &fseg, &ball, err);
@@ -210,10 +212,18 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         cJSON_AddNumberToObject(rl, "depth", s->relief_depth);
         cJSON_AddNumberToObject(rl, "repeat", a->relief_repeat);
     }
-    r = mesoi_add_input_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, err);
+    if (a->relief_color) {
+        cJSON* cl = cJSON_AddObjectToObject(params, "color");
+        cJSON_AddStringToObject(cl, "file", mesoi_base_name(a->relief_color));
+        cJSON_AddNumberToObject(cl, "repeat", a->relief_repeat);
+    }
+    cJSON* inputs = cJSON_AddArrayToObject(meta, "inputs");
+    r = mesoi_add_input_provenance(inputs, a->input, err);
+    if (r == MESO_OK && a->relief_color)
+        r = mesoi_add_input_provenance(inputs, a->relief_color, err);
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
-    mesoi_chunk chunks[5];
+    mesoi_chunk chunks[6];
     int count = 0;
     chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
                                     .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};
@@ -231,6 +241,10 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_RELF, .object = 1, .dtype = relief->dtype,
                                                  .components = 1, .dims = {relief->dims[0], relief->dims[1], 1}},
                                         .data = relief->encoded, .size = relief->encoded_size};
+    if (a->relief_color) /* sRGB RGBA8 as the PNG holds it, row 0 at the bottom (color_map.h) */
+        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8,
+                                                 .components = 4, .dims = {color->width, color->height, 1}},
+                                        .data = color->rgba, .size = 4 * (size_t)color->width * color->height};
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
     cJSON_Delete(meta);
@@ -310,6 +324,7 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     meso_frustum_model m = {0};
     meso_frusta_object obj = {0};
     meso_texfn relief = {0};
+    meso_color_map color = {0};
 
     /* A skeleton loaded before (meso_bake_skeleton_load) is used as it is. */
     const meso_skeleton* skel = &sk;
@@ -338,6 +353,8 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
                                "cobble, ribs)",
                                a.relief);
     }
+    if (r == MESO_OK && a.relief_color)
+        r = meso_color_map_load_png(a.relief_color, run.common.max_memory, &color, err);
     if (r == MESO_OK) {
         meso_frustum_options fo = {.keep_cap_intersections = a.keep_cap_intersections,
                                    .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle,
@@ -373,9 +390,10 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     }
     if (r == MESO_OK) {
         fill_report(&m, &obj, s);
-        r = assemble(&a, &obj, &relief, s, out, err);
+        r = assemble(&a, &obj, &relief, &color, s, out, err);
     }
     meso_texfn_free(&relief);
+    meso_color_map_free(&color);
     meso_frusta_object_free(&obj);
     meso_frustum_model_free(&m);
     meso_skeleton_free(&sk);

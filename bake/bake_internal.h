@@ -95,5 +95,8 @@ meso_result mesoi_add_provenance(cJSON* inputs, const char* path, const meso_mes
 /* meso_bake_load_mesh within a bake (warnings through `run`). */
 meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m, meso_bake_mesh_fixes* fixes,
                             meso_error* err);
+/* The same with the glTF materials (meso_bake_load_mesh_materials). */
+meso_result mesoi_load_mesh_materials(mesoi_bake_run* run, const char* path, meso_mesh* m,
+                                      meso_mesh_materials* materials, meso_bake_mesh_fixes* fixes, meso_error* err);
 
 #endif

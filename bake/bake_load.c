@@ -243,6 +243,12 @@ meso_result mesoi_load_mesh(mesoi_bake_run* run, const char* path, meso_mesh* m,
     return load_mesh(run, path, m, NULL, fixes, err);
 }
 
+meso_result mesoi_load_mesh_materials(mesoi_bake_run* run, const char* path, meso_mesh* m,
+                                      meso_mesh_materials* materials, meso_bake_mesh_fixes* fixes, meso_error* err)
+{
+    return load_mesh(run, path, m, materials, fixes, err);
+}
+
 /* A copy of `src`'s arrays into *m (zeroed first); 0 when out of memory. */
 static int copy_mesh(const meso_mesh* src, meso_mesh* m)
 {

@@ -459,7 +459,7 @@ typedef struct meso_bake_cells_options {
     double cell_size;      /* or: a tile's edge in mesh units (tiles must be 0) */
     uint32_t tile_res;     /* voxels per tile edge; 0 = the tile map's (32 for generators) */
     const char* tile_map;  /* voronoi[:SEEDS[:RNG]] | spheres[:N[:RADIUS]] | FILE.raw:R; NULL = "voronoi" */
-    const char* colour;    /* hash[:SEED] | FILE.raw:R; NULL = "hash" */
+    const char* colour;    /* hash[:SEED] | FILE.raw:R | from-mesh[:G]; NULL = "hash" */
     const char* voxelizer; /* auto | parity | vdb | winding; NULL = "auto" */
 } meso_bake_cells_options;
 
@@ -498,7 +498,9 @@ typedef struct meso_bake_frusta_options {
     int keep_cap_intersections; /* 1: keep the paper's planes where caps intersect */
     const char* relief;         /* a height-field SPEC, or NULL */
     double relief_depth;        /* skeleton units; 0 = a quarter of the mean radius */
-    double relief_repeat;       /* tiles around the circumference; default 1 */
+    double relief_repeat;       /* tiles around the circumference; default 1 (the colour map's too) */
+    const char* relief_color;   /* an 8-bit PNG colour map sampled at the relief coordinates
+                                   (FORMAT.md §7.2 kind 4, COLR), with or without a relief; or NULL */
     double twist;               /* degrees of texture twist per unit of skeleton length (default 0):
                                    each segment's twist is twist x its length (a .skel node's
                                    twist=DEG replaces it for its segment); finite, |twist| <=
@@ -523,7 +525,7 @@ typedef struct meso_bake_frusta_report {
 MESO_BAKE_API meso_bake_frusta_options meso_bake_frusta_defaults(void);
 
 /* `mesobake frusta`: a skeleton skinned with conical frusta, as one FRUSTA
- * object (SKEL, FRUS, FSEG, BALL, RELF). */
+ * object (SKEL, FRUS, FSEG, BALL, RELF, COLR). */
 MESO_BAKE_API meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output** out,
                                            meso_bake_frusta_report* report, meso_error* err);
 

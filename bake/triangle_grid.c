@@ -33,34 +33,45 @@
 #include "skeleton_from_mesh_internal.h" /* mesoi_dist_at */
 
 /* Exact distance from p to triangle (a, b, c): the closest point by Voronoi
- * regions (Ericson, "Real-Time Collision Detection", 5.1.5). */
-static double point_triangle_distance(const double p[3], const double a[3], const double b[3], const double c[3])
+ * regions (Ericson, "Real-Time Collision Detection", 5.1.5). The closest
+ * point's barycentrics of b and c go to bw[0], bw[1] (the distance is
+ * computed as it always was, so bakes that write it keep their bytes). */
+static double point_triangle_distance(const double p[3], const double a[3], const double b[3], const double c[3],
+                                      double bw[2])
 {
     double ab[3], ac[3], ap[3], bp[3], cp[3], q[3];
     sub3(b, a, ab);
     sub3(c, a, ac);
     sub3(p, a, ap);
     const double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    bw[0] = bw[1] = 0;
     if (d1 <= 0 && d2 <= 0)
         return dist3(p, a);
     sub3(p, b, bp);
     const double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    bw[0] = 1;
     if (d3 >= 0 && d4 <= d3)
         return dist3(p, b);
     const double vc = d1 * d4 - d3 * d2;
+    bw[0] = d1 / (d1 - d3);
     if (vc <= 0 && d1 >= 0 && d3 <= 0)
-        return mesoi_dist_at(a, b, d1 / (d1 - d3), p);
+        return mesoi_dist_at(a, b, bw[0], p);
     sub3(p, c, cp);
     const double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    bw[0] = 0, bw[1] = 1;
     if (d6 >= 0 && d5 <= d6)
         return dist3(p, c);
     const double vb = d5 * d2 - d1 * d6;
+    bw[1] = d2 / (d2 - d6);
     if (vb <= 0 && d2 >= 0 && d6 <= 0)
-        return mesoi_dist_at(a, c, d2 / (d2 - d6), p);
+        return mesoi_dist_at(a, c, bw[1], p);
     const double va = d3 * d6 - d5 * d4;
+    bw[1] = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    bw[0] = 1 - bw[1];
     if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-        return mesoi_dist_at(b, c, (d4 - d3) / ((d4 - d3) + (d5 - d6)), p);
+        return mesoi_dist_at(b, c, bw[1], p);
     const double den = 1 / (va + vb + vc), v = vb * den, w = vc * den;
+    bw[0] = v, bw[1] = w;
     for (int k = 0; k < 3; ++k)
         q[k] = a[k] + ab[k] * v + ac[k] * w;
     return dist3(p, q);
@@ -149,12 +160,21 @@ oom:
  * k * cell, so the search stops once the best is no more than that. */
 double mesoi_tri_grid_distance(mesoi_tri_grid* g, const double p[3])
 {
+    uint32_t tri;
+    double bw[2];
+    return mesoi_tri_grid_closest(g, p, &tri, bw);
+}
+
+double mesoi_tri_grid_closest(mesoi_tri_grid* g, const double p[3], uint32_t* tri, double bw[2])
+{
     int ci[3];
     for (int k = 0; k < 3; ++k)
         ci[k] = grid_coord(g, k, p[k]);
     const int kmax = g->dim[0] > g->dim[1] ? (g->dim[0] > g->dim[2] ? g->dim[0] : g->dim[2])
                                             : (g->dim[1] > g->dim[2] ? g->dim[1] : g->dim[2]);
-    double best = DBL_MAX;
+    double best = DBL_MAX, w[2];
+    *tri = UINT32_MAX;
+    bw[0] = bw[1] = 0;
     ++g->query;
     for (int k = 0; k <= kmax; ++k) {
         for (int z = ci[2] - k; z <= ci[2] + k; ++z) {
@@ -174,8 +194,12 @@ double mesoi_tri_grid_distance(mesoi_tri_grid* g, const double p[3])
                             g->stamp[f] = g->query;
                             const uint32_t* t = g->tri + 3 * (size_t)f;
                             const double d = point_triangle_distance(p, g->xyz + 3 * (size_t)t[0],
-                                                                     g->xyz + 3 * (size_t)t[1], g->xyz + 3 * (size_t)t[2]);
-                            best = d < best ? d : best;
+                                                                     g->xyz + 3 * (size_t)t[1], g->xyz + 3 * (size_t)t[2], w);
+                            if (d < best || (d == best && f < *tri)) { /* ties: the lowest triangle, whatever the order */
+                                best = d;
+                                *tri = f;
+                                bw[0] = w[0], bw[1] = w[1];
+                            }
                         }
                     }
                     if (k == 0)

@@ -36,6 +36,11 @@ meso_result mesoi_tri_grid_build(const double* xyz, const uint32_t* tri, uint32_
  * not thread-safe: the query stamps live in `g`). */
 double mesoi_tri_grid_distance(mesoi_tri_grid* g, const double p[3]);
 
+/* The same, and the nearest triangle (the lowest index among equally near
+ * ones) with the barycentrics of its 2nd and 3rd corners at the closest
+ * point (the 1st: 1 - bw[0] - bw[1]). */
+double mesoi_tri_grid_closest(mesoi_tri_grid* g, const double p[3], uint32_t* tri, double bw[2]);
+
 void mesoi_tri_grid_free(mesoi_tri_grid* g);
 
 #endif /* MESO_TRIANGLE_GRID_H */

@@ -314,6 +314,33 @@ static void check_shell(obj_check* c)
 
 /* >>frusta (kind 4) --------------------------------------------------------- */
 
+/* A colour chunk of `type` (FORMAT.md §7.2: frusta COLR, cells TX3D): at
+ * most one with the object's id (any lod), U8 x 4, and W x H x 1 when
+ * `flat`; else issue `code`. */
+static void colour_chunk(obj_check* c, uint32_t type, int flat, uint32_t code)
+{
+    const char* kind = type == MESO_CHUNK_COLR ? "frusta" : "cells";
+    char cc[5];
+    mesoi_fourcc_str(type, cc);
+    int32_t first = -1;
+    for (uint32_t i = 0; i < c->f->chunk_count && !c->stop; i++) {
+        const meso_chunk_info* k = &c->f->chunks[i];
+        if (k->type != type || k->object != c->id)
+            continue;
+        if (first >= 0) {
+            ISSUE(c, code, (int32_t)i, "%s %u: a second %s chunk (chunk %d; the first is %d)", kind, c->id, cc, (int)i,
+                  (int)first);
+            return;
+        }
+        first = (int32_t)i;
+        if (!rules_ok(c, first))
+            return;
+        if (k->dtype != MESO_DTYPE_U8 || k->components != 4 || (flat && k->dims[2] != 1))
+            ISSUE(c, code, first, "%s %u: %s is dtype %u x %u, %u x %u x %u; must be U8 x 4%s", kind, c->id, cc,
+                  k->dtype, k->components, k->dims[0], k->dims[1], k->dims[2], flat ? ", W x H x 1" : "");
+    }
+}
+
 static void check_frusta(obj_check* c)
 {
     const int32_t fr = required(c, MESO_OBJECT_FRUSTA, MESO_CHUNK_FRUS);
@@ -326,6 +353,8 @@ static void check_frusta(obj_check* c)
             ISSUE(c, MESO_ISSUE_FRUSTA_RELF, re, "frusta %u: RELF is dtype %u x %u, must be U8 or U16 x 1", c->id,
                   q->dtype, q->components);
     }
+    if (!c->stop)
+        colour_chunk(c, MESO_CHUNK_COLR, 1, MESO_ISSUE_FRUSTA_COLR);
     if (fr < 0 || fs < 0 || sk < 0 || c->stop)
         return;
     uint8_t* frus = load(c, fr);
@@ -402,6 +431,8 @@ meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso
             mesh_header(&c, i, &l);
         if (!c.stop)
             required(&c, rec->kind, MESO_CHUNK_CELL);
+        if (!c.stop)
+            colour_chunk(&c, MESO_CHUNK_TX3D, 0, MESO_ISSUE_CELLS_COLOUR_GRID);
         break;
     case MESO_OBJECT_SHELL: check_shell(&c); break;
     case MESO_OBJECT_FRUSTA: check_frusta(&c); break;

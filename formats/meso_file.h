@@ -287,7 +287,7 @@ MESO_API meso_result meso_file_validate(meso_file* f, meso_check level, meso_iss
 MESO_API meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err);
 
 /* Check object `object` (an OBJT record) against what its kind is made of
- * (FORMAT.md §7.2, issues 6001..6204): the chunks the kind requires, the
+ * (FORMAT.md §7.2, issues 6001..6301): the chunks the kind requires, the
  * counts that tie them together (SDIR and STHK per MESH vertex, one FSEG
  * per FRUS, SKEL node references in range) and the values a renderer relies
  * on (finite directors, thickness > 0, texture types, non-degenerate
@@ -472,6 +472,8 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_FRUSTA_NODE 6202u         /* a SKEL node reference out of range */
 #define MESO_ISSUE_FRUSTA_AXIS 6203u         /* zero-length axis or zero cutting-plane normal */
 #define MESO_ISSUE_FRUSTA_RELF 6204u         /* RELF not U8 or U16 x 1 */
+#define MESO_ISSUE_FRUSTA_COLR 6205u         /* frusta COLR not one U8 x 4, W x H x 1 chunk */
+#define MESO_ISSUE_CELLS_COLOUR_GRID 6301u   /* cells TX3D (mesh colour grid) not one U8 x 4 chunk */
 #define MESO_ISSUE_API_ARG 5001u
 #define MESO_ISSUE_API_BUFFER 5002u
 #define MESO_ISSUE_API_MEMORY 5003u

@@ -14,6 +14,8 @@
  *                 without GL_EXT_texture_norm16), decoded in the shader
  *   unit 3  COLR  3D texture SRGB8_ALPHA8 (fetches are linear)
  *   unit 4  the host's environment cube map, if it passes one
+ *   unit 5  TX3D, the mesh's colour grid when the object has one: 3D texture
+ *           SRGB8_ALPHA8, interpolated by hand (trilinear, float weights)
  * plus the base mesh's vertex array (the MESH chunk buffer, as rt_mesh.c
  * uploads it). SPLT is not needed to draw: MEMB's tags are final.
  *
@@ -46,10 +48,11 @@ typedef struct mesoi_cells {
     uint32_t class_words, record_words; /* ceil(T / 16), W */
     float origin[3], voxel;
     int map_full;
-    GLuint tile_tex, memb_buf, memb_tex, nrmm_tex, colr_tex;
+    GLuint tile_tex, memb_buf, memb_tex, nrmm_tex, colr_tex, grid_tex;
+    GLint grid[3]; /* TX3D colour grid dims; 0 without one */
 } mesoi_cells;
 
-enum { UNIT_TILE = 0, UNIT_MEMB, UNIT_NRMM, UNIT_COLR, UNIT_ENV, UNIT_COUNT };
+enum { UNIT_TILE = 0, UNIT_MEMB, UNIT_NRMM, UNIT_COLR, UNIT_ENV, UNIT_GRID, UNIT_COUNT };
 
 void mesoi_cells_release(meso_rt* rt, mesoi_object* o)
 {
@@ -57,8 +60,8 @@ void mesoi_cells_release(meso_rt* rt, mesoi_object* o)
     if (!c)
         return;
     mesoi_gl* gl = &rt->gl;
-    const GLuint tex[4] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex};
-    gl->DeleteTextures(4, tex);
+    const GLuint tex[5] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, c->grid_tex};
+    gl->DeleteTextures(5, tex);
     gl->DeleteBuffers(1, &c->memb_buf);
     mesoi_rt_free(rt, c);
     o->cells = NULL;
@@ -212,6 +215,20 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     }
     if (r == MESO_OK)
         r = upload_chunk_3d(rt, f, ci[4], GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->colr_tex);
+    const int32_t gi = mesoi_find_chunk(f, MESO_CHUNK_TX3D, id); /* the mesh's colour grid */
+    if (r == MESO_OK && gi >= 0) {
+        const meso_chunk_info* gc = meso_file_chunk(f, (uint32_t)gi);
+        if (gc->dtype != MESO_DTYPE_U8 || gc->components != 4) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                      "cells %u: TX3D is dtype %u x %u; FORMAT.md §7.2 wants U8 x 4 (the colour grid)", id,
+                      gc->dtype, gc->components);
+            r = MESO_ERR_UNSUPPORTED;
+        } else {
+            r = upload_chunk_3d(rt, f, gi, GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->grid_tex);
+            for (int k = 0; k < 3; ++k)
+                c->grid[k] = (GLint)gc->dims[k];
+        }
+    }
     mesoi_file_free(&f->alloc, tile);
     mesoi_file_free(&f->alloc, memb);
     char what[48];
@@ -238,7 +255,7 @@ static const mesoi_program* cells_program(meso_rt* rt, int stats, meso_rt_pass p
     const char* vs[4] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_cells_vert};
     const char* pre[2] = {mesoi_glsl_instance, mesoi_glsl_raycast_common};
     static const char* const samplers[UNIT_COUNT + 1] = {"u_tile", "u_memb", "u_nrmm", "u_colr", "u_env",
-                                                         "u_instances"};
+                                                         "u_grid", "u_instances"};
     static const char* const names[MESO_PASS_COUNT] = {"cells", "cells depth", "cells gbuffer"};
     const mesoi_program_src src = {.vs = vs, .vs_count = 4, .vs_file = "cells_vert.glsl", .pre = pre,
                                    .pre_count = 2, .frag = mesoi_glsl_cells_frag, .frag_file = "cells_frag.glsl",
@@ -327,8 +344,9 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
     static const GLenum targets[UNIT_COUNT + 1] = {GL_TEXTURE_3D, GL_TEXTURE_BUFFER, GL_TEXTURE_3D, GL_TEXTURE_3D,
-                                                   GL_TEXTURE_CUBE_MAP, GL_TEXTURE_BUFFER};
-    GLuint bind[UNIT_COUNT + 1] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment, 0};
+                                                   GL_TEXTURE_CUBE_MAP, GL_TEXTURE_3D, GL_TEXTURE_BUFFER};
+    GLuint bind[UNIT_COUNT + 1] = {c->tile_tex, c->memb_tex, c->nrmm_tex, c->colr_tex, k->environment, c->grid_tex,
+                                   0};
     int from_near = 0;
     if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, 1, instance_cells, &from_near,
                                             &bind[UNIT_COUNT])) != MESO_OK)
@@ -350,6 +368,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1f(u[MESOI_U_h], c->voxel);
     gl->Uniform3i(u[MESOI_U_tiles], (GLint)c->tiles[0], (GLint)c->tiles[1], (GLint)c->tiles[2]);
     gl->Uniform1i(u[MESOI_U_res], (GLint)c->res);
+    gl->Uniform3i(u[MESOI_U_grid_size], c->grid[0], c->grid[1], c->grid[2]);
     gl->Uniform1i(u[MESOI_U_class_words], (GLint)c->class_words);
     gl->Uniform1i(u[MESOI_U_words], (GLint)c->record_words);
     gl->Uniform1i(u[MESOI_U_map_full], c->map_full);

@@ -14,7 +14,11 @@
  *   3 plane1.xyz, D       7 bounding sphere centre.xyz, radius
  *   8..15 the 8 corners of the bounding geometry (xyz)
  * (a ball: texel 0 is centre, radius), plus the relief map as a 2D texture
- * (linear, repeat). The 12 bounding triangles per primitive are generated
+ * (linear, repeat) and the colour map (COLR) as an SRGB8_ALPHA8 2D texture,
+ * so fetches return linear colour; the shader interpolates both by hand.
+ * Balls have no relief coordinates: with a colour map they take its mean
+ * linear colour (FORMAT.md §7.2 kind 4), computed here in double precision
+ * as the reference does. The 12 bounding triangles per primitive are generated
  * from gl_VertexID (36 vertices each), so an animation step uploads 256
  * bytes per primitive and nothing else.
  *
@@ -61,12 +65,14 @@ typedef struct mesoi_frusta {
     uint32_t slots;                 /* pose slots (meso_rt_frusta_pose_slots), >= 1; slot 0 is recs/balls */
     meso_frustum_rec* slot_recs;    /* slots 1.., count each */
     meso_frustum_ball_rec* slot_balls; /* slots 1.., ball_count each */
-    GLuint prim_buf, prim_tex, relief_tex;
+    GLuint prim_buf, prim_tex, relief_tex, color_tex;
     int relief_w, relief_h;         /* 0 without RELF */
+    int color_w, color_h;           /* 0 without COLR */
+    float ball_color[3];            /* COLR's mean linear colour (balls) */
     uint32_t boxed;                 /* frusta whose bound fell back to a box (last build) */
 } mesoi_frusta;
 
-enum { UNIT_PRIMS = 0, UNIT_RELIEF, UNIT_COUNT, UNIT_INSTANCES = UNIT_COUNT };
+enum { UNIT_PRIMS = 0, UNIT_RELIEF, UNIT_COLOR, UNIT_COUNT, UNIT_INSTANCES = UNIT_COUNT };
 
 /* >>bounds ----------------------------------------------------------------- */
 
@@ -347,8 +353,8 @@ static void frusta_free(meso_rt* rt, mesoi_frusta* s)
     if (!s)
         return;
     mesoi_gl* gl = &rt->gl;
-    GLuint tex[2] = {s->prim_tex, s->relief_tex};
-    gl->DeleteTextures(2, tex);
+    GLuint tex[3] = {s->prim_tex, s->relief_tex, s->color_tex};
+    gl->DeleteTextures(3, tex);
     gl->DeleteBuffers(1, &s->prim_buf);
     mesoi_rt_free(rt, s->recs);
     mesoi_rt_free(rt, s->scratch);
@@ -453,6 +459,68 @@ static meso_result read_records(meso_rt* rt, meso_file* f, uint32_t id, const in
     return r;
 }
 
+static double srgb_to_linear(double x)
+{
+    return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
+}
+
+/* COLR (U8 x 4, W x H x 1, sRGB) as an SRGB8_ALPHA8 2D texture, nearest
+ * (the shader fetches texels), and its mean linear colour. */
+static meso_result upload_color(meso_rt* rt, meso_file* f, uint32_t id, int32_t ci, mesoi_frusta* s)
+{
+    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
+    mesoi_gl* gl = &rt->gl;
+    GLint limit = 0;
+    gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &limit);
+    if (c->dtype != MESO_DTYPE_U8 || c->components != 4 || c->dims[2] != 1 || c->dims[0] == 0 || c->dims[1] == 0 ||
+        c->dims[0] > (uint32_t)limit || c->dims[1] > (uint32_t)limit) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "frusta %u: COLR is dtype %u x %u, %ux%ux%u; FORMAT.md §7.2 wants U8 x 4, W x H x 1 (this context: "
+                  "at most %d a side)",
+                  id, c->dtype, c->components, c->dims[0], c->dims[1], c->dims[2], (int)limit);
+        return MESO_ERR_UNSUPPORTED;
+    }
+    void* data = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
+    if (r != MESO_OK)
+        return r;
+    const uint8_t* px = data;
+    const size_t n = (size_t)c->dims[0] * c->dims[1];
+    double lut[256], sum[3] = {0, 0, 0};
+    for (int i = 0; i < 256; ++i)
+        lut[i] = srgb_to_linear(i / 255.0);
+    for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k)
+            sum[k] += lut[px[4 * i + (size_t)k]];
+    for (int k = 0; k < 3; ++k)
+        s->ball_color[k] = (float)(sum[k] / (double)n);
+    GLint prev_tex = 0;
+    gl->GetIntegerv(GL_TEXTURE_BINDING_2D, &prev_tex);
+    mesoi_unpack unpack;
+    mesoi_unpack_default(rt, &unpack);
+    gl->GenTextures(1, &s->color_tex);
+    gl->BindTexture(GL_TEXTURE_2D, s->color_tex);
+    gl->TexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, (GLsizei)c->dims[0], (GLsizei)c->dims[1], 0, GL_RGBA,
+                   GL_UNSIGNED_BYTE, data);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+    GLint width = 0; /* no level 0: GL refused it (the error queue stays the host's) */
+    gl->GetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_WIDTH, &width);
+    gl->BindTexture(GL_TEXTURE_2D, (GLuint)prev_tex);
+    mesoi_unpack_restore(rt, &unpack);
+    mesoi_rt_free(rt, data);
+    if (width != (GLint)c->dims[0]) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "frusta %u: a %ux%u colour map could not be created", id,
+                  c->dims[0], c->dims[1]);
+        return MESO_ERR_GL;
+    }
+    s->color_w = (int)c->dims[0];
+    s->color_h = (int)c->dims[1];
+    return MESO_OK;
+}
+
 meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_object* o)
 {
     static const uint32_t types[4] = {MESO_CHUNK_FRUS, MESO_CHUNK_FSEG, MESO_CHUNK_SKEL, MESO_CHUNK_BALL};
@@ -466,6 +534,7 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
             return MESO_ERR_NOT_FOUND;
         }
     const int32_t ri = mesoi_find_chunk(f, MESO_CHUNK_RELF, id);
+    const int32_t coli = mesoi_find_chunk(f, MESO_CHUNK_COLR, id);
     mesoi_frusta* s = mesoi_rt_alloc(rt, sizeof(*s));
     if (!s)
         return MESO_ERR_OUT_OF_MEMORY;
@@ -496,6 +565,8 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
     if (r == MESO_OK && ri >= 0)
         r = mesoi_upload_texture(rt, f, ri, 0, 0, &s->relief_tex);
+    if (r == MESO_OK && coli >= 0)
+        r = upload_color(rt, f, id, coli, s);
     if (r == MESO_OK) {
         build_texels(s);
         s->prim_tex = mesoi_texture_buffer(rt, GL_RGBA32F, s->texels, sizeof(float) * FLOATS * (size_t)prims,
@@ -718,7 +789,7 @@ static const mesoi_program* frusta_program(meso_rt* rt, int stats, meso_rt_pass 
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_frusta_common,
                          mesoi_glsl_frusta_vert};
     const char* pre[3] = {mesoi_glsl_instance, mesoi_glsl_frusta_common, mesoi_glsl_raycast_common};
-    static const char* const samplers[UNIT_COUNT + 1] = {"u_prims", "u_relief", "u_instances"};
+    static const char* const samplers[UNIT_COUNT + 1] = {"u_prims", "u_relief", "u_color", "u_instances"};
     static const char* const names[MESO_PASS_COUNT] = {"frusta", "frusta depth", "frusta gbuffer"};
     const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "frusta_vert.glsl", .pre = pre,
                                    .pre_count = 3, .frag = mesoi_glsl_frusta_frag, .frag_file = "frusta_frag.glsl",
@@ -767,14 +838,18 @@ meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     if (!prog)
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
-    static const GLenum targets[UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_2D, GL_TEXTURE_BUFFER};
-    GLuint bind[UNIT_COUNT + 1] = {s->prim_tex, s->relief_tex, 0};
+    static const GLenum targets[UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_2D, GL_TEXTURE_2D,
+                                                   GL_TEXTURE_BUFFER};
+    GLuint bind[UNIT_COUNT + 1] = {s->prim_tex, s->relief_tex, s->color_tex, 0};
     if (inst && (r = mesoi_instances_upload(rt, &ds, o, d, inst, NULL, count, 1, instance_slot, NULL,
                                             &bind[UNIT_INSTANCES])) != MESO_OK)
         return r;
     mesoi_draw_begin(rt, &ds, prog, 1, inst ? UNIT_COUNT + 1 : UNIT_COUNT, targets, bind);
     const GLint size[2] = {s->relief_w, s->relief_h};
     gl->Uniform2iv(prog->loc[MESOI_U_relief_size], 1, size);
+    const GLint csize[2] = {s->color_w, s->color_h};
+    gl->Uniform2iv(prog->loc[MESOI_U_color_size], 1, csize);
+    gl->Uniform3fv(prog->loc[MESOI_U_ball_color], 1, s->ball_color);
     gl->Uniform1i(prog->loc[MESOI_U_relief_steps], k->relief_steps > 0 ? k->relief_steps : 64);
     gl->Uniform1i(prog->loc[MESOI_U_bisect_steps], k->bisection_steps > 0 ? k->bisection_steps : 4);
     const GLsizei vertices = 36 * (GLsizei)(s->count + s->ball_count);

@@ -29,9 +29,9 @@ typedef struct mesoi_object {
     X(view) X(proj) X(model) X(light_dir)                              /* mesh */                          \
     X(uv_scale) X(tex_kind) X(has_dist) X(tex_size) X(err_scale) X(max_steps) X(bisect_steps)             \
     X(segment_steps) X(fixed_step) X(min_step) X(slices) X(slice_axis) X(prism_count) /* shell, slices */                \
-    X(relief_size) X(relief_steps)                                     /* frusta */                        \
+    X(relief_size) X(relief_steps) X(color_size) X(ball_color)          /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
-    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) /* cells */                              \
+    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) /* cells */                              \
     X(instanced) X(instance_base)                                      /* instance.glsl */
 
 enum {

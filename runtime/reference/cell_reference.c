@@ -140,6 +140,36 @@ static void octa_decode(uint16_t u0, uint16_t u1, float out[3])
         out[k] = (float)n[k];
 }
 
+static double srgb_to_linear(double x);
+
+/* The optional TX3D colour grid (U8 x 4; meso_file_check_object's 6301
+ * holds it to that, refused here too). */
+static meso_result load_grid(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err)
+{
+    const int32_t gi = mesoi_ref_find_chunk(f, MESO_CHUNK_TX3D, object_id);
+    if (gi < 0)
+        return MESO_OK;
+    const meso_chunk_info* k = meso_file_chunk(f, (uint32_t)gi);
+    if (k->dtype != MESO_DTYPE_U8 || k->components != 4 || !k->dims[0] || !k->dims[1] || !k->dims[2])
+        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "cells", object_id, "TX3D colour grid is not U8 x 4");
+    void* raw = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_ref_read_whole(f, gi, &raw, &size, err);
+    if (r != MESO_OK)
+        return r;
+    const size_t n = (size_t)k->dims[0] * k->dims[1] * k->dims[2];
+    out->grid_rgb = size == 4 * n ? malloc(sizeof(double) * 3 * n) : NULL;
+    if (!out->grid_rgb) {
+        free(raw);
+        return mesoi_ref_fail(err, MESO_ERR_OUT_OF_MEMORY, "cells", object_id, "colour grid: out of memory");
+    }
+    for (size_t i = 0; i < 3 * n; ++i)
+        out->grid_rgb[i] = srgb_to_linear(((const uint8_t*)raw)[4 * (i / 3) + i % 3] / 255.0);
+    free(raw);
+    memcpy(out->grid, k->dims, sizeof(out->grid));
+    return MESO_OK;
+}
+
 meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err)
 {
     if (!f || !out)
@@ -195,6 +225,8 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
     for (uint64_t k = 0; k < L; ++k)
         out->memb[k] = ld32((const uint8_t*)memb + 4 * k);
     memcpy(out->colour, colr, 4 * n);
+    if ((r = load_grid(f, object_id, out, err)) != MESO_OK)
+        goto done;
 done:
     free(cell);
     free(tile);
@@ -214,6 +246,7 @@ void meso_ref_cells_free(meso_ref_cells* c)
     free(c->memb);
     free(c->normal);
     free(c->colour);
+    free(c->grid_rgb);
     memset(c, 0, sizeof(*c));
 }
 
@@ -432,12 +465,43 @@ static void pick_normal(const meso_ref_cells* c, const int64_t v[3], const doubl
         n[k] = use_m ? m[k] : f[k];
 }
 
-static void shade(const meso_ref_cells* c, const int64_t v[3], const double n[3], const double l[3], double rgb[3])
+void meso_ref_cells_albedo(const meso_ref_cells* c, const int64_t v[3], const double p[3], double rgb[3])
 {
-    const uint8_t* col = &c->colour[4 * map_index(c, v)];
+    if (!c->grid[0]) {
+        const uint8_t* col = &c->colour[4 * map_index(c, v)];
+        for (int i = 0; i < 3; ++i)
+            rgb[i] = srgb_to_linear(col[i] / 255.0);
+        return;
+    }
+    uint32_t i0[3], i1[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+        const double ext = (double)c->tiles[a] * c->res * c->voxel;
+        const double x = fmin(fmax((p[a] - c->origin[a]) / ext * c->grid[a] - 0.5, 0.0), c->grid[a] - 1.0);
+        i0[a] = (uint32_t)x;
+        i1[a] = i0[a] + 1 < c->grid[a] ? i0[a] + 1 : i0[a];
+        f[a] = x - i0[a];
+    }
+    for (int k = 0; k < 3; ++k) {
+        double acc = 0;
+        for (int corner = 0; corner < 8; ++corner) {
+            const uint32_t ix = corner & 1 ? i1[0] : i0[0], iy = corner & 2 ? i1[1] : i0[1],
+                           iz = corner & 4 ? i1[2] : i0[2];
+            const double w = (corner & 1 ? f[0] : 1 - f[0]) * (corner & 2 ? f[1] : 1 - f[1]) *
+                             (corner & 4 ? f[2] : 1 - f[2]);
+            acc += w * c->grid_rgb[3 * (((size_t)iz * c->grid[1] + iy) * c->grid[0] + ix) + (size_t)k];
+        }
+        rgb[k] = acc;
+    }
+}
+
+static void shade(const meso_ref_cells* c, const int64_t v[3], const double p[3], const double n[3],
+                  const double l[3], double rgb[3])
+{
     const double k = 0.15 + 0.85 * fmax(0.0, dot3(n, l));
+    meso_ref_cells_albedo(c, v, p, rgb);
     for (int i = 0; i < 3; ++i)
-        rgb[i] = srgb_to_linear(col[i] / 255.0) * k;
+        rgb[i] *= k;
 }
 
 static void reflect(const double u[3], const double n[3], double r[3])
@@ -557,7 +621,7 @@ void meso_ref_cells_trace(const meso_ref_cells* c, const double o[3], const doub
         for (int k = 0; k < 3; ++k)
             f[k] = -u[k];
     pick_normal(c, v, f, n);
-    shade(c, v, n, light, rgb);
+    shade(c, v, p, n, light, rgb);
     memcpy(out->p[0], p, sizeof(p));
     memcpy(out->n[0], n, sizeof(n));
     memcpy(out->voxel[0], v, sizeof(v));
@@ -579,7 +643,7 @@ void meso_ref_cells_trace(const meso_ref_cells* c, const double o[3], const doub
             advance(p, d, s, p);
             face(axis, d, -1, f);
             pick_normal(c, v, f, n);
-            shade(c, v, n, light, rgb);
+            shade(c, v, p, n, light, rgb);
             for (int k = 0; k < 3; ++k)
                 col[k] += w * (1 - kr) * rgb[k];
             w *= kr;

@@ -140,7 +140,17 @@ typedef struct meso_ref_cells {
     int map_full;       /* 1: no TILE value is 0 (INSIDE tiles are wholly solid) */
     float* normal;      /* R^3 x 3, the NRMM normals decoded (unit) */
     uint8_t* colour;    /* R^3 x 4, COLR */
+    /* The mesh's colour grid (TX3D U8 x 4, FORMAT.md 7.2 kind 3), or none
+     * (grid[0] 0): G0 x G1 x G2 samples at the centres of equal cells
+     * spanning the tile grid's box, decoded to linear RGB. With one, the
+     * albedo of a hit p is the grid trilinear at p (sample coordinates
+     * clamped to [0, G - 1] per axis) instead of COLR's voxel colour. */
+    uint32_t grid[3];
+    double* grid_rgb;   /* 3 per sample, x fastest */
 } meso_ref_cells;
+
+/* The albedo (linear RGB) of a hit at object-space p in solid voxel v. */
+void meso_ref_cells_albedo(const meso_ref_cells* c, const int64_t v[3], const double p[3], double rgb[3]);
 
 /* Read a cells object (kind 3): CELL, TILE, MEMB, NRMM and COLR, after
  * meso_file_check_cells (whose MESO_ERR_CORRUPT and message, naming the

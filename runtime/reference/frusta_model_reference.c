@@ -145,6 +145,85 @@ void meso_ref_ball_from_rec(const meso_frustum_ball_rec* rec, meso_ref_ball* out
 
 /* >>files ------------------------------------------------------------------ */
 
+static double srgb_to_linear(double x)
+{
+    return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
+}
+
+/* COLR chunk ci: texels to linear RGB, and their mean. */
+static meso_result load_color(meso_file* f, int32_t ci, uint32_t object_id, meso_ref_frusta* out, meso_error* err)
+{
+    const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
+    if (c->dtype != MESO_DTYPE_U8 || c->components != 4 || c->dims[2] != 1 || c->dims[0] == 0 || c->dims[1] == 0)
+        return mesoi_ref_fail(err, MESO_ERR_UNSUPPORTED, "frusta", object_id,
+            "COLR is not U8 x 4, W x H x 1 (FORMAT.md 7.2)");
+    void* raw = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_ref_read_whole(f, ci, &raw, &size, err);
+    if (r != MESO_OK)
+        return r;
+    const size_t n = (size_t)c->dims[0] * c->dims[1];
+    out->color = size == 4 * n ? malloc(sizeof(double) * 3 * n) : NULL;
+    if (!out->color) {
+        free(raw);
+        return mesoi_ref_fail(err, size == 4 * n ? MESO_ERR_OUT_OF_MEMORY : MESO_ERR_CORRUPT, "frusta", object_id,
+            "COLR: out of memory or a payload of the wrong size");
+    }
+    const uint8_t* px = raw;
+    double sum[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            out->color[3 * i + (size_t)k] = srgb_to_linear(px[4 * i + (size_t)k] / 255.0);
+            sum[k] += out->color[3 * i + (size_t)k];
+        }
+    free(raw);
+    for (int k = 0; k < 3; ++k)
+        out->ball_color[k] = sum[k] / (double)n;
+    out->color_w = c->dims[0];
+    out->color_h = c->dims[1];
+    return MESO_OK;
+}
+
+static int wrap_index(double i, uint32_t n)
+{
+    double m = fmod(i, (double)n);
+    if (m < 0)
+        m += n;
+    const int k = (int)m;
+    return k >= (int)n ? (int)n - 1 : k;
+}
+
+int meso_ref_frusta_albedo(const meso_ref_frusta* m, const meso_ref_frustum_hit* hit, double albedo[3])
+{
+    if (!m || !m->color || !hit)
+        return 0;
+    if (hit->part == MESO_REF_PART_BALL) {
+        memcpy(albedo, m->ball_color, sizeof(m->ball_color));
+        return 1;
+    }
+    double st[2];
+    meso_ref_frustum_relief_coords(&m->segs[hit->index], hit->p, &st[0], &st[1], NULL);
+    const uint32_t n[2] = {m->color_w, m->color_h};
+    int i0[2], i1[2];
+    double fr[2];
+    for (int a = 0; a < 2; ++a) {
+        const double x = st[a] * n[a] - 0.5, fl = floor(x);
+        fr[a] = x - fl;
+        i0[a] = wrap_index(fl, n[a]);
+        i1[a] = wrap_index(fl + 1, n[a]);
+    }
+    for (int k = 0; k < 3; ++k) {
+        const double* c = m->color;
+        const size_t W = m->color_w;
+        const double c00 = c[3 * ((size_t)i0[1] * W + (size_t)i0[0]) + (size_t)k];
+        const double c10 = c[3 * ((size_t)i0[1] * W + (size_t)i1[0]) + (size_t)k];
+        const double c01 = c[3 * ((size_t)i1[1] * W + (size_t)i0[0]) + (size_t)k];
+        const double c11 = c[3 * ((size_t)i1[1] * W + (size_t)i1[0]) + (size_t)k];
+        albedo[k] = (1 - fr[1]) * ((1 - fr[0]) * c00 + fr[0] * c10) + fr[1] * ((1 - fr[0]) * c01 + fr[0] * c11);
+    }
+    return 1;
+}
+
 meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frusta* out, meso_error* err)
 {
     if (!f || !out)
@@ -160,6 +239,7 @@ meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frus
     const int32_t si = mesoi_ref_find_chunk(f, MESO_CHUNK_FSEG, object_id);
     const int32_t bi = mesoi_ref_find_chunk(f, MESO_CHUNK_BALL, object_id);
     const int32_t ri = meso_file_find(f, MESO_CHUNK_RELF, object_id, 0);
+    const int32_t ci = meso_file_find(f, MESO_CHUNK_COLR, object_id, 0);
     if (fi < 0 || si < 0)
         return mesoi_ref_fail(err, MESO_ERR_NOT_FOUND, "frusta", object_id, fi < 0 ? "no FRUS chunk" : "no FSEG chunk");
     void *frus = NULL, *fseg = NULL, *ball = NULL;
@@ -206,6 +286,8 @@ meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frus
         out->relief.height.d = 1;
         out->relief.height.values = out->relief_values;
     }
+    if (ci >= 0 && (r = load_color(f, ci, object_id, out, err)) != MESO_OK)
+        goto done;
     r = MESO_OK;
 done:
     free(frus);
@@ -223,6 +305,7 @@ void meso_ref_frusta_free(meso_ref_frusta* m)
     free(m->segs);
     free(m->balls);
     free(m->relief_values);
+    free(m->color);
     memset(m, 0, sizeof(*m));
 }
 
@@ -231,6 +314,7 @@ void meso_ref_frusta_free(meso_ref_frusta* m)
 /* A bounding-volume hierarchy (ref_bvh.h) over the items' bounding spheres
  * (as boxes); items without a bound are tested for every ray. */
 typedef struct frusta_scene {
+    const meso_ref_frusta* obj;
     model_ref m;
     mesoi_ref_camera cam;
     double (*box)[6];      /* per item: lo, hi */
@@ -294,7 +378,9 @@ static void frusta_row(const frusta_scene* sc, meso_ref_image* img, int y)
         for (int c = 0; c < 3; ++c)
             img->hit[3 * px + (size_t)c] = (float)h.p[c];
         const double w = h.relief ? fmin(fmax(h.w, 0.0), 1.0) : 1.0;
-        mesoi_ref_shade(&sc->cam, d, h.shading_normal, w, &img->rgb[3 * px], &img->normal[3 * px]);
+        mesoi_ref_camera cam = sc->cam;
+        meso_ref_frusta_albedo(sc->obj, &h, cam.albedo);
+        mesoi_ref_shade(&cam, d, h.shading_normal, w, &img->rgb[3 * px], &img->normal[3 * px]);
     }
 }
 
@@ -322,6 +408,7 @@ meso_result meso_ref_frusta_render(const meso_ref_frusta* m, const meso_ref_view
     memset(out, 0, sizeof(*out));
     frusta_scene sc;
     memset(&sc, 0, sizeof(sc));
+    sc.obj = m;
     sc.m = (model_ref){m->segs, m->seg_count, m->balls, m->ball_count, &m->relief};
     if (!mesoi_ref_camera_init(v, &sc.cam))
         return MESO_ERR_INVALID_ARG;

@@ -113,6 +113,14 @@
  * the hit's shading_normal turned to face the ray and w is the relief
  * height at the hit clamped to [0, 1] on a relief segment, and 1 on
  * everything else (plain segments, caps of plain segments, balls).
+ *
+ * Colour (FORMAT.md §7.2 kind 4, COLR): with a colour map, the albedo of a
+ * segment hit (lateral, relief or cap) is the map at the hit's relief
+ * coordinates (s, t) (meso_ref_frustum_relief_coords: u, v of the cone
+ * through the hit), each texel decoded from sRGB to linear exactly, then
+ * bilinear between texel centres ((i + ½)/W, (j + ½)/H), wrapping in s and
+ * t; a ball's albedo is the map's mean linear colour. Without a map, the
+ * view's albedo.
  */
 #ifndef MESO_FRUSTUM_REFERENCE_H
 #define MESO_FRUSTUM_REFERENCE_H
@@ -239,16 +247,24 @@ typedef struct meso_ref_frusta {
     meso_ref_ball* balls;       /* ball_count (NULL when 0) */
     meso_ref_relief relief;     /* height kind 1 from the object's RELF (lod 0), kind 0 without one */
     float* relief_values;       /* owned storage of relief.height.values */
+    uint32_t color_w, color_h;  /* the COLR colour map; 0 without one */
+    double* color;              /* its texels decoded to linear RGB, 3 per texel, row 0 first (t = 0) */
+    double ball_color[3];       /* its mean linear colour (balls) */
     float bbox_min[3], bbox_max[3]; /* the OBJT record's */
 } meso_ref_frusta;
 
 /* Loads object `object_id` (kind 4): FRUS + FSEG (required, equal counts),
- * BALL and RELF (optional; RELF must be U8 or U16 × 1, values / max) through
- * meso_file_read_chunk. MESO_ERR_NOT_FOUND: no such object or a required
+ * BALL, RELF and COLR (optional; RELF must be U8 or U16 × 1, values / max;
+ * COLR U8 × 4, W × H × 1) through meso_file_read_chunk. MESO_ERR_NOT_FOUND: no such object or a required
  * chunk is missing; MESO_ERR_CORRUPT: counts disagree; MESO_ERR_UNSUPPORTED:
- * a RELF dtype other than U8/U16 × 1. Free with meso_ref_frusta_free. */
+ * a RELF dtype other than U8/U16 × 1, a COLR other than U8 × 4, W × H × 1. Free with meso_ref_frusta_free. */
 meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frusta* out, meso_error* err);
 void meso_ref_frusta_free(meso_ref_frusta* m);
+
+/* The albedo of a hit of meso_ref_frusta_intersect_relief on `m` (its
+ * index and part) with m's colour map, as above; returns 0 (and leaves
+ * `albedo` alone) when m has no colour map. */
+int meso_ref_frusta_albedo(const meso_ref_frusta* m, const meso_ref_frustum_hit* hit, double albedo[3]);
 
 /* Renders a frusta object with the conventions above (shell_reference.h's
  * rays, depth, light and albedo; v->curved, uv_scale and samples_per_prism

@@ -7,7 +7,10 @@
 //
 // Data (runtime/rt_cells.c): u_tile the tile map (split-cell id per voxel),
 // u_memb the MEMB words as stored (classes, rank, records), u_nrmm the
-// octahedral normals, u_colr the colours (sRGB texture: fetched linear).
+// octahedral normals, u_colr the colours (sRGB texture: fetched linear),
+// u_grid the mesh's colour grid when the object has one (u_grid_size > 0:
+// FORMAT.md sec. 7.2 kind 3 TX3D; sRGB, fetched linear, trilinear by hand
+// in float as the reference does; it replaces u_colr as the albedo).
 //
 // Searches: exact voxel traversal (Amanatides-Woo, lowest axis first on
 // ties) over the grid's voxels with whole-tile skipping (OUTSIDE tiles when
@@ -25,6 +28,8 @@ uniform usampler3D u_tile;
 uniform usamplerBuffer u_memb;
 uniform sampler3D u_nrmm;
 uniform sampler3D u_colr;
+uniform sampler3D u_grid;
+uniform ivec3 u_grid_size;  // (0, 0, 0): no colour grid
 uniform samplerCube u_env;  // the host's environment (u_has_env == 1)
 uniform int u_has_env;
 // u_env_rot, u_light_obj: instance.glsl
@@ -289,15 +294,28 @@ vec3 shading_normal(ivec3 v, vec3 f)
     return dot(m, f) > 0.0 ? m : f;
 }
 
-// The colour map's texel of voxel v (linear: the texture is sRGB).
-vec3 colr(ivec3 v)
+// The albedo of a hit at p in voxel v (linear: the textures are sRGB): the
+// colour map's texel of v, or the colour grid trilinear at p (sample
+// coordinates clamped to [0, G - 1]).
+vec3 colr(ivec3 v, vec3 p)
 {
-    return texelFetch(u_colr, v - (v / u_res) * u_res, 0).rgb;
+    if (u_grid_size.x <= 0)
+        return texelFetch(u_colr, v - (v / u_res) * u_res, 0).rgb;
+    vec3 g = vec3(u_grid_size);
+    vec3 x = clamp((p - u_origin) / (vec3(u_tiles * u_res) * u_h) * g - 0.5, vec3(0.0), g - 1.0);
+    ivec3 i0 = min(ivec3(x), u_grid_size - 1);
+    ivec3 i1 = min(i0 + 1, u_grid_size - 1);
+    vec3 f = x - vec3(i0);
+    vec3 c00 = mix(texelFetch(u_grid, i0, 0).rgb, texelFetch(u_grid, ivec3(i1.x, i0.y, i0.z), 0).rgb, f.x);
+    vec3 c10 = mix(texelFetch(u_grid, ivec3(i0.x, i1.y, i0.z), 0).rgb, texelFetch(u_grid, ivec3(i1.x, i1.y, i0.z), 0).rgb, f.x);
+    vec3 c01 = mix(texelFetch(u_grid, ivec3(i0.x, i0.y, i1.z), 0).rgb, texelFetch(u_grid, ivec3(i1.x, i0.y, i1.z), 0).rgb, f.x);
+    vec3 c11 = mix(texelFetch(u_grid, ivec3(i0.x, i1.y, i1.z), 0).rgb, texelFetch(u_grid, i1, 0).rgb, f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
-vec3 shade(ivec3 v, vec3 n)
+vec3 shade(ivec3 v, vec3 n, vec3 p)
 {
-    vec3 c = colr(v);
+    vec3 c = colr(v, p);
     return c * (0.15 + 0.85 * max(0.0, dot(n, u_light_obj)));
 }
 
@@ -306,9 +324,9 @@ vec3 shade(ivec3 v, vec3 n)
 vec3 lit(ivec3 v, vec3 n, vec3 p, vec3 u)
 {
 #ifdef MESO_HOOK
-    return meso_shade(colr(v), world_normal(n), world_point(p), world_view(u));
+    return meso_shade(colr(v, p), world_normal(n), world_point(p), world_view(u));
 #else
-    return shade(v, n);
+    return shade(v, n, p);
 #endif
 }
 
@@ -399,7 +417,7 @@ void main()
     write_depth(p);
 #if MESO_PASS == MESO_PASS_GBUFFER // the first hit's material and normal; no bounces
     vec3 n = shading_normal(h.vox, f);
-    emit_obj(vec3(0.0), colr(h.vox), 1.0, n, p, rd);
+    emit_obj(vec3(0.0), colr(h.vox, p), 1.0, n, p, rd);
 #elif MESO_PASS == MESO_PASS_FORWARD
     vec3 n = shading_normal(h.vox, f);
     vec3 col = lit(h.vox, n, p, rd);

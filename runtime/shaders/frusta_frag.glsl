@@ -39,6 +39,14 @@
 // reference does not, and the analytic derivative of the same bilinear
 // interpolant gives the gradient for the shading normal.
 //
+// Colour (FORMAT.md sec. 7.2 kind 4, COLR): with a colour map the albedo of
+// a frustum hit (lateral, relief or cap) is the map at the hit's relief
+// coordinates (s, t) - the same (u, v) of the cone through the hit the
+// relief uses - bilinear in linear colour between texel centres, wrapping,
+// by hand like the heights (the SRGB8_ALPHA8 texture decodes each texel);
+// balls take the map's mean linear colour (u_ball_color). Without a map:
+// u_albedo everywhere.
+//
 // Shading: the reference's - albedo * (0.25 + 0.75 w) * (0.15 + 0.85
 // max(0, n.l)), n the shading normal turned to face the ray, w the relief
 // height at the hit on relief frusta (1 elsewhere); lateral normals are the
@@ -55,6 +63,9 @@ uniform ivec2 u_relief_size; // texels; (0, 0) without relief
 // u_light_obj: instance.glsl
 uniform vec3 u_albedo;
 uniform int u_relief_steps;
+uniform sampler2D u_color;   // COLR, SRGB8_ALPHA8: fetches are linear
+uniform ivec2 u_color_size;  // texels; (0, 0) without a colour map
+uniform vec3 u_ball_color;   // the map's mean linear colour
 uniform int u_bisect_steps;
 
 const float INV_TAU = 0.15915494309189535;
@@ -268,6 +279,21 @@ float relief_height(vec2 st, out vec2 grad)
     return mix(mix(h00, h10, f.x), mix(h01, h11, f.x), f.y);
 }
 
+// The albedo at relief coordinates st: the colour map bilinear (texel
+// centres at (i + 1/2) / W, wrapping), or u_albedo without one.
+vec3 color_at(vec2 st)
+{
+    if (u_color_size.x <= 0)
+        return u_albedo;
+    vec2 size = vec2(u_color_size);
+    vec2 x = st * size - 0.5;
+    vec2 i0 = floor(x), f = x - i0;
+    ivec2 a = min(ivec2(mod(i0, size)), u_color_size - 1), b = min(ivec2(mod(i0 + 1.0, size)), u_color_size - 1);
+    vec3 c00 = texelFetch(u_color, ivec2(a.x, a.y), 0).rgb, c10 = texelFetch(u_color, ivec2(b.x, a.y), 0).rgb;
+    vec3 c01 = texelFetch(u_color, ivec2(a.x, b.y), 0).rgb, c11 = texelFetch(u_color, ivec2(b.x, b.y), 0).rgb;
+    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+}
+
 bool solid_at(Frustum F, vec3 op)
 {
     ++g_steps;
@@ -326,11 +352,11 @@ vec3 relief_normal(Frustum F, ConePoint P)
 
 // --- output (fragment_ray, write_depth, finish: raycast_common.glsl) -------
 
-vec3 shade(vec3 n, float w, vec3 rd)
+vec3 shade(vec3 albedo, vec3 n, float w, vec3 rd)
 {
     if (dot(n, rd) > 0.0)
         n = -n;
-    return u_albedo * (0.25 + 0.75 * clamp(w, 0.0, 1.0)) * (0.15 + 0.85 * max(dot(n, u_light_obj), 0.0));
+    return albedo * (0.25 + 0.75 * clamp(w, 0.0, 1.0)) * (0.15 + 0.85 * max(dot(n, u_light_obj), 0.0));
 }
 
 // --- primitives --------------------------------------------------------------
@@ -359,7 +385,8 @@ void ball_main(int prim, vec3 ro, vec3 rd)
     }
     vec3 p = o + t * rd;
 #if MESO_PASS != MESO_PASS_DEPTH
-    emit_obj(shade(p / s.w, 1.0, rd), u_albedo, 1.0, facing(p, rd), s.xyz + p, rd);
+    vec3 albedo = u_color_size.x > 0 ? u_ball_color : u_albedo;
+    emit_obj(shade(albedo, p / s.w, 1.0, rd), albedo, 1.0, facing(p, rd), s.xyz + p, rd);
 #endif
     write_depth(s.xyz + p);
     finish(true);
@@ -438,7 +465,8 @@ void frustum_main(int prim, vec3 ro, vec3 rd)
     else
         n = eq8_normal(F, P);
     float w = F.D > 0.0 ? P.w : 1.0;
-    emit_obj(shade(n, w, rd), u_albedo, occlusion(w), facing(n, rd), F.c0 + op, rd);
+    vec3 albedo = color_at(relief_st(F, P));
+    emit_obj(shade(albedo, n, w, rd), albedo, occlusion(w), facing(n, rd), F.c0 + op, rd);
 #endif
     write_depth(F.c0 + op);
     finish(true);

@@ -3,7 +3,8 @@
  * object id 1) in memory, baked from SWC text or an SWC path with
  * mesobake's own code (skeleton → frustum model → records,
  * bake/frusta_chunks.h) and the format library's writer, optionally with a
- * relief map and with the defects the malformed-input tests need. */
+ * relief map, a colour map and with the defects the malformed-input tests
+ * need. */
 #ifndef MESO_TEST_FRUSTA_SCENE_H
 #define MESO_TEST_FRUSTA_SCENE_H
 
@@ -35,6 +36,10 @@ typedef struct frusta_file_opts {
     int bad_node;             /* frustum 0's node1 past the end of SKEL */
     int keep_crossing_caps;   /* bake with the paper's joint planes even where caps cross */
     double twist;             /* degrees per unit length (mesobake frusta --twist); 0: none */
+    const uint8_t* color;     /* COLR texels (RGBA8 sRGB, color_w x color_h, s fastest, row 0 at t = 0), or NULL */
+    uint32_t color_w, color_h;
+    uint32_t color_depth;     /* COLR dims[2] (a defect when > 1; 0: 1), color_h divisible by it */
+    int color_twice;          /* a second COLR chunk (lod 1; a defect) */
 } frusta_file_opts;
 
 /* An SWC path (starting with '/') or SWC text. */
@@ -107,6 +112,17 @@ static inline uint8_t* frusta_file(const char* swc, const frusta_file_opts* o, s
         free(v);
     } else if (o->relief) {
         frusta_scene_add(w, MESO_CHUNK_RELF, o->relief, texels, MESO_DTYPE_U8, o->relief_w, o->relief_h);
+    }
+    for (int k = 0; o->color && k <= (o->color_twice ? 1 : 0); ++k) {
+        const uint32_t depth = o->color_depth ? o->color_depth : 1;
+        const meso_chunk_desc cd = {.type = MESO_CHUNK_COLR,
+                                    .object = 1,
+                                    .lod = (uint16_t)k,
+                                    .dtype = MESO_DTYPE_U8,
+                                    .components = 4,
+                                    .dims = {o->color_w, o->color_h / depth, depth}};
+        FRUSTA_SCENE_CHECK(meso_writer_add(w, &cd, o->color, 4 * (size_t)o->color_w * o->color_h, &err) == MESO_OK,
+                           err.message);
     }
     size_t need = 0;
     meso_writer_finish(w, NULL, 0, &need);

@@ -264,6 +264,26 @@ static void test_first_hit(ctx* c)
     unload(c, &l);
 }
 
+/* The mesh's colour grid (--colour from-mesh, FORMAT.md 7.2 kind 3 TX3D):
+ * the albedo trilinear at the hit, in GL as in the reference; first hit and
+ * reflections (the bounces' hits take it too). */
+static void test_colour_grid(ctx* c)
+{
+    const char* p = bake(c, "from_mesh", "gltf/box.gltf", "--tiles 4 --tile-res 16 --colour from-mesh:24");
+    loaded l = load(c, p);
+    CHECK(l.ref.grid[0] == 24 && l.ref.grid_rgb != NULL);
+    char name[64];
+    for (int i = 0; i < 2; ++i) {
+        const camera cam = view_box(&l, dirs[i], 1.0);
+        snprintf(name, sizeof(name), "from_mesh_first_%d", i);
+        check_close(name, render_compare(c, name, &l, &cam, NULL), 0.01);
+    }
+    const camera cam = view_box(&l, dirs[0], 0.8);
+    meso_rt_draw_desc d = {.cells = {.mode = MESO_CELLS_REFLECT, .bounces = 2}};
+    check_close("from_mesh_reflect_2", render_compare(c, "from_mesh_reflect_2", &l, &cam, &d), 0.03);
+    unload(c, &l);
+}
+
 static void test_reflection_refraction(ctx* c)
 {
     const char* p = bake(c, "voronoi_rr", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map voronoi:8");
@@ -526,6 +546,7 @@ int main(int argc, char** argv)
     c.depth = malloc(sizeof(float) * W * H);
 
     test_first_hit(&c);
+    test_colour_grid(&c);
     test_reflection_refraction(&c);
     test_environment(&c);
     test_camera_inside(&c);

@@ -8,7 +8,8 @@
  * ball), NeuroM's radius jump (tests/data/neurom_fat_end.swc), the camera
  * inside a frustum, relief-mapped chains and branches (from outside,
  * grazing, and the camera inside the relief layer, with relief_steps swept
- * from 8 to 256: error against cost; twisted, mesobake frusta --twist), animation through
+ * from 8 to 256: error against cost; twisted, mesobake frusta --twist), colour maps
+ * (COLR at the relief coordinates: plain, relief, caps, twist, balls), animation through
  * meso_rt_frusta_set_pose, the GL state contract and malformed objects.
  *
  * Files are built here from SWC text through mesobake's own code
@@ -188,6 +189,32 @@ static result run_case(ctx* c, const char* name, const char* swc, const frusta_f
     return r;
 }
 
+/* GL's image of `swc` baked with `o` against the reference of it baked
+ * with `other`: the colour MAE (a difference the options must make). */
+static double against_other_reference(ctx* c, const char* name, const char* swc, const frusta_file_opts* o,
+                                      const frusta_file_opts* other, const double dir[3])
+{
+    size_t size, size0;
+    uint8_t* file = frusta_file(swc, o, &size);
+    uint8_t* file0 = frusta_file(swc, other, &size0);
+    meso_ref_frusta ref, ref0;
+    meso_rt_object obj = load_both(c, file, size, &ref);
+    meso_file* f0 = NULL;
+    meso_error err;
+    CHECK(meso_file_open_memory(file0, size0, NULL, &f0, &err) == MESO_OK);
+    CHECK(meso_ref_frusta_load(f0, 1, &ref0, &err) == MESO_OK);
+    meso_file_close(f0);
+    const camera cam = auto_camera(file, size, dir, 0.7, 0.85);
+    result r = render_compare(c, name, obj, &ref0, &cam, NULL);
+    printf("%s: colour MAE %.4f (must be large)\n", name, r.m.colour_mae);
+    meso_ref_frusta_free(&ref);
+    meso_ref_frusta_free(&ref0);
+    meso_rt_release_object(c->rt, obj);
+    free(file);
+    free(file0);
+    return r.m.colour_mae;
+}
+
 /* >>cases ------------------------------------------------------------------ */
 
 static const char* const swc_cone = "1 1 0 0 0 0.5 -1\n2 1 0.3 1.6 0.1 0.2 1\n";
@@ -275,28 +302,9 @@ static void test_relief(ctx* c, const texture* height)
      * u = ... + v·twist/2π in frusta_frag.glsl against the reference. */
     const frusta_file_opts twisted = {.depth = 0.08, .u_repeat = 3, .twist = 120, RELIEF(height)};
     run_case(c, "relief_twisted_cylinder", swc_cylinder, &twisted, front, 0.02);
-    {
-        /* The twist shows: GL's twisted image against the untwisted
-         * reference is far off (so the agreement above is not vacuous). */
-        size_t size, size0;
-        uint8_t* file = frusta_file(swc_cylinder, &twisted, &size);
-        uint8_t* file0 = frusta_file(swc_cylinder, &rel, &size0);
-        meso_ref_frusta ref, ref0;
-        meso_rt_object obj = load_both(c, file, size, &ref);
-        meso_file* f0 = NULL;
-        meso_error err;
-        CHECK(meso_file_open_memory(file0, size0, NULL, &f0, &err) == MESO_OK);
-        CHECK(meso_ref_frusta_load(f0, 1, &ref0, &err) == MESO_OK);
-        meso_file_close(f0);
-        const camera cam = auto_camera(file, size, front, 0.7, 0.85);
-        result r = render_compare(c, "twisted_vs_untwisted_ref", obj, &ref0, &cam, NULL);
-        CHECK_MSG(r.m.colour_mae > 0.01, "the twist changes the image: colour MAE %.4f", r.m.colour_mae);
-        meso_ref_frusta_free(&ref);
-        meso_ref_frusta_free(&ref0);
-        meso_rt_release_object(c->rt, obj);
-        free(file);
-        free(file0);
-    }
+    /* The twist shows: GL's twisted image against the untwisted reference
+     * is far off (so the agreement above is not vacuous). */
+    CHECK(against_other_reference(c, "twisted_vs_untwisted_ref", swc_cylinder, &twisted, &rel, front) > 0.01);
     run_case(c, "relief_twisted_bent_chain", swc_bent, &twisted, oblique, 0.02);
     run_case(c, "relief_twisted_tapered", swc_tapered, &(frusta_file_opts){.depth = 0.08, .u_repeat = 3,
                                                             .twist = -200, RELIEF(height)}, front, 0.02);
@@ -483,6 +491,52 @@ static void test_state_contract(ctx* c)
 }
 
 /* Malformed objects: load fails with a logged error, nothing leaks or crashes. */
+/* >>colour ------------------------------------------------------------------ */
+
+/* A colour map (RGBA8 sRGB, n x n/2): hues that change over a few texels,
+ * with some sharp edges (a checker of two brightnesses). */
+static uint8_t* make_color(uint32_t n)
+{
+    uint8_t* t = malloc(4 * (size_t)n * (n / 2));
+    for (uint32_t j = 0; j < n / 2; ++j)
+        for (uint32_t i = 0; i < n; ++i) {
+            uint8_t* p = t + 4 * ((size_t)j * n + i);
+            const double a = 6.283185307179586 * i / n, b = 6.283185307179586 * j / (n / 2);
+            const double k = ((i / 4 + j / 4) & 1) ? 1.0 : 0.7;
+            p[0] = (uint8_t)lround(k * (150 + 100 * sin(a)));
+            p[1] = (uint8_t)lround(k * (130 + 90 * sin(b + 1.0)));
+            p[2] = (uint8_t)lround(k * (120 + 100 * cos(a + b)));
+            p[3] = 255;
+        }
+    return t;
+}
+
+#define COLOR(t, n) .color = (t), .color_w = (n), .color_h = (n) / 2
+
+/* GL against the reference with a colour map (FORMAT.md §7.2 kind 4 COLR):
+ * plain and relief-mapped frusta, caps, twist, balls (the map's mean). */
+static void test_color(ctx* c, const texture* height)
+{
+    enum { N = 32 };
+    uint8_t* col = make_color(N);
+    const double front[3] = {0.1, 0.2, 1.0}, oblique[3] = {-0.8, 0.5, 0.6}, dir[3] = {1.0, 0.4, 0.8};
+    const frusta_file_opts plain = {.u_repeat = 2, COLOR(col, N)};
+    run_case(c, "color_cylinder", swc_cylinder, &plain, dir, 0.01);
+    run_case(c, "color_cone_end_on", swc_cone, &plain, (double[3]){0.1, 1.0, 0.15}, 0.01);
+    run_case(c, "color_bent_chain", swc_bent, &plain, oblique, 0.01);
+    run_case(c, "color_branch_ball", swc_branch, &plain, front, 0.01);
+    const frusta_file_opts rel = {.depth = 0.08, .u_repeat = 3, RELIEF(height), COLOR(col, N)};
+    run_case(c, "color_relief_bent_chain", swc_bent, &rel, oblique, 0.02);
+    run_case(c, "color_relief_branch", swc_branch, &rel, front, 0.02);
+    const frusta_file_opts twisted = {.depth = 0.08, .u_repeat = 3, .twist = 120, RELIEF(height), COLOR(col, N)};
+    run_case(c, "color_relief_twisted", swc_cylinder, &twisted, front, 0.02);
+    /* The map shows: GL with it against the reference without it (the
+     * default albedo) is far off, so the agreement is not vacuous. */
+    const frusta_file_opts uncolored = {.depth = 0.08, .u_repeat = 3, RELIEF(height)};
+    CHECK(against_other_reference(c, "color_vs_uncolored_ref", swc_bent, &rel, &uncolored, oblique) > 0.05);
+    free(col);
+}
+
 static void expect_load_failure(ctx* c, const char* what, const uint8_t* file, size_t size, meso_result want,
                                 meso_log_item item)
 {
@@ -519,6 +573,35 @@ static void test_malformed(ctx* c, const texture* height)
                        &size);
     expect_load_failure(c, "RELF as F32", file, size, MESO_ERR_UNSUPPORTED, MESO_LOGITEM_CHUNK_READ_FAILED);
     free(file);
+    /* COLR 16 x 4 x 2 (a volume; frusta colour maps are W x H x 1): refused
+     * by the loader and by the full check (6205); so is a second COLR. */
+    uint8_t* col = make_color(16);
+    file = frusta_file(swc_bent, &(frusta_file_opts){COLOR(col, 16), .color_depth = 2}, &size);
+    expect_load_failure(c, "COLR 16 x 4 x 2", file, size, MESO_ERR_UNSUPPORTED, MESO_LOGITEM_CHUNK_READ_FAILED);
+    for (int k = 0; k < 2; ++k) {
+        meso_file* f = NULL;
+        meso_error err;
+        CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
+        const meso_result vr = meso_file_check_object(f, 1, &err);
+        printf("validate: %-30s -> %s, issue %u: %s\n", k ? "two COLR chunks" : "COLR 16 x 4 x 2",
+               meso_result_string(vr), err.code, err.message);
+        CHECK(vr == MESO_ERR_CORRUPT && err.code == MESO_ISSUE_FRUSTA_COLR);
+        meso_file_close(f);
+        free(file);
+        file = frusta_file(swc_bent, &(frusta_file_opts){COLOR(col, 16), .color_twice = 1}, &size);
+    }
+    free(file);
+    file = frusta_file(swc_bent, &(frusta_file_opts){COLOR(col, 16)}, &size);
+    {
+        meso_file* f = NULL;
+        meso_error err;
+        CHECK(meso_file_open_memory(file, size, NULL, &f, &err) == MESO_OK);
+        CHECK_MSG(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK && meso_file_check_object(f, 1, &err) == MESO_OK,
+                  "a good COLR: %s", err.message);
+        meso_file_close(f);
+    }
+    free(file);
+    free(col);
     /* FSEG bytes damaged after writing: an unknown flag bit in record 0.
      * The CRC catches it on the read (the content check would too). */
     file = frusta_file(swc_bent, &(frusta_file_opts){0}, &size);
@@ -567,6 +650,7 @@ int main(void)
     test_chains(&c);
     test_camera_inside(&c);
     test_relief(&c, &height);
+    test_color(&c, &height);
     test_animation(&c, &height);
     test_state_contract(&c);
     test_malformed(&c, &height);

@@ -40,7 +40,14 @@
  *  - refused: a hook that does not compile, alone (checked first) or with a
  *    kind's shader (a name clash), fails meso_rt_create with MESO_ERR_GL and
  *    SHADER_COMPILE_FAILED naming the hook; two-pass slices in the depth pass
- *    give MESO_ERR_UNSUPPORTED; the colour mask comes back.
+ *    give MESO_ERR_UNSUPPORTED; the colour mask comes back;
+ *  - a frusta colour map (mesobake frusta --relief-color): the G-buffer
+ *    albedo against the source PNG at the analytic relief coordinates of
+ *    each pixel's hit, mean error <= 2/255 in sRGB (test_frusta_color);
+ *  - cells coloured from a glTF's base-colour texture (mesobake cells
+ *    --colour from-mesh): the albedo against the texture at the nearest
+ *    box point, mean <= 2/255 away from the box's edges
+ *    (test_cells_from_mesh).
  * MESO_TEST_PNG is not used: the numbers are printed per case. */
 #include "test_util.h"
 
@@ -52,7 +59,9 @@
 #include "egl_context.h"
 #include "frustum_reference.h"
 #include "gl_log.h"
+#include "meso_bake.h"
 #include "meso_rt.h"
+#include "png_io.h"
 #include "shell_reference.h"
 #include "shell_scene.h"
 
@@ -553,6 +562,249 @@ static void test_kinds(ctx* c)
     unload(c, &l);
 }
 
+/* Draws `l` into the G-buffer from direction `dir`; inv = (proj view)^-1. */
+static void gbuffer_view(ctx* c, const loaded* l, const double dir[3], double inv[16])
+{
+    const camera cam = view_box(l, dir);
+    meso_rt_draw_desc d = {.pass = MESO_PASS_GBUFFER};
+    camera_matrices(&cam, d.view, d.proj);
+    CHECK(draw(c, c->rt, l->obj, &d) == MESO_OK);
+    double mvp[16] = {0};
+    for (int a = 0; a < 4; ++a)
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 4; ++k)
+                mvp[4 * a + r] += (double)d.proj[4 * k + r] * (double)d.view[4 * a + k];
+    CHECK(invert4(mvp, inv));
+}
+
+/* >>frusta colour ------------------------------------------------------------
+ * A colour map on frusta (mesobake frusta --relief-color, FORMAT.md §7.2
+ * kind 4 COLR) against the source PNG: one straight cylinder (two tips, so
+ * both planes are perpendicular to the axis and v = y / h), the G-buffer's
+ * linear albedo at every pixel whose ray meets the lateral surface well
+ * inside both ends and not at a grazing angle, against the PNG bilinear in
+ * linear colour at the (s, t) computed here from the ray's analytic hit on
+ * the cylinder and FORMAT.md's parametrisation (u from the FSEG frame, the
+ * PNG's bottom row at t = 0). Compared in sRGB (0..255): mean error at most
+ * 2 (issue 16's goal). */
+enum { CW = 12, CH = 6 };
+
+static double srgb_encode(double l)
+{
+    l = fmin(fmax(l, 0.0), 1.0);
+    return l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1 / 2.4) - 0.055;
+}
+
+static void test_frusta_color(ctx* c)
+{
+    uint8_t png[CW * CH * 4]; /* rows top to bottom, as the file */
+    for (int y = 0; y < CH; ++y)
+        for (int x = 0; x < CW; ++x) {
+            uint8_t* p = png + 4 * (y * CW + x);
+            p[0] = (uint8_t)(30 + 18 * x);
+            p[1] = (uint8_t)(220 - 30 * y);
+            p[2] = (uint8_t)(128 + (int)lround(80 * sin(0.7 * x + 1.1 * y)));
+            p[3] = 255;
+        }
+    char path[160], swc[160], args[512], why[256];
+    snprintf(path, sizeof(path), "%s/colour.png", c->dir);
+    CHECK_MSG(meso_png_write_rgba8(path, png, CW, CH, 0, why, (int)sizeof(why)) == 0, "%s", why);
+    snprintf(swc, sizeof(swc), "%s/rod.swc", c->dir);
+    FILE* f = fopen(swc, "w");
+    CHECK(f && fputs("1 1 0 0 0 0.5 -1\n2 1 3 0.4 0.2 0.5 1\n", f) >= 0 && fclose(f) == 0);
+    snprintf(args, sizeof(args), "frusta -i '%s' --relief-color '%s' --relief-repeat 2", swc, path);
+    loaded l = load(c, bake(c, "frusta_colour", args));
+    CHECK(l.frusta.seg_count == 1 && l.frusta.ball_count == 0 && l.frusta.color_w == CW);
+    const meso_ref_frustum* sg = &l.frusta.segs[0];
+    CHECK(fabs(sg->r0 - sg->r1) < 1e-6 && !(sg->twist != 0));
+
+    static const double dir[3] = {0.2, 0.6, 1.0};
+    double inv[16];
+    gbuffer_view(c, &l, dir, inv);
+    double ax[3], h = 0, fz[3];
+    for (int k = 0; k < 3; ++k) {
+        ax[k] = sg->c1[k] - sg->c0[k];
+        h += ax[k] * ax[k];
+    }
+    h = sqrt(h);
+    for (int k = 0; k < 3; ++k)
+        ax[k] /= h;
+    const double* fx = sg->frame_x;
+    fz[0] = fx[1] * ax[2] - fx[2] * ax[1];
+    fz[1] = fx[2] * ax[0] - fx[0] * ax[2];
+    fz[2] = fx[0] * ax[1] - fx[1] * ax[0];
+    double sum_err = 0, max_err = 0, sum_e = 0, sum_e2 = 0;
+    long count = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + (size_t)x;
+            if (!(c->depth[i] < 1.0f))
+                continue;
+            double o[3], rd[3], oq[3], dq[3];
+            unproject(inv, x, y, 0.0, o);
+            pixel_ray(inv, x, y, rd);
+            double oy = 0, dy = 0;
+            for (int k = 0; k < 3; ++k) {
+                oy += (o[k] - sg->c0[k]) * ax[k];
+                dy += rd[k] * ax[k];
+            }
+            double A = 0, B = 0, C = -sg->r0 * sg->r0;
+            for (int k = 0; k < 3; ++k) {
+                oq[k] = o[k] - sg->c0[k] - oy * ax[k];
+                dq[k] = rd[k] - dy * ax[k];
+                A += dq[k] * dq[k];
+                B += 2 * oq[k] * dq[k];
+                C += oq[k] * oq[k];
+            }
+            const double disc = B * B - 4 * A * C;
+            if (!(disc > 0) || !(A > 0))
+                continue;
+            const double t = (-B - sqrt(disc)) / (2 * A), yy = oy + t * dy;
+            double q[3], qn = 0, facing = 0;
+            for (int k = 0; k < 3; ++k) {
+                q[k] = oq[k] + t * dq[k];
+                qn += q[k] * q[k];
+            }
+            qn = sqrt(qn);
+            for (int k = 0; k < 3; ++k)
+                facing -= rd[k] * q[k] / qn;
+            if (!(yy > 0.03 * h && yy < 0.97 * h) || facing < 0.25)
+                continue; /* near an end or grazing: the hit is sensitive to rounding there */
+            double qx = 0, qz = 0;
+            for (int k = 0; k < 3; ++k) {
+                qx += q[k] * fx[k];
+                qz += q[k] * fz[k];
+            }
+            double u = atan2(qx, qz) / (2 * M_PI) - sg->u_offset;
+            u -= floor(u);
+            const double st[2] = {u * sg->u_scale, sg->v_offset + yy / h * sg->v_scale};
+            const int n[2] = {CW, CH};
+            int i0[2], i1[2];
+            double fr[2];
+            for (int a = 0; a < 2; ++a) {
+                const double xx = st[a] * n[a] - 0.5, fl = floor(xx);
+                fr[a] = xx - fl;
+                i0[a] = (((int)fl % n[a]) + n[a]) % n[a];
+                i1[a] = (i0[a] + 1) % n[a];
+            }
+            for (int k = 0; k < 3; ++k) {
+                /* texel row j (t) is the PNG's row CH - 1 - j */
+#define TEX(ix, jt) srgb_decode(png[4 * ((CH - 1 - (jt)) * CW + (ix)) + k] / 255.0)
+                const double lin = (1 - fr[1]) * ((1 - fr[0]) * TEX(i0[0], i0[1]) + fr[0] * TEX(i1[0], i0[1])) +
+                                   fr[1] * ((1 - fr[0]) * TEX(i0[0], i1[1]) + fr[0] * TEX(i1[0], i1[1]));
+#undef TEX
+                const double want = 255 * srgb_encode(lin), got = 255 * srgb_encode(c->c0[4 * i + (size_t)k]);
+                sum_err += fabs(want - got);
+                max_err = fmax(max_err, fabs(want - got));
+                sum_e += want;
+                sum_e2 += want * want;
+            }
+            ++count;
+        }
+    const double mean = sum_err / (3.0 * (double)count), m1 = sum_e / (3.0 * (double)count);
+    const double spread = sqrt(fmax(0.0, sum_e2 / (3.0 * (double)count) - m1 * m1));
+    printf("frusta colour map: %ld pixels, error vs the source PNG mean %.3f / 255, max %.2f / 255 (colour spread "
+           "%.1f)\n",
+           count, mean, max_err, spread);
+    CHECK_MSG(count > 1500, "only %ld pixels compared", count);
+    CHECK_MSG(spread > 20, "the map's colours vary over the image (spread %.1f), so a constant cannot pass", spread);
+    CHECK_MSG(mean <= 2.0, "frusta colour: mean error %.3f / 255 > 2", mean);
+    unload(c, &l);
+}
+
+/* >>cells colour from the mesh -------------------------------------------------
+ * mesobake cells --colour from-mesh (FORMAT.md §7.2 kind 3, the TX3D colour
+ * grid) on tests/data/gltf/box.gltf (the unit box [-0.5, 0.5]^3, each face
+ * mapped to uv [0, 1]^2 as make_gltf.py builds it, a 4 x 4 PNG texture and
+ * a base-colour factor). At every G-buffer pixel whose hit p (unprojected
+ * from the depth buffer) is inside the box and nearer to one face than to
+ * any other by at least two grid spacings (away from the box's edges,
+ * where the nearest face and so the colour jumps), the albedo against the
+ * base colour at p's nearest box point: that face's uv, computed here from
+ * make_gltf.py's face table, the texture bilinear in linear colour
+ * (repeating, v = 0 its first row) times the factor. sRGB, mean <= 2/255. */
+static void test_cells_from_mesh(ctx* c)
+{
+    enum { G = 64 };
+    char path[512], args[700];
+    snprintf(path, sizeof(path), "%s/gltf/box.gltf", MESO_TEST_DATA);
+    snprintf(args, sizeof(args), "cells -i '%s' --tiles 4 --tile-res 16 --colour from-mesh:%d -j 2", path, G);
+    loaded l = load(c, bake(c, "cells_from_mesh", args));
+    CHECK(l.cells.grid[0] == G && l.cells.grid[1] == G && l.cells.grid[2] == G);
+    meso_mesh m;
+    meso_mesh_materials mats;
+    meso_error err;
+    CHECK_MSG(meso_bake_load_mesh_materials(path, NULL, &m, &mats, NULL, &err) == MESO_OK, "%s", err.message);
+    CHECK(mats.material_count == 1 && mats.materials[0].rgba && mats.materials[0].width == 4);
+    const meso_mesh_material* mt = &mats.materials[0];
+
+    static const double dir[3] = {0.35, 0.5, 1.0};
+    double inv[16];
+    gbuffer_view(c, &l, dir, inv);
+    /* make_gltf.py's faces: (normal axis, sign, u axis, v axis); u = p[ua] + 0.5, v = 0.5 - p[va]. */
+    static const int faces[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 2, 0}, {1, 0, 2}, {2, 0, 1}, {2, 1, 0}};
+    const double spacing = (double)l.cells.tiles[0] * l.cells.res * l.cells.voxel / G;
+    double sum = 0, worst = 0, sum_all = 0;
+    long count = 0, covered = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const size_t i = (size_t)y * W + (size_t)x;
+            if (!(c->depth[i] < 1.0f))
+                continue;
+            double p[3];
+            unproject(inv, x, y, c->depth[i], p);
+            int best = -1;
+            double d1 = 1e30, d2 = 1e30;
+            for (int f = 0; f < 6; ++f) {
+                const int axis = faces[f][0];
+                const double dist = f % 2 == 0 ? 0.5 - p[axis] : p[axis] + 0.5;
+                if (dist < d1) {
+                    d2 = d1;
+                    d1 = dist;
+                    best = f;
+                } else if (dist < d2) {
+                    d2 = dist;
+                }
+            }
+            const double uv[2] = {p[faces[best][1]] + 0.5, 0.5 - p[faces[best][2]]};
+            double want[3];
+            for (int k = 0; k < 3; ++k) {
+                double xy[2], fr[2];
+                int i0[2], i1[2];
+                for (int a = 0; a < 2; ++a) {
+                    xy[a] = uv[a] * 4 - 0.5;
+                    const double fl = floor(xy[a]);
+                    fr[a] = xy[a] - fl;
+                    i0[a] = (((int)fl % 4) + 4) % 4;
+                    i1[a] = (i0[a] + 1) % 4;
+                }
+#define TEXEL(tx, ty) srgb_decode(mt->rgba[4 * ((ty) * 4 + (tx)) + k] / 255.0)
+                want[k] = mt->base_color_factor[k] *
+                          ((1 - fr[1]) * ((1 - fr[0]) * TEXEL(i0[0], i0[1]) + fr[0] * TEXEL(i1[0], i0[1])) +
+                           fr[1] * ((1 - fr[0]) * TEXEL(i0[0], i1[1]) + fr[0] * TEXEL(i1[0], i1[1])));
+#undef TEXEL
+            }
+            double e = 0;
+            for (int k = 0; k < 3; ++k)
+                e += fabs(255 * srgb_encode(want[k]) - 255 * srgb_encode(c->c0[4 * i + (size_t)k])) / 3;
+            ++covered;
+            sum_all += e;
+            if (!(d1 >= 0) || d2 - d1 < 2 * spacing)
+                continue; /* outside the box, or near an edge */
+            sum += e;
+            worst = fmax(worst, e);
+            ++count;
+        }
+    printf("cells from-mesh: %ld of %ld pixels away from the box's edges: error vs the texture mean %.3f / 255, "
+           "max %.2f / 255; all %ld pixels: mean %.3f / 255\n",
+           count, covered, sum / (double)count, worst, covered, sum_all / (double)covered);
+    CHECK_MSG(count > 2000, "only %ld pixels compared", count);
+    CHECK_MSG(sum / (double)count <= 2.0, "cells from-mesh: mean error %.3f / 255 > 2", sum / (double)count);
+    meso_mesh_materials_free(&mats);
+    meso_mesh_free(&m);
+    unload(c, &l);
+}
+
 static void test_broken_hook(void)
 {
     log_capture log = {0};
@@ -612,6 +864,8 @@ int main(int argc, char** argv)
     target_create(&c);
     test_broken_hook();
     test_kinds(&c);
+    test_frusta_color(&c);
+    test_cells_from_mesh(&c);
     meso_rt_destroy(c.rt);
     meso_rt_destroy(c.hooked);
     test_temp_dir_remove(c.dir);

@@ -5,7 +5,7 @@
 # byte, the tile-map and colour variants, and bad input (a coded error, a
 # non-zero exit, no output file); mesoinspect preview of a cells object
 # with libmeso and with the exact reference, in all three modes, and of
-# libmeso's depth and G-buffer passes (--pass).
+# libmeso's depth and G-buffer passes (--pass); --colour from-mesh.
 # usage: cells_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE]
 set -u
 bake=$1 inspect=$2 data=$3 probe=${4:-}
@@ -85,6 +85,18 @@ refuse raw_res_mismatch 1 3150 -i "$data/sphere.obj" --tile-map "$tmp/slabs.raw:
 refuse raw_missing 2 3151 -i "$data/sphere.obj" --tile-map "$tmp/nope.raw:8"
 refuse bad_colour 1 3190 -i "$data/sphere.obj" --tiles 2 --tile-res 8 --colour plaid
 refuse colour_size 3 3191 -i "$data/sphere.obj" --tiles 2 --tile-res 8 --colour "$tmp/slabs.raw:8"
+# --colour from-mesh (--color too): a glTF's base colour as the TX3D colour grid.
+"$bake" cells -i "$data/gltf/box.gltf" -o "$tmp/fm.meso" --tiles 3 --tile-res 8 --color from-mesh:20 -j 2 \
+  >/dev/null 2>&1
+check "from-mesh: bake succeeds" test -s "$tmp/fm.meso"
+check "from-mesh: validates fully" sh -c "'$inspect' validate --full '$tmp/fm.meso' >/dev/null"
+check "from-mesh: TX3D u8 x 4, 20x20x20 on object 1" \
+  test "$(row "$tmp/fm.meso" TX3D | awk '{print $4, $7, $8, $9}')" = "1 u8 4 20x20x20"
+"$bake" cells -i "$data/gltf/box.gltf" -o "$tmp/fm2.meso" --tiles 3 --tile-res 8 --colour from-mesh:20 -j 1 \
+  >/dev/null 2>&1
+check "from-mesh: -j 1 = -j 2, --colour = --color" cmp -s "$tmp/fm.meso" "$tmp/fm2.meso"
+refuse from_mesh_obj 3 3562 -i "$data/sphere.obj" --tiles 2 --tile-res 8 --colour from-mesh
+refuse from_mesh_g 1 3190 -i "$data/gltf/box.gltf" --tiles 2 --tile-res 8 --colour from-mesh:1
 refuse too_many_voxels 1 3180 -i "$data/sphere.obj" --tiles 1024 --tile-res 32
 refuse both_sizes 1 "" -i "$data/sphere.obj" --tiles 4 --cell-size 0.5
 refuse bad_voxelizer 1 "" -i "$data/sphere.obj" --voxelizer magic

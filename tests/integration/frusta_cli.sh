@@ -2,11 +2,11 @@
 # mesobake frusta from the command line (FORMAT.md §7.2 kind 4): SWC and
 # text skeletons, the chunks a frusta object is made of, the report keys
 # the issue names, relief, determinism, twist (--twist and the .skel
-# twist= field), and bad input (a coded error that names the line, a
+# twist= field), colour maps (--relief-color: COLR), and bad input (a coded error that names the line, a
 # non-zero exit, and no output file).
-# usage: frusta_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE]
+# usage: frusta_cli.sh MESOBAKE MESOINSPECT TEST_DATA_DIR [PNG_PROBE [WRITE_HEIGHT_PNG]]
 set -u
-bake=$1 inspect=$2 data=$3 probe=${4:-}
+bake=$1 inspect=$2 data=$3 probe=${4:-} writepng=${5:-}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -145,6 +145,54 @@ check "--twist 300000 on segments of length ~2: exit 1 (over 1000 turns)" test $
 check "--twist 300000: names the segment's line" grep -q "line [0-9]" "$tmp/badtw.err"
 "$bake" frusta --help | grep -q -- "--twist DEG" && "$bake" frusta --help | grep -q "twist=DEG"
 check "--help documents --twist and twist=DEG" test $? = 0
+
+# 3e. Colour maps (--relief-color, FORMAT.md §7.2 kind 4 COLR): an 8-bit
+# PNG (here a reference preview, RGBA) stored as U8 x 4, W x H x 1, with or
+# without a relief; deterministic; the preview shows it; a missing file is
+# exit 2 (E3560), a file that is no 8-bit PNG exit 3 (E3561), nothing written.
+"$inspect" preview "$tmp/simple.meso" -o "$tmp/col.png" --size 24x16 --reference >/dev/null 2>&1
+check "colour: a PNG to use" test -s "$tmp/col.png"
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/col1.meso" --relief bricks:64 --relief-depth 0.05 \
+  --relief-color "$tmp/col.png" >/dev/null 2>&1
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/col2.meso" --relief bricks:64 --relief-depth 0.05 \
+  --relief-color "$tmp/col.png" >/dev/null 2>&1
+check "colour: bake succeeds" test -s "$tmp/col1.meso"
+check "colour: validates fully" sh -c "'$inspect' validate --full '$tmp/col1.meso' >/dev/null"
+check "colour: COLR u8 x 4, 24x16x1 on object 1" \
+  test "$(row "$tmp/col1.meso" COLR | awk '{print $4, $7, $8, $9}')" = "1 u8 4 24x16x1"
+check "colour: two bakes are byte-identical" cmp -s "$tmp/col1.meso" "$tmp/col2.meso"
+for t in FRUS FSEG RELF; do
+  check "colour: $t as without it" test "$(row "$tmp/arm1.meso" $t | awk '{print $13}')" = \
+    "$(row "$tmp/col1.meso" $t | awk '{print $13}')"
+done
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/colplain.meso" --relief-color "$tmp/col.png" >/dev/null 2>&1
+check "colour without relief: COLR and no RELF" \
+  sh -c "'$inspect' info '$tmp/colplain.meso' | awk '\$2 == \"COLR\"' | grep -q . && ! '$inspect' info '$tmp/colplain.meso' | awk '\$2 == \"RELF\"' | grep -q ."
+if [ -n "$probe" ]; then
+  "$inspect" preview "$tmp/arm1.meso" -o "$tmp/arm_ref.png" --size 48x48 --reference >/dev/null 2>&1
+  "$inspect" preview "$tmp/col1.meso" -o "$tmp/col_ref.png" --size 48x48 --reference >/dev/null 2>&1
+  check "colour: the preview shows it (differs from the uncoloured one)" \
+    sh -c "test \"\$('$probe' --diff '$tmp/arm_ref.png' '$tmp/col_ref.png' | cut -d' ' -f1)\" -gt 50"
+fi
+badcol() { # NAME EXIT CODE: --relief-color $tmp/NAME
+  "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/badcol.meso" --relief-color "$tmp/$1" >/dev/null 2>"$tmp/badcol.err"
+  rc=$?
+  check "colour $1: exit $2" test "$rc" = "$2"
+  check "colour $1: error E$3 naming the file" grep -q "E$3.*$1" "$tmp/badcol.err"
+  check "colour $1: no output file" test ! -e "$tmp/badcol.meso"
+}
+badcol nope.png 2 3560
+printf 'not a png at all, just text\n' >"$tmp/text.png"
+badcol text.png 3 3561
+head -c 60 "$tmp/col.png" >"$tmp/cut.png"
+badcol cut.png 3 3561
+if [ -n "$writepng" ]; then
+  "$writepng" "$tmp/deep16.png" 16 8
+  badcol deep16.png 3 3561
+  check "colour deep16.png: says 8-bit" grep -q "8-bit" "$tmp/badcol.err"
+fi
+"$bake" frusta --help | grep -q -- "--relief-color FILE.png"
+check "--help documents --relief-color" test $? = 0
 
 # 4. Bad input: a coded error naming the line, exit 3, no output.
 bad() { # NAME CONTENT EXT CODE

@@ -337,6 +337,23 @@ static void frusta_cases(void)
     free(m);
 }
 
+/* Colour chunks (FORMAT.md §7.2 kinds 3 and 4: issues 6205, 6301), each
+ * reshaped in the TOC with its byte count kept (so only the object rule
+ * can object). */
+static void colour_cases(void)
+{
+    CASE("frusta_col", "frusta-colr-deep", MESO_ISSUE_FRUSTA_COLR, { /* 16 x 16 x 1 -> 16 x 8 x 2 */
+        uint8_t* e = entry(m, chunk_of(m, MESO_CHUNK_COLR));
+        st32(e + MESO_TOC_OFF_DIMS + 4, ld32(e + MESO_TOC_OFF_DIMS + 4) / 2);
+        st32(e + MESO_TOC_OFF_DIMS + 8, 2);
+    });
+    CASE("cells_fm", "cells-grid-one-component", MESO_ISSUE_CELLS_COLOUR_GRID, { /* 8^3 x 4 -> (32 x 8 x 8) x 1 */
+        uint8_t* e = entry(m, chunk_of(m, MESO_CHUNK_TX3D));
+        e[MESO_TOC_OFF_COMPONENTS] = 1;
+        st32(e + MESO_TOC_OFF_DIMS, 4 * ld32(e + MESO_TOC_OFF_DIMS));
+    });
+}
+
 int main(int argc, char** argv)
 {
     if (argc != 5) {
@@ -384,10 +401,23 @@ int main(int argc, char** argv)
         check(run(cmd) == 0, "preview --reference exits 0", drawn[i]);
     }
 
+    /* Colour (issue 16): a frusta COLR from a PNG (the preview above) and a
+     * cells TX3D colour grid from a glTF's base colour. */
+    snprintf(args, sizeof args, "frusta -i '%s/neurom_simple.swc' --relief-color '%s/frusta.png'", data, tmp);
+    bake_file("frusta_col", args);
+    snprintf(args, sizeof args, "cells -i '%s/gltf/box.gltf' --tiles 2 --tile-res 8 --colour from-mesh:8", data);
+    bake_file("cells_fm", args);
+    for (int i = 0; i < 2; i++) {
+        const char* coloured[] = {"frusta_col", "cells_fm"};
+        snprintf(path, sizeof path, "%s/%s.meso", tmp, coloured[i]);
+        expect_valid(path, coloured[i]);
+    }
+
     mesh_cases();
     shell_cases();
     anim_cases();
     frusta_cases();
+    colour_cases();
 
     char cmd[600];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);

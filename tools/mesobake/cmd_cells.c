@@ -36,6 +36,12 @@ static const char* const usage_cells =
     "                                                  R is the tile resolution (--tile-res must agree)\n"
     "      --colour SPEC       hash[:SEED]  a colour per cell with a little grain (default hash:0)\n"
     "                          FILE.raw:R   R^3 RGBA8 texels, x fastest (R = the tile resolution)\n"
+    "                          from-mesh[:G] the input's base colour (glTF: factor x texture) at\n"
+    "                                       the mesh point nearest each hit, from a G-sample grid\n"
+    "                                       along the longest side (default 64, 2..256; stored\n"
+    "                                       as TX3D); it replaces the cells' colours. No base\n"
+    "                                       colour in the input: exit 3 (E3562)\n"
+    "      --color SPEC        the same as --colour\n"
     "      --voxelizer V       auto (default): parity for closed meshes, else winding\n"
     "                          parity, vdb: exact ray parity (closed meshes only; 'vdb' is an alias:\n"
     "                          the exact path replaced OpenVDB, which misclassifies near the surface)\n"
@@ -73,7 +79,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
             continue;
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tiles", "--cell-size",
-            "--tile-res", "--tile-map", "--colour", "--voxelizer", "-j", "--threads"};
+            "--tile-res", "--tile-map", "--colour", "--color", "--voxelizer", "-j", "--threads"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -83,7 +89,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
             continue;
         if (!strcmp(s, "--tile-map"))
             o->tile_map = v;
-        else if (!strcmp(s, "--colour"))
+        else if (!strcmp(s, "--colour") || !strcmp(s, "--color"))
             o->colour = v;
         else if (!strcmp(s, "--voxelizer")) {
             if (strcmp(v, "auto") && strcmp(v, "vdb") && strcmp(v, "parity") && strcmp(v, "winding"))

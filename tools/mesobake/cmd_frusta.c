@@ -2,11 +2,13 @@
  * cmd_frusta.c — `mesobake frusta`: a skeleton (SWC, the text format of
  * skeleton_swc.h, or one extracted from a closed mesh) skinned with conical
  * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
- * optional relief map (§3), as one .meso frusta object: SKEL, FRUS, FSEG,
- * BALL and RELF (FORMAT.md §7.2 kind 4). The bake is meso_bake_frusta
+ * optional relief map (§3) and colour map, as one .meso frusta object:
+ * SKEL, FRUS, FSEG, BALL, RELF and COLR (FORMAT.md §7.2 kind 4). The bake
+ * is meso_bake_frusta
  * (bake/bake_frusta.c); this file parses the options.
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -42,17 +44,26 @@ static const char* const usage_frusta =
     "      --keep-cap-intersections\n"
     "                          keep the paper's planes where caps intersect at sharp joints\n"
     "                          (default: ball joints there); for reproducing the failure\n"
-    "Relief (a height field between the cone, w = 0, and the cone + depth, w = 1):\n"
+    "Relief (a height field between the cone, w = 0, and the cone + depth, w = 1), colour:\n"
     "      --relief SPEC       height:FILE.png, bricks[:RES], cobble[:RES] or ribs[:RES]\n"
     "      --relief-depth D    depth in skeleton units (default: a quarter of the mean radius)\n"
     "      --relief-repeat N   tiles around the circumference (default 1; along the axis the\n"
     "                          texture keeps texels square and runs on across joints)\n"
+    "      --relief-color FILE.png\n"
+    "                          colour map (8-bit PNG, sRGB) running with the relief: sampled\n"
+    "                          at the relief map's (s, t), so it repeats (--relief-repeat),\n"
+    "                          twists and runs on across joints as the relief does (stored\n"
+    "                          as COLR); without --relief it colours the plain frusta with\n"
+    "                          the same coordinates. Balls take the map's mean colour.\n"
+    "                          Missing file: exit 2 (E3560); not an 8-bit PNG: exit 3 (E3561)\n"
     "      --twist DEG         twist the texture DEG degrees per unit of skeleton length\n"
     "                          (default 0): a segment of length L twists DEG x L degrees, so\n"
     "                          the pattern turns uniformly whatever the segmentation (the\n"
     "                          joints' u alignment accounts for it); DEG > 0 makes lines of\n"
     "                          constant u left-handed helices; |DEG| <= 360000, and at most\n"
-    "                          1000 turns per segment\n"
+    "                          1000 turns per segment\n";
+
+static const char* const usage_frusta_end =
     "Other:\n"
     "      --report FILE       the bake report as JSON: segments, joints, branch_points,\n"
     "                          cap_intersections_found, cap_intersections_unhandled,\n"
@@ -96,7 +107,8 @@ static int parse_args(int argc, char** argv, frusta_args* a)
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
-            print_help(usage_frusta);
+            fputs(usage_frusta, stdout);
+            print_help(usage_frusta_end);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
@@ -109,7 +121,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             continue;
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tolerance",
-            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat", "--twist"};
+            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat", "--relief-color", "--twist"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -119,6 +131,8 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             continue;
         if (!strcmp(s, "--relief"))
             o->relief = v;
+        else if (!strcmp(s, "--relief-color"))
+            o->relief_color = v;
         else if (!strcmp(s, "--tolerance")) {
             if (!meso_bake_parse_positive(v, &o->tolerance))
                 return usage_error("--tolerance expects a positive length, got '%s'", v);

@@ -332,7 +332,8 @@ const char* mi_issue_name(uint32_t code)
         {6104, "SHELL_TEXTURE"},     {6105, "SHELL_ANIM"},
         {6201, "FRUSTA_COUNT"},
         {6202, "FRUSTA_NODE"},       {6203, "FRUSTA_AXIS"},
-        {6204, "FRUSTA_RELF"},
+        {6204, "FRUSTA_RELF"},       {6205, "FRUSTA_COLR"},
+        {6301, "CELLS_COLOUR_GRID"},
     };
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); ++i)
         if (names[i].code == code)
