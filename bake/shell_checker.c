@@ -39,6 +39,7 @@ struct meso_shell_checker {
     float* prev;            /* 3 nv: the directors of the last call */
     uint8_t* prism;         /* nt: prism verdict != 0 */
     uint8_t *vchanged, *fchanged;
+    uint8_t* force;         /* nv or NULL: vertices the next call treats as changed (prime) */
     double *base, *top;     /* 3 nv: base and offset positions, doubles */
     meso_cgal_pairs self, cross;
     double seconds;
@@ -79,6 +80,7 @@ void meso_shell_checker_destroy(meso_shell_checker* c)
     free(c->prism);
     free(c->vchanged);
     free(c->fchanged);
+    free(c->force);
     free(c->base);
     free(c->top);
     free(c->self.pairs);
@@ -89,6 +91,22 @@ void meso_shell_checker_destroy(meso_shell_checker* c)
 double meso_shell_checker_seconds(const meso_shell_checker* c)
 {
     return c->seconds;
+}
+
+meso_result meso_shell_checker_prime(meso_shell_checker* c, const float* d, const uint8_t* dirty, meso_error* err)
+{
+    const meso_mesh* m = c->m;
+    const size_t nv = m->vertex_count;
+    if (!c->force && !(c->force = calloc(nv ? nv : 1, 1)))
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "shell check: out of memory");
+    memcpy(c->prev, d, sizeof(float) * 3 * nv);
+    memcpy(c->force, dirty, nv);
+    for (size_t i = 0; i < 3 * nv; ++i)
+        c->top[i] = (double)m->positions[i] + (double)d[i];
+    memset(c->prism, 0, m->triangle_count ? m->triangle_count : 1);
+    c->self.count = c->cross.count = 0;
+    c->primed = 1;
+    return MESO_OK;
 }
 
 /* Drop the pairs of `l` whose first face changed (both: or second), in order. */
@@ -131,7 +149,8 @@ meso_result meso_shell_checker_bad_faces(meso_shell_checker* c, const float* d, 
     /* Changed vertices and faces (all on the first call). */
     uint32_t nchanged = 0;
     for (uint32_t v = 0; v < nv; ++v) {
-        c->vchanged[v] = !c->primed || memcmp(c->prev + 3 * (size_t)v, d + 3 * (size_t)v, 3 * sizeof(float)) != 0;
+        c->vchanged[v] = !c->primed || (c->force && c->force[v]) ||
+                         memcmp(c->prev + 3 * (size_t)v, d + 3 * (size_t)v, 3 * sizeof(float)) != 0;
         if (c->vchanged[v])
             for (int k = 0; k < 3; ++k)
                 c->top[3 * (size_t)v + k] = (double)m->positions[3 * (size_t)v + k] + (double)d[3 * (size_t)v + k];
@@ -144,6 +163,8 @@ meso_result meso_shell_checker_bad_faces(meso_shell_checker* c, const float* d, 
     const int full = !c->primed || nchanged > nt / 2;
     memcpy(c->prev, d, sizeof(float) * 3 * (size_t)nv);
     c->primed = 1;
+    if (c->force)
+        memset(c->force, 0, nv);
     /* Prisms of the changed faces: each verdict depends only on its face. */
     const long ntl = (long)nt;
 #ifdef _OPENMP
