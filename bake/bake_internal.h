@@ -75,6 +75,14 @@ meso_result mesoi_add_input_provenance(cJSON* inputs, const char* path, meso_err
  * "orientation_unchecked") to a report; adds nothing when it changed nothing. */
 void mesoi_report_fixes(cJSON* report, const meso_bake_mesh_fixes* fixes);
 
+/* A .meso input (bake_pack.c; also shell --update): open `path` and verify
+ * it in full (Draco meshes decoded); err gets the first issue, prefixed by
+ * the file's base name. */
+meso_result mesoi_open_verified(const char* path, meso_file** f, meso_error* err);
+/* A JSON chunk of `f` (file-wide `type`) parsed, or NULL when absent; a
+ * chunk that does not parse cannot pass full validation, so NULL then too. */
+cJSON* mesoi_json_chunk(meso_file* f, uint32_t type);
+
 /* >>load --------------------------------------------------------------------------- */
 
 const char* mesoi_base_name(const char* path);

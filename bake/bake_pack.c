@@ -60,9 +60,7 @@ static int keep_first(void* user, const meso_error* issue)
     return 1; /* one is enough to refuse the input */
 }
 
-/* A JSON chunk of `f` (file-wide `type`) parsed, or NULL when absent; a
- * chunk that does not parse cannot pass full validation, so NULL then too. */
-static cJSON* json_chunk(meso_file* f, uint32_t type)
+cJSON* mesoi_json_chunk(meso_file* f, uint32_t type)
 {
     const int32_t idx = meso_file_find(f, type, 0, 0);
     if (idx < 0)
@@ -141,8 +139,8 @@ static meso_result add_input(pack_state* p, meso_file* f, const char* path, uint
         if (r == MESO_OK)
             p->cap = cap;
     }
-    cJSON* src_meta = r == MESO_OK ? json_chunk(f, MESO_CHUNK_META) : NULL;
-    cJSON* src_rep = r == MESO_OK ? json_chunk(f, MESO_CHUNK_RPRT) : NULL;
+    cJSON* src_meta = r == MESO_OK ? mesoi_json_chunk(f, MESO_CHUNK_META) : NULL;
+    cJSON* src_rep = r == MESO_OK ? mesoi_json_chunk(f, MESO_CHUNK_RPRT) : NULL;
     const uint32_t chunks = meso_file_chunk_count(f);
     for (uint32_t c = 0; c < chunks && r == MESO_OK; ++c) {
         const meso_chunk_info* ci = meso_file_chunk(f, c);
@@ -208,8 +206,7 @@ static meso_result add_input(pack_state* p, meso_file* f, const char* path, uint
     return r;
 }
 
-/* Open input `path` and verify it in full (Draco meshes decoded). */
-static meso_result open_verified(const char* path, meso_file** f, meso_error* err)
+meso_result mesoi_open_verified(const char* path, meso_file** f, meso_error* err)
 {
     const meso_decoder dec = meso_bake_draco_decoder();
     const meso_open_desc desc = {.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0};
@@ -274,7 +271,7 @@ meso_result meso_bake_pack(const meso_bake_pack_options* o, meso_bake_output** o
     p.warnings = cJSON_CreateArray();
     for (uint32_t k = 0; k < o->input_count && r == MESO_OK; ++k) {
         meso_file* f = NULL;
-        r = open_verified(o->inputs[k], &f, err);
+        r = mesoi_open_verified(o->inputs[k], &f, err);
         if (r == MESO_OK)
             r = mesoi_add_input_provenance(p.inputs, o->inputs[k], err);
         if (r == MESO_OK)

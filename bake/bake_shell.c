@@ -25,6 +25,7 @@
 #include "shell_allowed.h"
 #include "shell_hybrid.h"
 #include "shell_regrow.h"
+#include "shell_update.h"
 #include "shell_validate.h"
 
 meso_bake_shell_options meso_bake_shell_defaults(void)
@@ -104,6 +105,12 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
     cJSON_AddNumberToObject(rep, "vertices_shortened", s->vertices_shortened);
     cJSON_AddNumberToObject(rep, "field_evaluations", (double)s->field_evaluations);
     cJSON_AddNumberToObject(rep, "artificial_faces", s->artificial_faces);
+    if (s->vertices_recomputed || s->vertices_moved || s->update_radius > 0) {
+        cJSON* u = cJSON_AddObjectToObject(rep, "update");
+        cJSON_AddNumberToObject(u, "vertices_moved", s->vertices_moved);
+        cJSON_AddNumberToObject(u, "vertices_recomputed", s->vertices_recomputed);
+        cJSON_AddNumberToObject(u, "radius", s->update_radius);
+    }
 }
 
 /* Refuse what no shell can be built on, before any work: the topology
@@ -165,6 +172,7 @@ typedef struct shell_bake {
     uint8_t *lp_mask, *lp_side;
     meso_field_surface fs;
     meso_lp_field* field;
+    mesoi_shell_prior prior; /* --update: the old bake's directors and the region to redo */
 } shell_bake;
 
 static void shell_free(shell_bake* s)
@@ -177,6 +185,7 @@ static void shell_free(shell_bake* s)
     free(s->lp_mask);
     free(s->lp_side);
     free(s->topo.boundary);
+    mesoi_shell_prior_free(&s->prior);
     meso_mesh_free(&s->m);
 }
 
@@ -217,9 +226,12 @@ static meso_result directors(shell_bake* s, meso_error* err)
         mesoi_run_stage(&s->run, "directors", f0, f1 - 0.05, NULL);
         meso_hybrid_stats hs;
         float* dl = s->d + 3 * (size_t)nv * (size_t)layer;
+        const uint8_t* redo = s->prior.redo; /* --update: only these; the rest are the old bake's */
+        if (redo)
+            memcpy(dl, s->prior.d + 3 * (size_t)nv * (size_t)layer, sizeof(float) * 3 * (size_t)nv);
         t = meso_seconds();
-        r = meso_shell_side_directors(s->field, m, s->normals, sign, &topt, a->directors, s->run.common.threads, dl,
-                                      s->lp_side, &hs, &ts, err);
+        r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors, s->run.common.threads,
+                                         redo, dl, s->lp_side, &hs, &ts, err);
         for (uint32_t v = 0; v < nv; ++v)
             s->lp_mask[v] |= s->lp_side[v];
         s->rep->hybrid_rounds += hs.rounds;
@@ -239,7 +251,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
                 memcpy(before, dl, sizeof(float) * 3 * (size_t)nv);
             t = meso_seconds();
             if (r == MESO_OK)
-                r = meso_shell_repair(m, dl, sign, 30, s->run.common.threads, &shortened, &rounds, &left, err);
+                r = meso_shell_repair_in(m, dl, sign, 30, s->run.common.threads, redo, &shortened, &rounds, &left,
+                                         err);
             if (r == MESO_OK)
                 mesoi_run_stage(&s->run, "repair", f1, f1,
                                 "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
@@ -248,8 +261,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
              * only, and lengthening one can make top and bottom meet (spot's
              * envelope did, tests/gl/test_rt_shell_baked.c). */
             if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
-                r = meso_shell_regrow(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, s->run.common.threads, &grown,
-                                      err);
+                r = meso_shell_regrow_in(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, s->run.common.threads, redo,
+                                         &grown, err);
                 if (r == MESO_OK)
                     mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
                                     grown, mesoi_run_ms(&s->run));
@@ -424,7 +437,12 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         cJSON_AddBoolToObject(params, "repair", !a->no_repair);
         if (a->texture)
             mesoi_shell_texture_json(params, a, tx, 0);
-        r = mesoi_add_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, a->mesh, err);
+        cJSON* inputs = cJSON_AddArrayToObject(meta, "inputs");
+        r = mesoi_add_provenance(inputs, a->input, a->mesh, err);
+        if (r == MESO_OK && a->update) {
+            cJSON_AddStringToObject(params, "update_of", mesoi_base_name(a->update));
+            r = mesoi_add_input_provenance(inputs, a->update, err);
+        }
         rep = cJSON_CreateObject();
         report_json(rep, s->rep);
         mesoi_report_fixes(rep, &s->rep->fixes);
@@ -510,6 +528,19 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     if (r == MESO_OK && a->texture)
         r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
     s.rep->seconds_texture = meso_seconds() - t;
+    if (r == MESO_OK && a->update) {
+        const double h_side = a->kind == MESO_SHELL_ENVELOPE ? 0.5 * s.h : s.h;
+        r = mesoi_shell_prior_load(a->update, a, s.h, h_side, &s.m, s.tx.source, s.tx.indices,
+                                   s.m.vertex_count + s.tx.seam_vertices, &s.prior, err);
+        s.rep->vertices_moved = s.prior.moved;
+        s.rep->vertices_recomputed = s.prior.redo_count;
+        s.rep->update_radius = s.prior.radius;
+        if (r == MESO_OK)
+            mesoi_run_stage(&s.run, "update", 0.2, 0.2,
+                            "update of %s: %u vertices moved, %u of %u recomputed (within %g of a moved face)",
+                            mesoi_base_name(a->update), s.prior.moved, s.prior.redo_count, s.m.vertex_count,
+                            s.prior.radius);
+    }
     meso_bake_shell_report* rep = s.rep;
     rep->vertices = s.m.vertex_count;
     rep->triangles = s.m.triangle_count;

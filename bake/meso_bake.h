@@ -391,6 +391,14 @@ typedef struct meso_bake_shell_options {
                                     ANIM + TXFR + DSFR (frame 0 also as the TX3D + DIST) [0] */
     double fps;                  /* frames per second; 0: frames / the texture's period, so the
                                     sequence loops seamlessly [0] */
+    /* Incremental re-bake (volume-textures-lp-averaged-shells.md §6,
+     * "Deformations"; bake/shell_update.c): the .meso file of a previous
+     * bake of this mesh before an edit that moved vertices but kept the
+     * topology. Directors are recomputed only within the edit's influence
+     * radius, the rest are the old file's; the parameters (kind, directors,
+     * p, theta, angle_tol_deg, smooth, no_repair and the thickness) must be
+     * the old bake's. NULL: a full bake. */
+    const char* update;
 } meso_bake_shell_options;
 
 typedef struct meso_bake_shell_report {
@@ -431,6 +439,10 @@ typedef struct meso_bake_shell_report {
      * the output). All layers of an envelope summed. */
     double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,
         seconds_directors_checks, seconds_repair, seconds_validate, seconds_allowed, seconds_assemble;
+    /* With options.update: the vertices the edit moved, and those whose
+     * directors were recomputed (within update_radius of a moved face). */
+    uint32_t vertices_moved, vertices_recomputed;
+    double update_radius;
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

@@ -26,6 +26,15 @@ meso_result meso_shell_checker_create(const meso_mesh* m, int sign, int threads,
  * check. */
 meso_result meso_shell_checker_bad_faces(meso_shell_checker* c, const float* d, uint8_t* bad, uint32_t* count,
                                          meso_error* err);
+/* Start from directors d (3 nv floats) known to pass every check except
+ * around the vertices with dirty[v] (an incremental re-bake, shell_update.h:
+ * the previous bake's valid shell, with the edited region marked): the
+ * next call re-checks only the faces with a dirty corner or a changed
+ * director, as if a full check had found every other face valid. Exact
+ * when no offset triangle of a clean face can meet the base or offset
+ * triangles of a dirty one whose base moved — the caller's region must
+ * guarantee that (shell_update.c). */
+meso_result meso_shell_checker_prime(meso_shell_checker* c, const float* d, const uint8_t* dirty, meso_error* err);
 /* Seconds spent in meso_shell_checker_bad_faces so far. */
 double meso_shell_checker_seconds(const meso_shell_checker* c);
 void meso_shell_checker_destroy(meso_shell_checker* c);

@@ -146,22 +146,33 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
                                       uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
                                       meso_error* err)
 {
+    return meso_shell_side_directors_in(field, m, normals, sign, opt, mode, threads, NULL, d, lp_mask, hs, ts, err);
+}
+
+meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_mesh* m, const float* normals,
+                                         int sign, const meso_trace_options* opt, meso_shell_directors mode,
+                                         int threads, const uint8_t* redo, float* d, uint8_t* lp_mask,
+                                         meso_hybrid_stats* hs, meso_trace_stats* ts, meso_error* err)
+{
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     memset(hs, 0, sizeof(*hs));
     uint8_t* mask = calloc(nv ? nv : 1, 1);
     uint8_t* add = calloc(nv ? nv : 1, 1);
     uint8_t* bad = calloc(nt ? nt : 1, 1);
-    if (!mask || !add || !bad) {
-        free(mask), free(add), free(bad);
+    uint8_t* have = calloc(nv ? nv : 1, 1); /* Lp already, or kept (not in redo) */
+    if (!mask || !add || !bad || !have) {
+        free(mask), free(add), free(bad), free(have);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "directors: out of memory");
     }
     for (size_t i = 0; i < 3 * (size_t)nv; ++i)
-        d[i] = (float)(sign * opt->thickness * normals[i]);
+        if (!redo || redo[i / 3])
+            d[i] = (float)(sign * opt->thickness * normals[i]);
     meso_result r = MESO_OK;
     const int smooth = opt->smooth_iterations;
     if (mode == MESO_DIRECTORS_LP) {
-        memset(mask, 1, nv);
-        r = meso_shell_trace_all(field, m, normals, sign, opt, NULL, threads, d, ts, err);
+        for (uint32_t v = 0; v < nv; ++v)
+            mask[v] = !redo || redo[v];
+        r = meso_shell_trace_all(field, m, normals, sign, opt, redo, threads, d, ts, err);
         if (r == MESO_OK && smooth)
             r = smooth_directors(m, d, mask, smooth, err);
     } else if (mode == MESO_DIRECTORS_HYBRID) {
@@ -178,6 +189,8 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
         meso_shell_checker* ck = NULL;
         if (r == MESO_OK)
             r = meso_shell_checker_create(m, sign, threads, &ck, err);
+        if (r == MESO_OK && redo)
+            r = meso_shell_checker_prime(ck, d, redo, err);
         while (r == MESO_OK) {
             memcpy(d, raw, sizeof(float) * 3 * (size_t)nv);
             if (smooth && hs->vertices_lp && (r = smooth_directors(m, d, mask, smooth, err)) != MESO_OK)
@@ -186,7 +199,9 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
             if (r != MESO_OK || nbad == 0)
                 break;
             hs->rounds++;
-            const uint32_t fresh = grow(m, bad, mask, rings, add);
+            for (uint32_t v = 0; v < nv; ++v)
+                have[v] = mask[v] || (redo && !redo[v]);
+            const uint32_t fresh = grow(m, bad, have, rings, add);
             if (fresh == 0)
                 break; /* every vertex near a bad face already follows the field */
             r = meso_shell_trace_all(field, m, normals, sign, opt, add, threads, raw, ts, err);
@@ -206,7 +221,7 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
     hs->vertices_normal = nv - hs->vertices_lp;
     if (lp_mask)
         memcpy(lp_mask, mask, nv);
-    free(mask), free(add), free(bad);
+    free(mask), free(add), free(bad), free(have);
     return r;
 }
 
@@ -257,6 +272,13 @@ static int feasible_direction(const meso_mesh* m, const uint32_t* first, const u
 meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
                               uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left, meso_error* err)
 {
+    return meso_shell_repair_in(m, d, sign, max_rounds, threads, NULL, shortened, rounds, bad_left, err);
+}
+
+meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
+                                 const uint8_t* redo, uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left,
+                                 meso_error* err)
+{
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     uint8_t* bad = calloc(nt ? nt : 1, 1);
     uint8_t* touched = calloc(nv ? nv : 1, 1);
@@ -286,6 +308,8 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
     uint32_t nbad = 0, round = 0;
     meso_shell_checker* ck = NULL;
     meso_result r = meso_shell_checker_create(m, sign, threads, &ck, err);
+    if (r == MESO_OK && redo)
+        r = meso_shell_checker_prime(ck, d, redo, err);
     while (r == MESO_OK) {
         r = meso_shell_checker_bad_faces(ck, d, bad, &nbad, err);
         if (r != MESO_OK || nbad == 0 || round == max_rounds)
@@ -293,8 +317,10 @@ meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t m
         memset(now, 0, nv);
         for (uint32_t f = 0; f < nt; ++f)
             if (bad[f])
-                for (int k = 0; k < 3; ++k)
-                    now[m->indices[3 * (size_t)f + k]] = 1;
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t v = m->indices[3 * (size_t)f + k];
+                    now[v] = !redo || redo[v];
+                }
         /* A director that does not leave every adjacent face on the shell's
          * side keeps its prisms inverted at any length: turn it into a
          * feasible direction (same length). Others are shortened by 0.8.

@@ -37,6 +37,16 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
                                       const meso_trace_options* opt, meso_shell_directors mode, int threads, float* d,
                                       uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
                                       meso_error* err);
+/* The same for an incremental re-bake (shell_update.h): only the vertices
+ * with redo[v] get directors (normal, traced, smoothed); the others keep
+ * what d holds on entry, which must be a shell that passed every check
+ * outside the redo region (the previous bake's). The rounds check only
+ * the faces around the redo region (meso_shell_checker_prime). redo NULL:
+ * meso_shell_side_directors. */
+meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_mesh* m, const float* normals,
+                                         int sign, const meso_trace_options* opt, meso_shell_directors mode,
+                                         int threads, const uint8_t* redo, float* d, uint8_t* lp_mask,
+                                         meso_hybrid_stats* hs, meso_trace_stats* ts, meso_error* err);
 
 /* Repair (issue #4, --repair): shorten the directors of the vertices of
  * still-bad faces by a factor 0.8 per round, until no face is bad or
@@ -48,5 +58,10 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
  * `threads` threads (<= 0: all cores; the result does not depend on it). */
 meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
                               uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left, meso_error* err);
+/* The same, changing only the directors of vertices with redo[v], the rest
+ * known valid (as for meso_shell_side_directors_in); redo NULL: all. */
+meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
+                                 const uint8_t* redo, uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left,
+                                 meso_error* err);
 
 #endif

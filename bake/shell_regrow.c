@@ -72,6 +72,12 @@ static meso_result settle(meso_shell_checker* chk, const meso_mesh* m, const flo
 meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
                               int threads, uint32_t* grown, meso_error* err)
 {
+    return meso_shell_regrow_in(m, d, target, sign, rounds, threads, NULL, grown, err);
+}
+
+meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
+                                 int threads, const uint8_t* redo, uint32_t* grown, meso_error* err)
+{
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     const size_t nd = 3 * (size_t)nv;
     float* cand = malloc(sizeof(float) * (nd ? nd : 1));
@@ -104,6 +110,8 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
     meso_shell_checker* chk = NULL;
     if (r == MESO_OK)
         r = meso_shell_checker_create(m, sign, threads, &chk, err);
+    if (r == MESO_OK && redo)
+        r = meso_shell_checker_prime(chk, d, redo, err);
     uint32_t nbad = 0;
     if (r == MESO_OK) {
         memcpy(orig, d, sizeof(float) * nd);

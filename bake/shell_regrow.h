@@ -39,5 +39,11 @@
  * *grown (may be NULL) counts the directors changed. Deterministic. */
 meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
                               int threads, uint32_t* grown, meso_error* err);
+/* The same where only the vertices with redo[v] may have been shortened and
+ * the rest of d is known valid (an incremental re-bake, shell_update.h): the
+ * first check covers only the faces around redo (meso_shell_checker_prime).
+ * redo NULL: meso_shell_regrow. */
+meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
+                                 int threads, const uint8_t* redo, uint32_t* grown, meso_error* err);
 
 #endif /* MESO_SHELL_REGROW_H */

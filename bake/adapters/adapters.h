@@ -93,6 +93,17 @@ meso_result meso_cgal_shell_pairs(const double* top, const double* base, uint32_
                                   const uint32_t* indices, uint32_t triangle_count, const uint8_t* changed,
                                   int threads, meso_cgal_pairs* self, meso_cgal_pairs* cross, meso_error* err);
 
+/* The exact test of meso_cgal_shell_pairs for given candidate pairs (the
+ * caller found them by box overlap; shell_checker.c): hit[i] = 1 when pair
+ * i intersects — self pairs (`cross` 0): top triangle pairs[2i] against top
+ * triangle pairs[2i+1]; cross pairs (`cross` 1): top pairs[2i] against base
+ * pairs[2i+1] — with the same shared-corner rules, and 0 when either
+ * triangle has zero area (meso_cgal_shell_pairs skips those). Split over
+ * `threads`; hit does not depend on it. */
+meso_result meso_cgal_test_pairs(const double* top, const double* base, uint32_t vertex_count, const uint32_t* indices,
+                                 uint32_t triangle_count, const uint32_t* pairs, size_t count, int cross, int threads,
+                                 uint8_t* hit, meso_error* err);
+
 /* Curve skeleton of a closed triangle mesh by mean curvature flow
  * (CGAL::Mean_curvature_flow_skeletonization: medially centred, 500
  * iterations at most, min edge length 0.002 x bbox diagonal, and the two

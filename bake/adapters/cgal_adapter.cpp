@@ -544,6 +544,32 @@ void near_boxes(const std::vector<Box>& near, std::vector<Box>& boxes)
     boxes.erase(boxes.begin() + (std::ptrdiff_t)n, boxes.end());
 }
 
+// work(k) for k = 0 .. parts-1, each on its own thread (the last on this
+// one); the first exception any of them threw is rethrown here.
+template <class F> void run_parts(size_t parts, F work)
+{
+    std::vector<std::exception_ptr> failed(parts);
+    std::vector<std::thread> pool;
+    for (size_t k = 0; k < parts; ++k) {
+        auto part = [&, k]() {
+            try {
+                work(k);
+            } catch (...) {
+                failed[k] = std::current_exception();
+            }
+        };
+        if (k + 1 < parts)
+            pool.emplace_back(part);
+        else
+            part();
+    }
+    for (std::thread& th : pool)
+        th.join();
+    for (const std::exception_ptr& e : failed)
+        if (e)
+            std::rethrow_exception(e);
+}
+
 bool to_c_pairs(Pair_list& l, meso_cgal_pairs* out)
 {
     std::sort(l.begin(), l.end());
@@ -582,27 +608,10 @@ extern "C" meso_result meso_cgal_shell_pairs(const double* top, const double* ba
         const size_t n = changed_boxes.size();
         const size_t parts = (size_t)std::max(1, std::min(threads, 64));
         std::vector<Pair_list> selfs(parts), crosses(parts);
-        std::vector<std::exception_ptr> failed(parts);
-        std::vector<std::thread> pool;
-        for (size_t k = 0; k < parts; ++k) {
-            auto work = [&, k]() {
-                try {
-                    shell_pairs_part(t, b, changed_boxes, n * k / parts, n * (k + 1) / parts, top_boxes, base_boxes,
-                                     changed, selfs[k], crosses[k]);
-                } catch (...) {
-                    failed[k] = std::current_exception();
-                }
-            };
-            if (k + 1 < parts)
-                pool.emplace_back(work);
-            else
-                work();
-        }
-        for (std::thread& th : pool)
-            th.join();
-        for (const std::exception_ptr& e : failed)
-            if (e)
-                std::rethrow_exception(e);
+        run_parts(parts, [&](size_t k) {
+            shell_pairs_part(t, b, changed_boxes, n * k / parts, n * (k + 1) / parts, top_boxes, base_boxes, changed,
+                             selfs[k], crosses[k]);
+        });
         Pair_list all_self, all_cross;
         for (size_t k = 0; k < parts; ++k) {
             all_self.insert(all_self.end(), selfs[k].begin(), selfs[k].end());
@@ -615,6 +624,37 @@ extern "C" meso_result meso_cgal_shell_pairs(const double* top, const double* ba
             *cross = meso_cgal_pairs();
             return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");
         }
+        return MESO_OK;
+    } catch (const std::bad_alloc&) {
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");
+    } catch (const std::exception& e) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: %s", e.what());
+    } catch (...) {
+        return meso_bake_fail(err, MESO_ERR_CORRUPT, 0, "CGAL: unknown exception");
+    }
+}
+
+extern "C" meso_result meso_cgal_test_pairs(const double* top, const double* base, uint32_t vertex_count,
+                                            const uint32_t* indices, uint32_t triangle_count, const uint32_t* pairs,
+                                            size_t count, int cross, int threads, uint8_t* hit, meso_error* err)
+{
+    try {
+        if (!check_indices(indices, vertex_count, triangle_count, err))
+            return MESO_ERR_INVALID_ARG;
+        for (size_t i = 0; i < 2 * count; ++i)
+            if (pairs[i] >= triangle_count)
+                return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "CGAL: pair triangle %u out of range",
+                                      pairs[i]);
+        const Soup t = {top, indices}, b = {base, indices};
+        const Soup& other = cross ? b : t;
+        // Threads only for enough pairs to pay for starting them.
+        const size_t parts = count > 256 ? (size_t)std::max(1, std::min(threads, 64)) : 1;
+        run_parts(parts, [&](size_t k) {
+            for (size_t i = count * k / parts; i < count * (k + 1) / parts; ++i) {
+                const uint32_t f = pairs[2 * i], g = pairs[2 * i + 1];
+                hit[i] = !degenerate(t, f) && !degenerate(other, g) && pair_intersects(t, f, other, g, cross);
+            }
+        });
         return MESO_OK;
     } catch (const std::bad_alloc&) {
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "CGAL: out of memory");

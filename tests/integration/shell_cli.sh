@@ -130,6 +130,31 @@ check "folded_cube.obj exists" test -s "$tmp/defective/folded_cube.obj"
 "$bake" shell -i "$tmp/defective/folded_cube.obj" -o "$tmp/fold.meso" >/dev/null 2>&1
 rc=$?
 check "folded_cube: exit 0 or 3 (got $rc)" sh -c "[ $rc = 0 ] || [ $rc = 3 ]"
+# --update (bake/shell_update.c; tests/integration/test_shell_update.c checks
+# the directors against full re-bakes): an unchanged mesh recomputes
+# nothing; other options, another topology or a file that is not a shell
+# are refused with their codes, and nothing is written.
+"$bake" shell -i "$data/torus.obj" -o "$tmp/old.meso" --thickness 0.05 >/dev/null 2>&1
+"$bake" shell -i "$data/torus.obj" -o "$tmp/upd.meso" --thickness 0.05 --update "$tmp/old.meso" \
+  --report "$tmp/upd.json" >/dev/null 2>&1
+check "--update of an unchanged mesh succeeds" test -s "$tmp/upd.meso"
+check "--update reports 0 vertices recomputed" grep -q '"vertices_recomputed":[[:space:]]*0' "$tmp/upd.json"
+"$inspect" dump "$tmp/old.meso" SDIR -o "$tmp/old.sdir" >/dev/null 2>&1
+"$inspect" dump "$tmp/upd.meso" SDIR -o "$tmp/upd.sdir" >/dev/null 2>&1
+check "--update of an unchanged mesh keeps SDIR byte for byte" cmp -s "$tmp/old.sdir" "$tmp/upd.sdir"
+update_refused() { # DESCRIPTION EXIT CODE ARGS...
+  what=$1 want=$2 code=$3; shift 3
+  rm -f "$tmp/refused.meso"
+  "$bake" shell -o "$tmp/refused.meso" "$@" 2>"$tmp/err.txt" >/dev/null
+  rc=$?
+  check "--update $what: exit $want (got $rc)" test "$rc" = "$want"
+  check "--update $what: E$code" grep -q "E$code" "$tmp/err.txt"
+  check "--update $what: nothing written" test ! -e "$tmp/refused.meso"
+}
+update_refused "other thickness" 1 3117 -i "$data/torus.obj" --thickness 0.06 --update "$tmp/old.meso"
+update_refused "other topology" 3 3118 -i "$data/sphere.obj" --thickness 0.05 --update "$tmp/old.meso"
+"$bake" mesh -i "$data/torus.obj" -o "$tmp/mesh.meso" >/dev/null 2>&1
+update_refused "of a mesh file" 3 3116 -i "$data/torus.obj" --thickness 0.05 --update "$tmp/mesh.meso"
 check "usage: conflicting thickness flags exit 1" sh -c "'$bake' shell -i x -o y --thickness 1 --thickness-rel 0.1 2>/dev/null; [ \$? = 1 ]"
 check "usage: bad kind exits 1" sh -c "'$bake' shell -i x -o y --kind sideways 2>/dev/null; [ \$? = 1 ]"
 exit $fail

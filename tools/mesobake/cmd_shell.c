@@ -46,6 +46,14 @@ static const char* const usage_shell =
     "      --allow-defects     write the shell even if inverted prisms or intersections are\n"
     "                          left (default: such a bake exits 8, E3115, and writes only\n"
     "                          the --report file, which says what is left)\n"
+    "      --update OLD.meso   incremental re-bake after an edit that moved vertices (same\n"
+    "                          mesh topology, same options): recompute only the directors\n"
+    "                          within 3 x thickness (+ the longest edge) of a moved face, keep\n"
+    "                          OLD's elsewhere; validated in full as every bake; the report's\n"
+    "                          \"update\" says how many vertices were recomputed. Other options\n"
+    "                          are refused (E3117, exit 1), and so are a different topology\n"
+    "                          (E3118) and an OLD that is not one valid shell (E3116, E3119),\n"
+    "                          exit 3\n"
     "  -j, --threads N         threads (default: all cores); the output does not depend on N\n";
 /* (in three parts: one literal would pass the 4095 characters C11 promises) */
 static const char* const usage_shell_texture =
@@ -183,7 +191,8 @@ static int parse_args(int argc, char** argv, shell_args* a)
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
-            "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps"};
+            "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps",
+            "--update"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -193,6 +202,8 @@ static int parse_args(int argc, char** argv, shell_args* a)
             continue;
         if (!strcmp(s, "--texture"))
             o->texture = v;
+        else if (!strcmp(s, "--update"))
+            o->update = v;
         else if (!strcmp(s, "--time")) {
             char* end = NULL;
             o->time = strtod(v, &end);

@@ -1,0 +1,38 @@
+/*
+ * shell_update.h — incremental re-bake of a shell after a local edit of its
+ * base mesh (`mesobake shell --update OLD.meso`; volume-textures-lp-averaged-
+ * shells.md §6, "Deformations": recompute only the part within the field's
+ * influence distance of the modified surface). Internal to bake_shell.c.
+ */
+#ifndef MESO_SHELL_UPDATE_H
+#define MESO_SHELL_UPDATE_H
+
+#include <stdint.h>
+
+#include "bake_internal.h"
+
+/* What an update keeps from OLD and what it recomputes. */
+typedef struct mesoi_shell_prior {
+    float* d;              /* layers x 3 nv: OLD's directors per mesh vertex, in the bake's layer order
+                              (exterior: outward; interior: inward; envelope: top, then bottom) */
+    uint8_t* redo;         /* nv: 1 = recompute this vertex's directors */
+    uint32_t moved;        /* vertices whose position differs from OLD's */
+    uint32_t redo_count;   /* vertices recomputed */
+    double radius;         /* the influence radius the region was grown by (mesh units) */
+} mesoi_shell_prior;
+
+/* Read OLD (`path`: one shell object, validated in full, written without
+ * defects) and match it to the edited mesh m (nv mesh vertices; its output
+ * vertices are out_source[o] for o < nv_out with triangles out_indices, or
+ * the mesh itself when out_source is NULL). Refuses, with a code naming the
+ * difference: a file that is not one valid shell (E3116), bake parameters
+ * that differ (E3117: kind, directors, p, theta, angle tolerance, smoothing,
+ * repair, thickness), a different topology (E3118: vertex count or
+ * triangles), or an OLD written with defects (E3119). h_side: each side's
+ * thickness. */
+meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_options* a, double h, double h_side,
+                                   const meso_mesh* m, const uint32_t* out_source, const uint32_t* out_indices,
+                                   uint32_t nv_out, mesoi_shell_prior* out, meso_error* err);
+void mesoi_shell_prior_free(mesoi_shell_prior* p);
+
+#endif /* MESO_SHELL_UPDATE_H */

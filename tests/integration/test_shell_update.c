@@ -1,0 +1,319 @@
+/* Incremental shell re-bakes (meso_bake_shell_options.update, bake/shell_update.c;
+ * volume-textures-lp-averaged-shells.md §6 "Deformations") against a full
+ * re-bake of the edited mesh:
+ *  - a local edit (a smooth bump over ~1 % of the torus's vertices) recomputes
+ *    exactly the vertices a brute-force search puts within the update radius
+ *    of a moved face, a small fraction of the mesh;
+ *  - the update is as valid as the full re-bake (both 0 inverted prisms, 0
+ *    intersections), and its directors match the full re-bake's: recomputed
+ *    ones bit for bit where the rounds agree, kept ones within a small
+ *    fraction of the far field's own error (what the directors change when
+ *    the Barnes-Hut opening angle is halved, measured here);
+ *  - an unchanged mesh recomputes nothing and reproduces OLD's directors;
+ *  - refusals: another topology (E3118), other parameters (E3117), a file
+ *    that is not one shell (E3116), an OLD written with defects (E3119).
+ * Exterior and interior shells. */
+#include "test_util.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mesh_bump.h"
+#include "meso_bake.h"
+#include "meso_file.h"
+
+static meso_mesh load(const char* name)
+{
+    meso_mesh m;
+    meso_error err = {0};
+    assert(meso_bake_load_mesh(test_data(name), NULL, &m, NULL, &err) == MESO_OK);
+    return m;
+}
+
+/* A copy of m's arrays (positions owned; the rest shared). */
+static meso_mesh edited_copy(const meso_mesh* m, float** pos)
+{
+    meso_mesh e = *m;
+    *pos = malloc(sizeof(float) * 3 * m->vertex_count);
+    memcpy(*pos, m->positions, sizeof(float) * 3 * m->vertex_count);
+    e.positions = *pos;
+    return e;
+}
+
+
+typedef struct baked {
+    meso_bake_shell_report rep;
+    float* sdir; /* the SDIR chunk */
+    uint32_t n, layers;
+    meso_result r;
+    meso_error err;
+} baked;
+
+static void baked_free(baked* b)
+{
+    free(b->sdir);
+    memset(b, 0, sizeof(*b));
+}
+
+/* Bake (writing the file to `path` when given) and read back its SDIR. */
+static baked bake(const meso_bake_shell_options* o, const char* path)
+{
+    baked b;
+    memset(&b, 0, sizeof(b));
+    meso_bake_output* out = NULL;
+    b.r = meso_bake_shell(o, &out, &b.rep, &b.err);
+    if (b.r != MESO_OK)
+        return b;
+    size_t size = 0;
+    meso_bake_output_copy(out, NULL, 0, &size);
+    assert(size > 0);
+    void* bytes = malloc(size);
+    assert(meso_bake_output_copy(out, bytes, size, &size) == MESO_OK);
+    if (path)
+        assert(meso_bake_output_write_file(out, path, &b.err) == MESO_OK);
+    meso_bake_output_free(out);
+    meso_file* f = NULL;
+    meso_error err = {0};
+    assert(meso_file_open_memory(bytes, size, NULL, &f, &err) == MESO_OK);
+    const int32_t si = meso_file_find(f, MESO_CHUNK_SDIR, 1, 0);
+    assert(si >= 0);
+    const meso_chunk_info* ci = meso_file_chunk(f, (uint32_t)si);
+    b.n = ci->dims[0];
+    b.layers = ci->dims[1];
+    b.sdir = malloc((size_t)ci->decoded_size);
+    assert(meso_file_read_chunk(f, (uint32_t)si, b.sdir, (size_t)ci->decoded_size, &err) == MESO_OK);
+    meso_file_close(f);
+    free(bytes);
+    return b;
+}
+
+/* max and mean of |a - b| per director, over all layers, in units of h. */
+static void compare(const baked* a, const baked* b, double h, double* max, double* mean, uint32_t* identical,
+                    uint32_t* above)
+{
+    assert(a->n == b->n && a->layers == b->layers);
+    *max = *mean = 0;
+    *identical = *above = 0;
+    const size_t n = (size_t)a->n * a->layers;
+    for (size_t i = 0; i < n; ++i) {
+        double s = 0;
+        for (int k = 0; k < 3; ++k)
+            s += ((double)a->sdir[3 * i + k] - b->sdir[3 * i + k]) * ((double)a->sdir[3 * i + k] - b->sdir[3 * i + k]);
+        s = sqrt(s) / h;
+        *max = fmax(*max, s);
+        *mean += s / (double)n;
+        *identical += s == 0;
+        *above += s > 0.01;
+    }
+}
+
+/* The longest edge of m. */
+static double longest_edge(const meso_mesh* m)
+{
+    double best = 0;
+    for (uint32_t f = 0; f < m->triangle_count; ++f)
+        for (int c = 0; c < 3; ++c) {
+            const float* a = m->positions + 3 * m->indices[3 * f + c];
+            const float* b = m->positions + 3 * m->indices[3 * f + (c + 1) % 3];
+            double l = 0;
+            for (int k = 0; k < 3; ++k)
+                l += ((double)a[k] - b[k]) * ((double)a[k] - b[k]);
+            best = fmax(best, sqrt(l));
+        }
+    return best;
+}
+
+/* Brute force: vertices of `e` inside the box of some moved face (old and
+ * new corners) grown by R. */
+static uint32_t brute_region(const meso_mesh* old, const meso_mesh* e, double R, uint32_t* moved, uint8_t* inside)
+{
+    const uint32_t nv = e->vertex_count;
+    *moved = 0;
+    uint8_t* mv = calloc(nv, 1);
+    for (uint32_t v = 0; v < nv; ++v) {
+        mv[v] = memcmp(old->positions + 3 * v, e->positions + 3 * v, 3 * sizeof(float)) != 0;
+        *moved += mv[v];
+    }
+    uint32_t count = 0;
+    for (uint32_t v = 0; v < nv; ++v) {
+        int in = 0;
+        for (uint32_t f = 0; f < e->triangle_count && !in; ++f) {
+            const uint32_t* ix = e->indices + 3 * f;
+            if (!mv[ix[0]] && !mv[ix[1]] && !mv[ix[2]])
+                continue;
+            in = 1;
+            for (int k = 0; k < 3 && in; ++k) {
+                double lo = INFINITY, hi = -INFINITY;
+                for (int c = 0; c < 3; ++c) {
+                    lo = fmin(lo, fmin(old->positions[3 * ix[c] + k], e->positions[3 * ix[c] + k]));
+                    hi = fmax(hi, fmax(old->positions[3 * ix[c] + k], e->positions[3 * ix[c] + k]));
+                }
+                const double x = e->positions[3 * v + k];
+                in = x >= lo - R && x <= hi + R;
+            }
+        }
+        count += (uint32_t)in;
+        inside[v] = (uint8_t)in;
+    }
+    free(mv);
+    return count;
+}
+
+static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_directors directors, double rel,
+                       const char* dir)
+{
+    meso_mesh m = load(mesh);
+    const uint32_t nv = m.vertex_count;
+    char old_path[4200];
+    snprintf(old_path, sizeof(old_path), "%s/old.meso", dir);
+
+    meso_bake_shell_options o = meso_bake_shell_defaults();
+    o.mesh = &m;
+    o.kind = kind;
+    o.directors = directors;
+    o.thickness_rel = rel;
+    baked old = bake(&o, old_path);
+    assert(old.r == MESO_OK);
+    const double h = old.rep.thickness;
+    assert(old.rep.inverted_prisms == 0 && old.rep.offset_self_intersections == 0 &&
+           old.rep.offset_base_intersections == 0);
+
+    /* Unchanged mesh: nothing recomputed, OLD's directors. */
+    o.thickness = h;
+    o.update = old_path;
+    baked same = bake(&o, NULL);
+    assert(same.r == MESO_OK);
+    assert(same.rep.vertices_moved == 0 && same.rep.vertices_recomputed == 0);
+    double max, mean;
+    uint32_t identical;
+    uint32_t above;
+    compare(&same, &old, h, &max, &mean, &identical, &above);
+    assert(max == 0.0);
+
+    /* The edit: ~1 % of the vertices. */
+    float* pos = NULL;
+    meso_mesh e = edited_copy(&m, &pos);
+    const uint32_t count = nv / 100;
+    mesh_bump(pos, nv, nv / 3, count, 0.3 * h);
+    o.mesh = &e;
+    baked upd = bake(&o, NULL);
+    if (upd.r != MESO_OK)
+        fprintf(stderr, "update failed: %s\n", upd.err.message);
+    assert(upd.r == MESO_OK);
+    o.update = NULL;
+    baked full = bake(&o, NULL);
+    assert(full.r == MESO_OK);
+    meso_bake_shell_options half = o;
+    half.theta = 0.25;
+    baked fine = bake(&half, NULL);
+    assert(fine.r == MESO_OK);
+
+    /* The region against brute force. */
+    uint32_t moved = 0;
+    const double R = 3.0 * h + longest_edge(&e);
+    uint8_t* inside = malloc(nv);
+    const uint32_t region = brute_region(&m, &e, R, &moved, inside);
+    printf("%s %s %s %.3g: %u of %u vertices moved, %u recomputed (brute force %u, radius %.4g = %.2f h)\n",
+           mesh, meso_bake_shell_kind_name(kind), meso_bake_directors_name(directors), rel, upd.rep.vertices_moved, nv, upd.rep.vertices_recomputed, region, R,
+           R / h);
+    assert(upd.rep.vertices_moved == moved && moved > 0 && moved <= count);
+    assert(fabs(upd.rep.update_radius - R) <= 1e-9 * R);
+    assert(upd.rep.vertices_recomputed == region);
+    assert(upd.rep.vertices_recomputed < nv / 3);
+
+    /* Validity identical. */
+    assert(upd.rep.inverted_prisms == 0 && full.rep.inverted_prisms == 0);
+    assert(upd.rep.offset_self_intersections == 0 && full.rep.offset_self_intersections == 0);
+    assert(upd.rep.offset_base_intersections == 0 && full.rep.offset_base_intersections == 0);
+
+    /* Directors: the update against the full re-bake, and the far field's
+     * own error (the full re-bake against itself with the Barnes-Hut
+     * opening angle halved, 0.5 -> 0.25): what is kept outside the radius
+     * may differ only by a small part of that. */
+    double tmax, tmean;
+    compare(&full, &fine, h, &tmax, &tmean, &identical, &above);
+    compare(&upd, &full, h, &max, &mean, &identical, &above);
+    printf("  update vs full re-bake: max %.3g h, mean %.3g h, %u of %u identical, %u differ by > 0.01 h; far-field "
+           "error (theta 0.5 vs 0.25): max %.3g h, mean %.3g h\n",
+           max, mean, identical, upd.n * upd.layers, above, tmax, tmean);
+    assert(tmean > 0);
+    if (directors == MESO_DIRECTORS_LP) {
+        /* Every director traced: the kept ones differ by the edit's far
+         * field only, the recomputed ones not at all. */
+        assert(mean <= 0.1 * tmean);
+        assert(max <= tmax);
+    } else {
+        /* Hybrid: inside the radius the rounds start again from normal
+         * displacement, so a vertex near the border can join the field in
+         * another round than in the full re-bake (a few, by a few % of h). */
+        assert(mean <= tmean);
+        assert(max <= 0.1);
+        assert(above <= nv / 100);
+    }
+
+    /* Refusals. */
+    o.update = old_path;
+    o.p = 4.0;
+    baked bad = bake(&o, NULL);
+    assert(bad.r != MESO_OK && bad.err.code == 3117 && strstr(bad.err.message, "--p"));
+    o.p = 3.0;
+    meso_mesh other = load("sphere.obj");
+    o.mesh = &other;
+    bad = bake(&o, NULL);
+    assert(bad.r != MESO_OK && bad.err.code == 3118);
+    meso_mesh_free(&other);
+
+    free(pos);
+    free(inside);
+    baked_free(&old), baked_free(&same), baked_free(&upd), baked_free(&full), baked_free(&fine);
+    meso_mesh_free(&m);
+}
+
+int main(void)
+{
+    char dir[4096];
+    test_temp_dir(dir, sizeof(dir), "shell_update");
+    setvbuf(stdout, NULL, _IONBF, 0);
+    check_kind("torus.obj", MESO_SHELL_EXTERIOR, MESO_DIRECTORS_LP, 0.03, dir);
+    check_kind("torus.obj", MESO_SHELL_INTERIOR, MESO_DIRECTORS_LP, 0.02, dir);
+    check_kind("blub_fish_low_resolution.obj", MESO_SHELL_EXTERIOR, MESO_DIRECTORS_HYBRID, 0.03, dir);
+
+    /* OLD that is not one shell: a mesh bake (E3116). */
+    char path[4200];
+    snprintf(path, sizeof(path), "%s/mesh.meso", dir);
+    meso_mesh m = load("torus.obj");
+    meso_bake_mesh_options mo;
+    memset(&mo, 0, sizeof(mo));
+    mo.mesh = &m;
+    meso_bake_output* out = NULL;
+    meso_error err = {0};
+    assert(meso_bake_mesh(&mo, &out, NULL, &err) == MESO_OK);
+    assert(meso_bake_output_write_file(out, path, &err) == MESO_OK);
+    meso_bake_output_free(out);
+    meso_bake_shell_options o = meso_bake_shell_defaults();
+    o.mesh = &m;
+    o.update = path;
+    baked bad = bake(&o, NULL);
+    assert(bad.r != MESO_OK && bad.err.code == 3116);
+
+    /* OLD with defects (no repair on the saddle at 40 %: folds), E3119. */
+    meso_mesh s = load("saddle.obj");
+    o = meso_bake_shell_defaults();
+    o.mesh = &s;
+    o.thickness_rel = 0.4;
+    o.directors = MESO_DIRECTORS_NORMAL;
+    o.no_repair = 1;
+    snprintf(path, sizeof(path), "%s/defects.meso", dir);
+    baked def = bake(&o, path);
+    assert(def.r == MESO_OK && def.rep.inverted_prisms > 0);
+    o.thickness = def.rep.thickness;
+    o.update = path;
+    bad = bake(&o, NULL);
+    assert(bad.r != MESO_OK && bad.err.code == 3119);
+    baked_free(&def);
+    meso_mesh_free(&s);
+    meso_mesh_free(&m);
+    test_temp_dir_remove(dir);
+    puts("shell_update: ok");
+    return 0;
+}
