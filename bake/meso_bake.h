@@ -131,6 +131,10 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  *   3120 the texture SPEC does not parse       3122 texture file content unusable
  *   3121 texture file missing or unreadable    3123 .vdb: no such float grid, or empty
  *   (3124..3129 reserved for texture functions and distance maps)
+ * Shell colour (mesobake shell --color, bake/shell_color.h):
+ *   3130 the colour SPEC does not parse        3132 colour file content unusable
+ *   3131 colour file missing or unreadable     3133 from-mesh: no single usable
+ *                                                   base colour in the input
  * Skeletons (bake/skeleton_swc.h): 3140..3149, each listed there.
  * Cell tile maps and split cells (bake/tile_map.h, bake/split_cells.h):
  *   3150..3153, listed in tile_map.h.
@@ -391,6 +395,10 @@ typedef struct meso_bake_shell_options {
                                     ANIM + TXFR + DSFR (frame 0 also as the TX3D + DIST) [0] */
     double fps;                  /* frames per second; 0: frames / the texture's period, so the
                                     sequence loops seamlessly [0] */
+    /* Colour function (FORMAT.md §7.2 "Shell colour"; needs `texture`); NULL: none. SPEC:
+     * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a
+     * volume texture) or from-mesh (the glTF input's base colour at the mesh's own uv). */
+    const char* color;
 } meso_bake_shell_options;
 
 typedef struct meso_bake_shell_report {
