@@ -96,7 +96,8 @@ typedef struct meso_mesh_material {
 
 /* The materials of a loaded mesh (glTF input; empty for other formats):
  * triangle_materials[t] indexes `materials` for triangle t of the mesh as
- * loaded (UINT32_MAX: none). Kept for colour work; no bake reads it yet. */
+ * loaded (UINT32_MAX: none). mesobake shell --color from-mesh reads it
+ * (bake/shell_color.h). */
 typedef struct meso_mesh_materials {
     uint32_t material_count;
     meso_mesh_material* materials;

@@ -4,7 +4,8 @@
  * .meso SHELL object: MESH (the base), SDIR (directors), STHK (thickness),
  * and optionally a texture function (TX2D height field or TX3D density) with
  * its distance map (DIST) and texture coordinates in the MESH (FORMAT.md
- * §7.2, "Shell prisms and texture space"). The bake is meso_bake_shell
+ * §7.2, "Shell prisms and texture space"), and optionally its colour (COLR +
+ * CMAP, §7.2 "Shell colour"; bake/shell_color.h). The bake is meso_bake_shell
  * (bake/bake_shell.c); this file parses the options.
  */
 #include <stdio.h>
