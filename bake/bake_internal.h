@@ -95,6 +95,10 @@ meso_result mesoi_slurp(const char* path, uint8_t** data, size_t* size, meso_err
  * checked as a loaded file is. Exactly one of the two. */
 meso_result mesoi_load_input(mesoi_bake_run* run, const char* path, const meso_mesh* mem, meso_mesh* m,
                              meso_bake_mesh_fixes* fixes, meso_error* err);
+/* The same, with the materials' base colour of a glTF file into *mats
+ * (zeroed for other formats and for a mesh in memory). */
+meso_result mesoi_load_input_materials(mesoi_bake_run* run, const char* path, const meso_mesh* mem, meso_mesh* m,
+                                       meso_mesh_materials* mats, meso_bake_mesh_fixes* fixes, meso_error* err);
 /* The object's default name: the input's base name, or "mesh" in memory. */
 const char* mesoi_input_label(const char* path);
 /* META "inputs": the file's provenance, or for a mesh in memory its name

@@ -321,6 +321,15 @@ meso_result mesoi_load_input(mesoi_bake_run* run, const char* path, const meso_m
     return r;
 }
 
+meso_result mesoi_load_input_materials(mesoi_bake_run* run, const char* path, const meso_mesh* mem, meso_mesh* m,
+                                       meso_mesh_materials* mats, meso_bake_mesh_fixes* fixes, meso_error* err)
+{
+    if (!mem)
+        return load_mesh(run, path, m, mats, fixes, err);
+    memset(mats, 0, sizeof(*mats));
+    return mesoi_load_input(run, path, mem, m, fixes, err);
+}
+
 const char* mesoi_input_label(const char* path)
 {
     return path ? mesoi_base_name(path) : "mesh";

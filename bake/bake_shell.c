@@ -8,6 +8,7 @@
  * is bake_shell_texture.c).
  */
 #include "bake_shell.h"
+#include "shell_color.h"
 #include "meso_layout.h"
 
 #include <math.h>
@@ -82,6 +83,8 @@ static meso_result normalise(const meso_bake_shell_options* o, meso_bake_shell_o
     if (!bad && !a->texture &&
         (a->dist_res[0] || a->dist_dtype != MESO_DTYPE_U8 || a->tiling[0] != 1.0 || a->tiling[1] != 1.0))
         bad = "tiling, dist_res and dist_dtype need a texture";
+    if (!bad && a->color && !a->texture)
+        bad = "color needs a texture (its texture space)";
     return bad ? meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "shell options: %s", bad) : MESO_OK;
 }
 
@@ -164,6 +167,8 @@ typedef struct shell_bake {
     mesoi_bake_run run;
     meso_bake_shell_report* rep;
     mesoi_shell_texture tx;
+    mesoi_shell_color col;     /* --color: dims 0 when none */
+    meso_mesh_materials mats;  /* --color from-mesh: the input's materials */
     meso_mesh m;
     meso_mesh_topology topo;
     double lo[3], hi[3], h;
@@ -178,6 +183,8 @@ typedef struct shell_bake {
 static void shell_free(shell_bake* s)
 {
     mesoi_shell_texture_free(&s->tx);
+    mesoi_shell_color_free(&s->col);
+    meso_mesh_materials_free(&s->mats);
     meso_lp_field_destroy(s->field);
     meso_field_surface_free(&s->fs);
     free(s->normals);
@@ -360,6 +367,43 @@ static meso_result allowed(shell_bake* s, meso_error* err)
     return r;
 }
 
+/* META.parameters.color: the SPEC, where the texels came from, their size
+ * and how they map (the CMAP record says the same in binary). */
+static void color_json(cJSON* params, const meso_bake_shell_options* a, const mesoi_shell_color* c)
+{
+    cJSON* o = cJSON_AddObjectToObject(params, "color");
+    cJSON_AddStringToObject(o, "spec", a->color);
+    cJSON_AddStringToObject(o, "source", c->source);
+    const double d[3] = {c->dims[0], c->dims[1], c->dims[2]};
+    cJSON_AddItemToObject(o, "res", cJSON_CreateDoubleArray(d, c->dims[2] > 1 ? 3 : 2));
+    cJSON_AddStringToObject(o, "mapping", c->mapping == MESO_CMAP_BASE ? "base" : "tiled");
+}
+
+/* --color: a file is read before any mesh work (a bad one fails fast);
+ * from-mesh once the mesh, its materials and its uvs are known. */
+static meso_result color_prepare(shell_bake* s, int from_mesh, meso_error* err)
+{
+    const meso_bake_shell_options* a = &s->a;
+    double t = meso_seconds();
+    meso_result r;
+    if (from_mesh)
+        r = mesoi_shell_color_from_mesh(a->input, &s->m, &s->mats, s->tx.plane[0] == 0 && s->m.uvs != NULL, &s->col,
+                                        err);
+    else
+        r = mesoi_shell_color_load(a->color, s->run.common.max_memory, &s->col, err);
+    if (r == MESO_OK && s->col.dims[2] > 1 && s->tx.fn.kind != MESO_TEXFN_DENSITY)
+        r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, MESO_COLOR_ISSUE_SPEC,
+                           "--color '%s': a 3D colour needs a volume texture function (--texture volume:..., weave, "
+                           "cells, ...)",
+                           a->color);
+    if (r == MESO_OK)
+        mesoi_run_stage(&s->run, "colour", from_mesh ? 0.2 : 0.1, from_mesh ? 0.2 : 0.1, "colour %s (%s): %ux%ux%u RGBA8, %s (%.0f ms)", a->color,
+                        s->col.source, s->col.dims[0], s->col.dims[1], s->col.dims[2],
+                        s->col.mapping == MESO_CMAP_BASE ? "at the mesh's own uv" : "tiled like the texture",
+                        1e3 * (meso_seconds() - t));
+    return r;
+}
+
 /* The file: base mesh with the normals the directors started from (and the
  * texture coordinates of the texture function), SDIR, STHK, the texture
  * function and its distance map. Everything per vertex is written for the
@@ -437,6 +481,8 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         cJSON_AddBoolToObject(params, "repair", !a->no_repair);
         if (a->texture)
             mesoi_shell_texture_json(params, a, tx, 0);
+        if (s->col.rgba)
+            color_json(params, a, &s->col);
         cJSON* inputs = cJSON_AddArrayToObject(meta, "inputs");
         r = mesoi_add_provenance(inputs, a->input, a->mesh, err);
         if (r == MESO_OK && a->update) {
@@ -455,7 +501,14 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         const meso_anim_record ar = {.frame_count = a->frames, .flags = MESO_ANIM_FLAG_LOOP, .fps = (float)a->fps,
                                      .time0 = (float)a->time};
         meso_anim_record_encode(&ar, anim);
-        const mesoi_chunk chunks[8] = {
+        /* Colour: COLR and the CMAP record that maps it (FORMAT.md §7.2 "Shell colour"). */
+        uint8_t cmap[MESO_CMAP_RECORD_SIZE];
+        const int base_map = s->col.mapping == MESO_CMAP_BASE;
+        const meso_cmap_record cr = {.mapping = s->col.mapping,
+                                     .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
+                                               base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
+        meso_cmap_record_encode(&cr, cmap);
+        mesoi_chunk chunks[10] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -482,8 +535,18 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                       .dims = {tx->dist.dims[0], tx->dist.dims[1], tx->dist.dims[2] * a->frames}},
              .data = tx->dist_frames, .size = tx->dist.encoded_size * a->frames},
         };
+        size_t n = a->frames ? 8 : a->texture ? 5 : 3;
+        if (s->col.rgba) {
+            const uint32_t* cd = s->col.dims;
+            chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8,
+                                                 .components = 4, .dims = {cd[0], cd[1], cd[2]}},
+                                        .data = s->col.rgba, .size = 4 * (size_t)cd[0] * cd[1] * cd[2]};
+            chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_CMAP, .object = 1, .dtype = MESO_DTYPE_BYTES,
+                                                 .components = 1, .dims = {1, 1, 1}},
+                                        .data = cmap, .size = sizeof(cmap)};
+        }
         if (r == MESO_OK)
-            r = mesoi_output_build(meta, rep, &rec, chunks, a->frames ? 8 : a->texture ? 5 : 3, out, err);
+            r = mesoi_output_build(meta, rep, &rec, chunks, n, out, err);
     }
     cJSON_Delete(meta);
     cJSON_Delete(rep);
@@ -515,9 +578,14 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     mesoi_run_begin(&s.run, &a->common);
     double t = meso_seconds();
     /* The texture first: a bad spec fails before any mesh work. */
+    const int from_mesh = mesoi_shell_color_is_from_mesh(a->color);
     if (a->texture)
         r = mesoi_shell_texture_prepare(&s.run, a, &s.tx, err);
-    if (r == MESO_OK)
+    if (r == MESO_OK && a->color && !from_mesh)
+        r = color_prepare(&s, 0, err);
+    if (r == MESO_OK && from_mesh)
+        r = mesoi_load_input_materials(&s.run, a->input, a->mesh, &s.m, &s.mats, &s.rep->fixes, err);
+    else if (r == MESO_OK)
         r = mesoi_load_input(&s.run, a->input, a->mesh, &s.m, &s.rep->fixes, err);
     const double diag = r == MESO_OK ? meso_mesh_bounds(&s.m, s.lo, s.hi) : 0;
     s.rep->seconds_load = meso_seconds() - t;
@@ -527,6 +595,8 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     t = meso_seconds();
     if (r == MESO_OK && a->texture)
         r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
+    if (r == MESO_OK && from_mesh)
+        r = color_prepare(&s, 1, err);
     s.rep->seconds_texture = meso_seconds() - t;
     if (r == MESO_OK && a->update) {
         const double h_side = a->kind == MESO_SHELL_ENVELOPE ? 0.5 * s.h : s.h;

@@ -96,7 +96,8 @@ typedef struct meso_mesh_material {
 
 /* The materials of a loaded mesh (glTF input; empty for other formats):
  * triangle_materials[t] indexes `materials` for triangle t of the mesh as
- * loaded (UINT32_MAX: none). Kept for colour work; no bake reads it yet. */
+ * loaded (UINT32_MAX: none). mesobake shell --color from-mesh reads it
+ * (bake/shell_color.h). */
 typedef struct meso_mesh_materials {
     uint32_t material_count;
     meso_mesh_material* materials;
@@ -131,6 +132,10 @@ MESO_BAKE_API double meso_mesh_bounds(const meso_mesh* m, double lo[3], double h
  *   3120 the texture SPEC does not parse       3122 texture file content unusable
  *   3121 texture file missing or unreadable    3123 .vdb: no such float grid, or empty
  *   (3124..3129 reserved for texture functions and distance maps)
+ * Shell colour (mesobake shell --color, bake/shell_color.h):
+ *   3130 the colour SPEC does not parse        3132 colour file content unusable
+ *   3131 colour file missing or unreadable     3133 from-mesh: no single usable
+ *                                                   base colour in the input
  * Skeletons (bake/skeleton_swc.h): 3140..3149, each listed there.
  * Cell tile maps and split cells (bake/tile_map.h, bake/split_cells.h):
  *   3150..3153, listed in tile_map.h.
@@ -399,6 +404,10 @@ typedef struct meso_bake_shell_options {
      * p, theta, angle_tol_deg, smooth, no_repair and the thickness) must be
      * the old bake's. NULL: a full bake. */
     const char* update;
+    /* Colour function (FORMAT.md §7.2 "Shell colour"; needs `texture`); NULL: none. SPEC:
+     * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a
+     * volume texture) or from-mesh (the glTF input's base colour at the mesh's own uv). */
+    const char* color;
 } meso_bake_shell_options;
 
 typedef struct meso_bake_shell_report {

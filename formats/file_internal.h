@@ -173,6 +173,8 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
                                  uint64_t base, meso_error* err);
 /* ANIM contents (file_anim.c, issues 4901, 4902). */
 meso_result mesoi_check_anim(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err);
+/* CMAP contents (file_cmap.c, issues 4911, 4912). */
+meso_result mesoi_check_cmap(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err);
 /* The 64-byte header stored in front of a Draco MESH bitstream, checked
  * against the chunk's decoded_size. */
 meso_result mesoi_check_mesh_header(const uint8_t* hdr, uint64_t decoded_size, meso_mesh_layout* out, int32_t chunk,

@@ -51,6 +51,7 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_BALL:
     case MESO_CHUNK_CELL:
     case MESO_CHUNK_ANIM:
+    case MESO_CHUNK_CMAP:
     case MESO_CHUNK_TXFR:
     case MESO_CHUNK_DSFR:
     case MESO_CHUNK_RELF: return 1;
@@ -171,6 +172,7 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_BALL:
     case MESO_CHUNK_CELL:
     case MESO_CHUNK_ANIM:
+    case MESO_CHUNK_CMAP:
         if (c->dtype != MESO_DTYPE_BYTES || c->components != 1)
             return elem_error(c, chunk, err, "BYTES x 1");
         return MESO_OK;
@@ -587,6 +589,7 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
     case MESO_CHUNK_BALL: return check_ball(data, size, chunk, base, err);
     case MESO_CHUNK_CELL: return check_cell(data, size, chunk, base, err);
     case MESO_CHUNK_ANIM: return mesoi_check_anim(data, size, chunk, base, err);
+    case MESO_CHUNK_CMAP: return mesoi_check_cmap(data, size, chunk, base, err);
     default: return MESO_OK;
     }
 }

@@ -283,6 +283,41 @@ static void shell_anim(obj_check* c)
         anim_frames(c, si, xi, r.frame_count);
 }
 
+/* How many chunks of `type` the object has, at any lod. */
+static uint32_t count_of(const obj_check* c, uint32_t type)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < c->f->chunk_count; i++)
+        n += c->f->chunks[i].type == type && c->f->chunks[i].object == c->id;
+    return n;
+}
+
+/* The shell's colour (§7.2 "Shell colour"): at most one COLR, exactly when
+ * there is one CMAP record; W x H x 1, or W x H x D over a TX3D volume. */
+static void shell_color(obj_check* c)
+{
+    const int32_t ci = finest(c, MESO_CHUNK_COLR), mi = finest(c, MESO_CHUNK_CMAP);
+    const uint32_t nc = count_of(c, MESO_CHUNK_COLR), nm = count_of(c, MESO_CHUNK_CMAP);
+    if (nc > 1 || nm > 1) {
+        ISSUE(c, MESO_ISSUE_SHELL_COLOR, nc > 1 ? ci : mi, "shell %u has %u COLR and %u CMAP chunks, at most one each",
+              c->id, nc, nm);
+        return;
+    }
+    if ((ci >= 0) != (mi >= 0)) {
+        ISSUE(c, MESO_ISSUE_SHELL_COLOR, ci >= 0 ? ci : mi, "shell %u: %s", c->id,
+              ci >= 0 ? "a COLR needs a CMAP record saying how it maps to texture space" : "a CMAP without a COLR");
+        return;
+    }
+    if (ci < 0 || !rules_ok(c, ci))
+        return;
+    const meso_chunk_info* q = &c->f->chunks[ci]; /* U8 x 4: the §7 element rule */
+    if (q->dims[2] != 1 && finest(c, MESO_CHUNK_TX3D) < 0)
+        ISSUE(c, MESO_ISSUE_SHELL_COLOR, ci,
+              "shell %u: COLR is %ux%ux%u; a 3D colour (depth > 1) needs a TX3D volume, else W x H x 1", c->id,
+              q->dims[0], q->dims[1], q->dims[2]);
+    /* The record's own contents (4911, 4912) are the chunk tier's. */
+}
+
 static void check_shell(obj_check* c)
 {
     const int32_t mi = required(c, MESO_OBJECT_SHELL, MESO_CHUNK_MESH);
@@ -310,6 +345,8 @@ static void check_shell(obj_check* c)
         shell_texture(c);
     if (!c->stop)
         shell_anim(c);
+    if (!c->stop)
+        shell_color(c);
 }
 
 /* >>frusta (kind 4) --------------------------------------------------------- */

@@ -111,6 +111,7 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_ANIM MESO_FOURCC('A', 'N', 'I', 'M') /* a shell's animated texture function: frames, rate, loop */
 #define MESO_CHUNK_TXFR MESO_FOURCC('T', 'X', 'F', 'R') /* its frames: TX2D/TX3D slabs stacked along z */
 #define MESO_CHUNK_DSFR MESO_FOURCC('D', 'S', 'F', 'R') /* their distance maps: DIST slabs stacked along z */
+#define MESO_CHUNK_CMAP MESO_FOURCC('C', 'M', 'A', 'P') /* how a shell's COLR maps to texture space (one record) */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -462,12 +463,15 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_CELL_MEMB 4806u
 #define MESO_ISSUE_ANIM_SIZE 4901u           /* ANIM is not one 32-byte record */
 #define MESO_ISSUE_ANIM_VALUE 4902u          /* ANIM field out of range or reserved bytes not zero */
+#define MESO_ISSUE_CMAP_SIZE 4911u           /* CMAP is not one 32-byte record */
+#define MESO_ISSUE_CMAP_VALUE 4912u          /* CMAP field out of range or reserved bytes not zero */
 #define MESO_ISSUE_OBJ_CHUNKS 6001u          /* an object lacks a chunk its kind requires */
 #define MESO_ISSUE_SHELL_COUNT 6101u         /* SDIR/STHK count != MESH vertex count, or no triangles */
 #define MESO_ISSUE_SHELL_SDIR 6102u          /* non-finite director */
 #define MESO_ISSUE_SHELL_STHK 6103u          /* thickness not finite or not > 0 */
 #define MESO_ISSUE_SHELL_TEXTURE 6104u       /* texture function chunks not as FORMAT.md 7.2 */
 #define MESO_ISSUE_SHELL_ANIM 6105u          /* ANIM/TXFR/DSFR do not fit the shell's texture function */
+#define MESO_ISSUE_SHELL_COLOR 6106u         /* COLR/CMAP of a shell not as FORMAT.md 7.2 */
 #define MESO_ISSUE_FRUSTA_COUNT 6201u        /* FSEG and FRUS record counts differ */
 #define MESO_ISSUE_FRUSTA_NODE 6202u         /* a SKEL node reference out of range */
 #define MESO_ISSUE_FRUSTA_AXIS 6203u         /* zero-length axis or zero cutting-plane normal */
@@ -575,6 +579,22 @@ MESO_API void meso_anim_record_decode(const void* src, meso_anim_record* rec);
  * 0..frame_count-1 with LOOP, else clamped (the 1e-4 frame keeps t = time0
  * + k / fps on frame k despite rounding). */
 MESO_API uint32_t meso_anim_frame_at(const meso_anim_record* rec, double t);
+
+/* One 32-byte CMAP record (FORMAT.md §7.2 "Shell colour"), decoded: a
+ * shell's COLR is looked up at (s · scale[0], t' · scale[1], w) for the
+ * texture point (s, t', w) of a hit (wraps in s and t', clamps in w). */
+typedef struct meso_cmap_record {
+    uint32_t mapping; /* MESO_CMAP_TILED or MESO_CMAP_BASE: what the colour follows (scale says how) */
+    uint32_t flags;   /* 0 (no flags defined) */
+    float scale[2];   /* finite, > 0; TILED: 1, 1; BASE: 1 / the bake's tiling */
+} meso_cmap_record;
+#define MESO_CMAP_TILED 0u /* one COLR tile per texture tile, like the texture function */
+#define MESO_CMAP_BASE 1u  /* the COLR spans the base mesh's own uv square once (colour of the mesh) */
+
+/* Encode one record into 32 bytes at dst (reserved bytes zero) / decode 32
+ * bytes at src (no checks: the full tier and meso_file_read_chunk check). */
+MESO_API void meso_cmap_record_encode(const meso_cmap_record* rec, void* dst);
+MESO_API void meso_cmap_record_decode(const void* src, meso_cmap_record* rec);
 
 /* The file's objects: reads and checks the OBJT chunk (CRC and records) and
  * writes up to `cap` records to `out` (NULL with cap 0 only counts); *count

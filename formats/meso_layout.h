@@ -87,6 +87,14 @@
 #define MESO_ANIM_OFF_RESERVED 16
 #define MESO_ANIM_SIZE_RESERVED 16
 
+/* CMAP chunk: one 32-byte record (FORMAT.md §7.2 "Shell colour"). */
+#define MESO_CMAP_RECORD_SIZE 32
+#define MESO_CMAP_OFF_MAPPING 0
+#define MESO_CMAP_OFF_FLAGS 4
+#define MESO_CMAP_OFF_SCALE 8
+#define MESO_CMAP_OFF_RESERVED 16
+#define MESO_CMAP_SIZE_RESERVED 16
+
 /* SKEL chunk: one 32-byte record per skeleton node. */
 #define MESO_SKEL_RECORD_SIZE 32
 #define MESO_SKEL_OFF_POSITION 0

@@ -344,7 +344,9 @@ typedef enum meso_rt_pass {
                               shading; cells trace only the first hit */
     MESO_PASS_GBUFFER,     /* into the host's attachments, which it binds with glDrawBuffers before the
                               draw: location 0 albedo: rgb the linear material colour (desc->albedo; for
-                              cells the colour map's texel at the hit), a the built-in occlusion factor
+                              cells the colour map's texel at the hit; for shells with a colour, COLR +
+                              CMAP, FORMAT.md 7.2, the colour at the hit's texture point), a the built-in
+                              occlusion factor
                               (shells and relief frusta 0.25 + 0.75 w, w the hit's height in the shell or
                               relief layer; 1 for meshes, balls, smooth frusta and cells); location 1 the
                               world-space unit shading normal, facing the viewer, encoded rgb = n · 0.5 +

@@ -95,6 +95,60 @@ float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count)
     return f;
 }
 
+/* A new 2D or 3D texture of `dims` texels at level 0 (the only level),
+ * `filter` both ways, repeating in s and t, clamped in r; the unit's
+ * binding and the unpack state restored. */
+static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, GLint internal, GLenum format,
+                                GLenum type, GLint filter, const void* data, GLuint* out)
+{
+    mesoi_gl* gl = &rt->gl;
+    const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
+    /* Refused before GL sees it: an invalid TexImage would raise an error
+     * in the host's queue. */
+    GLint limit = 0;
+    gl->GetIntegerv(dims3 ? GL_MAX_3D_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &limit);
+    for (int k = 0; k < (dims3 ? 3 : 2); ++k)
+        if (dims[k] == 0 || dims[k] > (uint32_t)limit) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
+                      "a %ux%ux%u texture exceeds this context's limit of %d texels a side", dims[0], dims[1],
+                      dims[2], (int)limit);
+            *out = 0;
+            return MESO_ERR_GL;
+        }
+    GLint prev_tex = 0;
+    gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
+    mesoi_unpack unpack;
+    mesoi_unpack_default(rt, &unpack);
+    gl->GenTextures(1, out);
+    gl->BindTexture(target, *out);
+    if (dims3)
+        gl->TexImage3D(target, 0, internal, (GLsizei)dims[0], (GLsizei)dims[1], (GLsizei)dims[2], 0, format, type,
+                       data);
+    else
+        gl->TexImage2D(target, 0, internal, (GLsizei)dims[0], (GLsizei)dims[1], 0, format, type, data);
+    gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
+    gl->TexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
+    gl->TexParameteri(target, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    gl->TexParameteri(target, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    if (dims3)
+        gl->TexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+    gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
+    /* A refused or failed TexImage leaves level 0 empty: that is the check,
+     * so the host's GL error queue is left alone. */
+    GLint width = 0;
+    gl->GetTexLevelParameteriv(target, 0, GL_TEXTURE_WIDTH, &width);
+    gl->BindTexture(target, (GLuint)prev_tex);
+    mesoi_unpack_restore(rt, &unpack);
+    if (width != (GLint)dims[0]) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created", dims[0],
+                  dims[1], dims[2]);
+        gl->DeleteTextures(1, out);
+        *out = 0;
+        return MESO_ERR_GL;
+    }
+    return MESO_OK;
+}
+
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
                                 const void* data, GLuint* out)
 {
@@ -114,55 +168,15 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
         type = GL_FLOAT;
         data = converted;
     }
-    mesoi_gl* gl = &rt->gl;
-    const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
-    /* Refused before GL sees it: an invalid TexImage would raise an error
-     * in the host's queue. */
-    GLint limit = 0;
-    gl->GetIntegerv(dims3 ? GL_MAX_3D_TEXTURE_SIZE : GL_MAX_TEXTURE_SIZE, &limit);
-    for (int k = 0; k < (dims3 ? 3 : 2); ++k)
-        if (dims[k] == 0 || dims[k] > (uint32_t)limit) {
-            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR,
-                      "a %ux%ux%u texture exceeds this context's limit of %d texels a side", dims[0], dims[1],
-                      dims[2], (int)limit);
-            mesoi_rt_free(rt, converted);
-            *out = 0;
-            return MESO_ERR_GL;
-        }
-    GLint prev_tex = 0;
-    gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
-    mesoi_unpack unpack;
-    mesoi_unpack_default(rt, &unpack);
-    gl->GenTextures(1, out);
-    gl->BindTexture(target, *out);
-    if (dims3)
-        gl->TexImage3D(target, 0, (GLint)internal, (GLsizei)dims[0], (GLsizei)dims[1], (GLsizei)dims[2], 0, GL_RED,
-                       type, data);
-    else
-        gl->TexImage2D(target, 0, (GLint)internal, (GLsizei)dims[0], (GLsizei)dims[1], 0, GL_RED, type, data);
-    const GLint filter = nearest ? GL_NEAREST : GL_LINEAR;
-    gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
-    gl->TexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
-    gl->TexParameteri(target, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    gl->TexParameteri(target, GL_TEXTURE_WRAP_T, GL_REPEAT);
-    if (dims3)
-        gl->TexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
-    gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
-    /* A refused or failed TexImage leaves level 0 empty: that is the check,
-     * so the host's GL error queue is left alone. */
-    GLint width = 0;
-    gl->GetTexLevelParameteriv(target, 0, GL_TEXTURE_WIDTH, &width);
-    gl->BindTexture(target, (GLuint)prev_tex);
-    mesoi_unpack_restore(rt, &unpack);
+    const meso_result r = upload_image(rt, dims, dims3, (GLint)internal, GL_RED, type, nearest ? GL_NEAREST : GL_LINEAR,
+                                       data, out);
     mesoi_rt_free(rt, converted);
-    if (width != (GLint)dims[0]) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created", dims[0],
-                  dims[1], dims[2]);
-        gl->DeleteTextures(1, out);
-        *out = 0;
-        return MESO_ERR_GL;
-    }
-    return MESO_OK;
+    return r;
+}
+
+meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], const void* data, GLuint* out)
+{
+    return upload_image(rt, dims, 1, GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, data, out);
 }
 
 meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out)

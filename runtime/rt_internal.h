@@ -29,6 +29,7 @@ typedef struct mesoi_object {
     X(view) X(proj) X(model) X(light_dir)                              /* mesh */                          \
     X(uv_scale) X(tex_kind) X(has_dist) X(tex_size) X(err_scale) X(max_steps) X(bisect_steps)             \
     X(segment_steps) X(fixed_step) X(min_step) X(slices) X(slice_axis) X(prism_count) /* shell, slices */                \
+    X(has_color) X(color_scale)                                        /* shell colour */                  \
     X(relief_size) X(relief_steps) X(color_size) X(ball_color)          /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
     X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) /* cells */                              \
@@ -108,9 +109,21 @@ typedef struct mesoi_shell {
     meso_rt_shell_texture frame_desc; /* dims and types of one frame (data pointers unset) */
     size_t fn_bytes, dist_bytes;
     uint32_t shown_frame; /* the stored frame uploaded last; UINT32_MAX after meso_rt_shell_set_texture */
+    /* Colour (COLR + CMAP, FORMAT.md §7.2 "Shell colour"): a 3D SRGB8_ALPHA8
+     * texture (depth 1 for 2D colour), looked up at (s, t', w) * color_scale. */
+    GLuint color_tex;     /* 0: none (u_albedo) */
+    float color_scale[3]; /* the CMAP scale, 1 */
 } mesoi_shell;
 
-enum { SHELL_UNIT_VERTS = 0, SHELL_UNIT_INDEX, SHELL_UNIT_HEIGHT, SHELL_UNIT_VOLUME, SHELL_UNIT_DIST, SHELL_UNIT_COUNT };
+enum {
+    SHELL_UNIT_VERTS = 0,
+    SHELL_UNIT_INDEX,
+    SHELL_UNIT_HEIGHT,
+    SHELL_UNIT_VOLUME,
+    SHELL_UNIT_DIST,
+    SHELL_UNIT_COLOR,
+    SHELL_UNIT_COUNT
+};
 
 meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d); /* rt_slices.c */
 /* Deletes the slice programs and the offscreen target (rt_slices.c). */
@@ -161,6 +174,10 @@ meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims
  * the unpack state are restored; MESO_ERR_GL (logged) when GL made no level 0. MESO_ERR_UNSUPPORTED for other types. */
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
                                 const void* data, GLuint* out);
+/* An RGBA8 colour chunk (COLR) as a 3D GL_SRGB8_ALPHA8 texture (fetches
+ * are linear), filtered linearly at level 0, repeating in s and t and
+ * clamped in r; bindings and unpack state restored as mesoi_upload_texels. */
+meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], const void* data, GLuint* out);
 /* A texture buffer over a new buffer object holding `size` bytes of `data`;
  * 0 (logged, *buf 0, nothing left behind) when GL could not store them. */
 GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf);

@@ -32,9 +32,9 @@ static void shell_free(meso_rt* rt, mesoi_shell* s)
     if (!s)
         return;
     mesoi_gl* gl = &rt->gl;
-    GLuint tex[4] = {s->vert_tex, s->index_tex, s->func_tex, s->dist_tex};
+    GLuint tex[5] = {s->vert_tex, s->index_tex, s->func_tex, s->dist_tex, s->color_tex};
     GLuint buf[2] = {s->vert_buf, s->index_buf};
-    gl->DeleteTextures(4, tex);
+    gl->DeleteTextures(5, tex);
     gl->DeleteBuffers(2, buf);
     mesoi_rt_free(rt, s->positions);
     mesoi_rt_free(rt, s->directors);
@@ -125,6 +125,42 @@ static meso_result load_frames(meso_rt* rt, meso_file* f, uint32_t id, mesoi_she
     }
     s->shown_frame = 0; /* the TX2D/TX3D and DIST just uploaded */
     return MESO_OK;
+}
+
+/* The shell's colour (FORMAT.md §7.2 "Shell colour"): COLR uploaded as
+ * SRGB8_ALPHA8 and the CMAP record's scale. No COLR: nothing (u_albedo). */
+static meso_result load_color(meso_rt* rt, meso_file* f, uint32_t id, mesoi_shell* s)
+{
+    const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_COLR, id), mi = mesoi_find_chunk(f, MESO_CHUNK_CMAP, id);
+    if (ci < 0 && mi < 0)
+        return MESO_OK;
+    const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
+    if (!c || mi < 0 || c->dtype != MESO_DTYPE_U8 || c->components != 4 ||
+        (c->dims[2] != 1 && s->tex_kind != 2)) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "shell %u: colour needs one U8 x 4 COLR (3D only over a TX3D) and its CMAP record (FORMAT.md "
+                  "issue 6106)",
+                  id);
+        return MESO_ERR_CORRUPT;
+    }
+    void* rec = NULL;
+    size_t rec_size = 0;
+    meso_result r = mesoi_read_whole(rt, f, mi, &rec, &rec_size); /* contents checked: 4911, 4912 */
+    if (r != MESO_OK)
+        return r;
+    meso_cmap_record m;
+    meso_cmap_record_decode(rec, &m);
+    mesoi_rt_free(rt, rec);
+    void* texels = NULL;
+    size_t size = 0;
+    r = mesoi_read_whole(rt, f, ci, &texels, &size);
+    if (r == MESO_OK)
+        r = mesoi_upload_srgba8(rt, c->dims, texels, &s->color_tex);
+    mesoi_rt_free(rt, texels);
+    s->color_scale[0] = m.scale[0];
+    s->color_scale[1] = m.scale[1];
+    s->color_scale[2] = 1.0f;
+    return r;
 }
 
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_object* o)
@@ -229,6 +265,8 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         r = mesoi_upload_texture(rt, f, xi, 1, 1, &s->dist_tex);
     if (r == MESO_OK)
         r = load_frames(rt, f, id, s, hi >= 0 ? hi : vi, xi);
+    if (r == MESO_OK)
+        r = load_color(rt, f, id, s);
     char what[48];
     snprintf(what, sizeof(what), "uploading shell %u", id);
     r = mesoi_upload_end(rt, prev_tex_buffer, r, what);
@@ -413,8 +451,8 @@ meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_
 
 /* Programs per technique, with or without the stats counters (atomics
  * cost time, so draws that do not ask for stats run without them). */
-static const char* const shell_samplers[SHELL_UNIT_COUNT + 1] = {"u_verts", "u_index", "u_height", "u_volume",
-                                                                 "u_dist", "u_instances"};
+static const char* const shell_samplers[SHELL_UNIT_COUNT + 1] = {"u_verts", "u_index", "u_height",   "u_volume",
+                                                                 "u_dist",  "u_color", "u_instances"};
 
 static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, int stats, meso_rt_pass pass)
 {
@@ -589,13 +627,16 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     float max_tex = fmaxf(s->tex_size[0], fmaxf(s->tex_size[1], s->tex_size[2]));
 
     static const GLenum unit_target[SHELL_UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
-                                                         GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_BUFFER};
+                                                             GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_3D,
+                                                             GL_TEXTURE_BUFFER};
     const GLuint bind[SHELL_UNIT_COUNT + 1] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
-                                               s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, inst_tex};
+                                               s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, s->color_tex, inst_tex};
     mesoi_draw_begin(rt, &ds, prog, 1, inst ? SHELL_UNIT_COUNT + 1 : SHELL_UNIT_COUNT, unit_target, bind);
     const GLint* u = prog->loc;
     gl->Uniform1f(u[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(u[MESOI_U_tex_kind], s->tex_kind);
+    gl->Uniform1i(u[MESOI_U_has_color], s->color_tex != 0);
+    gl->Uniform3fv(u[MESOI_U_color_scale], 1, s->color_scale);
     gl->Uniform1i(u[MESOI_U_has_dist], s->dist_tex && !k->no_distance_map);
     gl->Uniform3fv(u[MESOI_U_tex_size], 1, s->tex_size);
     gl->Uniform1f(u[MESOI_U_err_scale], (float)err_scale);

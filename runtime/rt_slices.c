@@ -47,7 +47,7 @@
 
 enum { PASS_NONE = 0, PASS_FIRST, PASS_NORMAL, PASS_TEXCOORD, PASS_COMPOSITE, PASS_COUNT };
 enum { TEX_A_T1 = 0, TEX_A_COLOUR, TEX_A_DEPTH, TEX_B_COLOUR, TEX_B_DEPTH, TEX_COUNT };
-/* Units: the shell's five (rt_shell.c), then the target's two inputs. */
+/* Units: the shell's six (rt_shell.c), then the target's two inputs. */
 enum { UNIT_FIRST = SHELL_UNIT_COUNT, UNIT_SECOND, SLICE_UNITS };
 
 /* Slice pass `pass` (SLICE_PASS) of draw pass `mpass`: SLICE_PASS 0 writes
@@ -71,7 +71,7 @@ static const mesoi_program* slice_program(meso_rt* rt, meso_rt_pass mpass, int p
         {"slices none depth"},
         {"slices none gbuffer"}};
     static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
-                                                      "u_dist",  "u_first", "u_second"};
+                                                      "u_dist",  "u_color", "u_first",  "u_second"};
     const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "shell_slices_vert.glsl", .pre = pre,
                                    .pre_count = 4, .frag = mesoi_glsl_shell_slices_frag,
                                    .frag_file = "shell_slices_frag.glsl", .own_outputs = pass != PASS_NONE,
@@ -162,6 +162,8 @@ static void use_pass(meso_rt* rt, const mesoi_draw* ds, const mesoi_program* p, 
     const float vp[4] = {(float)viewport[0], (float)viewport[1], (float)viewport[2], (float)viewport[3]};
     gl->Uniform4fv(p->loc[MESOI_U_viewport], 1, vp);
     gl->Uniform1i(p->loc[MESOI_U_tex_kind], s->tex_kind);
+    gl->Uniform1i(p->loc[MESOI_U_has_color], s->color_tex != 0);
+    gl->Uniform3fv(p->loc[MESOI_U_color_scale], 1, s->color_scale);
     gl->Uniform3fv(p->loc[MESOI_U_tex_size], 1, s->tex_size);
     gl->Uniform1i(p->loc[MESOI_U_slices], k->slices > 0 ? k->slices : 16);
     gl->Uniform1i(p->loc[MESOI_U_slice_axis], (GLint)k->slice_axis);
@@ -203,10 +205,10 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
         return MESO_ERR_GL;
     mesoi_gl* gl = &rt->gl;
     static const GLenum unit_target[SLICE_UNITS] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
-                                                    GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_2D,
-                                                    GL_TEXTURE_2D};
+                                                    GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_3D,
+                                                    GL_TEXTURE_2D,     GL_TEXTURE_2D};
     const GLuint bind[SLICE_UNITS] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
-                                      s->tex_kind == 2 ? s->func_tex : 0, 0, 0, 0};
+                                      s->tex_kind == 2 ? s->func_tex : 0, 0, s->color_tex, 0, 0};
     mesoi_draw_begin(rt, &ds, prog, 0, SLICE_UNITS, unit_target, bind);
     gl->Disable(GL_CULL_FACE); /* slices are seen from both sides */
     /* Triangles a prism: levels, M slices and 3 side quads; the view

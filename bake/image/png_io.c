@@ -74,6 +74,7 @@ typedef struct png_ctx {
     uint64_t max_bytes;  /* read: budget for what the image needs */
     unsigned extra;      /* read: the caller's bytes per pixel, counted in it */
     uint64_t need;       /* read: what it needs (set when over the budget) */
+    int rgba8;           /* read: expand to 8-bit RGBA (meso_png_read_rgba8_fp) */
     uint8_t* pixels;    /* decoded image (read) */
     png_bytep* rows;    /* row pointers */
 } png_ctx;
@@ -119,6 +120,14 @@ static int read_body(png_structp png, png_infop info, png_ctx* c, int* width, in
     png_set_keep_unknown_chunks(png, PNG_HANDLE_CHUNK_NEVER, NULL, 0); /* and chunks libpng does not know */
     png_read_info(png, info);
     png_set_expand(png); /* palette -> RGB, grey < 8 bits -> 8 bits, tRNS -> alpha */
+    if (c->rgba8) {
+        /* Colour images: the stored sRGB values as they are (no gamma
+         * processing), 16-bit samples scaled to 8 bits, grey to RGB, opaque
+         * alpha added where there is none. */
+        png_set_scale_16(png);
+        png_set_gray_to_rgb(png);
+        png_set_add_alpha(png, 0xFF, PNG_FILLER_AFTER);
+    }
     (void)png_set_interlace_handling(png);
     png_read_update_info(png, info);
     const png_uint_32 w = png_get_image_width(png, info), h = png_get_image_height(png, info);
@@ -169,6 +178,29 @@ int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int*
     return rc;
 }
 
+/* Signature, then read_body under setjmp: c->rows hold the decoded image
+ * on 0; -1 or -2 (over the budget, c->need set) with `why` filled. */
+static int read_rows(png_ctx* c, int* w, int* h, int* depth, int* channels)
+{
+    uint8_t sig[8];
+    if (fread(sig, 1, 8, c->fp) != 8 || png_sig_cmp(sig, 0, 8)) {
+        snprintf(c->why, (size_t)c->why_size, "%s: not a PNG file", c->path);
+        return -1;
+    }
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, c, ctx_error, ctx_warning);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    if (!info) {
+        snprintf(c->why, (size_t)c->why_size, "%s: out of memory", c->path);
+        png_destroy_read_struct(&png, NULL, NULL);
+        return -1;
+    }
+    int rc = -1;
+    if (setjmp(png_jmpbuf(png)) == 0)
+        rc = read_body(png, info, c, w, h, depth, channels);
+    png_destroy_read_struct(&png, &info, NULL);
+    return rc;
+}
+
 int meso_png_read_channel0_fp(FILE* fp, const char* name, uint64_t max_bytes, unsigned extra_per_pixel,
                               uint16_t** values, int* width, int* height, int* bit_depth, uint64_t* need, char* why,
                               int why_size)
@@ -177,24 +209,8 @@ int meso_png_read_channel0_fp(FILE* fp, const char* name, uint64_t max_bytes, un
     png_ctx ctx = {.why = why, .why_size = why_size, .path = name, .fp = fp, .max_bytes = max_bytes,
                    .extra = extra_per_pixel};
     png_ctx* c = &ctx;
-    uint8_t sig[8];
-    if (fread(sig, 1, 8, c->fp) != 8 || png_sig_cmp(sig, 0, 8)) {
-        snprintf(why, (size_t)why_size, "%s: not a PNG file", name);
-        ctx_free(c);
-        return -1;
-    }
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, c, ctx_error, ctx_warning);
-    png_infop info = png ? png_create_info_struct(png) : NULL;
-    if (!info) {
-        snprintf(why, (size_t)why_size, "%s: out of memory", name);
-        png_destroy_read_struct(&png, NULL, NULL);
-        ctx_free(c);
-        return -1;
-    }
-    int w = 0, h = 0, depth = 0, channels = 0, rc = -1;
-    if (setjmp(png_jmpbuf(png)) == 0)
-        rc = read_body(png, info, c, &w, &h, &depth, &channels);
-    png_destroy_read_struct(&png, &info, NULL);
+    int w = 0, h = 0, depth = 0, channels = 0;
+    int rc = read_rows(c, &w, &h, &depth, &channels);
     if (rc == -2 && need)
         *need = c->need;
     uint16_t* out = rc == 0 ? malloc(sizeof(uint16_t) * (size_t)w * (size_t)h) : NULL;
@@ -214,6 +230,38 @@ int meso_png_read_channel0_fp(FILE* fp, const char* name, uint64_t max_bytes, un
         *width = w;
         *height = h;
         *bit_depth = depth;
+    }
+    ctx_free(c);
+    return rc;
+}
+
+int meso_png_read_rgba8_fp(FILE* fp, const char* name, uint64_t max_bytes, unsigned extra_per_pixel, uint8_t** rgba,
+                           int* width, int* height, uint64_t* need, char* why, int why_size)
+{
+    *rgba = NULL;
+    png_ctx ctx = {.why = why, .why_size = why_size, .path = name, .fp = fp, .max_bytes = max_bytes,
+                   .extra = extra_per_pixel + 2, .rgba8 = 1}; /* read_body counts 2 B of samples, the copy takes 4 */
+    png_ctx* c = &ctx;
+    int w = 0, h = 0, depth = 0, channels = 0;
+    int rc = read_rows(c, &w, &h, &depth, &channels);
+    if (rc == -2 && need)
+        *need = c->need;
+    if (rc == 0 && (depth != 8 || channels != 4)) {
+        snprintf(why, (size_t)why_size, "%s: unsupported PNG layout (%d-bit, %d channels after expansion)", name,
+                 depth, channels);
+        rc = -1;
+    }
+    uint8_t* out = rc == 0 ? malloc(4 * (size_t)w * (size_t)h) : NULL;
+    if (rc == 0 && !out) {
+        snprintf(why, (size_t)why_size, "%s: out of memory", name);
+        rc = -1;
+    }
+    for (size_t y = 0; rc == 0 && y < (size_t)h; ++y)
+        memcpy(out + 4 * (size_t)w * y, c->rows[y], 4 * (size_t)w);
+    if (rc == 0) {
+        *rgba = out;
+        *width = w;
+        *height = h;
     }
     ctx_free(c);
     return rc;

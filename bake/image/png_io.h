@@ -31,6 +31,13 @@ int meso_png_read_channel0(const char* path, uint16_t** values, int* width, int*
 int meso_png_read_channel0_fp(FILE* fp, const char* name, uint64_t max_bytes, unsigned extra_per_pixel,
                               uint16_t** values, int* width, int* height, int* bit_depth, uint64_t* need, char* why,
                               int why_size);
+/* Colour images (a shell's --color): any PNG as 8-bit RGBA, rows top to
+ * bottom, the stored (sRGB) values without gamma processing (palette and
+ * grey expanded, 16-bit samples scaled to 8 bits, alpha 255 where the file
+ * has none); *rgba is malloc'd (free with free()). Budget and return codes
+ * as meso_png_read_channel0_fp (-2: over `max_bytes`, nothing allocated). */
+int meso_png_read_rgba8_fp(FILE* fp, const char* name, uint64_t max_bytes, unsigned extra_per_pixel, uint8_t** rgba,
+                           int* width, int* height, uint64_t* need, char* why, int why_size);
 /* Write a grey PNG from width*height samples, rows top to bottom, with
  * bit_depth 8 (values 0..255) or 16. Returns 0 on success. */
 int meso_png_write_gray(const char* path, const uint16_t* values, int width, int height, int bit_depth, char* why,

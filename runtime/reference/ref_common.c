@@ -191,6 +191,12 @@ float mesoi_ref_depth(const mesoi_ref_camera* c, const double p[3])
 void mesoi_ref_shade(const mesoi_ref_camera* c, const double d[3], const double n_in[3], double w, float rgb[3],
     float nrm[3])
 {
+    mesoi_ref_shade_albedo(c, c->albedo, d, n_in, w, rgb, nrm);
+}
+
+void mesoi_ref_shade_albedo(const mesoi_ref_camera* c, const double albedo[3], const double d[3], const double n_in[3],
+                            double w, float rgb[3], float nrm[3])
+{
     double n[3] = {n_in[0], n_in[1], n_in[2]};
     const double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (nl > 0)
@@ -202,7 +208,7 @@ void mesoi_ref_shade(const mesoi_ref_camera* c, const double d[3], const double 
     const double ndl = n[0] * c->light[0] + n[1] * c->light[1] + n[2] * c->light[2];
     const double k = (0.25 + 0.75 * w) * (0.15 + 0.85 * fmax(0.0, ndl));
     for (int i = 0; i < 3; ++i) {
-        rgb[i] = (float)(c->albedo[i] * k);
+        rgb[i] = (float)(albedo[i] * k);
         nrm[i] = (float)n[i];
     }
 }
@@ -218,6 +224,7 @@ void meso_ref_image_free(meso_ref_image* img)
     free(img->coverage);
     free(img->hit);
     free(img->normal);
+    free(img->albedo);
     memset(img, 0, sizeof(*img));
 }
 
@@ -230,7 +237,8 @@ meso_result mesoi_ref_image_alloc(meso_ref_image* out, int W, int H)
     out->coverage = malloc(npx);
     out->hit = malloc(sizeof(float) * 3 * npx);
     out->normal = malloc(sizeof(float) * 3 * npx);
-    if (!out->rgb || !out->depth || !out->coverage || !out->hit || !out->normal) {
+    out->albedo = calloc(3 * npx, sizeof(float));
+    if (!out->rgb || !out->depth || !out->coverage || !out->hit || !out->normal || !out->albedo) {
         meso_ref_image_free(out);
         return MESO_ERR_OUT_OF_MEMORY;
     }
@@ -246,6 +254,7 @@ void mesoi_ref_image_miss(meso_ref_image* img, size_t px)
     img->coverage[px] = 0;
     img->hit[3 * px] = img->hit[3 * px + 1] = img->hit[3 * px + 2] = NAN;
     img->normal[3 * px] = img->normal[3 * px + 1] = img->normal[3 * px + 2] = 0.0f;
+    img->albedo[3 * px] = img->albedo[3 * px + 1] = img->albedo[3 * px + 2] = 0.0f;
 }
 
 /* >>threads ---------------------------------------------------------------- */

@@ -59,6 +59,9 @@ float mesoi_ref_depth(const mesoi_ref_camera* c, const double p[3]);
  * turned to face the ray d; writes the colour and that normal. */
 void mesoi_ref_shade(const mesoi_ref_camera* c, const double d[3], const double n_in[3], double w, float rgb[3],
     float nrm[3]);
+/* The same with the albedo given (a shell's colour at the hit). */
+void mesoi_ref_shade_albedo(const mesoi_ref_camera* c, const double albedo[3], const double d[3], const double n_in[3],
+                            double w, float rgb[3], float nrm[3]);
 
 /* >>images */
 

@@ -514,3 +514,31 @@ void meso_ref_texfn_gradient(const meso_ref_texfn* tf, double s, double t, doubl
     g[1] = -ht;
     g[2] = -hw;
 }
+
+/* >>colour ------------------------------------------------------------------ */
+
+static double srgb_to_linear(double x)
+{
+    return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
+}
+
+int meso_ref_color_value(const meso_ref_color* c, double s, double t, double w, double rgb[3])
+{
+    if (!c || !c->rgba || c->w == 0 || c->h == 0 || c->d == 0)
+        return 0;
+    uint32_t x[2], y[2], z[2];
+    double fx, fy, fz;
+    axis_wrap(s * c->scale[0], c->w, &x[0], &x[1], &fx);
+    axis_wrap(t * c->scale[1], c->h, &y[0], &y[1], &fy);
+    axis_clamp(w, c->d, &z[0], &z[1], &fz);
+    const double wx[2] = {1 - fx, fx}, wy[2] = {1 - fy, fy}, wz[2] = {1 - fz, fz};
+    rgb[0] = rgb[1] = rgb[2] = 0;
+    for (int k = 0; k < 8; ++k) {
+        const int a = k & 1, b = (k >> 1) & 1, e = k >> 2;
+        const double wt = wx[a] * wy[b] * wz[e];
+        const uint8_t* p = c->rgba + 4 * (((size_t)z[e] * c->h + y[b]) * c->w + x[a]);
+        for (int i = 0; i < 3; ++i)
+            rgb[i] += wt * srgb_to_linear(p[i] / 255.0);
+    }
+    return 1;
+}

@@ -134,6 +134,22 @@ int meso_ref_texfn_solid(const meso_ref_texfn* tf, double s, double t, double w)
  * (δ = 1/W, 1/H, 1/D); kind 0: (0,0,1). */
 void meso_ref_texfn_gradient(const meso_ref_texfn* tf, double s, double t, double w, double g[3]);
 
+/* A shell's colour (FORMAT.md §7.2 "Shell colour"): COLR texels (RGBA8,
+ * sRGB) and the CMAP scale. */
+typedef struct meso_ref_color {
+    uint32_t w, h, d;    /* 0: no colour */
+    const uint8_t* rgba; /* w*h*d texels, x fastest */
+    double scale[2];     /* the CMAP record's */
+} meso_ref_color;
+
+/* Linear RGB at texture point (s, t, w): looked up at (s·scale[0],
+ * t·scale[1], w), each texel decoded from sRGB (the exact curve: x ≤ 0.04045:
+ * x/12.92, else ((x + 0.055)/1.055)^2.4) and then filtered trilinearly with
+ * the wrap (s, t) / clamp (w) rules of the texture function — what an
+ * SRGB8_ALPHA8 texture fetch with GL_LINEAR returns. Returns 0 (rgb
+ * untouched) without colour. */
+int meso_ref_color_value(const meso_ref_color* c, double s, double t, double w, double rgb[3]);
+
 #ifdef __cplusplus
 }
 #endif

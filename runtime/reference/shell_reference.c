@@ -33,6 +33,35 @@
 
 /* >>loading ---------------------------------------------------------------- */
 
+/* COLR + CMAP (FORMAT.md §7.2 "Shell colour"); none: MESO_OK, color.w 0. */
+static meso_result load_color(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err)
+{
+    const int32_t ci = meso_file_find(f, MESO_CHUNK_COLR, object_id, 0);
+    const int32_t mi = meso_file_find(f, MESO_CHUNK_CMAP, object_id, 0);
+    if (ci < 0 && mi < 0)
+        return MESO_OK;
+    const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
+    if (!c || mi < 0 || c->dtype != MESO_DTYPE_U8 || c->components != 4 ||
+        meso_file_chunk(f, (uint32_t)mi)->decoded_size != MESO_CMAP_RECORD_SIZE ||
+        (c->dims[2] != 1 && out->tex.kind != 2))
+        return mesoi_ref_fail(err, MESO_ERR_CORRUPT, "shell", object_id,
+                              "colour needs one U8 x 4 COLR (3D only over a TX3D) and its CMAP record (FORMAT.md 7.2)");
+    uint8_t rec[MESO_CMAP_RECORD_SIZE];
+    meso_result r = meso_file_read_chunk(f, (uint32_t)mi, rec, sizeof(rec), err);
+    void* texels = NULL;
+    size_t size = 0;
+    if (r == MESO_OK)
+        r = mesoi_ref_read_whole(f, ci, &texels, &size, err);
+    if (r != MESO_OK)
+        return r;
+    meso_cmap_record m;
+    meso_cmap_record_decode(rec, &m);
+    out->color_texels = texels;
+    out->color = (meso_ref_color){.w = c->dims[0], .h = c->dims[1], .d = c->dims[2], .rgba = out->color_texels,
+                                  .scale = {m.scale[0], m.scale[1]}};
+    return MESO_OK;
+}
+
 meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err)
 {
     if (!f || !out)
@@ -104,7 +133,7 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
         out->tex.d = tc->dims[2];
         out->tex.values = out->tex_values;
     }
-    r = MESO_OK;
+    r = load_color(f, object_id, out, err);
 done:
     free(mesh);
     free(dirs);
@@ -152,6 +181,7 @@ void meso_ref_shell_free(meso_ref_shell* s)
     free(s->uvs);
     free(s->indices);
     free(s->tex_values);
+    free(s->color_texels);
     memset(s, 0, sizeof(*s));
 }
 
@@ -400,7 +430,7 @@ static void trace(const scene* sc, const ray* r, hit* best)
 }
 
 /* Normal and colour of a hit (shell_reference.h). */
-static void shade(const scene* sc, const ray* r, const hit* h, float rgb[3], float nrm[3])
+static void shade(const scene* sc, const ray* r, const hit* h, float rgb[3], float nrm[3], float alb[3])
 {
     const meso_prism* P = &sc->prisms[h->prism].P;
     const double u = h->uvw[0], v = h->uvw[1], w = h->uvw[2], del = 1e-3;
@@ -458,7 +488,11 @@ static void shade(const scene* sc, const ray* r, const hit* h, float rgb[3], flo
     double n[3];
     for (int i = 0; i < 3; ++i)
         n[i] = (g[0] * c12[i] + g[1] * c20[i] + g[2] * c01[i]) / (det != 0 ? det : 1);
-    mesoi_ref_shade(&sc->cam, r->d, n, w, rgb, nrm);
+    double albedo[3] = {sc->cam.albedo[0], sc->cam.albedo[1], sc->cam.albedo[2]};
+    meso_ref_color_value(&sc->shell->color, s, tp, w, albedo);
+    for (int i = 0; i < 3; ++i)
+        alb[i] = (float)albedo[i];
+    mesoi_ref_shade_albedo(&sc->cam, albedo, r->d, n, w, rgb, nrm);
 }
 
 static void render_row(const scene* sc, meso_ref_image* img, int y)
@@ -481,7 +515,7 @@ static void render_row(const scene* sc, meso_ref_image* img, int y)
         img->coverage[px] = 1;
         for (int c = 0; c < 3; ++c)
             img->hit[3 * px + (size_t)c] = (float)p[c];
-        shade(sc, &r, &h, &img->rgb[3 * px], &img->normal[3 * px]);
+        shade(sc, &r, &h, &img->rgb[3 * px], &img->normal[3 * px], &img->albedo[3 * px]);
     }
 }
 

@@ -20,6 +20,8 @@
  *  - colour = albedo · (0.25 + 0.75 w) · (0.15 + 0.85 max(0, n·l)), l the
  *    light direction in object space (transpose(mat3(model)) · light_dir,
  *    normalised); linear, no gamma. Background: coverage 0, depth 1.
+ *    albedo = the shell's colour at the hit's texture point
+ *    (meso_ref_color_value, COLR + CMAP) when it has one, else the view's.
  * Prisms come from the shell object's MESH + SDIR chunks (FORMAT.md §7.2).
  */
 #ifndef MESO_SHELL_REFERENCE_H
@@ -42,6 +44,8 @@ typedef struct meso_ref_shell {
     uint32_t* indices; /* 3 per triangle */
     meso_ref_texfn tex;    /* values owned here */
     float* tex_values;
+    meso_ref_color color;  /* COLR texels owned here (color_texels); w 0: none */
+    uint8_t* color_texels;
     float bbox_min[3], bbox_max[3];
 } meso_ref_shell;
 
@@ -74,6 +78,8 @@ typedef struct meso_ref_image {
     uint8_t* coverage; /* 1 where the ray hit the surface */
     float* hit;        /* object-space hit point, 3 per pixel (NaN where not covered) */
     float* normal;     /* object-space shading normal n above, 3 per pixel (0 where not covered) */
+    float* albedo;     /* linear albedo at the hit, 3 per pixel, as the G-buffer pass writes it (0 where not
+                          covered; the kinds that do not fill it leave 0) */
 } meso_ref_image;
 
 meso_result meso_ref_render(const meso_ref_shell* s, const meso_ref_view* v, meso_ref_image* out);

@@ -332,7 +332,8 @@ void main()
 #if MESO_PASS != MESO_PASS_DEPTH
         mat3 J = M * inverse(Tm); // world = X0 + J (texture - C0)
         vec3 n = transpose(inverse(J)) * tex_gradient(q);
-        emit_obj(shade(n, q.z, rd), u_albedo, occlusion(q.z), facing(n, rd), p, rd);
+        vec3 alb = albedo_at(q);
+        emit_obj(shade(alb, n, q.z, rd), alb, occlusion(q.z), facing(n, rd), p, rd);
 #endif
         write_depth(p);
     }
@@ -537,9 +538,11 @@ void main()
         }
         vec3 p = phi(P, hi);
 #if MESO_PASS != MESO_PASS_DEPTH
-        vec3 g = tex_gradient(vec3(tex_st(P, hi.xy), whi));
+        vec3 stw = vec3(tex_st(P, hi.xy), whi);
+        vec3 g = tex_gradient(stw);
         vec3 n = mapped_normal(P, curved ? vec3(hi.xy, whi) : hi, g, curved);
-        emit_obj(shade(n, whi, rd), u_albedo, occlusion(whi), facing(n, rd), p, rd);
+        vec3 alb = albedo_at(stw);
+        emit_obj(shade(alb, n, whi, rd), alb, occlusion(whi), facing(n, rd), p, rd);
 #endif
         write_depth(p);
     }

@@ -120,10 +120,11 @@ void main()
 #if SLICE_PASS == 0
 #if MESO_PASS != MESO_PASS_DEPTH
     vec3 n = slice_normal(P, v_q, v_stw);
-    emit_obj(shade(n, v_stw.z, rd), u_albedo, occlusion(v_stw.z), facing(n, rd), v_pos, rd);
+    vec3 alb = albedo_at(v_stw);
+    emit_obj(shade(alb, n, v_stw.z, rd), alb, occlusion(v_stw.z), facing(n, rd), v_pos, rd);
 #endif
 #else
-    vec3 col = shade(slice_normal(P, v_q, v_stw), v_stw.z, rd);
+    vec3 col = shade(albedo_at(v_stw), slice_normal(P, v_q, v_stw), v_stw.z, rd);
     o_tex = vec4(v_stw, a);
     o_color = vec4(col, gl_FragCoord.z);
 #endif
@@ -146,7 +147,7 @@ void main()
 #else
     vec3 n = slice_normal(P, prism_coords(P, t3), t3);
 #endif
-    o_color = vec4(shade(n, t3.z, rd), window_depth(p3));
+    o_color = vec4(shade(albedo_at(t3), n, t3.z, rd), window_depth(p3));
 #endif
 #endif
 }

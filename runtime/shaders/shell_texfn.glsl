@@ -9,6 +9,13 @@ uniform sampler3D u_volume;
 uniform vec3 u_tex_size;   // texels of the texture function (1 on unused axes)
 // u_light_obj: instance.glsl
 uniform vec3 u_albedo;
+// Colour (FORMAT.md sec. 7.2 "Shell colour"): COLR as an SRGB8_ALPHA8 3D
+// texture (depth 1 for 2D colour; fetches are linear), bilinear/trilinear at
+// level 0 like the texture function, repeating in s and t', clamped in w,
+// looked up at the hit's texture point times the CMAP scale (u_color_scale.z = 1).
+uniform int u_has_color;
+uniform sampler3D u_color;
+uniform vec3 u_color_scale;
 
 // --- texture function (FORMAT.md sec. 7.2) -------------------------------------
 
@@ -55,12 +62,21 @@ vec2 tex_st(Prism P, vec2 uv)
     return P.uv[0] + uv.x * (P.uv[1] - P.uv[0]) + uv.y * (P.uv[2] - P.uv[0]);
 }
 
-vec3 shade(vec3 n, float w, vec3 rd)
+// The albedo at texture point stw: the COLR colour there, else u_albedo
+// (shell_map.h: meso_ref_shell_albedo).
+vec3 albedo_at(vec3 stw)
+{
+    if (u_has_color == 0)
+        return u_albedo;
+    return textureLod(u_color, stw * u_color_scale, 0.0).rgb;
+}
+
+vec3 shade(vec3 albedo, vec3 n, float w, vec3 rd)
 {
     n = normalize(n);
     if (dot(n, rd) > 0.0)
         n = -n;
-    return u_albedo * (0.25 + 0.75 * clamp(w, 0.0, 1.0)) * (0.15 + 0.85 * max(0.0, dot(n, u_light_obj)));
+    return albedo * (0.25 + 0.75 * clamp(w, 0.0, 1.0)) * (0.15 + 0.85 * max(0.0, dot(n, u_light_obj)));
 }
 
 

@@ -58,6 +58,7 @@
 #include "cell_reference.h"
 #include "egl_context.h"
 #include "frustum_reference.h"
+#include "gl_gbuffer.h"
 #include "gl_log.h"
 #include "meso_bake.h"
 #include "meso_rt.h"
@@ -67,21 +68,7 @@
 
 enum { W = 128, H = 96 };
 
-#define PGL(X)                                                                                                    \
-    X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers) X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                       \
-    X(PFNGLGENRENDERBUFFERSPROC, GenRenderbuffers) X(PFNGLBINDRENDERBUFFERPROC, BindRenderbuffer)                   \
-    X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage)                                                          \
-    X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) X(PFNGLDRAWBUFFERSPROC, DrawBuffers)              \
-    X(PFNGLREADBUFFERPROC, ReadBuffer) X(PFNGLREADPIXELSPROC, ReadPixels) X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) \
-    X(PFNGLVIEWPORTPROC, Viewport) X(PFNGLGETBOOLEANVPROC, GetBooleanv) X(PFNGLGENBUFFERSPROC, GenBuffers)         \
-    X(PFNGLBINDBUFFERPROC, BindBuffer) X(PFNGLBUFFERDATAPROC, BufferData)                                         \
-    X(PFNGLBINDBUFFERBASEPROC, BindBufferBase) X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)
-
-typedef struct pgl {
-#define PGL_M(t, n) t n;
-    PGL(PGL_M)
-#undef PGL_M
-} pgl;
+typedef gbuffer_gl pgl;
 
 #define HOOK_BINDING 3u
 /* The hook under test: a mix of normal, albedo and view direction chosen by
@@ -109,28 +96,8 @@ static const float zero4[4] = {0.0f, 0.0f, 0.0f, 0.0f};
 
 static void target_create(ctx* c)
 {
-#define PGL_L(t, n)                                   \
-    {                                                 \
-        void (*fn)(void) = meso_egl_proc("gl" #n);    \
-        CHECK(fn);                                    \
-        memcpy(&c->gl.n, &fn, sizeof(fn));            \
-    }
-    PGL(PGL_L)
-#undef PGL_L
+    gbuffer_create(&c->gl, W, H, &c->fbo, c->rb);
     pgl* gl = &c->gl;
-    gl->GenFramebuffers(1, &c->fbo);
-    gl->BindFramebuffer(GL_FRAMEBUFFER, c->fbo);
-    gl->GenRenderbuffers(3, c->rb);
-    const GLenum fmt[3] = {GL_RGBA32F, GL_RGBA32F, GL_DEPTH_COMPONENT32F};
-    const GLenum att[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_DEPTH_ATTACHMENT};
-    for (int i = 0; i < 3; ++i) {
-        gl->BindRenderbuffer(GL_RENDERBUFFER, c->rb[i]);
-        gl->RenderbufferStorage(GL_RENDERBUFFER, fmt[i], W, H);
-        gl->FramebufferRenderbuffer(GL_FRAMEBUFFER, att[i], GL_RENDERBUFFER, c->rb[i]);
-    }
-    gl->DrawBuffers(2, att);
-    CHECK(gl->CheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE);
-    gl->Viewport(0, 0, W, H);
     gl->GenBuffers(1, &c->ubo);
     gl->BindBuffer(GL_UNIFORM_BUFFER, c->ubo);
     gl->BufferData(GL_UNIFORM_BUFFER, 16, zero4, GL_DYNAMIC_DRAW);

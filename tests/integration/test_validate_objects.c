@@ -1,6 +1,6 @@
 /*
  * test_validate_objects.c — full validation refuses objects that cannot be
- * drawn (FORMAT.md §7.2, issues 4312, 4902 and 6xxx), on files baked by mesobake
+ * drawn (FORMAT.md §7.2, issues 4312, 4902, 4912 and 6xxx), on files baked by mesobake
  * from tests/data and then mutated so that only the content is wrong: every
  * CRC is recomputed, chunks are "removed" by renaming them to an unknown,
  * non-required type (readers skip those), and count mismatches are written
@@ -309,6 +309,38 @@ static void anim_cases(void)
     CASE("anim", "anim-no-anim", MESO_ISSUE_SHELL_ANIM, drop(m, MESO_CHUNK_ANIM));
 }
 
+/* Shell colour (FORMAT.md §7.2 "Shell colour", issues 4912 and 6106), on a
+ * from-mesh bake of the glTF box: COLR 4x4x1 and a BASE CMAP record with
+ * scale 1/2 (--tiling 2). */
+static uint8_t* cmap_record(uint8_t* m) { return payload(m, chunk_of(m, MESO_CHUNK_CMAP)); }
+
+static void color_cases(void)
+{
+    CASE("color", "cmap-mapping", MESO_ISSUE_CMAP_VALUE, st32(cmap_record(m) + MESO_CMAP_OFF_MAPPING, 2));
+    CASE("color", "cmap-flags", MESO_ISSUE_CMAP_VALUE, st32(cmap_record(m) + MESO_CMAP_OFF_FLAGS, 1));
+    CASE("color", "cmap-nan-scale", MESO_ISSUE_CMAP_VALUE, stf(cmap_record(m) + MESO_CMAP_OFF_SCALE, NAN));
+    CASE("color", "cmap-zero-scale", MESO_ISSUE_CMAP_VALUE, stf(cmap_record(m) + MESO_CMAP_OFF_SCALE + 4, 0.0f));
+    CASE("color", "cmap-reserved", MESO_ISSUE_CMAP_VALUE, cmap_record(m)[MESO_CMAP_OFF_RESERVED + 5] = 1);
+    /* a TILED record must have scale 1, 1; this one keeps the bake's 1/2 */
+    CASE("color", "cmap-tiled-scale", MESO_ISSUE_CMAP_VALUE,
+         st32(cmap_record(m) + MESO_CMAP_OFF_MAPPING, MESO_CMAP_TILED));
+    CASE("color", "color-no-cmap", MESO_ISSUE_SHELL_COLOR, drop(m, MESO_CHUNK_CMAP));
+    CASE("color", "color-no-colr", MESO_ISSUE_SHELL_COLOR, drop(m, MESO_CHUNK_COLR));
+    /* 4x4x1 relabelled 4x2x2 (same bytes): a 3D colour over a height field */
+    CASE("color", "color-3d-over-tx2d", MESO_ISSUE_SHELL_COLOR, {
+        uint8_t* e = entry(m, chunk_of(m, MESO_CHUNK_COLR));
+        st32(e + MESO_TOC_OFF_DIMS + 4, 2);
+        st32(e + MESO_TOC_OFF_DIMS + 8, 2);
+    });
+    /* a second CMAP: the COLR relabelled (BYTES x 1 so the element rules hold) */
+    CASE("color", "color-two-cmap", MESO_ISSUE_SHELL_COLOR, {
+        uint8_t* e = entry(m, chunk_of(m, MESO_CHUNK_COLR));
+        st32(e + MESO_TOC_OFF_TYPE, MESO_CHUNK_CMAP);
+        m[(size_t)(e - m) + MESO_TOC_OFF_DTYPE] = MESO_DTYPE_BYTES;
+        m[(size_t)(e - m) + MESO_TOC_OFF_COMPONENTS] = 1;
+    });
+}
+
 static void frusta_cases(void)
 {
     CASE("frusta", "frusta-no-skel", MESO_ISSUE_OBJ_CHUNKS, drop(m, MESO_CHUNK_SKEL));
@@ -379,10 +411,13 @@ int main(int argc, char** argv)
     bake_file("anim", args);
     snprintf(args, sizeof args, "cells -i '%s/sphere.obj' --tiles 2 --tile-res 8", data);
     bake_file("cells", args);
+    snprintf(args, sizeof args, "shell -i '%s/gltf/box.gltf' --texture ribs:16 --dist-res 8x8x4 --tiling 2 --color from-mesh",
+             data);
+    bake_file("color", args);
 
-    const char* names[] = {"mesh", "draco", "shell", "frusta", "cells", "anim"};
+    const char* names[] = {"mesh", "draco", "shell", "frusta", "cells", "anim", "color"};
     char path[600];
-    for (int i = 0; i < 6; i++) {
+    for (int i = 0; i < 7; i++) {
         snprintf(path, sizeof path, "%s/%s.meso", tmp, names[i]);
         expect_valid(path, names[i]);
     }
@@ -416,6 +451,7 @@ int main(int argc, char** argv)
     mesh_cases();
     shell_cases();
     anim_cases();
+    color_cases();
     frusta_cases();
     colour_cases();
 

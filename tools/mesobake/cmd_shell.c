@@ -4,7 +4,8 @@
  * .meso SHELL object: MESH (the base), SDIR (directors), STHK (thickness),
  * and optionally a texture function (TX2D height field or TX3D density) with
  * its distance map (DIST) and texture coordinates in the MESH (FORMAT.md
- * §7.2, "Shell prisms and texture space"). The bake is meso_bake_shell
+ * §7.2, "Shell prisms and texture space"), and optionally its colour (COLR +
+ * CMAP, §7.2 "Shell colour"; bake/shell_color.h). The bake is meso_bake_shell
  * (bake/bake_shell.c); this file parses the options.
  */
 #include <stdio.h>
@@ -80,7 +81,16 @@ static const char* const usage_shell_texture =
     "      --dist-res WxHxD    distance-map cells (each 1..512; default: half the texture's\n"
     "                          resolution in s, t (8..128) and, in w, half a volume's depth or,\n"
     "                          for a height field, about one cell per typical height step)\n"
-    "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n";
+    "      --dist-type T       u8 (default), u16 or f32: distance-map store type\n"
+    "      --color SPEC        colour of the mesostructure (needs --texture; default: one albedo):\n"
+    "                          FILE.png        RGB(A) PNG over texture space, tiled like the\n"
+    "                                          height field (the bottom image row is t = 0)\n"
+    "                          volume:FILE.raw:WxHxD  RGBA8 texels over a volume texture\n"
+    "                                          (s fastest, then t, then w)\n"
+    "                          from-mesh       the glTF input's base colour (texture x factor) at\n"
+    "                                          the base point of each texel column (the mesh's\n"
+    "                                          own uv, not tiled); one material, TEXCOORD_0;\n"
+    "                                          other inputs: E3133, exit 3\n";
 static const char* const usage_shell_end =
     "      --time T            seconds: sample a time-dependent texture (boil) at T (default 0)\n"
     "      --frames N          store N frames (1..256) at T + k / FPS, looped (FORMAT.md 7.2\n"
@@ -191,7 +201,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
-            "--smooth", "--texture", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps",
+            "--smooth", "--texture", "--color", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps",
             "--update"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
@@ -204,6 +214,8 @@ static int parse_args(int argc, char** argv, shell_args* a)
             o->texture = v;
         else if (!strcmp(s, "--update"))
             o->update = v;
+        else if (!strcmp(s, "--color"))
+            o->color = v;
         else if (!strcmp(s, "--time")) {
             char* end = NULL;
             o->time = strtod(v, &end);
@@ -277,6 +289,8 @@ static int parse_args(int argc, char** argv, shell_args* a)
     if (!o->texture &&
         (o->dist_res[0] || o->dist_dtype != MESO_DTYPE_U8 || o->tiling[0] != 1.0 || o->tiling[1] != 1.0))
         return usage_error("%s", "--tiling, --dist-res and --dist-type need --texture");
+    if (o->color && !o->texture)
+        return usage_error("%s", "--color needs --texture (the colour lives in its texture space)");
     return check_outputs(a->out, a->report);
 }
 
