@@ -23,7 +23,7 @@ exits() { c=$1; shift; "$@" >/dev/null 2>"$tmp/err"; test $? -eq "$c"; }
 # 1. One file per kind, from the bundled data.
 "$bake" mesh -i "$data/spot_uv.obj" -o "$tmp/mesh.meso" >/dev/null 2>&1
 "$bake" shell -i "$data/spot_uv.obj" -o "$tmp/shell.meso" --texture bricks:64 -j 2 >/dev/null 2>&1
-"$bake" shell -i "$data/spot_uv.obj" -o "$tmp/shellvol.meso" --texture weave:32 -j 2 >/dev/null 2>&1
+"$bake" shell -i "$data/sphere.obj" -o "$tmp/shellvol.meso" --texture weave:32 -j 2 >/dev/null 2>&1
 "$bake" cells -i "$data/sphere.obj" -o "$tmp/cells.meso" --tiles 4 --tile-res 8 -j 2 >/dev/null 2>&1
 "$bake" frusta -i "$data/saguaro.skel" -o "$tmp/frusta.meso" --relief ribs:64 >/dev/null 2>&1
 "$bake" frusta -i "$data/neurom_simple.swc" -o "$tmp/swc.meso" >/dev/null 2>&1

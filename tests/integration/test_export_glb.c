@@ -590,10 +590,11 @@ static void compare_mesh(meso_file* f, const meso_object_record* rec, const prim
     CHECK(!bad_pos, "object %u: %d position components differ from the MESH", rec->id, bad_pos);
     CHECK(!bad_uv, "object %u: %d uvs differ from the MESH's (s, 1 - t')", rec->id, bad_uv);
     CHECK(!bad_nrm, "object %u: %d normals not along the MESH's", rec->id, bad_nrm);
-    /* A vertex has one frame for all its triangles, which can disagree
-     * where a uv layout folds or mirrors without a seam (a few corners at
-     * poles and chart borders): at most 1 % of the corners. */
-    CHECK(bad_frame * 100 <= framed, "object %u: %d of %d corners whose tangent frame disagrees with the uvs",
+    /* A vertex has one frame for all its triangles (the exporter splits
+     * vertices where the uv orientation flips), which can still disagree
+     * with a strongly sheared triangle at a pole: at most 0.2 % of the
+     * corners. */
+    CHECK(bad_frame * 500 <= framed, "object %u: %d of %d corners whose tangent frame disagrees with the uvs",
           rec->id, bad_frame, framed);
     if (framed)
         fprintf(stderr, "object %u: tangent frame against the triangle's uv directions at %d of %d corners\n",

@@ -11,7 +11,9 @@
  *    base-colour maps, uvs (s, t') on a REPEAT sampler, and tangents
  *    (export_shell_maps.c says what is baked and in which conventions).
  *    Triangles whose (s, t') have no area take the barycentric texture
- *    coordinates FORMAT.md §7.2 gives them, on their own three vertices;
+ *    coordinates FORMAT.md §7.2 gives them, on their own three vertices,
+ *    and vertices where the uv layout mirrors are split by orientation
+ *    (split_uv_vertices);
  *  - cells: the base mesh, coloured by the mean of its COLR over the
  *    non-empty voxels (alpha > 0), averaged in linear RGB;
  *  - frusta: a triangle tessellation of the surface with its relief
@@ -375,28 +377,53 @@ static double uv_det(const meso_mesh_view* v, const uint32_t i[3])
     return ((double)b[0] - a[0]) * ((double)c[1] - a[1]) - ((double)c[0] - a[0]) * ((double)b[1] - a[1]);
 }
 
-/* Triangles whose (s, t') have no area (|det| < 1e-12, FORMAT.md §7.2) take
- * barycentric texture coordinates (0, 0), (1, 0), (0, 1) on three new
- * vertices appended after the MESH's; the triangle keeps its positions and
- * its place. */
-static int split_flat_uv_triangles(const meso_mesh_view* v, const float* heights, mi_glb_prim* p, float** prism_h)
+/* The shell's vertices as a normal map needs them:
+ *  - triangles whose (s, t') have no area (|det| < 1e-12, FORMAT.md §7.2)
+ *    take barycentric texture coordinates (0, 0), (1, 0), (0, 1), on three
+ *    vertices of their own;
+ *  - a vertex shared by triangles of both uv orientations (a layout that
+ *    mirrors without a seam, e.g. the planar projection mesobake gives a
+ *    closed mesh without uvs) gets a copy for its mirrored triangles (those
+ *    with det < 0), so each copy has one tangent frame that fits all its
+ *    triangles — the handedness split MikkTSpace makes too.
+ * New vertices come after the MESH's, which keep their numbers; every
+ * triangle keeps its place and its corners' positions. Exit code. */
+static int split_uv_vertices(const meso_mesh_view* v, const float* heights, mi_glb_prim* p, float** prism_h)
 {
     const uint32_t nv = v->layout.vertex_count, ni = v->layout.index_count;
-    uint64_t flat = 0;
-    for (uint32_t t = 0; t + 2 < ni; t += 3) {
-        flat += fabs(uv_det(v, v->indices + t)) < 1e-12;
+    uint8_t* seen = calloc(nv ? nv : 1, 1); /* bit 0: det > 0, bit 1: det < 0 */
+    uint32_t* copy = malloc(sizeof(uint32_t) * (nv ? nv : 1));
+    if (!seen || !copy) {
+        free(seen);
+        free(copy);
+        return out_of_memory();
     }
-    if (nv + 3 * flat > UINT32_MAX) {
-        mi_error("%s: too many vertices once flat-uv triangles are split", p->name);
+    uint64_t extra = 0;
+    for (uint32_t t = 0; t + 2 < ni; t += 3) {
+        const double det = uv_det(v, v->indices + t);
+        if (fabs(det) < 1e-12)
+            extra += 3;
+        else
+            for (int k = 0; k < 3; ++k)
+                seen[v->indices[t + (uint32_t)k]] |= det > 0 ? 1 : 2;
+    }
+    for (uint32_t i = 0; i < nv; ++i)
+        extra += seen[i] == 3;
+    if (nv + extra > UINT32_MAX) {
+        free(seen);
+        free(copy);
+        mi_error("%s: too many vertices once uv seams are split", p->name);
         return MESO_EXIT_UNSUPPORTED;
     }
-    const uint32_t n = nv + (uint32_t)(3 * flat);
+    const uint32_t n = nv + (uint32_t)extra;
     float* pos = malloc(sizeof(float) * 3 * n);
-    float* st = malloc(sizeof(float) * 2 * n);
+    float* st = calloc(2 * (size_t)n, sizeof(float));
     float* hh = malloc(sizeof(float) * n);
     float* nrm = v->normals ? malloc(sizeof(float) * 3 * n) : NULL;
     uint32_t* idx = malloc(sizeof(uint32_t) * (ni ? ni : 1));
     if (!pos || !st || !hh || (v->normals && !nrm) || !idx) {
+        free(seen);
+        free(copy);
         free(pos);
         free(st);
         free(hh);
@@ -407,29 +434,42 @@ static int split_flat_uv_triangles(const meso_mesh_view* v, const float* heights
     memcpy(pos, v->positions, sizeof(float) * 3 * nv);
     if (v->uvs)
         memcpy(st, v->uvs, sizeof(float) * 2 * nv);
-    else
-        memset(st, 0, sizeof(float) * 2 * nv);
     memcpy(hh, heights, sizeof(float) * nv);
     if (nrm)
         memcpy(nrm, v->normals, sizeof(float) * 3 * nv);
     memcpy(idx, v->indices, sizeof(uint32_t) * ni);
-    static const float bary[3][2] = {{0, 0}, {1, 0}, {0, 1}};
     uint32_t next = nv;
+    /* New vertex `next` as a copy of MESH vertex m with (s, t') = uv. */
+#define NEW_VERTEX(m, s0, t0)                                                             \
+    do {                                                                                 \
+        memcpy(pos + 3 * (size_t)next, v->positions + 3 * (size_t)(m), sizeof(float) * 3); \
+        if (nrm)                                                                         \
+            memcpy(nrm + 3 * (size_t)next, v->normals + 3 * (size_t)(m), sizeof(float) * 3); \
+        st[2 * (size_t)next] = (s0);                                                     \
+        st[2 * (size_t)next + 1] = (t0);                                                 \
+        hh[next] = heights[m];                                                           \
+    } while (0)
+    for (uint32_t i = 0; i < nv; ++i)
+        if (seen[i] == 3) {
+            NEW_VERTEX(i, st[2 * (size_t)i], st[2 * (size_t)i + 1]);
+            copy[i] = next++;
+        }
+    static const float bary[3][2] = {{0, 0}, {1, 0}, {0, 1}};
     for (uint32_t t = 0; t + 2 < ni; t += 3) {
         const uint32_t* i = v->indices + t;
         const double det = uv_det(v, i);
-        if (fabs(det) >= 1e-12)
-            continue;
         for (int k = 0; k < 3; ++k) {
-            memcpy(pos + 3 * (size_t)next, v->positions + 3 * (size_t)i[k], sizeof(float) * 3);
-            if (nrm)
-                memcpy(nrm + 3 * (size_t)next, v->normals + 3 * (size_t)i[k], sizeof(float) * 3);
-            st[2 * (size_t)next] = bary[k][0];
-            st[2 * (size_t)next + 1] = bary[k][1];
-            hh[next] = heights[i[k]];
-            idx[t + (uint32_t)k] = next++;
+            if (fabs(det) < 1e-12) {
+                NEW_VERTEX(i[k], bary[k][0], bary[k][1]);
+                idx[t + (uint32_t)k] = next++;
+            } else if (det < 0 && seen[i[k]] == 3) {
+                idx[t + (uint32_t)k] = copy[i[k]];
+            }
         }
     }
+#undef NEW_VERTEX
+    free(seen);
+    free(copy);
     p->vertex_count = n;
     p->index_count = ni;
     p->positions = pos;
@@ -481,7 +521,7 @@ static int export_shell(meso_file* f, const meso_object_record* rec, mi_glb_prim
         }
         heights[i] = (float)sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     }
-    code = split_flat_uv_triangles(&v, heights, p, &prism_h);
+    code = split_uv_vertices(&v, heights, p, &prism_h);
     if (code != MESO_EXIT_OK)
         goto done;
     mi_shell_src src = {.positions = p->positions, .normals = p->normals, .uvs = p->uvs, .heights = prism_h,

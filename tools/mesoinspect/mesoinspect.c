@@ -71,9 +71,10 @@ static const char* const usage_full =
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
     "            4 internal error, 5 not supported in this build, 7 diff found a difference.\n"
     "\n"
-    "Files written by dump -o, preview -o and export -o appear complete or not at all (also on\n"
-    "SIGINT, SIGTERM, SIGHUP). An output that is a symbolic link is written through\n"
-    "to its target; a dangling link, directory, device, FIFO or socket is refused (exit 2).\n"
+    "Files written by dump -o, preview -o and export -o appear complete or not at all\n"
+    "(also on SIGINT, SIGTERM, SIGHUP). An output that is a symbolic link is written\n"
+    "through to its target; a dangling link, directory, device, FIFO or socket is\n"
+    "refused (exit 2).\n"
     "\n"
     "Run 'mesoinspect <command> --help' for the options of one command.\n";
 
