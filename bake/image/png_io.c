@@ -326,3 +326,79 @@ int meso_png_write_gray(const char* path, const uint16_t* values, int width, int
     ctx_free(c);
     return rc;
 }
+
+/* >>memory ----------------------------------------------------------------
+ * PNG files held in memory (embedded in a glTF binary, and read back from
+ * one by the tests); the simplified API, 8 bits a channel. */
+
+int meso_png_encode_memory(const uint8_t* px, int width, int height, int channels, int flip_y, uint8_t** out,
+                           size_t* size, char* why, int why_size)
+{
+    *out = NULL;
+    *size = 0;
+    if (channels < 1 || channels > 4 || width < 1 || height < 1) {
+        snprintf(why, (size_t)why_size, "bad image shape %dx%dx%d", width, height, channels);
+        return -1;
+    }
+    static const png_uint_32 formats[4] = {PNG_FORMAT_GRAY, PNG_FORMAT_GA, PNG_FORMAT_RGB, PNG_FORMAT_RGBA};
+    png_image img;
+    memset(&img, 0, sizeof(img));
+    img.version = PNG_IMAGE_VERSION;
+    img.width = (png_uint_32)width;
+    img.height = (png_uint_32)height;
+    img.format = formats[channels - 1];
+    const png_int_32 row = (png_int_32)(channels * width);
+    const png_int_32 stride = flip_y ? -row : row;
+    png_alloc_size_t n = 0;
+    if (!png_image_write_to_memory(&img, NULL, &n, 0, px, stride, NULL)) {
+        snprintf(why, (size_t)why_size, "%s", img.message);
+        return -1;
+    }
+    uint8_t* buf = malloc(n ? n : 1);
+    if (!buf) {
+        snprintf(why, (size_t)why_size, "out of memory for a %dx%d PNG", width, height);
+        return -1;
+    }
+    if (!png_image_write_to_memory(&img, buf, &n, 0, px, stride, NULL)) {
+        snprintf(why, (size_t)why_size, "%s", img.message);
+        free(buf);
+        return -1;
+    }
+    *out = buf;
+    *size = (size_t)n;
+    return 0;
+}
+
+int meso_png_decode_memory_rgba8(const uint8_t* data, size_t size, uint8_t** rgba, int* width, int* height, char* why,
+                                 int why_size)
+{
+    *rgba = NULL;
+    png_image img;
+    memset(&img, 0, sizeof(img));
+    img.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_memory(&img, data, size)) {
+        snprintf(why, (size_t)why_size, "%s", img.message);
+        return -1;
+    }
+    img.format = PNG_FORMAT_RGBA;
+    if (img.width == 0 || img.height == 0 || img.width > 65536 || img.height > 65536) {
+        snprintf(why, (size_t)why_size, "unsupported size %ux%u", img.width, img.height);
+        png_image_free(&img);
+        return -1;
+    }
+    uint8_t* buf = malloc(PNG_IMAGE_SIZE(img));
+    if (!buf) {
+        snprintf(why, (size_t)why_size, "out of memory");
+        png_image_free(&img);
+        return -1;
+    }
+    if (!png_image_finish_read(&img, NULL, buf, 0, NULL)) {
+        snprintf(why, (size_t)why_size, "%s", img.message);
+        free(buf);
+        return -1;
+    }
+    *rgba = buf;
+    *width = (int)img.width;
+    *height = (int)img.height;
+    return 0;
+}

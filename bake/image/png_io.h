@@ -4,6 +4,7 @@
 #ifndef MESO_PNG_IO_H
 #define MESO_PNG_IO_H
 
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -42,5 +43,16 @@ int meso_png_read_rgba8_fp(FILE* fp, const char* name, uint64_t max_bytes, unsig
  * bit_depth 8 (values 0..255) or 16. Returns 0 on success. */
 int meso_png_write_gray(const char* path, const uint16_t* values, int width, int height, int bit_depth, char* why,
                         int why_size);
+
+/* Encode 8-bit rows (channels 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) top to
+ * bottom (or bottom to top with flip_y) as a PNG in memory: *out (malloc'd,
+ * free with free()) gets *size bytes. Returns 0 on success; on failure
+ * writes a reason to `why`. */
+int meso_png_encode_memory(const uint8_t* px, int width, int height, int channels, int flip_y, uint8_t** out,
+                           size_t* size, char* why, int why_size);
+/* Decode a PNG held in memory as RGBA8 rows top to bottom (malloc'd, free
+ * with free()). Returns 0 on success. */
+int meso_png_decode_memory_rgba8(const uint8_t* data, size_t size, uint8_t** rgba, int* width, int* height, char* why,
+                                 int why_size);
 
 #endif

@@ -2,8 +2,9 @@
  *
  *  frusta_vs_tess.csv  the paper's §4 comparison: the ray caster against
  *                polygon tessellations of the same relief surface
- *                (frusta_tessellate.h) at growing resolution, each against
- *                the exact reference (coverage mismatch, mean hit error in
+ *                (runtime/reference/frusta_tessellate.h) at growing
+ *                resolution, each against the exact reference (coverage
+ *                mismatch, mean hit error in
  *                pixel footprints), with memory (file bytes of the object,
  *                and the bytes a GPU holds) and draw time at 400x300 and
  *                800x600;
@@ -61,7 +62,7 @@ static meso_rt_object load_memory(bench* b, const uint8_t* data, size_t size)
 }
 
 /* A one-object .meso file in memory holding the tessellation as a MESH. */
-static uint8_t* mesh_file(const tess_mesh* t, size_t* size)
+static uint8_t* mesh_file(const meso_ref_tess_mesh* t, size_t* size)
 {
     meso_mesh m = {.vertex_count = t->vertex_count, .triangle_count = t->index_count / 3, .positions = t->positions,
                    .normals = t->normals, .indices = t->indices};
@@ -217,7 +218,6 @@ int main(int argc, char** argv)
         free(ball);
     }
     meso_file_close(f);
-    tess_relief rel = {ref.relief.height.w, ref.relief.height.h, ref.relief.height.values};
 
     double ctr[3], rad = 0;
     for (int k = 0; k < 3; ++k) {
@@ -278,8 +278,8 @@ int main(int argc, char** argv)
             ms_small, ms_big, mf.coverage_mismatch, mf.hit_err_px);
     const uint32_t grids[] = {8, 16, 32, 64, 128, 256, 512};
     for (size_t g = 0; g < sizeof(grids) / sizeof(grids[0]); ++g) {
-        tess_mesh tm;
-        if (!tess_frusta(recs, nrec, balls, nball, &rel, grids[g], &tm))
+        meso_ref_tess_mesh tm;
+        if (!meso_ref_frusta_tessellate(recs, nrec, balls, nball, &ref.relief.height, grids[g], &tm))
             return 1;
         size_t fsize = 0;
         uint8_t* file = mesh_file(&tm, &fsize);
@@ -297,7 +297,7 @@ int main(int argc, char** argv)
         fflush(vt);
         meso_rt_release_object(b.rt, mo);
         free(file);
-        tess_free(&tm);
+        meso_ref_tess_free(&tm);
     }
     fclose(vt);
 

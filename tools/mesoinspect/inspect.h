@@ -1,6 +1,6 @@
 /*
  * inspect.h — internal to mesoinspect: one file per command (info.c,
- * validate.c, dump.c, diff.c, preview.c) and the helpers they share
+ * validate.c, dump.c, diff.c, preview.c, export.c) and the helpers they share
  * (main.c). CLI conventions: STYLE.md §8, exit codes in cli_common.h.
  */
 #ifndef MESO_INSPECT_H
@@ -19,6 +19,7 @@ int mesoinspect_validate(int argc, char** argv);
 int mesoinspect_dump(int argc, char** argv);
 int mesoinspect_diff(int argc, char** argv);
 int mesoinspect_preview(int argc, char** argv); /* preview.c */
+int mesoinspect_export(int argc, char** argv);  /* export.c */
 
 /* >>diagnostics ----------------------------------------------------------- */
 
@@ -62,6 +63,28 @@ const uint8_t* mi_stored(const meso_file* f, uint32_t index);
 /* Decoded bytes of chunk `index` in a malloc'd buffer (free() it), checked
  * like the runtime reads them (CRC, decoder, contents). */
 meso_result mi_read_decoded(meso_file* f, uint32_t index, uint8_t** out, size_t* size, meso_error* err);
+
+/* >>objects --------------------------------------------------------------- */
+
+/* Every OBJT record of `f` (malloc'd, *count of them; a file without OBJT has
+ * none). NULL and a message on stderr when the table cannot be read (*r
+ * says why). */
+meso_object_record* mi_all_records(meso_file* f, uint32_t* count, meso_result* r);
+/* The value of --object: all digits is an id (*id, 1..2^32-1), anything
+ * else a name of 1..31 bytes (*name = v). Returns 0, or prints a usage
+ * error and returns its exit code. */
+int mi_object_option(const char* v, unsigned long* id, const char** name);
+/* The id of the object named `name` in `path` (already validated): exit 0,
+ * or a usage error naming the file's objects when none has that name. */
+int mi_object_by_name(const char* path, const char* name, unsigned long* id);
+
+/* >>validation ------------------------------------------------------------ */
+
+/* The full check before a command uses a file, so nothing downstream ever
+ * sees a file the validator refuses: every issue is listed on stderr as
+ * `validate --full` lists them, then "N issues; not <not_what>"; exit 3
+ * (2 on a read failure), 0 when the file is clean. */
+int mi_validate_full(const char* path, const char* not_what);
 
 /* >>names ----------------------------------------------------------------- */
 

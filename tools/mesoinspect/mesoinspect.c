@@ -1,13 +1,16 @@
 /*
  * mesoinspect — look inside .meso files with exactly the parser the runtime
  * uses (meso_format): header, objects and chunks (info), every issue
- * (validate), raw chunk bytes (dump), structural differences (diff) and a
- * headless render (preview).
+ * (validate), raw chunk bytes (dump), structural differences (diff), a
+ * headless render (preview) and a glTF 2.0 copy for engines without libmeso
+ * (export).
  *
- * One file per command (info.c, validate.c, dump.c, diff.c, preview.c); this
- * file has the dispatcher and the helpers they share (inspect.h).
+ * One file per command (info.c, validate.c, dump.c, diff.c, preview.c,
+ * export.c); this file has the dispatcher and the helpers they share
+ * (inspect.h).
  * CLI conventions: STYLE.md §8 (exit codes in cli_common.h).
  */
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,6 +30,7 @@ static const char* const usage_short =
     "  dump      FILE CHUNK -o OUT        write one chunk's bytes\n"
     "  diff      A B                      compare two files chunk by chunk\n"
     "  preview   FILE -o OUT.png          render a preview image headlessly\n"
+    "  export    FILE -o OUT.glb          write the objects as a glTF 2.0 binary\n"
     "\n"
     "Run 'mesoinspect --help' or 'mesoinspect <command> --help' for all options.\n";
 
@@ -53,6 +57,11 @@ static const char* const usage_full =
     "           [--api gl|gles]                    desktop OpenGL (default) or OpenGL ES 3.2\n"
     "           [--reference [--samples N]]        shells, frusta and cells by the exact\n"
     "                                              CPU references instead (no EGL)\n"
+    "  export   FILE -o OUT.glb [--object ID]      every object (or one) as glTF 2.0 (.glb)\n"
+    "           [--frusta-grid N]                  for engines without libmeso: meshes as\n"
+    "                                              they are, shells as their base mesh with\n"
+    "                                              baked normal and colour maps, cells in\n"
+    "                                              their mean colour, frusta tessellated\n"
     "\n"
     "Output:\n"
     "  --format text        aligned text for humans (default)\n"
@@ -62,9 +71,10 @@ static const char* const usage_full =
     "Exit codes: 0 success, 1 command-line error, 2 I/O failure, 3 invalid input,\n"
     "            4 internal error, 5 not supported in this build, 7 diff found a difference.\n"
     "\n"
-    "Files written by dump -o and preview -o appear complete or not at all (also on\n"
-    "SIGINT, SIGTERM, SIGHUP). An output that is a symbolic link is written through\n"
-    "to its target; a dangling link, directory, device, FIFO or socket is refused (exit 2).\n"
+    "Files written by dump -o, preview -o and export -o appear complete or not at all\n"
+    "(also on SIGINT, SIGTERM, SIGHUP). An output that is a symbolic link is written\n"
+    "through to its target; a dangling link, directory, device, FIFO or socket is\n"
+    "refused (exit 2).\n"
     "\n"
     "Run 'mesoinspect <command> --help' for the options of one command.\n";
 
@@ -221,6 +231,111 @@ meso_result mi_read_decoded(meso_file* f, uint32_t index, uint8_t** out, size_t*
     *out = buf;
     *size = (size_t)c->decoded_size;
     return MESO_OK;
+}
+
+/* >>objects --------------------------------------------------------------- */
+
+meso_object_record* mi_all_records(meso_file* f, uint32_t* count, meso_result* r)
+{
+    meso_error err = {0};
+    *count = 0;
+    if ((*r = meso_file_objects(f, NULL, 0, count, &err)) == MESO_OK) {
+        meso_object_record* recs = calloc(*count ? *count : 1, sizeof(*recs));
+        if (!recs) {
+            *r = MESO_ERR_OUT_OF_MEMORY;
+            mi_error("out of memory");
+            return NULL;
+        }
+        if ((*r = meso_file_objects(f, recs, *count, count, &err)) == MESO_OK)
+            return recs;
+        free(recs);
+    }
+    mi_error("%s", err.message);
+    return NULL;
+}
+
+int mi_object_option(const char* v, unsigned long* id, const char** name)
+{
+    char* end = NULL;
+    errno = 0;
+    *name = NULL;
+    *id = strtoul(v, &end, 10);
+    /* all digits: an id; anything else ("3d.obj" too): a name */
+    if (v[0] < '0' || v[0] > '9' || !end || *end) {
+        *id = 0;
+        *name = v; /* OBJT names are UTF-8, at most 31 bytes */
+        if (!v[0] || strlen(v) > 31)
+            return mi_usage_error("--object expects an id >= 1 or a name of 1..31 bytes, got '%s'", v);
+    } else if (errno || *id == 0 || *id > UINT32_MAX) {
+        return mi_usage_error("--object expects an object id >= 1, got '%s'", v);
+    }
+    return MESO_EXIT_OK;
+}
+
+int mi_object_by_name(const char* path, const char* name, unsigned long* id)
+{
+    meso_file* f = NULL;
+    meso_error err;
+    meso_result r = meso_file_open_path(path, NULL, &f, &err);
+    if (r != MESO_OK) {
+        mi_error("%s: %s", path, err.message);
+        return meso_exit_for(r);
+    }
+    uint32_t count = 0;
+    meso_object_record* recs = mi_all_records(f, &count, &r);
+    meso_file_close(f);
+    if (!recs)
+        return meso_exit_for(r);
+    *id = 0;
+    for (uint32_t i = 0; i < count && !*id; ++i)
+        if (!strcmp(recs[i].name, name))
+            *id = recs[i].id;
+    if (!*id) {
+        fprintf(stderr, "mesoinspect error: --object: %s has no object named '%s'; its objects:", path, name);
+        for (uint32_t i = 0; i < count; ++i)
+            fprintf(stderr, "%s %u '%s'", i ? "," : "", recs[i].id, recs[i].name);
+        fprintf(stderr, "\n");
+    }
+    free(recs);
+    return *id ? MESO_EXIT_OK : MESO_EXIT_USAGE;
+}
+
+/* >>validation ------------------------------------------------------------ */
+
+typedef struct full_issues {
+    const char* path;
+    size_t count;
+    int code;
+} full_issues;
+
+static int print_issue(void* user, const meso_error* e)
+{
+    full_issues* p = user;
+    char line[400];
+    mi_format_issue(e, line, sizeof(line));
+    mi_error("%s: %s", p->path, line);
+    const int c = e->result == MESO_ERR_IO              ? MESO_EXIT_IO
+                  : e->result == MESO_ERR_OUT_OF_MEMORY ? MESO_EXIT_INTERNAL
+                                                        : MESO_EXIT_INVALID;
+    if (p->code == MESO_EXIT_OK || c == MESO_EXIT_IO)
+        p->code = c;
+    p->count++;
+    return 0;
+}
+
+int mi_validate_full(const char* path, const char* not_what)
+{
+    meso_file* f = NULL;
+    int code = mi_open_or_report(path, &f);
+    if (code != MESO_EXIT_OK)
+        return code;
+    full_issues p = {path, 0, MESO_EXIT_OK};
+    meso_file_validate(f, MESO_CHECK_FULL, print_issue, &p);
+    meso_file_close(f);
+    if (p.count)
+        mi_error("%s: %zu issue%s; not %s (see 'mesoinspect validate --full')", path, p.count,
+                 p.count == 1 ? "" : "s", not_what);
+    return p.code;
 }
 
 /* >>names ----------------------------------------------------------------- */
@@ -542,6 +657,8 @@ int main(int argc, char** argv)
         return mesoinspect_diff(argc - 2, argv + 2);
     if (!strcmp(cmd, "preview"))
         return mesoinspect_preview(argc - 2, argv + 2);
+    if (!strcmp(cmd, "export"))
+        return mesoinspect_export(argc - 2, argv + 2);
     if (cmd[0] == '-')
         return mi_usage_error("unrecognized option '%s'", cmd);
     return mi_usage_error("unknown command '%s'", cmd);

@@ -189,27 +189,6 @@ static uint8_t unorm8(float c)
     return (uint8_t)lrintf(fminf(fmaxf(c, 0.0f), 1.0f) * 255.0f);
 }
 
-/* Every OBJT record of `f` (malloc'd, *count of them; a file without OBJT has
- * none). NULL and a message on stderr when the table cannot be read. */
-static meso_object_record* all_records(meso_file* f, uint32_t* count, meso_result* r)
-{
-    meso_error err = {0};
-    *count = 0;
-    if ((*r = meso_file_objects(f, NULL, 0, count, &err)) == MESO_OK) {
-        meso_object_record* recs = calloc(*count ? *count : 1, sizeof(*recs));
-        if (!recs) {
-            *r = MESO_ERR_OUT_OF_MEMORY;
-            fprintf(stderr, "mesoinspect error: out of memory\n");
-            return NULL;
-        }
-        if ((*r = meso_file_objects(f, recs, *count, count, &err)) == MESO_OK)
-            return recs;
-        free(recs);
-    }
-    fprintf(stderr, "mesoinspect error: %s\n", err.message);
-    return NULL;
-}
-
 #define PREVIEW_MAX_REF 64 /* shell, frusta and cells objects the reference renders */
 
 /* One object the reference renders. */
@@ -248,7 +227,7 @@ static int render_reference(const char* path, const char* out, int width, int he
      * frusta and cells), so the two images share a camera. */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     uint32_t count = 0;
-    recs = all_records(f, &count, &r);
+    recs = mi_all_records(f, &count, &r);
     if (!recs) {
         code = meso_exit_for(r);
         goto done;
@@ -471,7 +450,7 @@ static int render(const char* path, const char* out, int width, int height, uint
     /* Every object of the OBJT table (or just --object). */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     uint32_t count = 0;
-    recs = all_records(f, &count, &r);
+    recs = mi_all_records(f, &count, &r);
     objs = recs ? calloc(count ? count : 1, sizeof(*objs)) : NULL;
     if (!objs) {
         code = meso_exit_for(recs ? MESO_ERR_OUT_OF_MEMORY : r);
@@ -611,36 +590,6 @@ done:
 }
 #endif
 
-/* The id of the object named `name` in `path` (already validated): exit 0,
- * or a usage error naming the file's objects when none has that name. */
-static int object_by_name(const char* path, const char* name, unsigned long* id)
-{
-    meso_file* f = NULL;
-    meso_error err;
-    meso_result r = meso_file_open_path(path, NULL, &f, &err);
-    if (r != MESO_OK) {
-        fprintf(stderr, "mesoinspect error: %s: %s\n", path, err.message);
-        return meso_exit_for(r);
-    }
-    uint32_t count = 0;
-    meso_object_record* recs = all_records(f, &count, &r);
-    meso_file_close(f);
-    if (!recs)
-        return meso_exit_for(r);
-    *id = 0;
-    for (uint32_t i = 0; i < count && !*id; ++i)
-        if (!strcmp(recs[i].name, name))
-            *id = recs[i].id;
-    if (!*id) {
-        fprintf(stderr, "mesoinspect error: --object: %s has no object named '%s'; its objects:", path, name);
-        for (uint32_t i = 0; i < count; ++i)
-            fprintf(stderr, "%s %u '%s'", i ? "," : "", recs[i].id, recs[i].name);
-        fprintf(stderr, "\n");
-    }
-    free(recs);
-    return *id ? MESO_EXIT_OK : MESO_EXIT_USAGE;
-}
-
 /* "WxH", each 1..8192; digits only, so nothing can overflow or wrap
  * (sscanf's %d would, and 4294967297 became 1). */
 static int parse_size(const char* s, int* w, int* h)
@@ -659,47 +608,6 @@ static int parse_size(const char* s, int* w, int* h)
     *w = (int)v[0];
     *h = (int)v[1];
     return 1;
-}
-
-/* >>validation ------------------------------------------------------------- */
-
-typedef struct preview_issues {
-    const char* path;
-    size_t count;
-    int code;
-} preview_issues;
-
-static int print_issue(void* user, const meso_error* e)
-{
-    preview_issues* p = user;
-    char line[400];
-    mi_format_issue(e, line, sizeof(line));
-    mi_error("%s: %s", p->path, line);
-    const int c = e->result == MESO_ERR_IO              ? MESO_EXIT_IO
-                  : e->result == MESO_ERR_OUT_OF_MEMORY ? MESO_EXIT_INTERNAL
-                                                        : MESO_EXIT_INVALID;
-    if (p->code == MESO_EXIT_OK || c == MESO_EXIT_IO)
-        p->code = c;
-    p->count++;
-    return 0;
-}
-
-/* The full check before anything is drawn, so neither libmeso nor the
- * reference ever sees a file the validator refuses: exit 3 (2 on a read
- * failure) with the issues listed, as `validate --full` lists them. */
-static int preview_validate(const char* path)
-{
-    meso_file* f = NULL;
-    int code = mi_open_or_report(path, &f);
-    if (code != MESO_EXIT_OK)
-        return code;
-    preview_issues p = {path, 0, MESO_EXIT_OK};
-    meso_file_validate(f, MESO_CHECK_FULL, print_issue, &p);
-    meso_file_close(f);
-    if (p.count)
-        mi_error("%s: %zu issue%s; not drawn (see 'mesoinspect validate --full')", path, p.count,
-                 p.count == 1 ? "" : "s");
-    return p.code;
 }
 
 int mesoinspect_preview(int argc, char** argv)
@@ -729,22 +637,9 @@ int mesoinspect_preview(int argc, char** argv)
                 return MESO_EXIT_USAGE;
             }
         } else if (!strcmp(a, "--object") && val) {
-            errno = 0;
-            only_name = NULL;
-            only = strtoul(argv[++i], &end, 10);
-            /* all digits: an id; anything else ("3d.obj" too): a name */
-            if (argv[i][0] < '0' || argv[i][0] > '9' || !end || *end) {
-                only = 0, only_name = argv[i]; /* a name (OBJT names are UTF-8, at most 31 bytes) */
-                if (!argv[i][0] || strlen(argv[i]) > 31) {
-                    fprintf(stderr, "mesoinspect error: --object expects an id >= 1 or a name of 1..31 bytes, "
-                                    "got '%s'\nSee 'mesoinspect --help'.\n", argv[i]);
-                    return MESO_EXIT_USAGE;
-                }
-            } else if (!end || *end || errno || only == 0 || only > UINT32_MAX) {
-                fprintf(stderr, "mesoinspect error: --object expects an object id >= 1, got '%s'\n"
-                                "See 'mesoinspect --help'.\n", argv[i]);
-                return MESO_EXIT_USAGE;
-            }
+            const int code = mi_object_option(argv[++i], &only, &only_name);
+            if (code != MESO_EXIT_OK)
+                return code;
         } else if ((!strcmp(a, "--yaw") || !strcmp(a, "--pitch")) && val) {
             double v = strtod(argv[++i], &end);
             if (!end || *end || !(v >= -360 && v <= 360)) {
@@ -919,11 +814,11 @@ int mesoinspect_preview(int argc, char** argv)
             return checked;
     }
     knobs.technique = technique;
-    const int valid = preview_validate(file);
+    const int valid = mi_validate_full(file, "drawn");
     if (valid != MESO_EXIT_OK)
         return valid;
     if (only_name) {
-        const int found = object_by_name(file, only_name, &only);
+        const int found = mi_object_by_name(file, only_name, &only);
         if (found != MESO_EXIT_OK)
             return found;
     }
