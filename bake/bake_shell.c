@@ -284,7 +284,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
     for (uint32_t v = 0; s->lp_mask && v < nv; ++v)
         lp_count += s->lp_mask[v];
     s->rep->vertices_lp = lp_count;
-    s->rep->vertices_normal = nv - lp_count;
+    /* an update: the recomputed vertices only (meso_bake.h) */
+    s->rep->vertices_normal = (s->prior.redo ? s->prior.redo_count : nv) - lp_count;
     s->rep->field_evaluations = ts.evaluations;
     s->rep->artificial_faces = s->fs.artificial_faces;
     return r;
@@ -599,8 +600,7 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         r = color_prepare(&s, 1, err);
     s.rep->seconds_texture = meso_seconds() - t;
     if (r == MESO_OK && a->update) {
-        const double h_side = a->kind == MESO_SHELL_ENVELOPE ? 0.5 * s.h : s.h;
-        r = mesoi_shell_prior_load(a->update, a, s.h, h_side, &s.m, s.tx.source, s.tx.indices,
+        r = mesoi_shell_prior_load(a->update, a, &s.h, &s.m, s.tx.source, s.tx.indices,
                                    s.m.vertex_count + s.tx.seam_vertices, &s.prior, err);
         s.rep->vertices_moved = s.prior.moved;
         s.rep->vertices_recomputed = s.prior.redo_count;

@@ -401,8 +401,11 @@ typedef struct meso_bake_shell_options {
      * bake of this mesh before an edit that moved vertices but kept the
      * topology. Directors are recomputed only within the edit's influence
      * radius, the rest are the old file's; the parameters (kind, directors,
-     * p, theta, angle_tol_deg, smooth, no_repair and the thickness) must be
-     * the old bake's. NULL: a full bake. */
+     * p, theta, angle_tol_deg, smooth, no_repair and, when `thickness` is
+     * given, the thickness) must be the old bake's; without `thickness` the
+     * old bake's thickness is kept (an edit may move the diagonal that
+     * thickness_rel refers to). The report's vertices_lp / vertices_normal
+     * then count the recomputed vertices only. NULL: a full bake. */
     const char* update;
     /* Colour function (FORMAT.md §7.2 "Shell colour"; needs `texture`); NULL: none. SPEC:
      * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a

@@ -17,10 +17,14 @@
  *    far field of the edit: tests/integration/shell_update.sh measures that
  *    change against a full re-bake of the edited mesh (it is far below the
  *    integration's own step error).
- *  - The exact checks: a clean face's offset triangle can meet a changed
- *    face's base only if its vertices are within h + (its longest edge) of
- *    it, so the region adds the mesh's longest edge. Inside that radius
- *    R = 3h + longest edge every vertex is recomputed (normal displacement,
+ *  - The exact checks: a clean face's offset triangle (corners within h of
+ *    its base corners, so edges up to L + 2h for the longest mesh edge L)
+ *    can meet a changed face's base only if one of its base corners is
+ *    within h + (L + 2h) = 3h + L of it. That is R, the same radius: the
+ *    region needs no more. It assumes |d| <= h for OLD's directors, which
+ *    mesobake's bakes keep (a hand-made OLD that breaks it can only make the
+ *    rounds miss a pair, which the final validation then reports, exit 8).
+ *    Inside R = 3h + L every vertex is recomputed (normal displacement,
  *    hybrid rounds, repair, regrow) and every face with a recomputed corner
  *    is re-checked; outside, OLD's directors and OLD's verdicts (valid: an
  *    OLD with defects is refused) are kept (meso_shell_checker_prime).
@@ -225,12 +229,12 @@ static meso_result read_whole(meso_file* f, int32_t idx, void** data, size_t* si
     return meso_file_read_chunk(f, (uint32_t)idx, *data, *size, err);
 }
 
-meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_options* a, double h, double h_side,
+meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_options* a, double* h_io,
                                    const meso_mesh* m, const uint32_t* out_source, const uint32_t* out_indices,
                                    uint32_t nv_out, mesoi_shell_prior* out, meso_error* err)
 {
     memset(out, 0, sizeof(*out));
-    (void)h_side;
+    double h = *h_io;
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     if (!out_source) {
         nv_out = nv;
@@ -251,8 +255,13 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
             r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3116,
                                "%s: --update needs a file mesobake shell wrote (its META has no shell parameters)",
                                mesoi_base_name(path));
-        else
+        else {
+            /* A relative thickness is the old bake's: the edit may have moved the diagonal. */
+            const double old_h = param_number(params, "thickness");
+            if (!(a->thickness > 0) && old_h > 0 && isfinite(old_h))
+                h = *h_io = old_h;
             r = check_parameters(path, params, a, h, err);
+        }
     }
     if (r == MESO_OK) {
         const char* keys[] = {"inverted_prisms", "offset_self_intersections", "offset_base_intersections"};

@@ -30,7 +30,7 @@ typedef struct mesoi_shell_prior {
  * repair, thickness), a different topology (E3118: vertex count or
  * triangles), or an OLD written with defects (E3119). h_side: each side's
  * thickness. */
-meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_options* a, double h, double h_side,
+meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_options* a, double* h,
                                    const meso_mesh* m, const uint32_t* out_source, const uint32_t* out_indices,
                                    uint32_t nv_out, mesoi_shell_prior* out, meso_error* err);
 void mesoi_shell_prior_free(mesoi_shell_prior* p);

@@ -10,6 +10,7 @@
  *    fraction of the far field's own error (what the directors change when
  *    the Barnes-Hut opening angle is halved, measured here);
  *  - an unchanged mesh recomputes nothing and reproduces OLD's directors;
+ *  - without a thickness in mesh units, OLD's thickness is kept;
  *  - refusals: another topology (E3118), other parameters (E3117), a file
  *    that is not one shell (E3116), an OLD written with defects (E3119).
  * Exterior and interior shells. */
@@ -178,9 +179,17 @@ static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_direct
     assert(old.rep.inverted_prisms == 0 && old.rep.offset_self_intersections == 0 &&
            old.rep.offset_base_intersections == 0);
 
+    /* Without a thickness in mesh units the update keeps OLD's, whatever
+     * the relative one (an edit may move the diagonal it refers to). */
+    o.update = old_path;
+    o.thickness_rel = 1.5 * rel;
+    baked kept = bake(&o, NULL);
+    /* (META's JSON keeps 15 significant digits) */
+    assert(kept.r == MESO_OK && fabs(kept.rep.thickness - h) <= 1e-12 * h);
+    baked_free(&kept);
+    o.thickness_rel = rel;
     /* Unchanged mesh: nothing recomputed, OLD's directors. */
     o.thickness = h;
-    o.update = old_path;
     baked same = bake(&o, NULL);
     assert(same.r == MESO_OK);
     assert(same.rep.vertices_moved == 0 && same.rep.vertices_recomputed == 0);
