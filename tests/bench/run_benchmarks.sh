@@ -46,6 +46,20 @@ if [ "${MESO_BENCH_SKIP_SHELL:-0}" != 1 ]; then
     echo "shell results in $results"
 fi
 
+# Incremental shell re-bakes (mesobake shell --update) against full re-bakes:
+# shell_update.csv. The checked-in one is of the shared armadillo and the
+# bundled spot_uv ($MESO_BENCH_MESHES/armadillo.obj when set). ~3-5 min.
+if [ "${MESO_BENCH_SKIP_SHELL:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_shell_update
+    echo "== bench_shell_update"
+    if [ -n "${MESO_BENCH_MESHES:-}" ] && [ -f "$MESO_BENCH_MESHES/armadillo.obj" ]; then
+        nice "$build/tests/bench/bench_shell_update" "$results" "$MESO_BENCH_MESHES/armadillo.obj" \
+            "$src/tests/data/spot_uv.obj"
+    else
+        nice "$build/tests/bench/bench_shell_update" "$results"
+    fi
+fi
+
 # Shell ray casting (issue #5): Table 1 on llvmpipe, error against the exact
 # reference, cost-vs-error sweeps. Results: table1.csv, shell_render_sweep.csv,
 # shell_render_cost_error.png, shell_render_table1.png. Skip with
