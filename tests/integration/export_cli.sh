@@ -79,6 +79,17 @@ for k in coltiled colmesh colfrusta; do
   mode=check; [ $k = colmesh ] && mode=check-hard-corners
   check "$k: the glb passes every check, colour included" "$checker" $mode "$tmp/$k.meso" "$tmp/$k.glb"
 done
+# A 3D colour (4x4x2) over a volume solid below w = 1/2 (4x4x8: four full
+# slices, four empty; alpha crosses 1/2 half-way between texel centres 7/16
+# and 9/16): every column tops out at w = 1/2, between the colour slices'
+# centres 1/4 and 3/4, so each tile texel is the two slices' mean in linear light.
+{ printf '\377%.0s' $(seq 1 64); printf '\000%.0s' $(seq 1 64); } >"$tmp/half.raw"
+"$bake" shell -i "$data/spot_uv.obj" -o "$tmp/col3d.meso" --texture "volume:$tmp/half.raw:4x4x8" \
+  --color "volume:$data/color/volume4.raw:4x4x2" -j 2 >/dev/null 2>&1
+check "col3d: bake" test -s "$tmp/col3d.meso"
+check "col3d: export" "$inspect" export "$tmp/col3d.meso" -o "$tmp/col3d.glb"
+check "col3d: the glb passes every check" "$checker" check "$tmp/col3d.meso" "$tmp/col3d.glb"
+check "col3d: the tile is the COLR at w = 1/2" "$checker" tile3d "$tmp/col3d.meso" "$tmp/col3d.glb" 0.5
 check "colmesh: base colour on TEXCOORD_1" grep -q '"texCoord":1' "$tmp/colmesh.glb"
 check "coltiled: base colour on TEXCOORD_0" sh -c "! grep -q 'TEXCOORD_1' '$tmp/coltiled.glb'"
 check "colfrusta: COLOR_0" grep -q '"COLOR_0"' "$tmp/colfrusta.glb"

@@ -51,6 +51,11 @@
  *       the same, but the tangent frames' agreement with the uvs is only
  *       reported (for a box, whose welded corners no one frame fits).
  *
+ *   test_export_glb tile3d FILE.meso FILE.glb W_TOP
+ *       a TILED W × H × D COLR over a density volume whose columns all
+ *       top out at w = W_TOP: each base-colour texel is the COLR there at
+ *       w = W_TOP (sRGB decoded, linear between slices), within 1/255.
+ *
  *   test_export_glb analytic FILE.glb K TOL_MAX_DEG TOL_MEAN_DEG
  *       the shell of DIR/plane.obj with thickness K (uv scale 1): each texel
  *       of the normal texture, turned to object space through the file's
@@ -1060,10 +1065,72 @@ static int analytic(const char* glb_path, double K, double tol_max, double tol_m
     return failures != 0;
 }
 
+/* >>tile3d ------------------------------------------------------------------ */
+
+/* A TILED 3D COLR (object 1 of FILE.meso, W × H × D) over a density volume
+ * whose every column's top-most solid w is W_TOP (known from how the test
+ * built it): each texel of the exported base-colour image (node 0) is the
+ * COLR at that texel's column and w = W_TOP as a GL fetch gives it (decoded
+ * to linear, linear between the slices whose centres (k + ½)/D bracket w,
+ * clamped), within 1/255 in sRGB; the image is W × H with t' = 1 at the
+ * top. */
+static int tile3d(const char* meso_path, const char* glb_path, double w_top)
+{
+    glb g;
+    meso_file* f = NULL;
+    meso_error e;
+    if (!glb_open(glb_path, &g) || meso_file_open_path(meso_path, NULL, &f, &e) != MESO_OK) {
+        fail("cannot open %s or %s", meso_path, glb_path);
+        glb_close(&g);
+        return 1;
+    }
+    const int32_t ci = finest(f, MESO_CHUNK_COLR, 1);
+    size_t n = 0;
+    uint8_t* colr = ci >= 0 ? read_chunk(f, ci, &n) : NULL;
+    const cJSON* mat = cJSON_GetArrayItem(cJSON_GetObjectItem(g.doc, "materials"), 0);
+    const cJSON* bct = cJSON_GetObjectItem(cJSON_GetObjectItem(mat, "pbrMetallicRoughness"), "baseColorTexture");
+    const cJSON* tex = cJSON_GetArrayItem(cJSON_GetObjectItem(g.doc, "textures"), num(bct, "index", -1));
+    const cJSON* img = cJSON_GetArrayItem(cJSON_GetObjectItem(g.doc, "images"), num(tex, "source", -1));
+    const cJSON* bv = cJSON_GetArrayItem(cJSON_GetObjectItem(g.doc, "bufferViews"), num(img, "bufferView", -1));
+    uint8_t* px = NULL;
+    int W = 0, H = 0;
+    char why[256];
+    if (!colr || !bv ||
+        meso_png_decode_memory_rgba8(g.bin + num(bv, "byteOffset", 0), (size_t)num(bv, "byteLength", 0), &px, &W, &H,
+                                     why, sizeof(why)) != 0) {
+        fail("no COLR or no decodable base-colour image");
+    } else {
+        const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
+        const int D = (int)c->dims[2];
+        CHECK(W == (int)c->dims[0] && H == (int)c->dims[1] && D > 1, "image %dx%d, COLR %ux%ux%u", W, H, c->dims[0],
+              c->dims[1], c->dims[2]);
+        const double z = fmin(D - 1.0, fmax(0.0, w_top * D - 0.5));
+        const int z0 = (int)floor(z), z1 = z0 + 1 < D ? z0 + 1 : z0;
+        double worst = 0;
+        for (int j = 0; j < H && W == (int)c->dims[0] && H == (int)c->dims[1]; ++j)
+            for (int i = 0; i < W; ++i)
+                for (int k = 0; k < 3; ++k) {
+                    const double a = srgb_to_linear(colr[4 * (((size_t)z0 * H + j) * W + i) + k]);
+                    const double b = srgb_to_linear(colr[4 * (((size_t)z1 * H + j) * W + i) + k]);
+                    const double want = linear_to_srgb255((1 - (z - z0)) * a + (z - z0) * b);
+                    worst = fmax(worst, fabs(want - px[4 * ((size_t)(H - 1 - j) * W + i) + k]));
+                }
+        CHECK(worst <= 1.0, "3D colour tile: worst texel %.2f/255 from the COLR at w = %g", worst, w_top);
+        fprintf(stderr, "3D colour tile at w = %g: worst %.3f/255\n", w_top, worst);
+    }
+    free(px);
+    free(colr);
+    meso_file_close(f);
+    glb_close(&g);
+    return failures != 0;
+}
+
 int main(int argc, char** argv)
 {
     if (argc == 3 && !strcmp(argv[1], "gen"))
         return gen(argv[2]);
+    if (argc == 5 && !strcmp(argv[1], "tile3d"))
+        return tile3d(argv[2], argv[3], atof(argv[4]));
     if (argc == 4 && !strcmp(argv[1], "check-hard-corners")) {
         hard_corners = 1;
         return check(argv[2], argv[3], 0);
@@ -1072,7 +1139,7 @@ int main(int argc, char** argv)
         return check(argv[2], argv[3], argc == 5 ? (uint32_t)strtoul(argv[4], NULL, 10) : 0);
     if (argc == 6 && !strcmp(argv[1], "analytic"))
         return analytic(argv[2], atof(argv[3]), atof(argv[4]), atof(argv[5]));
-    fprintf(stderr, "usage: test_export_glb gen DIR | check FILE.meso FILE.glb [ID] | check-hard-corners FILE.meso FILE.glb | analytic FILE.glb K MAXDEG "
+    fprintf(stderr, "usage: test_export_glb gen DIR | check FILE.meso FILE.glb [ID] | check-hard-corners FILE.meso FILE.glb | tile3d FILE.meso FILE.glb W | analytic FILE.glb K MAXDEG "
                     "MEANDEG\n");
     return 2;
 }
