@@ -50,7 +50,10 @@ static int tess_grow(tess_buf* b, uint64_t add_v, uint64_t add_i)
         float* n = realloc(m->normals, 3 * sizeof(float) * (size_t)nc);
         if (n)
             m->normals = n;
-        if (!p || !n)
+        uint32_t* o = realloc(m->owner, sizeof(uint32_t) * (size_t)nc);
+        if (o)
+            m->owner = o;
+        if (!p || !n || !o)
             return 0;
         b->cap_v = (uint32_t)nc;
     }
@@ -72,7 +75,7 @@ static int tess_grow(tess_buf* b, uint64_t add_v, uint64_t add_i)
  * ∂p/∂v × ∂p/∂u points out, or pass flip). */
 typedef void (*tess_fn)(const void* ctx, double u, double v, double p[3]);
 
-static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t nu, uint32_t nv, int flip)
+static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t owner, uint32_t nu, uint32_t nv, int flip)
 {
     if (!tess_grow(b, ((uint64_t)nu + 1) * ((uint64_t)nv + 1), 6 * (uint64_t)nu * nv))
         return 0;
@@ -103,7 +106,7 @@ static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t nu, uint
                 P[k] = (float)p[k];
                 N[k] = (float)(l > 0 ? (flip ? -n[k] : n[k]) / l : 0);
             }
-            m->vertex_count++;
+            m->owner[m->vertex_count++] = owner;
         }
     for (uint32_t j = 0; j < nv; ++j)
         for (uint32_t i = 0; i < nu; ++i) {
@@ -173,18 +176,18 @@ int meso_ref_frusta_tessellate(const meso_frustum_rec* recs, uint32_t count, con
             goto fail;
         const uint32_t nv = (uint32_t)nvd;
         const seg_ctx c = {&recs[f], relief};
-        if (!tess_grid(&b, seg_fn, &c, nu, nv, 0))
+        if (!tess_grid(&b, seg_fn, &c, f, nu, nv, 0))
             goto fail;
         for (int e = 0; e < 2; ++e) {
             if (!(recs[f].flags & (e ? MESO_FSEG_CAP1 : MESO_FSEG_CAP0)))
                 continue;
             const cap_ctx cc = {&recs[f], relief, e};
-            if (!tess_grid(&b, cap_fn, &cc, nu, 1, e == 0))
+            if (!tess_grid(&b, cap_fn, &cc, f, nu, 1, e == 0))
                 goto fail;
         }
     }
     for (uint32_t i = 0; i < ball_count; ++i)
-        if (!tess_grid(&b, ball_fn, &balls[i], nu, nu / 2 ? nu / 2 : 1, 1))
+        if (!tess_grid(&b, ball_fn, &balls[i], count + i, nu, nu / 2 ? nu / 2 : 1, 1))
             goto fail;
     *out = b.m;
     return 1;
@@ -197,6 +200,7 @@ void meso_ref_tess_free(meso_ref_tess_mesh* m)
 {
     free(m->positions);
     free(m->normals);
+    free(m->owner);
     free(m->indices);
     memset(m, 0, sizeof(*m));
 }

@@ -39,6 +39,7 @@ typedef struct meso_ref_tess_mesh {
     uint32_t vertex_count, index_count;
     float* positions; /* 3 per vertex */
     float* normals;   /* 3 per vertex, unit (0 where the grid degenerates) */
+    uint32_t* owner;  /* per vertex: frustum i (its lateral grid or caps) < count, else ball count + j */
     uint32_t* indices;
 } meso_ref_tess_mesh;
 

@@ -18,7 +18,14 @@
  *    non-empty voxels (alpha > 0), averaged in linear RGB;
  *  - frusta: a triangle tessellation of the surface with its relief
  *    (runtime/reference/frusta_tessellate.h), --frusta-grid points around
- *    each frustum, the default albedo.
+ *    each frustum, the default albedo; with a COLR, per-vertex COLOR_0
+ *    (linear RGB, baseColorFactor 1) = meso_ref_frusta_albedo at each
+ *    vertex on the frustum or ball that made it (the COLR bilinear at the
+ *    vertex's relief coordinates; balls their mean colour), so colour is
+ *    interpolated across triangles rather than textured (a frustum's
+ *    relief coordinates are not one chart an engine could texture with).
+ *    Shells' COLR follow their CMAP (export_shell_maps.c): TILED on
+ *    TEXCOORD_0, BASE on TEXCOORD_1.
  * Every exported uv is glTF's (u, v) = (s, 1 − t'): meso's texture rows run
  * from t' = 0 at the bottom (OpenGL's way), glTF's from v = 0 at the top.
  * Normals are written unit length: a MESH normal that is not finite and
@@ -54,10 +61,13 @@ static const char* const usage_export =
     "material per object, named after it, in object order. Meshes as they are;\n"
     "shells as their base mesh with one texture tile's baked tangent-space normal\n"
     "map and base-colour map (the shell's COLR colours, or the default albedo times\n"
-    "the height-dependent occlusion 0.25 + 0.75 w), uvs repeating; cells as their\n"
-    "base mesh in the mean colour of their cells; frusta as a triangle tessellation\n"
-    "of their surface and relief. FILE is first checked as 'mesoinspect validate\n"
-    "--full' does; a file with issues is not exported (exit 3).\n"
+    "the height-dependent occlusion 0.25 + 0.75 w), uvs repeating; a colour baked\n"
+    "with --color from-mesh (CMAP BASE) is the base mesh's own texture on TEXCOORD_1\n"
+    "(uv = texture coordinates / tiling); cells as their base mesh in the mean colour\n"
+    "of their cells; frusta as a triangle tessellation of their surface and relief,\n"
+    "coloured per vertex (COLOR_0) by their COLR when they have one. FILE is first\n"
+    "checked as 'mesoinspect validate --full' does; a file with issues is not\n"
+    "exported (exit 3).\n"
     "\n"
     "  -o, --output FILE     the .glb to write (atomically; a symbolic link is written\n"
     "                        through, a device, FIFO or directory refused)\n"
@@ -361,6 +371,28 @@ static int export_frusta(meso_file* f, const meso_object_record* rec, uint32_t g
             code = out_of_memory();
         set_albedo(p);
     }
+    if (code == MESO_EXIT_OK && ref.color) {
+        /* COLR (FORMAT.md §7.2 kind 4): per vertex, the reference's albedo
+         * of a hit there on the part that made the vertex. */
+        p->colors = malloc(sizeof(float) * 3 * (p->vertex_count ? p->vertex_count : 1));
+        if (!p->colors)
+            code = out_of_memory();
+        for (uint32_t v = 0; p->colors && v < p->vertex_count; ++v) {
+            meso_ref_frustum_hit hit;
+            memset(&hit, 0, sizeof(hit));
+            for (int k = 0; k < 3; ++k)
+                hit.p[k] = p->positions[3 * (size_t)v + (size_t)k];
+            const uint32_t o = m.owner[v];
+            hit.part = o < count ? MESO_REF_PART_LATERAL : MESO_REF_PART_BALL;
+            hit.index = (int32_t)(o < count ? o : o - count);
+            double a[3] = {MI_DEFAULT_ALBEDO_R, MI_DEFAULT_ALBEDO_G, MI_DEFAULT_ALBEDO_B};
+            meso_ref_frusta_albedo(&ref, &hit, a);
+            for (int k = 0; k < 3; ++k)
+                p->colors[3 * (size_t)v + (size_t)k] = (float)fmin(1.0, fmax(0.0, a[k]));
+        }
+        for (int k = 0; k < 3; ++k)
+            p->base_color[k] = 1.0f;
+    }
     meso_ref_tess_free(&m);
     meso_ref_frusta_free(&ref);
     free(recs);
@@ -543,6 +575,33 @@ static int export_shell(meso_file* f, const meso_object_record* rec, mi_glb_prim
             mi_warning("object %u (%s): its COLR chunk is not RGBA8 (u8 x 4, W x H x D); the default colour is "
                        "exported",
                        rec->id, rec->name);
+    }
+    meso_cmap_record cmap = {.mapping = MESO_CMAP_TILED, .scale = {1.0f, 1.0f}};
+    if (src.colr) {
+        /* How the COLR maps (validated: 4911, 4912, 6106). */
+        uint8_t* rec_bytes = NULL;
+        size_t rec_size = 0;
+        code = read_chunk(f, rec, MESO_CHUNK_CMAP, &rec_bytes, &rec_size);
+        if (code == MESO_EXIT_OK && rec_size == MESO_CMAP_RECORD_SIZE)
+            meso_cmap_record_decode(rec_bytes, &cmap);
+        free(rec_bytes);
+        if (code != MESO_EXIT_OK)
+            goto done;
+        src.colr_mapping = cmap.mapping;
+    }
+    if (src.colr && cmap.mapping == MESO_CMAP_BASE) {
+        /* TEXCOORD_1 = (s · scale0, 1 − t' · scale1), t' = 1 − v. */
+        p->uvs1 = malloc(sizeof(float) * 2 * (p->vertex_count ? p->vertex_count : 1));
+        if (!p->uvs1) {
+            code = out_of_memory();
+            goto done;
+        }
+        for (size_t i = 0; i < p->vertex_count; ++i) {
+            const double s0 = p->uvs[2 * i], t0 = 1.0 - (double)p->uvs[2 * i + 1];
+            p->uvs1[2 * i] = (float)(s0 * cmap.scale[0]);
+            p->uvs1[2 * i + 1] = (float)(1.0 - t0 * cmap.scale[1]);
+        }
+        p->color_texcoord = 1;
     }
     const double k = mi_shell_slope_scale(&src);
     if (mi_shell_tangents(&src, &p->tangents) != MESO_OK) {

@@ -28,6 +28,9 @@ typedef struct mi_glb_prim {
     float* normals;          /* 3 per vertex, unit; or NULL */
     float* tangents;         /* 4 per vertex (xyz unit, w = ±1); or NULL */
     float* uvs;              /* 2 per vertex, glTF's (u, v): v = 1 − t'; or NULL */
+    float* uvs1;             /* TEXCOORD_1, 2 per vertex, same v flip; or NULL */
+    float* colors;           /* COLOR_0, 3 per vertex, linear RGB in [0, 1]; or NULL */
+    int color_texcoord;      /* baseColorTexture.texCoord: 0, or 1 (needs uvs1) */
     uint32_t* indices;       /* index_count, each < vertex_count */
     float base_color[4];     /* pbrMetallicRoughness.baseColorFactor, linear */
     uint8_t* color_png;      /* base-colour texture (sRGB), or NULL */
@@ -60,6 +63,7 @@ typedef struct mi_shell_src {
     const meso_ref_texfn* tex;   /* kind 0 none, 1 height field, 2 density volume */
     const uint8_t* colr;         /* RGBA8 or NULL */
     uint32_t colr_dims[3];
+    uint32_t colr_mapping;       /* the CMAP record's: MESO_CMAP_TILED or MESO_CMAP_BASE */
 } mi_shell_src;
 
 /* k = prism height / (object length per unit of texture space): the
@@ -74,7 +78,8 @@ double mi_shell_slope_scale(const mi_shell_src* s);
  * +Y of a normal texture, "up" in the image), else −1. MESO_ERR_OUT_OF_MEMORY. */
 meso_result mi_shell_tangents(const mi_shell_src* s, float** out);
 
-/* The tile's normal map and base-colour map as PNGs (normal_png NULL when
+/* The tile's normal map and base-colour map as PNGs (a BASE-mapped COLR:
+ * the COLR itself, an image of the base mesh's uv square) (normal_png NULL when
  * the shell has no texture function; color_png NULL when it has neither a
  * texture function nor a COLR). `k` is mi_shell_slope_scale's. Returns 0,
  * or -1 with a reason in `why`. */

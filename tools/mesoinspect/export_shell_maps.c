@@ -35,11 +35,21 @@
  * perpendicular to the normal (Lengyel's construction; MikkTSpace gives
  * the same directions up to its angle weights).
  *
- * Base colour: the shell's COLR chunk when it has one (RGBA8, sRGB; a
- * W × H × 1 map is the tile's colour, a W × H × D map is sampled at each
- * column's baked height, nearest slice), else libmeso's shading without
- * light: the default albedo times the built-in occlusion 0.25 + 0.75 w at
- * the baked height, sRGB-encoded as glTF requires of baseColorTexture.
+ * Base colour: the shell's COLR chunk when it has one (RGBA8, sRGB), as
+ * its CMAP record maps it (FORMAT.md §7.2 "Shell colour"). TILED: the
+ * image is one texture tile on TEXCOORD_0, c = (s, t'); a W × H × 1 COLR is
+ * that tile texel for texel, a W × H × D one is sampled at each texel
+ * column's baked height w = h as the runtime's fetch would (decoded to
+ * linear, linear between the slices whose centres (k + ½)/D bracket w,
+ * clamped, re-encoded). BASE (`--color from-mesh`): the image is the COLR
+ * itself, spanning the base mesh's uv square once; export.c writes
+ * TEXCOORD_1 = (s · scale0, 1 − t' · scale1) for it (the same v flip as
+ * TEXCOORD_0) and points baseColorTexture.texCoord at it (a D > 1 BASE
+ * COLR, which mesobake never writes, shows its top slice). Either way the
+ * image rows run t' = 1 at the top, as the normal map's. Without a COLR:
+ * libmeso's shading without light, the default albedo times the built-in
+ * occlusion 0.25 + 0.75 w at the baked height, sRGB-encoded as glTF
+ * requires of baseColorTexture.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -173,8 +183,10 @@ meso_result mi_shell_tangents(const mi_shell_src* s, float** out)
         for (int k = 0; k < 3; ++k)
             t[k] = pu[k] - along * n[k];
         double l = sqrt(dot3(t, t));
-        if (!(l > 1e-12)) {
-            /* No uv direction here (an unused or degenerate vertex): any
+        if (!(l > 1e-12 && l > 1e-6 * sqrt(dot3(pu, pu)))) {
+            /* No uv direction here (an unused or degenerate vertex, or
+             * one whose triangles' ∂P/∂u sum along the normal, as at a
+             * welded cube corner, where what is left is rounding): any
              * perpendicular, from the axis least along the normal. */
             const int ax = fabs(n[0]) <= fabs(n[1]) && fabs(n[0]) <= fabs(n[2]) ? 0 : fabs(n[1]) <= fabs(n[2]) ? 1 : 2;
             double e[3] = {0, 0, 0};
@@ -275,12 +287,22 @@ int mi_shell_maps(const mi_shell_src* s, double k, uint8_t** normal_png, size_t*
         px = malloc((size_t)W * H * 3);
         if (!px)
             goto oom;
+        const int tiled = s->colr_mapping == MESO_CMAP_TILED;
         for (uint32_t j = 0; j < H; ++j)
             for (uint32_t i = 0; i < W; ++i) {
-                const double h = has_fn ? meso_ref_texfn_value(&hf, (i + 0.5) / W, (j + 0.5) / H, 0) : 1.0;
-                const uint32_t z = D > 1 ? (uint32_t)fmin(D - 1.0, fmax(0.0, floor(h * D))) : 0;
-                const uint8_t* c = s->colr + 4 * (((size_t)z * H + j) * W + i);
-                memcpy(px + 3 * ((size_t)j * W + i), c, 3);
+                /* The colour at the texel centre's column top, w = h: the
+                 * GL fetch there is the texel's own colour in s and t'
+                 * and linear (in linear light) between slices in w. */
+                const double h = tiled && has_fn ? meso_ref_texfn_value(&hf, (i + 0.5) / W, (j + 0.5) / H, 0) : 1.0;
+                const double z = fmin(D - 1.0, fmax(0.0, h * D - 0.5));
+                const uint32_t z0 = (uint32_t)floor(z), z1 = z0 + 1 < D ? z0 + 1 : z0;
+                const double fz = z - z0;
+                const uint8_t* c0 = s->colr + 4 * (((size_t)z0 * H + j) * W + i);
+                const uint8_t* c1 = s->colr + 4 * (((size_t)z1 * H + j) * W + i);
+                for (int c = 0; c < 3; ++c)
+                    px[3 * ((size_t)j * W + i) + (size_t)c] =
+                        z1 == z0 || fz == 0 ? c0[c]
+                                            : mi_srgb8((1 - fz) * mi_srgb_to_linear(c0[c]) + fz * mi_srgb_to_linear(c1[c]));
             }
         if (meso_png_encode_memory(px, (int)W, (int)H, 3, 1, color_png, color_size, why, why_size) != 0)
             goto done;

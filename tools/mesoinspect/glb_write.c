@@ -13,7 +13,8 @@
  *
  * Layout: the 12-byte header, the JSON chunk (padded with spaces to a
  * multiple of 4), the BIN chunk (padded with zeros). In BIN, per primitive
- * in order: positions, normals, tangents, uvs (float, tightly packed),
+ * in order: positions, normals, tangents, uvs, second uvs (TEXCOORD_1),
+ * vertex colours (COLOR_0, VEC3 float) (float, tightly packed),
  * indices (UNSIGNED_INT), then the PNG images; every bufferView starts at a
  * multiple of 4. POSITION accessors carry min/max (required); the other
  * accessors do not (optional). Arrays that would be empty are left out
@@ -47,6 +48,8 @@ void mi_glb_prim_free(mi_glb_prim* p)
     free(p->normals);
     free(p->tangents);
     free(p->uvs);
+    free(p->uvs1);
+    free(p->colors);
     free(p->indices);
     free(p->color_png);
     free(p->normal_png);
@@ -225,6 +228,12 @@ meso_result mi_glb_write(const mi_glb_prim* prims, uint32_t count, const char* g
         if (p->uvs)
             cJSON_AddNumberToObject(attr, "TEXCOORD_0",
                                     add_accessor(&g, p->uvs, p->vertex_count, 2, GL_FLOAT_, GL_ARRAY_BUFFER_, NULL, NULL));
+        if (p->uvs1)
+            cJSON_AddNumberToObject(attr, "TEXCOORD_1",
+                                    add_accessor(&g, p->uvs1, p->vertex_count, 2, GL_FLOAT_, GL_ARRAY_BUFFER_, NULL, NULL));
+        if (p->colors)
+            cJSON_AddNumberToObject(attr, "COLOR_0", add_accessor(&g, p->colors, p->vertex_count, 3, GL_FLOAT_,
+                                                                  GL_ARRAY_BUFFER_, NULL, NULL));
         if (p->index_count)
             cJSON_AddNumberToObject(prim, "indices", add_accessor(&g, p->indices, p->index_count, 1, GL_UNSIGNED_INT_,
                                                                   GL_ELEMENT_ARRAY_BUFFER_, NULL, NULL));
@@ -241,9 +250,12 @@ meso_result mi_glb_write(const mi_glb_prim* prims, uint32_t count, const char* g
         cJSON* bcf = cJSON_AddArrayToObject(pbr, "baseColorFactor");
         for (int k = 0; k < 4; ++k)
             cJSON_AddItemToArray(bcf, cJSON_CreateNumber((double)p->base_color[k]));
-        if (p->color_png)
-            cJSON_AddItemToObject(pbr, "baseColorTexture",
-                                  add_texture(&g, images, textures, p->color_png, p->color_png_size));
+        if (p->color_png) {
+            cJSON* info = add_texture(&g, images, textures, p->color_png, p->color_png_size);
+            if (p->color_texcoord == 1 && p->uvs1)
+                cJSON_AddNumberToObject(info, "texCoord", 1);
+            cJSON_AddItemToObject(pbr, "baseColorTexture", info);
+        }
         /* Lambertian look, as libmeso shades: no metal, fully rough. */
         cJSON_AddNumberToObject(pbr, "metallicFactor", 0);
         cJSON_AddNumberToObject(pbr, "roughnessFactor", 1);
