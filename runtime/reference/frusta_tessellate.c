@@ -171,9 +171,9 @@ int meso_ref_frusta_tessellate(const meso_frustum_rec* recs, uint32_t count, con
         return 0;
     for (uint32_t f = 0; f < count; ++f) {
         const double ratio = recs[f].u_scale > 0 ? recs[f].v_scale / recs[f].u_scale : 1;
-        const double nvd = fmax(2.0, ceil(nu * ratio));
-        if (!(nvd <= MESO_REF_TESS_MAX_GRID * 64.0))
-            goto fail;
+        /* a long thin frustum gets at most 64 nu rings (a valid file must
+         * not fail for its proportions; its cells are then longer than wide) */
+        const double nvd = fmin(fmax(2.0, ceil(nu * ratio)), 64.0 * nu);
         const uint32_t nv = (uint32_t)nvd;
         const seg_ctx c = {&recs[f], relief};
         if (!tess_grid(&b, seg_fn, &c, f, nu, nv, 0))

@@ -49,12 +49,12 @@ typedef struct meso_ref_tess_mesh {
 
 /* The whole object: per frustum an nu × nv grid (plus caps) with nv chosen
  * so grid cells cover as much relief texture along v as across u
- * (nv = ⌈nu · v_scale / u_scale⌉, at least 2), per ball an
+ * (nv = ⌈nu · v_scale / u_scale⌉, at least 2, at most 64 nu), per ball an
  * nu × nu/2 sphere. `relief` is the object's height field (kind 1), or
  * NULL / kind 0 for none (frusta with relief_depth 0 ignore it too).
  * Returns 1, or 0 (nothing allocated) when nu is 0 or above
  * MESO_REF_TESS_MAX_GRID, a count would not fit in 32 bits, or memory runs
- * out. */
+ * out (never for a frustum's proportions). */
 int meso_ref_frusta_tessellate(const meso_frustum_rec* recs, uint32_t count, const meso_frustum_ball_rec* balls,
     uint32_t ball_count, const meso_ref_texfn* relief, uint32_t nu, meso_ref_tess_mesh* out);
 

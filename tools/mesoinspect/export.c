@@ -353,8 +353,9 @@ static int export_frusta(meso_file* f, const meso_object_record* rec, uint32_t g
     meso_ref_tess_mesh m;
     memset(&m, 0, sizeof(m));
     if (code == MESO_EXIT_OK && !meso_ref_frusta_tessellate(recs, count, balls, ball_count, &ref.relief.height, grid, &m)) {
-        mi_error("object %u (%s): out of memory tessellating %u frusta at --frusta-grid %u", rec->id, rec->name,
-                 count, grid);
+        mi_error("object %u (%s): cannot tessellate %u frusta at --frusta-grid %u (out of memory, or more than "
+                 "2^32 vertices: try a smaller grid)",
+                 rec->id, rec->name, count, grid);
         code = MESO_EXIT_INTERNAL;
     }
     if (code == MESO_EXIT_OK) {
