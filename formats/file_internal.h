@@ -165,6 +165,10 @@ static inline int mesoi_is_dtype(const meso_chunk_info* c, unsigned mask)
  * (NULL: stop at the first), including the chunk issues of chunks it reads.
  * Returns the first issue's result. */
 meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso_issue_fn fn, void* user);
+/* Every LODS record against OBJT and the chunks its level draws (6401). */
+void mesoi_check_levels(meso_file* f, const meso_object_record* recs, uint32_t count, meso_issue_fn fn, void* user);
+/* LODS contents (file_levels.c, issues 4921, 4922). */
+meso_result mesoi_check_lods(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err);
 meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso_error* err);
 /* Contents of a decoded structured chunk (META/RPRT JSON, OBJT, MESH, SKEL,
  * FRUS); OK for other types. `base` is the file offset for reports

@@ -52,6 +52,7 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_CELL:
     case MESO_CHUNK_ANIM:
     case MESO_CHUNK_CMAP:
+    case MESO_CHUNK_LODS:
     case MESO_CHUNK_TXFR:
     case MESO_CHUNK_DSFR:
     case MESO_CHUNK_RELF: return 1;
@@ -160,6 +161,7 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_META:
     case MESO_CHUNK_RPRT:
     case MESO_CHUNK_OBJT:
+    case MESO_CHUNK_LODS:
         if (c->object != 0)
             return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_TYPE_OBJECT, UINT64_MAX, chunk,
                                     "chunk %d (%s): file-wide chunk has object %u, must be 0", (int)chunk, cc,
@@ -590,6 +592,7 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
     case MESO_CHUNK_CELL: return check_cell(data, size, chunk, base, err);
     case MESO_CHUNK_ANIM: return mesoi_check_anim(data, size, chunk, base, err);
     case MESO_CHUNK_CMAP: return mesoi_check_cmap(data, size, chunk, base, err);
+    case MESO_CHUNK_LODS: return mesoi_check_lods(data, size, chunk, base, err);
     default: return MESO_OK;
     }
 }
@@ -762,7 +765,8 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
     int structured = known && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_RPRT || c->type == MESO_CHUNK_OBJT ||
                                c->type == MESO_CHUNK_MESH || c->type == MESO_CHUNK_SKEL || c->type == MESO_CHUNK_FRUS ||
                                c->type == MESO_CHUNK_FSEG || c->type == MESO_CHUNK_BALL ||
-                               c->type == MESO_CHUNK_CELL);
+                               c->type == MESO_CHUNK_CELL || c->type == MESO_CHUNK_ANIM ||
+                               c->type == MESO_CHUNK_CMAP || c->type == MESO_CHUNK_LODS);
     const uint8_t* whole = NULL;
     uint8_t* owned = NULL;
     if (f->data) {
@@ -871,8 +875,12 @@ static void validate_objects(meso_file* f, validate_state* s)
     if (meso_file_objects(f, recs, count, &count, &e) != MESO_OK)
         object_issue(s, &e);
     else
+    {
         for (uint32_t i = 0; i < count && !s->stop; i++)
             mesoi_check_object(f, &recs[i], object_issue, s);
+        if (!s->stop)
+            mesoi_check_levels(f, recs, count, object_issue, s);
+    }
     mesoi_file_free(&f->alloc, recs);
 }
 

@@ -23,6 +23,7 @@
 typedef struct obj_check {
     meso_file* f;
     uint32_t id;
+    uint16_t lod; /* the level checked: each type resolves to its chunk with the smallest lod >= this */
     meso_issue_fn fn; /* NULL: stop at the first issue */
     void* user;
     meso_result first;
@@ -35,6 +36,12 @@ static void note(obj_check* c, const meso_error* e)
         c->first = e->result;
     if (!c->fn || c->fn(c->user, e))
         c->stop = 1;
+}
+
+static int keep_first_issue(void* user, const meso_error* e)
+{
+    *(meso_error*)user = *e;
+    return 1;
 }
 
 #define ISSUE(c, code, chunk, ...)                                                                    \
@@ -54,17 +61,11 @@ static const char* kind_name(uint32_t kind)
     }
 }
 
-/* The object's chunk of `type` at its finest level (lowest lod), as the
- * runtime picks it; -1 when there is none. */
+/* The object's chunk of `type` at the level checked (lowest lod >= c->lod;
+ * level 0: its finest), as the runtime picks it; -1 when there is none. */
 static int32_t finest(const obj_check* c, uint32_t type)
 {
-    int32_t best = -1;
-    for (uint32_t i = 0; i < c->f->chunk_count; i++) {
-        const meso_chunk_info* k = &c->f->chunks[i];
-        if (k->type == type && k->object == c->id && (best < 0 || k->lod < c->f->chunks[best].lod))
-            best = (int32_t)i;
-    }
-    return best;
+    return meso_file_find_level(c->f, type, c->id, c->lod);
 }
 
 /* The chunk of `type` the kind requires; reports 6001 when it is missing. */
@@ -452,9 +453,11 @@ done:
 
 /* >>entry points ------------------------------------------------------------ */
 
-meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso_issue_fn fn, void* user)
+/* One level of an object: the kind's rules over the chunks that level draws. */
+static meso_result check_level(meso_file* f, const meso_object_record* rec, uint16_t lod, meso_issue_fn fn,
+                               void* user)
 {
-    obj_check c = {f, rec->id, fn, user, MESO_OK, 0};
+    obj_check c = {f, rec->id, lod, fn, user, MESO_OK, 0};
     meso_mesh_layout l;
     int32_t i;
     switch (rec->kind) {
@@ -478,11 +481,58 @@ meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso
     return c.first;
 }
 
-static int keep_first(void* user, const meso_error* e)
+meso_result mesoi_check_object(meso_file* f, const meso_object_record* rec, meso_issue_fn fn, void* user)
 {
-    *(meso_error*)user = *e;
-    return 1;
+    return check_level(f, rec, 0, fn, user);
 }
+
+/* Each LODS record against OBJT and the chunks its level draws (6401): the
+ * object exists, lod 0 is NATIVE, every coarser NATIVE level passes its
+ * kind's rules over the chunks it resolves to, a MESH stand-in has a MESH. */
+void mesoi_check_levels(meso_file* f, const meso_object_record* recs, uint32_t count, meso_issue_fn fn, void* user)
+{
+    const int32_t li = meso_file_find(f, MESO_CHUNK_LODS, 0, UINT16_MAX);
+    if (li < 0)
+        return;
+    obj_check top = {f, 0, 0, fn, user, MESO_OK, 0};
+    const meso_chunk_info* lc = &f->chunks[li];
+    uint8_t* lods = load(&top, li);
+    if (!lods)
+        return;
+    for (uint64_t k = 0; k < lc->decoded_size / MESO_LODS_RECORD_SIZE && !top.stop; k++) {
+        meso_level_record lr;
+        meso_level_record_decode(lods + k * MESO_LODS_RECORD_SIZE, &lr);
+        const meso_object_record* rec = NULL;
+        for (uint32_t i = 0; i < count; i++)
+            if (recs[i].id == lr.object)
+                rec = &recs[i];
+        if (!rec) {
+            ISSUE(&top, MESO_ISSUE_LEVELS, li, "chunk %d (LODS): record %llu names object %u, which OBJT has not",
+                  (int)li, (unsigned long long)k, lr.object);
+            continue;
+        }
+        if (lr.lod == 0 && lr.form != MESO_LEVEL_NATIVE) {
+            ISSUE(&top, MESO_ISSUE_LEVELS, li, "chunk %d (LODS): lod 0 of object %u is a stand-in, must be native",
+                  (int)li, lr.object);
+            continue;
+        }
+        if (lr.lod == 0)
+            continue; /* level 0 is the object check itself */
+        meso_object_record as = *rec;
+        if (lr.form == MESO_LEVEL_MESH)
+            as.kind = MESO_OBJECT_MESH;
+        obj_check c = {f, lr.object, lr.lod, NULL, NULL, MESO_OK, 0};
+        meso_error e;
+        memset(&e, 0, sizeof e);
+        if (check_level(f, &as, lr.lod, keep_first_issue, &e) != MESO_OK) {
+            ISSUE(&top, MESO_ISSUE_LEVELS, li, "object %u, level %u (%s): %s", lr.object, lr.lod,
+                  lr.form == MESO_LEVEL_MESH ? "mesh stand-in" : "native", e.message);
+        }
+        (void)c;
+    }
+    mesoi_file_free(&f->alloc, lods);
+}
+
 
 meso_result meso_file_check_object(meso_file* f, uint32_t object, meso_error* err)
 {
@@ -514,7 +564,7 @@ meso_result meso_file_check_object(meso_file* f, uint32_t object, meso_error* er
         if (rec.id != object)
             continue;
         memset(&e, 0, sizeof e);
-        r = mesoi_check_object(f, &rec, keep_first, &e);
+        r = mesoi_check_object(f, &rec, keep_first_issue, &e);
         if (r != MESO_OK && err)
             *err = e;
         break;

@@ -23,7 +23,7 @@
 typedef struct wchunk {
     meso_chunk_info info;
     uint8_t* data;
-    uint32_t group; /* 0 META, 1 OBJT, 2 RPRT, 3 everything else */
+    uint32_t group; /* 0 META, 1 OBJT, 2 LODS, 3 RPRT, 4 everything else */
     uint64_t seq;   /* insertion order */
 } wchunk;
 
@@ -66,7 +66,11 @@ void meso_writer_destroy(meso_writer* w)
 
 static uint32_t group_of(uint32_t type)
 {
-    return type == MESO_CHUNK_META ? 0u : type == MESO_CHUNK_OBJT ? 1u : type == MESO_CHUNK_RPRT ? 2u : 3u;
+    return type == MESO_CHUNK_META   ? 0u
+           : type == MESO_CHUNK_OBJT ? 1u
+           : type == MESO_CHUNK_LODS ? 2u
+           : type == MESO_CHUNK_RPRT ? 3u
+                                     : 4u;
 }
 
 /* File order: group, then lod descending, then insertion. */

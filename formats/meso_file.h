@@ -40,7 +40,7 @@ extern "C" {
 #define MESO_VERSION 100 /* tools/library 0.1.0 as one comparable integer */
 #define MESO_VERSION_STRING "0.1.0"
 #define MESO_FORMAT_MAJOR 1
-#define MESO_FORMAT_MINOR 0
+#define MESO_FORMAT_MINOR 1
 
 /* >>result ---------------------------------------------------------------- */
 
@@ -112,6 +112,7 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_TXFR MESO_FOURCC('T', 'X', 'F', 'R') /* its frames: TX2D/TX3D slabs stacked along z */
 #define MESO_CHUNK_DSFR MESO_FOURCC('D', 'S', 'F', 'R') /* their distance maps: DIST slabs stacked along z */
 #define MESO_CHUNK_CMAP MESO_FOURCC('C', 'M', 'A', 'P') /* how a shell's COLR maps to texture space (one record) */
+#define MESO_CHUNK_LODS MESO_FOURCC('L', 'O', 'D', 'S') /* levels of detail: error and bounds per object level (1.1) */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -465,6 +466,8 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_ANIM_VALUE 4902u          /* ANIM field out of range or reserved bytes not zero */
 #define MESO_ISSUE_CMAP_SIZE 4911u           /* CMAP is not one 32-byte record */
 #define MESO_ISSUE_CMAP_VALUE 4912u          /* CMAP field out of range or reserved bytes not zero */
+#define MESO_ISSUE_LODS_SIZE 4921u           /* LODS size not a multiple of 48 */
+#define MESO_ISSUE_LODS_VALUE 4922u          /* LODS record out of order, out of range, or reserved bytes not zero */
 #define MESO_ISSUE_OBJ_CHUNKS 6001u          /* an object lacks a chunk its kind requires */
 #define MESO_ISSUE_SHELL_COUNT 6101u         /* SDIR/STHK count != MESH vertex count, or no triangles */
 #define MESO_ISSUE_SHELL_SDIR 6102u          /* non-finite director */
@@ -478,6 +481,7 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_FRUSTA_RELF 6204u         /* RELF not U8 or U16 x 1 */
 #define MESO_ISSUE_FRUSTA_COLR 6205u         /* frusta COLR not one U8 x 4, W x H x 1 chunk */
 #define MESO_ISSUE_CELLS_COLOUR_GRID 6301u   /* cells TX3D (mesh colour grid) not one U8 x 4 chunk */
+#define MESO_ISSUE_LEVELS 6401u              /* an object's LODS levels do not fit its OBJT record or its chunks */
 #define MESO_ISSUE_API_ARG 5001u
 #define MESO_ISSUE_API_BUFFER 5002u
 #define MESO_ISSUE_API_MEMORY 5003u
@@ -595,6 +599,47 @@ typedef struct meso_cmap_record {
  * bytes at src (no checks: the full tier and meso_file_read_chunk check). */
 MESO_API void meso_cmap_record_encode(const meso_cmap_record* rec, void* dst);
 MESO_API void meso_cmap_record_decode(const void* src, meso_cmap_record* rec);
+
+/* Levels of detail (FORMAT.md §7.10). Level `lod` of an object draws, for
+ * each chunk type it needs, the object's chunk of that type with the
+ * smallest lod >= `lod` (meso_file_find_level); a level's `form` says what
+ * draws it. An object without LODS records has one level, lod 0, error 0,
+ * its OBJT bounds, form NATIVE. */
+typedef enum meso_level_form {
+    MESO_LEVEL_NATIVE = 0, /* the object's own kind draws it (shell, cells, frusta, mesh) */
+    MESO_LEVEL_MESH = 1,   /* a stand-in: the object's MESH at this level drawn as a plain mesh */
+    MESO_LEVEL_FORM_COUNT
+} meso_level_form;
+
+/* One 48-byte LODS record, decoded. */
+typedef struct meso_level_record {
+    uint32_t object; /* OBJT id */
+    uint16_t lod;    /* 0 = finest; an object's records are lod 0, 1, .. K-1 */
+    uint16_t form;   /* meso_level_form */
+    float error;     /* object units: the largest distance between this level's surface and lod 0's;
+                        finite, >= 0, 0 at lod 0, non-decreasing with lod */
+    float bbox_min[3], bbox_max[3]; /* what this level draws lies inside */
+} meso_level_record;
+
+MESO_API void meso_level_record_encode(const meso_level_record* rec, void* dst);
+MESO_API void meso_level_record_decode(const void* src, meso_level_record* rec);
+
+/* A level as a reader sees it: the record plus its place in the file. */
+typedef struct meso_level_info {
+    meso_level_record rec;
+    uint64_t bytes;        /* stored bytes of the chunks this level draws */
+    uint64_t prefix_bytes; /* a prefix of the file this long holds them all (and the header, TOC, META, OBJT, LODS) */
+} meso_level_info;
+
+/* Index of the chunk of `type` and `object` with the smallest lod >= `lod`
+ * (what level `lod` draws), or -1. */
+MESO_API int32_t meso_file_find_level(const meso_file* f, uint32_t type, uint32_t object, uint16_t lod);
+/* The levels of `object`: reads and checks the LODS chunk (when there is
+ * one) and writes up to `cap` entries finest first (NULL with cap 0 only
+ * counts); *count gets the number of levels (>= 1 for an object in OBJT).
+ * MESO_ERR_NOT_FOUND when no OBJT record has this id. */
+MESO_API meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_info* out, uint32_t cap,
+                                      uint32_t* count, meso_error* err);
 
 /* The file's objects: reads and checks the OBJT chunk (CRC and records) and
  * writes up to `cap` records to `out` (NULL with cap 0 only counts); *count

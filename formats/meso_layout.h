@@ -95,6 +95,18 @@
 #define MESO_CMAP_OFF_RESERVED 16
 #define MESO_CMAP_SIZE_RESERVED 16
 
+/* LODS chunk: one 48-byte record per level of an object (FORMAT.md §7.10). */
+#define MESO_LODS_RECORD_SIZE 48
+#define MESO_LODS_OFF_OBJECT 0
+#define MESO_LODS_OFF_LOD 4
+#define MESO_LODS_OFF_FORM 6
+#define MESO_LODS_OFF_ERROR 8
+#define MESO_LODS_OFF_RESERVED0 12
+#define MESO_LODS_OFF_BBOX_MIN 16
+#define MESO_LODS_OFF_BBOX_MAX 28
+#define MESO_LODS_OFF_RESERVED1 40
+#define MESO_LODS_SIZE_RESERVED1 8
+
 /* SKEL chunk: one 32-byte record per skeleton node. */
 #define MESO_SKEL_RECORD_SIZE 32
 #define MESO_SKEL_OFF_POSITION 0

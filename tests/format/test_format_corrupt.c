@@ -162,7 +162,7 @@ static void newer_minor_is_read_and_skips_unknown_optional_chunks(void)
     free(m);
 }
 
-static void unknown_encoding_is_corrupt_in_1_0_and_unsupported_at_read_in_newer_minors(void)
+static void unknown_encoding_is_corrupt_in_known_minors_and_unsupported_at_read_in_newer_ones(void)
 {
     size_t size;
     uint8_t* m = fresh(&size);
@@ -170,7 +170,7 @@ static void unknown_encoding_is_corrupt_in_1_0_and_unsupported_at_read_in_newer_
     put16(entry(m, i) + MESO_TOC_OFF_ENCODING, 7);
     fix_crcs(m);
     EXPECT(m, size, MESO_ERR_CORRUPT, MESO_ISSUE_CHUNK_ENCODING);
-    put16(m + MESO_HDR_OFF_MINOR, 1);
+    put16(m + MESO_HDR_OFF_MINOR, MESO_FORMAT_MINOR + 1);
     fix_crcs(m);
     meso_file* f = NULL;
     meso_error e;
@@ -1041,7 +1041,7 @@ int main(void)
     text_mode_and_7bit_damage_have_their_own_codes();
     newer_major_is_refused_and_major_zero_is_legacy();
     newer_minor_is_read_and_skips_unknown_optional_chunks();
-    unknown_encoding_is_corrupt_in_1_0_and_unsupported_at_read_in_newer_minors();
+    unknown_encoding_is_corrupt_in_known_minors_and_unsupported_at_read_in_newer_ones();
     larger_toc_entries_from_a_newer_minor_are_read();
     chunk_ranges_order_and_alignment_are_checked();
     absurd_chunk_count_allocates_nothing_large();

@@ -134,7 +134,7 @@ static void every_chunk_kind_round_trips_through_all_four_readers(void)
         assert(open_via(via, path, mem, size, &io, NULL, &f, &e) == MESO_OK);
         uint16_t major = 0, minor = 9;
         meso_file_version(f, &major, &minor);
-        assert(major == 1 && minor == 0);
+        assert(major == 1 && minor == MESO_FORMAT_MINOR);
         assert(meso_file_size(f) == size);
         if (via == VIA_IO)
             assert(io.reads == 1); /* header + TOC in one read */
@@ -239,7 +239,7 @@ static void header_fields_sit_at_layout_offsets(void)
     size_t n = sample_chunks(&sc);
     static const uint8_t magic[8] = {0x89, 'M', 'S', 'O', '\r', '\n', 0x1A, '\n'};
     assert(memcmp(mem + MESO_HDR_OFF_MAGIC, magic, 8) == 0);
-    assert(mem[MESO_HDR_OFF_MAJOR] == 1 && mem[MESO_HDR_OFF_MINOR] == 0);
+    assert(mem[MESO_HDR_OFF_MAJOR] == 1 && mem[MESO_HDR_OFF_MINOR] == MESO_FORMAT_MINOR);
     assert(get64(mem + MESO_HDR_OFF_FILE_SIZE) == size);
     assert(get64(mem + MESO_HDR_OFF_TOC_OFFSET) == 64);
     assert(get32(mem + MESO_HDR_OFF_CHUNK_COUNT) == n);

@@ -34,7 +34,7 @@ C
 export PKG_CONFIG_PATH="$(dirname "$pc")" PKG_CONFIG_SYSROOT_DIR="$dest"
 flags=$(pkg-config --cflags --libs meso)
 $cc -std=c99 -Wall -Werror $sanflags "$dest/use_meso.c" $flags -o "$dest/use_meso"
-LD_LIBRARY_PATH="$(pkg-config --variable=libdir meso)" "$dest/use_meso" | grep -qx "ok 1.0"
+LD_LIBRARY_PATH="$(pkg-config --variable=libdir meso)" "$dest/use_meso" | grep -qx "ok 1.1"
 echo "installed meso.pc builds and runs a C program"
 
 # libmeso_bake: meso-bake.pc, the header beside meso_file.h, a program that

@@ -1,0 +1,222 @@
+/*
+ * file_levels.c — levels of detail (FORMAT.md §7.10, format 1.1): the LODS
+ * record, its content check (issues 4921, 4922), the cross check of each
+ * object's levels against OBJT and its chunks (6401), and what a reader
+ * asks of them: which chunk a level draws, how many bytes it needs and how
+ * long a file prefix holds it.
+ *
+ * Decided here (the format's own choice, not a paper's): a level is not a
+ * list of chunks. Level L of an object draws, per chunk type, the object's
+ * chunk with the smallest lod >= L. A coarse level therefore shares what
+ * does not change (a frusta object's skeleton at lod 2 serves levels 0..2),
+ * and because the writer lays chunks out lod descending, the chunks of
+ * level L and of every coarser level sit in one prefix of the file. Byte
+ * ranges are derived from the TOC rather than stored, so they cannot
+ * disagree with it.
+ */
+#include "file_internal.h"
+
+#include <math.h>
+
+void meso_level_record_encode(const meso_level_record* rec, void* dst)
+{
+    uint8_t* p = (uint8_t*)dst;
+    memset(p, 0, MESO_LODS_RECORD_SIZE);
+    mesoi_st32(p + MESO_LODS_OFF_OBJECT, rec->object);
+    mesoi_st16(p + MESO_LODS_OFF_LOD, rec->lod);
+    mesoi_st16(p + MESO_LODS_OFF_FORM, rec->form);
+    mesoi_stf32(p + MESO_LODS_OFF_ERROR, rec->error);
+    for (int k = 0; k < 3; k++) {
+        mesoi_stf32(p + MESO_LODS_OFF_BBOX_MIN + 4 * k, rec->bbox_min[k]);
+        mesoi_stf32(p + MESO_LODS_OFF_BBOX_MAX + 4 * k, rec->bbox_max[k]);
+    }
+}
+
+void meso_level_record_decode(const void* src, meso_level_record* rec)
+{
+    const uint8_t* p = (const uint8_t*)src;
+    rec->object = mesoi_ld32(p + MESO_LODS_OFF_OBJECT);
+    rec->lod = mesoi_ld16(p + MESO_LODS_OFF_LOD);
+    rec->form = mesoi_ld16(p + MESO_LODS_OFF_FORM);
+    rec->error = mesoi_ldf32(p + MESO_LODS_OFF_ERROR);
+    for (int k = 0; k < 3; k++) {
+        rec->bbox_min[k] = mesoi_ldf32(p + MESO_LODS_OFF_BBOX_MIN + 4 * k);
+        rec->bbox_max[k] = mesoi_ldf32(p + MESO_LODS_OFF_BBOX_MAX + 4 * k);
+    }
+}
+
+/* >>content check (4921, 4922) ---------------------------------------------- */
+
+static const char* record_problem(const uint8_t* p, const meso_level_record* r, const meso_level_record* prev)
+{
+    for (int k = 0; k < 4; k++)
+        if (p[MESO_LODS_OFF_RESERVED0 + k] != 0)
+            return "reserved bytes not zero";
+    for (int k = 0; k < MESO_LODS_SIZE_RESERVED1; k++)
+        if (p[MESO_LODS_OFF_RESERVED1 + k] != 0)
+            return "reserved bytes not zero";
+    if (r->object == 0)
+        return "object 0 (levels belong to an OBJT object)";
+    if (r->form >= MESO_LEVEL_FORM_COUNT)
+        return "unknown form";
+    if (!isfinite(r->error) || r->error < 0.0f)
+        return "error not finite and >= 0";
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(r->bbox_min[k]) || !isfinite(r->bbox_max[k]) || r->bbox_min[k] > r->bbox_max[k])
+            return "bounds not finite or inverted";
+    const int first = prev == NULL || prev->object != r->object;
+    if (prev && r->object < prev->object)
+        return "objects not in ascending order";
+    if (first && r->lod != 0)
+        return "an object's first level is not lod 0";
+    if (first && r->error != 0.0f)
+        return "lod 0 has an error other than 0";
+    if (!first && r->lod != prev->lod + 1)
+        return "an object's lods are not consecutive";
+    if (!first && r->error < prev->error)
+        return "error decreases from a finer to a coarser level";
+    return NULL;
+}
+
+meso_result mesoi_check_lods(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err)
+{
+    if (n % MESO_LODS_RECORD_SIZE != 0)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_LODS_SIZE, base, chunk,
+                                "chunk %d (LODS): size %zu is not a multiple of 48", (int)chunk, n);
+    meso_level_record prev = {0}, r;
+    for (size_t i = 0; i < n / MESO_LODS_RECORD_SIZE; i++) {
+        const uint8_t* p = d + i * MESO_LODS_RECORD_SIZE;
+        meso_level_record_decode(p, &r);
+        const char* why = record_problem(p, &r, i ? &prev : NULL);
+        if (why)
+            return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_LODS_VALUE,
+                                    base == UINT64_MAX ? UINT64_MAX : base + i * MESO_LODS_RECORD_SIZE, chunk,
+                                    "chunk %d (LODS): record %zu (object %u, lod %u): %s", (int)chunk, i, r.object,
+                                    r.lod, why);
+        prev = r;
+    }
+    return MESO_OK;
+}
+
+/* >>queries ------------------------------------------------------------------ */
+
+int32_t meso_file_find_level(const meso_file* f, uint32_t type, uint32_t object, uint16_t lod)
+{
+    int32_t best = -1;
+    for (uint32_t i = 0; f && i < f->chunk_count; i++) {
+        const meso_chunk_info* c = &f->chunks[i];
+        if (c->type == type && c->object == object && c->lod >= lod && (best < 0 || c->lod < f->chunks[best].lod))
+            best = (int32_t)i;
+    }
+    return best;
+}
+
+static uint64_t padded_end(const meso_chunk_info* c) { return (c->offset + c->stored_size + 63u) & ~(uint64_t)63u; }
+
+/* Bytes and prefix of level `lod` of `object`: the chunks it draws are, per
+ * type the object has, the one with the smallest lod >= `lod` (MESH alone
+ * for a MESH stand-in); the prefix also covers the file-wide chunks. */
+static void level_extent(const meso_file* f, uint32_t object, uint16_t lod, uint16_t form, meso_level_info* out)
+{
+    uint64_t bytes = 0, end = 64u + (uint64_t)f->chunk_count * f->toc_entry_size;
+    for (uint32_t i = 0; i < f->chunk_count; i++) {
+        const meso_chunk_info* c = &f->chunks[i];
+        if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
+            end = padded_end(c) > end ? padded_end(c) : end;
+        if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH))
+            continue;
+        if (meso_file_find_level(f, c->type, object, lod) != (int32_t)i)
+            continue;
+        bytes += c->stored_size;
+        end = padded_end(c) > end ? padded_end(c) : end;
+    }
+    out->bytes = bytes;
+    out->prefix_bytes = end < f->file_size ? end : f->file_size;
+}
+
+/* Reads the LODS chunk (NULL, 0 when the file has none). */
+static meso_result read_lods(meso_file* f, uint8_t** out, size_t* n, meso_error* err)
+{
+    *out = NULL;
+    *n = 0;
+    const int32_t li = meso_file_find(f, MESO_CHUNK_LODS, 0, UINT16_MAX);
+    if (li < 0)
+        return MESO_OK;
+    const meso_chunk_info* c = &f->chunks[li];
+    uint8_t* buf = (uint8_t*)mesoi_file_alloc(&f->alloc, c->decoded_size ? (size_t)c->decoded_size : 1);
+    if (!buf)
+        return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, li,
+                                "chunk %d (LODS): out of memory", (int)li);
+    meso_result r = meso_file_read_chunk(f, (uint32_t)li, buf, (size_t)c->decoded_size, err);
+    if (r != MESO_OK) {
+        mesoi_file_free(&f->alloc, buf);
+        return r;
+    }
+    *out = buf;
+    *n = (size_t)c->decoded_size / MESO_LODS_RECORD_SIZE;
+    return MESO_OK;
+}
+
+meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_info* out, uint32_t cap, uint32_t* count,
+                             meso_error* err)
+{
+    mesoi_file_error_clear(err);
+    if (f == NULL || count == NULL || (out == NULL && cap != 0))
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
+                                "meso_file_levels: NULL file or count, or NULL out with cap > 0");
+    *count = 0;
+    /* The object's OBJT record: its bounds are lod 0's when LODS is silent. */
+    uint32_t objects = 0;
+    meso_result r = meso_file_objects(f, NULL, 0, &objects, err);
+    if (r != MESO_OK)
+        return r;
+    meso_object_record* recs =
+        (meso_object_record*)mesoi_file_alloc(&f->alloc, sizeof(meso_object_record) * (objects ? objects : 1));
+    if (!recs)
+        return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1, "out of memory");
+    if ((r = meso_file_objects(f, recs, objects, &objects, err)) != MESO_OK) {
+        mesoi_file_free(&f->alloc, recs);
+        return r;
+    }
+    const meso_object_record* rec = NULL;
+    for (uint32_t i = 0; i < objects; i++)
+        if (recs[i].id == object)
+            rec = &recs[i];
+    if (!rec) {
+        mesoi_file_free(&f->alloc, recs);
+        return mesoi_file_error(err, MESO_ERR_NOT_FOUND, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
+                                "object %u is not in the OBJT table", object);
+    }
+    uint8_t* lods = NULL;
+    size_t n = 0;
+    if ((r = read_lods(f, &lods, &n, err)) != MESO_OK) {
+        mesoi_file_free(&f->alloc, recs);
+        return r;
+    }
+    uint32_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+        meso_level_record lr;
+        meso_level_record_decode(lods + i * MESO_LODS_RECORD_SIZE, &lr);
+        if (lr.object != object)
+            continue;
+        if (k < cap) {
+            out[k].rec = lr;
+            level_extent(f, object, lr.lod, lr.form, &out[k]);
+        }
+        k++;
+    }
+    if (k == 0) { /* no records: one native level from OBJT */
+        if (cap > 0) {
+            memset(&out[0], 0, sizeof out[0]);
+            out[0].rec.object = object;
+            memcpy(out[0].rec.bbox_min, rec->bbox_min, sizeof rec->bbox_min);
+            memcpy(out[0].rec.bbox_max, rec->bbox_max, sizeof rec->bbox_max);
+            level_extent(f, object, 0, MESO_LEVEL_NATIVE, &out[0]);
+        }
+        k = 1;
+    }
+    *count = k;
+    mesoi_file_free(&f->alloc, lods);
+    mesoi_file_free(&f->alloc, recs);
+    return MESO_OK;
+}
