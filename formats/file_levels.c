@@ -111,7 +111,8 @@ int32_t meso_file_find_level(const meso_file* f, uint32_t type, uint32_t object,
     return best;
 }
 
-static uint64_t padded_end(const meso_chunk_info* c) { return (c->offset + c->stored_size + 63u) & ~(uint64_t)63u; }
+/* Where the chunk's stored bytes end (its padding is not needed to read it). */
+static uint64_t stored_end(const meso_chunk_info* c) { return c->offset + c->stored_size; }
 
 /* Bytes and prefix of level `lod` of `object`: the chunks it draws are, per
  * type the object has, the one with the smallest lod >= `lod` (MESH alone
@@ -122,13 +123,13 @@ static void level_extent(const meso_file* f, uint32_t object, uint16_t lod, uint
     for (uint32_t i = 0; i < f->chunk_count; i++) {
         const meso_chunk_info* c = &f->chunks[i];
         if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
-            end = padded_end(c) > end ? padded_end(c) : end;
+            end = stored_end(c) > end ? stored_end(c) : end;
         if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH))
             continue;
         if (meso_file_find_level(f, c->type, object, lod) != (int32_t)i)
             continue;
         bytes += c->stored_size;
-        end = padded_end(c) > end ? padded_end(c) : end;
+        end = stored_end(c) > end ? stored_end(c) : end;
     }
     out->bytes = bytes;
     out->prefix_bytes = end < f->file_size ? end : f->file_size;

@@ -359,7 +359,12 @@ static meso_result open_common(meso_file* f, uint64_t actual, const meso_open_de
     if (actual < MESO_HDR_SIZE)
         return parse_header(small, actual, max_chunks, &h, err);
     if (buf == NULL) {
-        size_t first = (size_t)(actual < FIRST_READ ? actual : FIRST_READ);
+        /* A host reader (meso_io) may be a stream that has received only
+         * part of the file: ask it for the header alone, then exactly the
+         * TOC, so that opening needs nothing past the TOC (FORMAT.md §7.10:
+         * a prefix draws). Path readers take one larger read. */
+        const uint64_t first_read = f->source == MESOI_SRC_IO ? MESO_HDR_SIZE : FIRST_READ;
+        size_t first = (size_t)(actual < first_read ? actual : first_read);
         owned = (uint8_t*)mesoi_file_alloc(&f->alloc, first);
         if (!owned)
             return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, -1,

@@ -628,7 +628,8 @@ MESO_API void meso_level_record_decode(const void* src, meso_level_record* rec);
 typedef struct meso_level_info {
     meso_level_record rec;
     uint64_t bytes;        /* stored bytes of the chunks this level draws */
-    uint64_t prefix_bytes; /* a prefix of the file this long holds them all (and the header, TOC, META, OBJT, LODS) */
+    uint64_t prefix_bytes; /* the shortest prefix of the file that holds them all (and the header, TOC, META,
+                              OBJT and LODS): where the last of their stored bytes ends */
 } meso_level_info;
 
 /* Index of the chunk of `type` and `object` with the smallest lod >= `lod`

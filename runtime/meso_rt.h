@@ -196,6 +196,35 @@ typedef struct meso_rt_object {
  * meso_open_desc the file was opened with. On failure nothing is uploaded
  * and out->id is 0. `file` may be closed after this returns. */
 MESO_API meso_result meso_rt_load_object(meso_rt* rt, meso_file* file, uint32_t object_id, meso_rt_object* out);
+/* Levels of detail (FORMAT.md §7.10). Like meso_rt_load_object, but the
+ * object keeps every level the file stores for it and each draw picks one:
+ * the coarsest whose error, projected at the level's nearest bound, is at
+ * most the draw's `pixel_error` (meso_rt_draw_desc). Only the coarsest
+ * level is uploaded here; a finer one is read from `file` and uploaded the
+ * first time a draw picks it. When that read fails (a stream that has not
+ * delivered those bytes yet, a damaged chunk: logged once, not retried)
+ * the draw takes the finest coarser level it can read, else the nearest
+ * finer one uploaded before, so
+ * `file` must stay open until the object is released. A mesh stand-in
+ * level (form MESO_LEVEL_MESH) is drawn as a mesh. A file without levels
+ * gives one level (the object as meso_rt_load_object loads it). The
+ * kind-specific calls (meso_rt_shell_*, meso_rt_frusta_*) do not apply to
+ * such an object (MESO_ERR_INVALID_ARG or empty answers). */
+MESO_API meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* file, uint32_t object_id,
+                                                meso_rt_object* out);
+
+/* What a levelled object holds: its level count, which are uploaded, the
+ * level its last draw used and the file bytes of the uploaded levels'
+ * chunks. A plain object reports one level, uploaded and drawn. */
+typedef struct meso_rt_levels_state {
+    uint32_t level_count;
+    uint32_t resident_mask;   /* bit L: level L is uploaded (levels >= 32 are not reported) */
+    int32_t last_drawn;       /* lod of the last draw, -1 before the first */
+    uint64_t bytes_resident;  /* sum of the uploaded levels' chunk bytes (meso_level_info.bytes) */
+    uint64_t bytes_read;      /* every byte read from the file for this object, uploads that failed included */
+} meso_rt_levels_state;
+MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object obj, meso_rt_levels_state* out);
+
 /* Free the object's GL resources. Stale or zero handles are ignored. */
 MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);
 /* Object-space bounds from the file's OBJT record. */
@@ -380,6 +409,9 @@ typedef struct meso_rt_draw_desc {
                                     0: the host's, left as it is [0] */
     int32_t viewport[4];         /* the host's viewport (x, y, width, height), which the ray casters
                                     need; all zero: queried from GL (a glGet per draw) [0] */
+    float pixel_error;           /* levelled objects (meso_rt_load_object_levels): the largest error on
+                                    screen, in pixels of the viewport's height, a level may have; < 0:
+                                    the finest level always [0: 1 pixel] */
     meso_rt_pass pass;           /* what the draw writes; MESO_SHELL_SLICES supports DEPTH and GBUFFER with
                                     MESO_SLICE_NONE only (the two-pass variants are refused with
                                     MESO_ERR_UNSUPPORTED, logged) [MESO_PASS_FORWARD] */

@@ -183,7 +183,7 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
                                       MESO_CHUNK_COLR};
     int32_t ci[5];
     for (int k = 0; k < 5; ++k)
-        ci[k] = mesoi_find_chunk(f, types[k], id); /* present: checked above */
+        ci[k] = mesoi_find_chunk(rt, f, types[k], id); /* present: checked above */
     mesoi_cells* c = mesoi_rt_alloc(rt, sizeof(*c));
     if (!c) {
         mesoi_file_free(&f->alloc, tile);
@@ -215,7 +215,7 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     }
     if (r == MESO_OK)
         r = upload_chunk_3d(rt, f, ci[4], GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, &c->colr_tex);
-    const int32_t gi = mesoi_find_chunk(f, MESO_CHUNK_TX3D, id); /* the mesh's colour grid */
+    const int32_t gi = mesoi_find_chunk(rt, f, MESO_CHUNK_TX3D, id); /* the mesh's colour grid */
     if (r == MESO_OK && gi >= 0) {
         const meso_chunk_info* gc = meso_file_chunk(f, (uint32_t)gi);
         if (gc->dtype != MESO_DTYPE_U8 || gc->components != 4) {

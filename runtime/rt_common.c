@@ -28,15 +28,11 @@
 
 /* >>chunks ----------------------------------------------------------------- */
 
-int32_t mesoi_find_chunk(meso_file* f, uint32_t type, uint32_t object)
+int32_t mesoi_find_chunk(const meso_rt* rt, meso_file* f, uint32_t type, uint32_t object)
 {
-    int32_t ci = -1;
-    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
-        const meso_chunk_info* c = meso_file_chunk(f, i);
-        if (c->type == type && c->object == object && (ci < 0 || c->lod < meso_file_chunk(f, (uint32_t)ci)->lod))
-            ci = (int32_t)i;
-    }
-    return ci;
+    /* The level being loaded draws each type's chunk with the smallest lod
+     * >= its own (FORMAT.md §7.10); a plain load is level 0: the finest. */
+    return meso_file_find_level(f, type, object, rt->load_lod);
 }
 
 meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, size_t* size)

@@ -527,14 +527,14 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
     static const char* const names[3] = {"FRUS", "FSEG", "SKEL"};
     int32_t ci[4];
     for (int k = 0; k < 4; ++k)
-        ci[k] = mesoi_find_chunk(f, types[k], id);
+        ci[k] = mesoi_find_chunk(rt, f, types[k], id);
     for (int k = 0; k < 3; ++k)
         if (ci[k] < 0) {
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "frusta %u lacks its %s chunk", id, names[k]);
             return MESO_ERR_NOT_FOUND;
         }
-    const int32_t ri = mesoi_find_chunk(f, MESO_CHUNK_RELF, id);
-    const int32_t coli = mesoi_find_chunk(f, MESO_CHUNK_COLR, id);
+    const int32_t ri = mesoi_find_chunk(rt, f, MESO_CHUNK_RELF, id);
+    const int32_t coli = mesoi_find_chunk(rt, f, MESO_CHUNK_COLR, id);
     mesoi_frusta* s = mesoi_rt_alloc(rt, sizeof(*s));
     if (!s)
         return MESO_ERR_OUT_OF_MEMORY;

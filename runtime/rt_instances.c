@@ -170,7 +170,8 @@ meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc*
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: stale handle or NULL desc");
         return MESO_ERR_INVALID_ARG;
     }
-    return draw_kind(rt, o, d, NULL, 0);
+    meso_result r = mesoi_levels_pick(rt, h, d, NULL, 0, &h);
+    return r == MESO_OK ? draw_kind(rt, mesoi_lookup(rt, h), d, NULL, 0) : r;
 }
 
 meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d,
@@ -183,7 +184,8 @@ meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_
                       "meso_rt_draw_instanced: stale handle, NULL desc, NULL instances or count 0 (%u)", count);
         return MESO_ERR_INVALID_ARG;
     }
-    return draw_kind(rt, o, d, instances, count);
+    meso_result r = mesoi_levels_pick(rt, h, d, instances, count, &h);
+    return r == MESO_OK ? draw_kind(rt, mesoi_lookup(rt, h), d, instances, count) : r;
 }
 
 /* >>lists -------------------------------------------------------------------- */
@@ -266,6 +268,7 @@ static void item_desc(const meso_rt_draw_item* it, const meso_rt_draw_desc* comm
  * ties keep the caller's order. */
 typedef struct list_key {
     uint32_t kind, program, object, index;
+    meso_rt_object drawn; /* the item's object, or the level of it the draw picked (rt_levels.c); 0: none */
 } list_key;
 
 static int key_cmp(const void* a, const void* b)
@@ -302,12 +305,30 @@ meso_result meso_rt_draw_list(meso_rt* rt, const meso_rt_draw_item* items, uint3
             mesoi_rt_free(rt, keys);
             return MESO_ERR_INVALID_ARG;
         }
+        keys[i].index = i;
+    }
+    /* Levels are picked (and uploaded) once the whole list is known to be
+     * valid; the key sorts by what is drawn. */
+    meso_result result = MESO_OK;
+    for (uint32_t i = 0; i < count; ++i) {
+        meso_rt_draw_desc d;
+        item_desc(&items[i], common, &d);
+        const meso_result r = mesoi_levels_pick(rt, items[i].object, &d,
+                                                items[i].instance_count ? items[i].instances : NULL,
+                                                items[i].instance_count, &keys[i].drawn);
+        if (r != MESO_OK) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND,
+                      "meso_rt_draw_list: item %u: no level of its object could be uploaded", i);
+            keys[i].drawn.id = 0;
+            if (result == MESO_OK)
+                result = r;
+        }
+        const mesoi_object* o = keys[i].drawn.id ? mesoi_lookup(rt, keys[i].drawn) : mesoi_lookup(rt, items[i].object);
         const meso_rt_draw_desc* k = items[i].knobs ? items[i].knobs : common;
         keys[i].kind = o->kind;
         keys[i].program = o->kind == MESO_OBJECT_SHELL ? (uint32_t)k->shell.technique : 0;
         keys[i].program = 2 * keys[i].program + (k->stats != NULL);
-        keys[i].object = items[i].object.id & 0xFFFFu;
-        keys[i].index = i;
+        keys[i].object = keys[i].drawn.id & 0xFFFFu;
     }
     qsort(keys, count, sizeof(list_key), key_cmp);
 
@@ -321,10 +342,11 @@ meso_result meso_rt_draw_list(meso_rt* rt, const meso_rt_draw_item* items, uint3
         list_save(rt, &saved);
     rt->in_list = 1;
     rt->list_program = 0;
-    meso_result result = MESO_OK;
     for (uint32_t n = 0; n < count; ++n) {
         const meso_rt_draw_item* it = &items[keys[n].index];
-        mesoi_object* o = mesoi_lookup(rt, it->object);
+        mesoi_object* o = mesoi_lookup(rt, keys[n].drawn);
+        if (!o)
+            continue; /* no level (logged above) */
         meso_rt_draw_desc d;
         item_desc(it, common, &d);
         const int slices = o->kind == MESO_OBJECT_SHELL && d.shell.technique == MESO_SHELL_SLICES;

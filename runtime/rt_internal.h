@@ -18,6 +18,8 @@ typedef struct mesoi_object {
     GLsizei index_count;
     uint64_t indices_offset;
     float bbox_min[3], bbox_max[3];
+    struct mesoi_levels* levels; /* meso_rt_load_object_levels: the levels, each its own slot (rt_levels.c);
+                                    such an object has no GL resources of its own */
 } mesoi_object;
 
 /* Every uniform any of the programs declares. Locations are looked up once,
@@ -87,6 +89,7 @@ struct meso_rt {
     size_t inst_texels_capacity; /* floats */
     GLuint list_program;       /* inside meso_rt_draw_list: the program bound last (0: none yet) */
     int in_list;               /* inside meso_rt_draw_list: the list saved the state, the draws do not */
+    uint16_t load_lod;         /* the level a load reads (mesoi_find_chunk); 0 outside rt_levels.c's loads */
     mesoi_object* objects;
     uint32_t object_capacity;
 };
@@ -161,8 +164,9 @@ void mesoi_cells_programs_destroy(meso_rt* rt);
 meso_result mesoi_cells_prepare(meso_rt* rt, int stats, meso_rt_pass pass);
 
 /* rt_common.c: chunks and uploads */
-/* Index of the finest-level chunk of `type` for `object`, or -1. */
-int32_t mesoi_find_chunk(meso_file* f, uint32_t type, uint32_t object);
+/* Index of the chunk of `type` for `object` that the level being loaded
+ * (rt->load_lod; 0: the finest) draws, or -1. */
+int32_t mesoi_find_chunk(const meso_rt* rt, meso_file* f, uint32_t type, uint32_t object);
 /* Reads a whole chunk (validated by meso_file_read_chunk) into a fresh
  * allocation; logs and fails cleanly. */
 meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, size_t* size);
@@ -358,6 +362,21 @@ void mesoi_instances_destroy(meso_rt* rt);
 /* rt_objects.c */
 mesoi_object* mesoi_lookup(const meso_rt* rt, meso_rt_object h);
 void mesoi_objects_destroy(meso_rt* rt);
+/* rt_objects.c: load level `lod` of object `id` (its record `rec`) into a
+ * new slot, drawn as `kind` (the record's, or MESO_OBJECT_MESH for a mesh
+ * stand-in). */
+meso_result mesoi_load_slot(meso_rt* rt, meso_file* f, const meso_object_record* rec, uint32_t kind, uint16_t lod,
+                            meso_rt_object* out);
+meso_result mesoi_find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_object_record* rec);
+int mesoi_kind_drawn(uint32_t kind); /* a kind this runtime draws */
+/* A live slot with no GL resources (a levelled object's own handle). */
+meso_result mesoi_empty_slot(meso_rt* rt, const meso_object_record* rec, meso_rt_object* out);
+/* rt_levels.c: the level of a levelled object `o` the draw picks (uploaded
+ * on first use); *out is `o` itself for a plain object. `o` may move (the
+ * slot table can grow): use *out. */
+meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                              uint32_t count, meso_rt_object* out);
+void mesoi_levels_release(meso_rt* rt, mesoi_object* o);
 
 /* meso_rt.c */
 void* mesoi_rt_alloc(meso_rt* rt, size_t size);

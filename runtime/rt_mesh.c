@@ -41,7 +41,7 @@ meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass)
 
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
 {
-    const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_MESH, object_id);
+    const int32_t ci = mesoi_find_chunk(rt, f, MESO_CHUNK_MESH, object_id);
     if (ci < 0) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "object %u has no MESH chunk", object_id);
         return MESO_ERR_NOT_FOUND;

@@ -48,7 +48,7 @@ static uint32_t next_generation(uint32_t last)
     return g ? g : 1u;
 }
 
-static meso_result find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_object_record* rec)
+meso_result mesoi_find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_object_record* rec)
 {
     /* Records are few (a 64-byte record per object); read them in batches. */
     meso_object_record batch[16];
@@ -82,6 +82,53 @@ static meso_result find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_obje
     return MESO_ERR_NOT_FOUND;
 }
 
+meso_result mesoi_load_slot(meso_rt* rt, meso_file* f, const meso_object_record* rec, uint32_t kind, uint16_t lod,
+                            meso_rt_object* out)
+{
+    out->id = 0;
+    uint32_t slot;
+    mesoi_object* o = alloc_slot(rt, &slot);
+    if (!o)
+        return MESO_ERR_OUT_OF_MEMORY;
+    rt->load_lod = lod;
+    const meso_result r = kind == MESO_OBJECT_MESH     ? mesoi_mesh_upload(rt, f, rec->id, o)
+                          : kind == MESO_OBJECT_SHELL  ? mesoi_shell_load(rt, f, rec->id, o)
+                          : kind == MESO_OBJECT_FRUSTA ? mesoi_frusta_load(rt, f, rec->id, o)
+                                                       : mesoi_cells_load(rt, f, rec->id, o);
+    rt->load_lod = 0;
+    if (r != MESO_OK)
+        return r;
+    o->generation = next_generation(o->generation);
+    o->live = 1;
+    o->kind = kind;
+    memcpy(o->bbox_min, rec->bbox_min, sizeof(o->bbox_min));
+    memcpy(o->bbox_max, rec->bbox_max, sizeof(o->bbox_max));
+    out->id = slot | (o->generation << 16);
+    return MESO_OK;
+}
+
+meso_result mesoi_empty_slot(meso_rt* rt, const meso_object_record* rec, meso_rt_object* out)
+{
+    out->id = 0;
+    uint32_t slot;
+    mesoi_object* o = alloc_slot(rt, &slot);
+    if (!o)
+        return MESO_ERR_OUT_OF_MEMORY;
+    o->generation = next_generation(o->generation);
+    o->live = 1;
+    o->kind = rec->kind;
+    memcpy(o->bbox_min, rec->bbox_min, sizeof(o->bbox_min));
+    memcpy(o->bbox_max, rec->bbox_max, sizeof(o->bbox_max));
+    out->id = slot | (o->generation << 16);
+    return MESO_OK;
+}
+
+int mesoi_kind_drawn(uint32_t kind)
+{
+    return kind == MESO_OBJECT_MESH || kind == MESO_OBJECT_SHELL || kind == MESO_OBJECT_FRUSTA ||
+           kind == MESO_OBJECT_CELLS;
+}
+
 meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, meso_rt_object* out)
 {
     if (!out)
@@ -93,32 +140,15 @@ meso_result meso_rt_load_object(meso_rt* rt, meso_file* f, uint32_t object_id, m
         return MESO_ERR_INVALID_ARG;
     }
     meso_object_record rec;
-    meso_result r = find_record(rt, f, object_id, &rec);
+    meso_result r = mesoi_find_record(rt, f, object_id, &rec);
     if (r != MESO_OK)
         return r;
-    if (rec.kind != MESO_OBJECT_MESH && rec.kind != MESO_OBJECT_SHELL && rec.kind != MESO_OBJECT_FRUSTA &&
-        rec.kind != MESO_OBJECT_CELLS) {
+    if (!mesoi_kind_drawn(rec.kind)) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND,
                   "object %u has kind %u; this runtime draws MESH, SHELL, CELLS and FRUSTA objects", object_id, rec.kind);
         return MESO_ERR_UNSUPPORTED;
     }
-    uint32_t slot;
-    mesoi_object* o = alloc_slot(rt, &slot);
-    if (!o)
-        return MESO_ERR_OUT_OF_MEMORY;
-    r = rec.kind == MESO_OBJECT_MESH     ? mesoi_mesh_upload(rt, f, object_id, o)
-        : rec.kind == MESO_OBJECT_SHELL  ? mesoi_shell_load(rt, f, object_id, o)
-        : rec.kind == MESO_OBJECT_FRUSTA ? mesoi_frusta_load(rt, f, object_id, o)
-                                         : mesoi_cells_load(rt, f, object_id, o);
-    if (r != MESO_OK)
-        return r;
-    o->generation = next_generation(o->generation);
-    o->live = 1;
-    o->kind = rec.kind;
-    memcpy(o->bbox_min, rec.bbox_min, sizeof(o->bbox_min));
-    memcpy(o->bbox_max, rec.bbox_max, sizeof(o->bbox_max));
-    out->id = slot | (o->generation << 16);
-    return MESO_OK;
+    return mesoi_load_slot(rt, f, &rec, rec.kind, 0, out);
 }
 
 void meso_rt_release_object(meso_rt* rt, meso_rt_object h)
@@ -126,6 +156,8 @@ void meso_rt_release_object(meso_rt* rt, meso_rt_object h)
     mesoi_object* o = mesoi_lookup(rt, h);
     if (!o)
         return;
+    mesoi_levels_release(rt, o); /* its levels' slots (a levelled object has no GL resources itself) */
+    o = mesoi_lookup(rt, h);
     mesoi_shell_release(rt, o);
     mesoi_frusta_release(rt, o);
     mesoi_cells_release(rt, o);
@@ -151,6 +183,7 @@ void mesoi_objects_destroy(meso_rt* rt)
     for (uint32_t i = 0; i < rt->object_capacity; ++i) {
         mesoi_object* o = &rt->objects[i];
         if (o->live) {
+            mesoi_levels_release(rt, o); /* never grows the table: `o` stays valid */
             mesoi_shell_release(rt, o);
             mesoi_frusta_release(rt, o);
             mesoi_cells_release(rt, o);

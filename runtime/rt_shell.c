@@ -72,8 +72,8 @@ static void fill_vertex_texels(const mesoi_shell* s, float* out)
  * DSFR read to host memory and checked against the frame-0 chunks. */
 static meso_result load_frames(meso_rt* rt, meso_file* f, uint32_t id, mesoi_shell* s, int32_t ti, int32_t xi)
 {
-    const int32_t ai = mesoi_find_chunk(f, MESO_CHUNK_ANIM, id), fi = mesoi_find_chunk(f, MESO_CHUNK_TXFR, id);
-    const int32_t si = mesoi_find_chunk(f, MESO_CHUNK_DSFR, id);
+    const int32_t ai = mesoi_find_chunk(rt, f, MESO_CHUNK_ANIM, id), fi = mesoi_find_chunk(rt, f, MESO_CHUNK_TXFR, id);
+    const int32_t si = mesoi_find_chunk(rt, f, MESO_CHUNK_DSFR, id);
     if (ai < 0)
         return MESO_OK;
     void* rec = NULL;
@@ -131,7 +131,7 @@ static meso_result load_frames(meso_rt* rt, meso_file* f, uint32_t id, mesoi_she
  * SRGB8_ALPHA8 and the CMAP record's scale. No COLR: nothing (u_albedo). */
 static meso_result load_color(meso_rt* rt, meso_file* f, uint32_t id, mesoi_shell* s)
 {
-    const int32_t ci = mesoi_find_chunk(f, MESO_CHUNK_COLR, id), mi = mesoi_find_chunk(f, MESO_CHUNK_CMAP, id);
+    const int32_t ci = mesoi_find_chunk(rt, f, MESO_CHUNK_COLR, id), mi = mesoi_find_chunk(rt, f, MESO_CHUNK_CMAP, id);
     if (ci < 0 && mi < 0)
         return MESO_OK;
     const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
@@ -165,14 +165,14 @@ static meso_result load_color(meso_rt* rt, meso_file* f, uint32_t id, mesoi_shel
 
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_object* o)
 {
-    const int32_t mi = mesoi_find_chunk(f, MESO_CHUNK_MESH, id), di = mesoi_find_chunk(f, MESO_CHUNK_SDIR, id);
+    const int32_t mi = mesoi_find_chunk(rt, f, MESO_CHUNK_MESH, id), di = mesoi_find_chunk(rt, f, MESO_CHUNK_SDIR, id);
     if (mi < 0 || di < 0) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "shell %u lacks its %s chunk", id,
                   mi < 0 ? "MESH" : "SDIR");
         return MESO_ERR_NOT_FOUND;
     }
-    const int32_t hi = mesoi_find_chunk(f, MESO_CHUNK_TX2D, id), vi = mesoi_find_chunk(f, MESO_CHUNK_TX3D, id);
-    const int32_t xi = mesoi_find_chunk(f, MESO_CHUNK_DIST, id);
+    const int32_t hi = mesoi_find_chunk(rt, f, MESO_CHUNK_TX2D, id), vi = mesoi_find_chunk(rt, f, MESO_CHUNK_TX3D, id);
+    const int32_t xi = mesoi_find_chunk(rt, f, MESO_CHUNK_DIST, id);
     mesoi_shell* s = mesoi_rt_alloc(rt, sizeof(*s));
     if (!s)
         return MESO_ERR_OUT_OF_MEMORY;

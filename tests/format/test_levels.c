@@ -103,8 +103,6 @@ static const meso_level_record good[3] = {{1, 0, MESO_LEVEL_NATIVE, 0.0f, {0, 0,
                                           {1, 1, MESO_LEVEL_NATIVE, 0.01f, {0, 0, 0}, {1, 1, 0}},
                                           {1, 2, MESO_LEVEL_NATIVE, 0.05f, {0, 0, 0}, {1, 1, 0}}};
 
-static uint64_t padded(uint64_t v) { return (v + 63u) & ~(uint64_t)63u; }
-
 static void levels_resolve_and_measure_against_the_toc(void)
 {
     size_t size;
@@ -148,14 +146,14 @@ static void levels_resolve_and_measure_against_the_toc(void)
     uint64_t header_end = 0; /* META, OBJT, LODS end */
     for (uint32_t i = 0; i < meso_file_chunk_count(f); i++) {
         const meso_chunk_info* c = meso_file_chunk(f, i);
-        if (c->object == 0 && c->type != MESO_CHUNK_RPRT && padded(c->offset + c->stored_size) > header_end)
-            header_end = padded(c->offset + c->stored_size);
+        if (c->object == 0 && c->type != MESO_CHUNK_RPRT && c->offset + c->stored_size > header_end)
+            header_end = c->offset + c->stored_size;
     }
     for (uint16_t lod = 0; lod < 3; lod++) {
         assert(li[lod].rec.lod == lod && li[lod].rec.error == good[lod].error);
         const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)meso_file_find(f, MESO_CHUNK_MESH, 1, lod));
         assert(li[lod].bytes == c->stored_size);
-        const uint64_t end = padded(c->offset + c->stored_size);
+        const uint64_t end = (c->offset + c->stored_size);
         assert(li[lod].prefix_bytes == (end > header_end ? end : header_end));
     }
     assert(li[2].prefix_bytes < li[1].prefix_bytes && li[1].prefix_bytes < li[0].prefix_bytes);
@@ -165,7 +163,7 @@ static void levels_resolve_and_measure_against_the_toc(void)
     assert(li[0].rec.lod == 0 && li[0].rec.error == 0.0f && li[0].rec.form == MESO_LEVEL_NATIVE);
     assert(li[0].rec.bbox_max[0] == 1.0f && li[0].rec.bbox_max[1] == 1.0f);
     const meso_chunk_info* c2 = meso_file_chunk(f, (uint32_t)meso_file_find(f, MESO_CHUNK_MESH, 2, 0));
-    assert(li[0].bytes == c2->stored_size && li[0].prefix_bytes == padded(c2->offset + c2->stored_size));
+    assert(li[0].bytes == c2->stored_size && li[0].prefix_bytes == (c2->offset + c2->stored_size));
     assert(meso_file_levels(f, 7, li, 4, &count, &e) == MESO_ERR_NOT_FOUND);
     meso_file_close(f);
     free(file);

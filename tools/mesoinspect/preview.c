@@ -20,6 +20,7 @@
  * all staged and published together.
  */
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,8 +40,24 @@
 
 /* The PNGs go to staged outputs (cli_output.h), published together and
  * whole once all are written. */
-static int write_pngs(const char* const* outs, const uint8_t* const* imgs, int n, int width, int height)
+/* The PNGs and, when `text_path` is given, one text file (--stats), staged
+ * and published together. */
+static int write_pngs_and(const char* const* outs, const uint8_t* const* imgs, int n, int width, int height,
+                          const char* text_path, const char* text)
 {
+    if (text_path) {
+        meso_output* o = NULL;
+        int code = mi_stage_output(text_path, &o);
+        meso_error e;
+        if (code == MESO_EXIT_OK && meso_output_write(o, text, strlen(text), &e) != MESO_OK) {
+            mi_error("cannot write '%s': %s", text_path, e.message);
+            code = MESO_EXIT_IO;
+        }
+        if (code != MESO_EXIT_OK) {
+            cli_outputs_discard();
+            return code;
+        }
+    }
     for (int i = 0; i < n; ++i) {
         meso_output* o = NULL;
         int code = mi_stage_output(outs[i], &o);
@@ -57,6 +74,11 @@ static int write_pngs(const char* const* outs, const uint8_t* const* imgs, int n
         }
     }
     return mi_publish_outputs();
+}
+
+static int write_pngs(const char* const* outs, const uint8_t* const* imgs, int n, int width, int height)
+{
+    return write_pngs_and(outs, imgs, n, width, height, NULL, NULL);
 }
 
 static int write_png(const char* out, const uint8_t* img, int width, int height)
@@ -125,7 +147,21 @@ static const char* const usage_preview =
     "                      stored, no sRGB encoding), OUT-normal.png (world-space normal,\n"
     "                      rgb = n * 0.5 + 0.5) and OUT-depth.png (as depth) beside OUT.png,\n"
     "                      which is not written; background: the forward clear colour.\n"
-    "                      Slices: with --slice-interp none only\n"
+    "                      Slices: with --slice-interp none only\n";
+static const char* const usage_preview_levels =
+    "      --pixel-error T levels of detail (FORMAT.md 7.10): each object draws its coarsest level\n"
+    "                      whose error covers at most T pixels of the image (default 1);\n"
+    "                      0: the finest levels everywhere\n"
+    "      --stream-bytes N draw as if only the first N bytes of FILE had arrived: levels\n"
+    "                      whose chunks end later are not read (an object none of whose\n"
+    "                      levels has arrived is left out, with a note on stderr)\n"
+    "      --stats FILE    write what the draw cost as JSON: per object levels_drawn (its\n"
+    "                      lod), level_count and bytes; bytes_resident and bytes_read over\n"
+    "                      all objects; steps_per_pixel and fragments_per_pixel (shader\n"
+    "                      work per covered pixel of the rendered image, which is 2x2\n"
+    "                      the PNG's; 0 where the context cannot count); gpu_ms (wall time\n"
+    "                      of the draws between two glFinish calls: on llvmpipe the GPU is\n"
+    "                      the CPU); not with --reference\n"
     "  -h, --help          this help\n";
 
 /* The options that change the drawing. */
@@ -143,6 +179,9 @@ typedef struct preview_knobs {
     int reversed; /* --depth reversed: reversed-Z, 0..1 clip depth, infinite far plane */
     int gles;    /* --api gles: an OpenGL ES 3.2 context */
     meso_rt_pass pass;
+    double pixel_error;    /* --pixel-error: pixels of the PNG (0: finest) */
+    uint64_t stream_bytes; /* --stream-bytes: 0 = the whole file */
+    const char* stats;     /* --stats FILE or NULL */
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -341,6 +380,59 @@ done:
 #include <GL/glcorearb.h>
 
 #include "egl_context.h"
+#include "meso_clock.h"
+
+/* --stats: the draw's cost as JSON (a malloc'd string). */
+static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const uint32_t* ids, int n, uint64_t steps,
+                                uint64_t fragments, int counted, uint64_t covered, double gpu_ms, uint64_t stream)
+{
+    size_t cap = 512 + (size_t)n * 160, len = 0;
+    char* s = malloc(cap);
+    if (!s)
+        return NULL;
+    uint64_t resident = 0, read = 0;
+    len += (size_t)snprintf(s + len, cap - len, "{\n  \"objects\": [");
+    for (int i = 0; i < n; ++i) {
+        meso_rt_levels_state ls;
+        meso_rt_levels_state_get(rt, objs[i], &ls);
+        resident += ls.bytes_resident;
+        read += ls.bytes_read;
+        len += (size_t)snprintf(s + len, cap - len,
+                                "%s\n    {\"id\": %u, \"levels_drawn\": %d, \"level_count\": %u, "
+                                "\"bytes_resident\": %llu}",
+                                i ? "," : "", ids[i], (int)ls.last_drawn, ls.level_count,
+                                (unsigned long long)ls.bytes_resident);
+    }
+    const double per = covered ? 1.0 / (double)covered : 0.0;
+    len += (size_t)snprintf(s + len, cap - len,
+                            "\n  ],\n  \"bytes_resident\": %llu,\n  \"bytes_read\": %llu,\n"
+                            "  \"stream_bytes\": %llu,\n  \"covered_pixels\": %llu,\n"
+                            "  \"steps_per_pixel\": %.4f,\n  \"fragments_per_pixel\": %.4f,\n"
+                            "  \"counted\": %s,\n  \"gpu_ms\": %.3f\n}\n",
+                            (unsigned long long)resident, (unsigned long long)read, (unsigned long long)stream,
+                            (unsigned long long)covered, counted ? (double)steps * per : 0.0,
+                            counted ? (double)fragments * per : 0.0, counted ? "true" : "false", gpu_ms);
+    (void)len;
+    return s;
+}
+
+/* --stream-bytes: a reader over FILE that has received only its first
+ * `limit` bytes; a read reaching past them fails, as a network reader's
+ * "not yet" would. */
+typedef struct partial_file {
+    FILE* fp;
+    uint64_t limit;
+} partial_file;
+
+static int partial_read(void* user, uint64_t offset, void* dst, size_t size)
+{
+    partial_file* p = user;
+    if (offset > p->limit || size > p->limit - offset || offset > (uint64_t)LONG_MAX)
+        return -1;
+    if (fseek(p->fp, (long)offset, SEEK_SET) != 0 || fread(dst, 1, size, p->fp) != size)
+        return -1;
+    return 0;
+}
 
 #define PREVIEW_GL(X)                                                                                              \
     X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers) X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                        \
@@ -350,7 +442,7 @@ done:
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus) X(PFNGLVIEWPORTPROC, Viewport)                        \
     X(PFNGLCLEARCOLORPROC, ClearColor) X(PFNGLCLEARPROC, Clear) X(PFNGLREADPIXELSPROC, ReadPixels)                  \
     X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv) X(PFNGLDEPTHFUNCPROC, DepthFunc)                                       \
-    X(PFNGLDRAWBUFFERSPROC, DrawBuffers) X(PFNGLREADBUFFERPROC, ReadBuffer)
+    X(PFNGLDRAWBUFFERSPROC, DrawBuffers) X(PFNGLREADBUFFERPROC, ReadBuffer) X(PFNGLFINISHPROC, Finish)
 
 typedef struct preview_gl {
 #define M(t, n) t n;
@@ -427,6 +519,9 @@ static int render(const char* path, const char* out, int width, int height, uint
     float* depth = NULL;
     meso_rt_object* objs = NULL;
     meso_object_record* recs = NULL;
+    uint32_t* obj_ids = NULL;
+    char* stats_text = NULL;
+    partial_file partial = {NULL, 0};
     int nobj = 0;
     if (missing) {
         fprintf(stderr, "mesoinspect error: the GL context lacks framebuffer objects\n");
@@ -439,8 +534,24 @@ static int render(const char* path, const char* out, int width, int height, uint
     }
     meso_decoder dec = meso_bake_draco_decoder();
     meso_error err;
-    meso_result r = meso_file_open_path(path, &(meso_open_desc){.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0},
-                                        &f, &err);
+    const meso_open_desc od = {.decoders = &dec, .decoder_count = dec.decode_fn ? 1 : 0};
+    meso_result r;
+    if (knobs->stream_bytes) {
+        partial.fp = fopen(path, "rb");
+        long end = -1;
+        if (partial.fp && fseek(partial.fp, 0, SEEK_END) == 0)
+            end = ftell(partial.fp);
+        if (end < 0) {
+            fprintf(stderr, "mesoinspect error: %s: cannot open: %s\n", path, strerror(errno));
+            code = MESO_EXIT_IO;
+            goto done;
+        }
+        partial.limit = knobs->stream_bytes < (uint64_t)end ? knobs->stream_bytes : (uint64_t)end;
+        const meso_io io = {.read_fn = partial_read, .size = (uint64_t)end, .user = &partial};
+        r = meso_file_open_io(&io, &od, &f, &err);
+    } else {
+        r = meso_file_open_path(path, &od, &f, &err);
+    }
     if (r != MESO_OK) {
         fprintf(stderr, "mesoinspect error: %s%s%s\n", strstr(err.message, path) ? "" : path,
                 strstr(err.message, path) ? "" : ": ", err.message);
@@ -452,7 +563,8 @@ static int render(const char* path, const char* out, int width, int height, uint
     uint32_t count = 0;
     recs = mi_all_records(f, &count, &r);
     objs = recs ? calloc(count ? count : 1, sizeof(*objs)) : NULL;
-    if (!objs) {
+    obj_ids = recs ? calloc(count ? count : 1, sizeof(*obj_ids)) : NULL;
+    if (!objs || !obj_ids) {
         code = meso_exit_for(recs ? MESO_ERR_OUT_OF_MEMORY : r);
         goto done;
     }
@@ -460,14 +572,28 @@ static int render(const char* path, const char* out, int width, int height, uint
         const meso_object_record* rec = &recs[i];
         if (only && rec->id != only)
             continue;
-        r = meso_rt_load_object(rt, f, rec->id, &objs[nobj]);
+        /* Levelled: each draw picks its level (--pixel-error); the file
+         * stays open until the objects are released. */
+        r = meso_rt_load_object_levels(rt, f, rec->id, &objs[nobj]);
+        if (r != MESO_OK && r != MESO_ERR_UNSUPPORTED && knobs->stream_bytes) {
+            fprintf(stderr, "mesoinspect note: object %u (%s): none of its levels is within the first %llu bytes\n",
+                    rec->id, rec->name, (unsigned long long)partial.limit);
+            continue;
+        }
         if (r == MESO_ERR_UNSUPPORTED && !only) {
             fprintf(stderr, "mesoinspect warning: object %u (%s) cannot be previewed by this build\n", rec->id,
                     rec->name);
             continue;
         }
-        if (r == MESO_OK && knobs->has_time && rec->kind == MESO_OBJECT_SHELL)
-            r = meso_rt_shell_set_time(rt, objs[nobj], knobs->time);
+        if (r == MESO_OK && knobs->has_time && rec->kind == MESO_OBJECT_SHELL) {
+            /* Frames are a shell's own: --time draws the object as
+             * meso_rt_load_object loads it (its finest level). */
+            meso_rt_release_object(rt, objs[nobj]);
+            r = meso_rt_load_object(rt, f, rec->id, &objs[nobj]);
+            if (r == MESO_OK)
+                r = meso_rt_shell_set_time(rt, objs[nobj], knobs->time);
+        }
+        obj_ids[nobj] = rec->id;
         if (r != MESO_OK) {
             code = meso_exit_for(r);
             goto done;
@@ -541,11 +667,27 @@ static int render(const char* path, const char* out, int width, int height, uint
     d.cells.bounces = knobs->cell_bounces;
     d.cells.step = knobs->cell_step;
     d.pass = knobs->pass;
-    for (int i = 0; i < nobj; ++i)
+    /* The image is rendered at 2x2 the PNG's pixels: the error budget in
+     * PNG pixels is twice that in the viewport's. */
+    d.pixel_error = knobs->pixel_error > 0 ? (float)(2.0 * knobs->pixel_error) : -1.0f;
+    meso_rt_draw_stats st_one;
+    uint64_t steps = 0, fragments = 0;
+    int counted = 1;
+    gl.Finish();
+    const double t0 = meso_seconds();
+    for (int i = 0; i < nobj; ++i) {
+        memset(&st_one, 0, sizeof st_one);
+        d.stats = knobs->stats ? &st_one : NULL;
         if (meso_rt_draw(rt, objs[i], &d) != MESO_OK) {
             code = MESO_EXIT_INTERNAL;
             goto done;
         }
+        steps += st_one.steps;
+        fragments += st_one.fragments;
+        counted = counted && st_one.supported;
+    }
+    gl.Finish();
+    const double gpu_ms = 1e3 * (meso_seconds() - t0);
     const size_t full = (size_t)W * (size_t)H, small = (size_t)width * (size_t)height * 4;
     px = malloc(full * 4);
     img = malloc(3 * small);
@@ -572,7 +714,21 @@ static int render(const char* path, const char* out, int width, int height, uint
     gbuffer_paths(out, paths);
     const char* const outs[3] = {paths[0], paths[1], paths[2]};
     const uint8_t* const imgs[3] = {img, img + small, img + 2 * small};
-    if ((code = files == 3 ? write_pngs(outs, imgs, 3, width, height) : write_png(out, img, width, height)) !=
+    if (knobs->stats) {
+        /* Covered pixels: where the depth buffer holds a hit. */
+        const float clear = knobs->reversed ? 0.0f : 1.0f;
+        uint64_t covered = 0;
+        for (size_t i = 0; i < full; ++i)
+            covered += depth[i] != clear;
+        stats_text = preview_stats_json(rt, objs, obj_ids, nobj, steps, fragments, counted, covered, gpu_ms,
+                                        partial.limit);
+        if (!stats_text) {
+            fprintf(stderr, "mesoinspect error: out of memory\n");
+            code = MESO_EXIT_INTERNAL;
+            goto done;
+        }
+    }
+    if ((code = write_pngs_and(files == 3 ? outs : &out, imgs, files, width, height, knobs->stats, stats_text)) !=
         MESO_EXIT_OK)
         goto done;
     gl.DeleteRenderbuffers(3, rb);
@@ -583,8 +739,12 @@ done:
     free(depth);
     free(recs);
     free(objs);
+    free(obj_ids);
+    free(stats_text);
+    meso_rt_destroy(rt); /* before the file: levelled objects read from it until released */
     meso_file_close(f);
-    meso_rt_destroy(rt);
+    if (partial.fp)
+        fclose(partial.fp);
     meso_egl_destroy(egl);
     return code;
 }
@@ -618,7 +778,7 @@ int mesoinspect_preview(int argc, char** argv)
     const char* only_name = NULL;
     double yaw = 30, pitch = 20;
     meso_shell_technique technique = MESO_SHELL_SMOOTH;
-    preview_knobs knobs = {.cell_bounces = 2, .zoom = 1.0};
+    preview_knobs knobs = {.cell_bounces = 2, .zoom = 1.0, .pixel_error = 1.0};
     int reference = 0;
     long samples = 0;
     for (int i = 0; i < argc; ++i) {
@@ -627,6 +787,7 @@ int mesoinspect_preview(int argc, char** argv)
         char* end = NULL;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             fputs(usage_preview, stdout);
+            fputs(usage_preview_levels, stdout);
             return MESO_EXIT_OK;
         } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && val) {
             out = argv[++i];
@@ -765,6 +926,25 @@ int mesoinspect_preview(int argc, char** argv)
                 return MESO_EXIT_USAGE;
             }
             knobs.cell_step = (float)st;
+        } else if (!strcmp(a, "--pixel-error") && val) {
+            knobs.pixel_error = strtod(argv[++i], &end);
+            if (!end || *end || !(knobs.pixel_error >= 0 && knobs.pixel_error <= 1e6)) {
+                fprintf(stderr, "mesoinspect error: --pixel-error expects pixels >= 0, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", argv[i]);
+                return MESO_EXIT_USAGE;
+            }
+        } else if (!strcmp(a, "--stream-bytes") && val) {
+            const char* v = argv[++i];
+            errno = 0;
+            const unsigned long long n = strtoull(v, &end, 10);
+            if (!end || *end || errno || *v < '0' || *v > '9' || n == 0) {
+                fprintf(stderr, "mesoinspect error: --stream-bytes expects a byte count >= 1, got '%s'\n"
+                                "See 'mesoinspect --help'.\n", v);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.stream_bytes = n;
+        } else if (!strcmp(a, "--stats") && val) {
+            knobs.stats = argv[++i];
         } else if (!strcmp(a, "--pass") && val) {
             const char* m = argv[++i];
             if (!strcmp(m, "forward"))
@@ -785,7 +965,8 @@ int mesoinspect_preview(int argc, char** argv)
                      !strcmp(a, "--samples") || !strcmp(a, "--cells") || !strcmp(a, "--bounces") ||
                      !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
                      !strcmp(a, "--depth") || !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") ||
-                     !strcmp(a, "--slice-axis") || !strcmp(a, "--api") || !strcmp(a, "--pass"))
+                     !strcmp(a, "--slice-axis") || !strcmp(a, "--api") || !strcmp(a, "--pass") ||
+                     !strcmp(a, "--pixel-error") || !strcmp(a, "--stream-bytes") || !strcmp(a, "--stats"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
@@ -799,6 +980,12 @@ int mesoinspect_preview(int argc, char** argv)
     }
     if (!file || !out) {
         fputs(usage_preview, stderr);
+        fputs(usage_preview_levels, stderr);
+        return MESO_EXIT_USAGE;
+    }
+    if (reference && (knobs.stats || knobs.stream_bytes)) {
+        fprintf(stderr, "mesoinspect error: --stats and --stream-bytes describe libmeso's draw, not the reference's\n"
+                        "See 'mesoinspect --help'.\n");
         return MESO_EXIT_USAGE;
     }
     if (reference && knobs.pass != MESO_PASS_FORWARD) {

@@ -1,0 +1,228 @@
+/* Levels of detail in libmeso (FORMAT.md §7.10, meso_rt_load_object_levels)
+ * on llvmpipe, with levels whose error is known exactly: level k of a mesh
+ * object is the unit square lifted to z = e_k, so the two-sided distance
+ * to level 0's square is e_k.
+ *  - At every distance the level drawn under pixel_error 1 moves the
+ *    square's image by at most 1 pixel (+1 for rasterisation) against the
+ *    finest level, and far away a coarse level is drawn: the error holds in
+ *    pixels at the distances it is chosen for.
+ *  - Streaming: a file prefix that ends at a level's prefix_bytes draws
+ *    (every level boundary), with the finest level that has arrived; a
+ *    prefix shorter than the coarsest level loads nothing, cleanly.
+ *  - The state reports what is resident and read. */
+#include "test_util.h"
+
+#include <GL/glcorearb.h>
+#include <string.h>
+
+#include "camera.h"
+#include "egl_context.h"
+#include "gl_api.h"
+#include "gl_fbo.h"
+#include "meso_layout.h"
+#include "meso_rt.h"
+
+enum { W = 160, H = 120, LEVELS = 4 };
+static const float lift[LEVELS] = {0.0f, 0.004f, 0.016f, 0.064f};
+
+static void add(meso_writer* w, uint32_t type, uint32_t object, uint16_t lod, const void* data, size_t size)
+{
+    meso_chunk_desc d = {.type = type, .object = object, .lod = lod, .dtype = MESO_DTYPE_BYTES, .components = 1};
+    meso_error e;
+    assert(meso_writer_add(w, &d, data, size, &e) == MESO_OK);
+}
+
+static uint8_t* square_mesh(float z, size_t* size)
+{
+    meso_mesh_layout l;
+    assert(meso_mesh_compute_layout(4, 6, MESO_MESH_ATTR_POSITIONS | MESO_MESH_ATTR_NORMALS, &l) == MESO_OK);
+    uint8_t* m = calloc(1, (size_t)l.size);
+    assert(m);
+    meso_mesh_write_header(&l, m);
+    const float p[12] = {0, 0, z, 1, 0, z, 1, 1, z, 0, 1, z};
+    const float n[12] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+    const uint32_t ix[6] = {0, 1, 2, 0, 2, 3};
+    memcpy(m + l.positions_offset, p, sizeof p);
+    memcpy(m + l.normals_offset, n, sizeof n);
+    memcpy(m + l.indices_offset, ix, sizeof ix);
+    *size = (size_t)l.size;
+    return m;
+}
+
+static uint8_t* levelled_file(size_t* size)
+{
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    static const char meta[] = "{\"tool\":\"test_rt_levels\"}";
+    add(w, MESO_CHUNK_META, 0, 0, meta, sizeof meta - 1);
+    uint8_t objt[MESO_OBJT_RECORD_SIZE];
+    meso_object_record o = {1, MESO_OBJECT_MESH, {0, 0, 0}, {1, 1, lift[LEVELS - 1]}, "lifted"};
+    meso_object_record_encode(&o, objt);
+    add(w, MESO_CHUNK_OBJT, 0, 0, objt, sizeof objt);
+    uint8_t lods[LEVELS * MESO_LODS_RECORD_SIZE];
+    for (uint16_t k = 0; k < LEVELS; ++k) {
+        size_t ms;
+        uint8_t* m = square_mesh(lift[k], &ms);
+        add(w, MESO_CHUNK_MESH, 1, k, m, ms);
+        free(m);
+        meso_level_record r = {1, k, MESO_LEVEL_NATIVE, lift[k], {0, 0, lift[k]}, {1, 1, lift[k]}};
+        meso_level_record_encode(&r, lods + (size_t)k * MESO_LODS_RECORD_SIZE);
+    }
+    add(w, MESO_CHUNK_LODS, 0, 0, lods, sizeof lods);
+    size_t need = 0;
+    assert(meso_writer_finish(w, NULL, 0, &need) == MESO_OK);
+    uint8_t* buf = malloc(need);
+    assert(buf && meso_writer_finish(w, buf, need, &need) == MESO_OK);
+    meso_writer_destroy(w);
+    *size = need;
+    return buf;
+}
+
+/* A reader that has received only the first `limit` bytes. */
+typedef struct prefix_io {
+    const uint8_t* data;
+    uint64_t limit;
+} prefix_io;
+
+static int prefix_read(void* user, uint64_t off, void* dst, size_t n)
+{
+    const prefix_io* p = user;
+    if (off > p->limit || n > p->limit - off)
+        return -1;
+    memcpy(dst, p->data + off, n);
+    return 0;
+}
+
+static test_fbo fb;
+
+/* Draws `obj` seen from distance `dist` (square's centre, 60 degrees off
+ * its normal) and returns per column the highest covered row (-1: none). */
+static void draw_at(meso_rt* rt, meso_rt_object obj, double dist, float tau, int top[W])
+{
+    meso_rt_draw_desc d = {0};
+    const double c[3] = {0.5, 0.5, 0.0}, up[3] = {0, 0, 1};
+    const double eye[3] = {0.5, 0.5 - dist * sin(M_PI / 3), dist * cos(M_PI / 3)};
+    meso_camera_look_at(d.view, eye, c, up);
+    meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.01, 1000.0);
+    d.pixel_error = tau;
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw(rt, obj, &d) == MESO_OK);
+    float* depth = malloc(sizeof(float) * W * H);
+    assert(depth);
+    test_fbo_read(&fb, NULL, depth);
+    for (int x = 0; x < W; ++x) {
+        top[x] = -1;
+        for (int y = 0; y < H; ++y)
+            if (depth[y * W + x] < 1.0f)
+                top[x] = y;
+    }
+    free(depth);
+}
+
+static void error_holds_in_pixels_where_chosen(meso_rt* rt, meso_file* f)
+{
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    meso_rt_levels_state st;
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+    assert(st.level_count == LEVELS && st.resident_mask == 1u << (LEVELS - 1) && st.last_drawn == -1);
+    int coarse_seen = 0;
+    for (double dist = 1.5; dist < 110.0; dist *= 1.6) {
+        int fine[W], lod[W];
+        draw_at(rt, obj, dist, -1.0f, fine);
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK && st.last_drawn == 0);
+        draw_at(rt, obj, dist, 1.0f, lod);
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        const int chosen = st.last_drawn;
+        int worst = 0, covered = 0;
+        for (int x = 0; x < W; ++x) {
+            if (!((fine[x] < 0) == (lod[x] < 0) || abs(fine[x] - lod[x]) <= 2))
+                printf("  column %d: top %d (finest) against %d (level %d)\n", x, fine[x], lod[x], chosen);
+            assert((fine[x] < 0) == (lod[x] < 0) || abs(fine[x] - lod[x]) <= 2);
+            if (fine[x] >= 0 && lod[x] >= 0) {
+                worst = abs(fine[x] - lod[x]) > worst ? abs(fine[x] - lod[x]) : worst;
+                ++covered;
+            }
+        }
+        printf("  distance %7.2f: level %d, top edge moved %d px (%d columns)\n", dist, chosen, worst, covered);
+        fflush(stdout);
+        assert(covered > 0);
+        assert(worst <= 2); /* 1 px of error budget + 1 px of rasterisation */
+        coarse_seen = coarse_seen > chosen ? coarse_seen : chosen;
+    }
+    assert(coarse_seen == LEVELS - 1); /* far away the coarsest level is drawn */
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK && st.resident_mask == (1u << LEVELS) - 1);
+    meso_level_info li[LEVELS];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, LEVELS, &n, NULL) == MESO_OK && n == LEVELS);
+    uint64_t all = 0;
+    for (int k = 0; k < LEVELS; ++k)
+        all += li[k].bytes;
+    assert(st.bytes_resident == all && st.bytes_read == all);
+    meso_rt_release_object(rt, obj);
+}
+
+static void every_level_prefix_draws(meso_rt* rt, const uint8_t* data, size_t size)
+{
+    meso_file* whole = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &whole, NULL) == MESO_OK);
+    meso_level_info li[LEVELS];
+    uint32_t n = 0;
+    assert(meso_file_levels(whole, 1, li, LEVELS, &n, NULL) == MESO_OK && n == LEVELS);
+    for (int k = LEVELS - 1; k >= 0; --k) {
+        prefix_io p = {data, li[k].prefix_bytes};
+        const meso_io io = {.read_fn = prefix_read, .size = size, .user = &p};
+        meso_file* f = NULL;
+        assert(meso_file_open_io(&io, NULL, &f, NULL) == MESO_OK);
+        meso_rt_object obj;
+        assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+        int top[W];
+        draw_at(rt, obj, 2.0, -1.0f, top); /* wants level 0: gets the finest that arrived */
+        meso_rt_levels_state st;
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        printf("  prefix %llu bytes of %zu: level %d drawn\n", (unsigned long long)p.limit, size, st.last_drawn);
+        assert(st.last_drawn == k);
+        int covered = 0;
+        for (int x = 0; x < W; ++x)
+            covered += top[x] >= 0;
+        assert(covered > W / 4);
+        meso_rt_release_object(rt, obj);
+        meso_file_close(f);
+    }
+    /* Less than the coarsest level: nothing to draw, refused cleanly. */
+    prefix_io p = {data, li[LEVELS - 1].prefix_bytes - 1};
+    const meso_io io = {.read_fn = prefix_read, .size = size, .user = &p};
+    meso_file* f = NULL;
+    assert(meso_file_open_io(&io, NULL, &f, NULL) == MESO_OK);
+    meso_rt_object obj = {7};
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) != MESO_OK && obj.id == 0);
+    meso_file_close(f);
+    meso_file_close(whole);
+}
+
+int main(void)
+{
+    char why[256];
+    meso_egl* egl = test_egl_create(why, sizeof why);
+    if (!egl) {
+        fprintf(stderr, "test_rt_levels: no EGL context: %s\n", why);
+        return 1;
+    }
+    assert(test_fbo_create(&fb, W, H));
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
+    size_t size;
+    uint8_t* data = levelled_file(&size);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    error_holds_in_pixels_where_chosen(rt, f);
+    every_level_prefix_draws(rt, data, size);
+    meso_file_close(f);
+    meso_rt_destroy(rt);
+    test_fbo_destroy(&fb);
+    meso_egl_destroy(egl);
+    free(data);
+    puts("test_rt_levels: ok");
+    return 0;
+}
