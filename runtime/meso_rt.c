@@ -184,6 +184,8 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
     rt->gl_version = major * 10 + minor;
     rt->state_policy = desc->state_policy;
     rt->check_gl_errors = desc->check_gl_errors != 0;
+    rt->budget = desc->memory_budget;
+    rt->tau_scale = 1.0;
     /* OpenGL ES says so at the start of GL_VERSION ("OpenGL ES 3.2 Mesa ..."). */
     rt->gles = version && strncmp((const char*)version, "OpenGL ES", 9) == 0;
     if (rt->gl_version < (rt->gles ? 32 : 33)) {

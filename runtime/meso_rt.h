@@ -131,6 +131,16 @@ typedef struct meso_rt_desc {
      * shading [NULL] */
     const char* shading_hook;
     uint32_t shading_hook_binding; /* uniform buffer binding point of the hook's MesoHook block [0] */
+    /* Levels of detail (meso_rt_load_object_levels): the bytes every
+     * levelled object's uploaded levels may hold together, counted as the
+     * file bytes of their chunks (meso_level_info.bytes). A draw that would
+     * go over evicts levels no draw of the current frame used, least
+     * recently used first, and otherwise draws a level already uploaded;
+     * meso_rt_frame_end raises the pixel error of every draw by a common
+     * factor while the frame's levels do not fit, and lowers it again once
+     * the levels of the lower factor would fit. Each object's coarsest
+     * level always stays. 0: no budget [0] */
+    uint64_t memory_budget;
 } meso_rt_desc;
 
 typedef struct meso_rt meso_rt;
@@ -224,6 +234,24 @@ typedef struct meso_rt_levels_state {
     uint64_t bytes_read;      /* every byte read from the file for this object, uploads that failed included */
 } meso_rt_levels_state;
 MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object obj, meso_rt_levels_state* out);
+
+/* End of a frame, for the memory budget (meso_rt_desc.memory_budget):
+ * adjusts the factor every draw's pixel error is multiplied by (x 1.25
+ * while the levels the frame's draws wanted exceed the budget; / 1.1,
+ * down to 1, when the levels they would want at the lower factor fit) and
+ * evicts levels not used this frame while over budget. The factor only
+ * falls when the lower one is known to fit, so under a static camera it
+ * settles and does not oscillate. Without a budget it only counts frames. */
+MESO_API void meso_rt_frame_end(meso_rt* rt);
+typedef struct meso_rt_budget_state {
+    uint64_t budget;          /* meso_rt_desc.memory_budget */
+    uint64_t bytes_resident;  /* over every levelled object */
+    uint64_t bytes_wanted;    /* the levels the last frame's draws wanted */
+    double pixel_error_scale; /* the factor, >= 1 */
+    uint64_t frames;          /* meso_rt_frame_end calls */
+    uint64_t evictions;       /* levels evicted so far */
+} meso_rt_budget_state;
+MESO_API void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* out);
 
 /* Free the object's GL resources. Stale or zero handles are ignored. */
 MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);

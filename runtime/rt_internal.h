@@ -90,6 +90,9 @@ struct meso_rt {
     GLuint list_program;       /* inside meso_rt_draw_list: the program bound last (0: none yet) */
     int in_list;               /* inside meso_rt_draw_list: the list saved the state, the draws do not */
     uint16_t load_lod;         /* the level a load reads (mesoi_find_chunk); 0 outside rt_levels.c's loads */
+    /* The memory budget of levelled objects (rt_levels.c). */
+    uint64_t budget, bytes_resident, bytes_wanted, frame, evictions;
+    double tau_scale;
     mesoi_object* objects;
     uint32_t object_capacity;
 };

@@ -33,8 +33,12 @@ typedef struct mesoi_levels {
     meso_level_info* info;   /* [count], finest first */
     meso_rt_object* slot;    /* [count]: the uploaded level's slot, id 0 when not uploaded */
     uint8_t* failed;         /* [count]: its upload failed (not retried) */
+    uint64_t* used;          /* [count]: the frame a draw last used it (rt->frame), for eviction */
     int32_t last_drawn;
     uint64_t bytes_read;
+    uint64_t want_frame;     /* the frame want_now/want_lower belong to */
+    uint32_t want_now, want_lower; /* the finest level this frame's draws wanted, at the budget's factor and
+                                      at the next lower one */
 } mesoi_levels;
 
 static void levels_free(meso_rt* rt, mesoi_levels* lv)
@@ -44,6 +48,7 @@ static void levels_free(meso_rt* rt, mesoi_levels* lv)
     mesoi_rt_free(rt, lv->info);
     mesoi_rt_free(rt, lv->slot);
     mesoi_rt_free(rt, lv->failed);
+    mesoi_rt_free(rt, lv->used);
     mesoi_rt_free(rt, lv);
 }
 
@@ -58,6 +63,8 @@ static meso_result upload_level(meso_rt* rt, mesoi_levels* lv, uint32_t l)
     const uint32_t kind = lv->info[l].rec.form == MESO_LEVEL_MESH ? (uint32_t)MESO_OBJECT_MESH : lv->rec.kind;
     lv->bytes_read += lv->info[l].bytes;
     const meso_result r = mesoi_load_slot(rt, lv->file, &lv->rec, kind, lv->info[l].rec.lod, &lv->slot[l]);
+    if (r == MESO_OK)
+        rt->bytes_resident += lv->info[l].bytes;
     if (r != MESO_OK) {
         lv->failed[l] = 1;
         mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
@@ -97,12 +104,14 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         lv->info = mesoi_rt_alloc(rt, sizeof(meso_level_info) * lv->count);
         lv->slot = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * lv->count);
         lv->failed = mesoi_rt_alloc(rt, lv->count);
-        if (!lv->info || !lv->slot || !lv->failed)
+        lv->used = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
+        if (!lv->info || !lv->slot || !lv->failed || !lv->used)
             r = MESO_ERR_OUT_OF_MEMORY;
     }
     if (r == MESO_OK) {
         memset(lv->slot, 0, sizeof(meso_rt_object) * lv->count);
         memset(lv->failed, 0, lv->count);
+        memset(lv->used, 0, sizeof(uint64_t) * lv->count);
         if ((r = meso_file_levels(f, object_id, lv->info, lv->count, &lv->count, &err)) != MESO_OK)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
     }
@@ -130,7 +139,10 @@ void mesoi_levels_release(meso_rt* rt, mesoi_object* o)
         return;
     o->levels = NULL;
     for (uint32_t l = 0; l < lv->count; ++l)
-        meso_rt_release_object(rt, lv->slot[l]);
+        if (lv->slot[l].id) {
+            meso_rt_release_object(rt, lv->slot[l]);
+            rt->bytes_resident -= lv->info[l].bytes;
+        }
     levels_free(rt, lv);
 }
 
@@ -177,6 +189,104 @@ static double projected_px(double error, const float lo[3], const float hi[3], c
     return error * scale * focal / dist;
 }
 
+/* The coarsest level whose projected error is at most `tau` pixels (for
+ * every instance); 0 when none is, or tau < 0. */
+static uint32_t choose(const mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                       uint32_t count, double tau, double height)
+{
+    if (tau < 0.0)
+        return 0;
+    for (uint32_t l = lv->count - 1; l > 0; --l) {
+        const meso_level_record* r = &lv->info[l].rec;
+        double px = 0.0;
+        if (inst)
+            for (uint32_t i = 0; i < count && px <= tau; ++i)
+                px = fmax(px, projected_px(r->error, r->bbox_min, r->bbox_max, inst[i].model, d, height));
+        else
+            px = projected_px(r->error, r->bbox_min, r->bbox_max, d->model, d, height);
+        if (px <= tau)
+            return l;
+    }
+    return 0;
+}
+
+/* >>budget ------------------------------------------------------------------ */
+
+/* Evict the least recently used level (any object's) that no draw of this
+ * frame used and that is not its object's coarsest; 0 when there is none. */
+static int evict_one(meso_rt* rt)
+{
+    mesoi_levels* best = NULL;
+    uint32_t best_l = 0;
+    for (uint32_t i = 0; i < rt->object_capacity; ++i) {
+        mesoi_levels* lv = rt->objects[i].live ? rt->objects[i].levels : NULL;
+        for (uint32_t l = 0; lv && l + 1 < lv->count; ++l)
+            if (lv->slot[l].id && lv->used[l] != rt->frame + 1 && (!best || lv->used[l] < best->used[best_l])) {
+                best = lv;
+                best_l = l;
+            }
+    }
+    if (!best)
+        return 0;
+    meso_rt_release_object(rt, best->slot[best_l]);
+    best->slot[best_l].id = 0;
+    rt->bytes_resident -= best->info[best_l].bytes;
+    rt->evictions++;
+    return 1;
+}
+
+/* Room for level l of lv under the budget, evicting what this frame does
+ * not use; 0 when it cannot be made. */
+static int make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l)
+{
+    if (!rt->budget)
+        return 1;
+    while (rt->bytes_resident + lv->info[l].bytes > rt->budget)
+        if (!evict_one(rt))
+            return 0;
+    return 1;
+}
+
+void meso_rt_frame_end(meso_rt* rt)
+{
+    if (!rt)
+        return;
+    uint64_t now = 0, lower = 0;
+    for (uint32_t i = 0; i < rt->object_capacity; ++i) {
+        const mesoi_levels* lv = rt->objects[i].live ? rt->objects[i].levels : NULL;
+        if (!lv || lv->want_frame != rt->frame + 1)
+            continue;
+        const uint64_t coarsest = lv->info[lv->count - 1].bytes;
+        now += lv->info[lv->want_now].bytes + (lv->want_now + 1 < lv->count ? coarsest : 0);
+        lower += lv->info[lv->want_lower].bytes + (lv->want_lower + 1 < lv->count ? coarsest : 0);
+    }
+    rt->bytes_wanted = now;
+    if (rt->budget) {
+        if (now > rt->budget)
+            rt->tau_scale = fmin(rt->tau_scale * 1.25, 1e6);
+        else if (rt->tau_scale > 1.0 && lower <= rt->budget)
+            rt->tau_scale = fmax(1.0, rt->tau_scale / 1.1);
+        while (rt->bytes_resident > rt->budget && evict_one(rt)) {
+        }
+    }
+    rt->frame++;
+}
+
+void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* out)
+{
+    if (!out)
+        return;
+    memset(out, 0, sizeof *out);
+    if (!rt)
+        return;
+    out->budget = rt->budget;
+    out->bytes_resident = rt->bytes_resident;
+    out->bytes_wanted = rt->bytes_wanted;
+    out->pixel_error_scale = rt->tau_scale;
+    out->frames = rt->frame;
+    out->evictions = rt->evictions;
+}
+
 meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                               uint32_t count, meso_rt_object* out)
 {
@@ -186,33 +296,28 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         return MESO_OK;
     mesoi_levels* lv = o->levels; /* stable: only the slot table moves */
     const double tau = d->pixel_error == 0.0f ? 1.0 : (double)d->pixel_error;
-    uint32_t want = 0;
-    if (tau >= 0.0 && lv->count > 1) {
-        double height = d->viewport[3];
-        if (d->viewport[2] == 0 && d->viewport[3] == 0) {
-            GLint vp[4] = {0, 0, 0, 0};
-            rt->gl.GetIntegerv(GL_VIEWPORT, vp);
-            height = vp[3];
-        }
-        for (uint32_t l = lv->count - 1; l > 0; --l) {
-            const meso_level_record* r = &lv->info[l].rec;
-            double px = 0.0;
-            if (inst)
-                for (uint32_t i = 0; i < count && px <= tau; ++i)
-                    px = fmax(px, projected_px(r->error, r->bbox_min, r->bbox_max, inst[i].model, d, height));
-            else
-                px = projected_px(r->error, r->bbox_min, r->bbox_max, d->model, d, height);
-            if (px <= tau) {
-                want = l;
-                break;
-            }
-        }
+    double height = d->viewport[3];
+    if (tau >= 0.0 && lv->count > 1 && d->viewport[2] == 0 && d->viewport[3] == 0) {
+        GLint vp[4] = {0, 0, 0, 0};
+        rt->gl.GetIntegerv(GL_VIEWPORT, vp);
+        height = vp[3];
+    }
+    const uint32_t want = choose(lv, d, inst, count, tau * rt->tau_scale, height);
+    const uint32_t lower = rt->tau_scale > 1.0 ? choose(lv, d, inst, count, tau * fmax(1.0, rt->tau_scale / 1.1), height)
+                                               : want;
+    if (lv->want_frame != rt->frame + 1) { /* the first draw of the object this frame */
+        lv->want_frame = rt->frame + 1;
+        lv->want_now = want;
+        lv->want_lower = lower;
+    } else {
+        lv->want_now = want < lv->want_now ? want : lv->want_now;
+        lv->want_lower = lower < lv->want_lower ? lower : lv->want_lower;
     }
     /* The level wanted, else the finest coarser one that can be had, else
      * the nearest finer one uploaded before. */
     int32_t got = -1;
     for (uint32_t l = want; got < 0 && l < lv->count; ++l)
-        if (upload_level(rt, lv, l) == MESO_OK)
+        if ((lv->slot[l].id || make_room(rt, lv, l)) && upload_level(rt, lv, l) == MESO_OK)
             got = (int32_t)l;
     for (uint32_t l = want; got < 0 && l-- > 0;)
         if (lv->slot[l].id)
@@ -220,6 +325,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     if (got < 0)
         return MESO_ERR_NOT_FOUND;
     lv->last_drawn = got;
+    lv->used[got] = rt->frame + 1;
     *out = lv->slot[got];
     return MESO_OK;
 }

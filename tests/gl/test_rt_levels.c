@@ -9,7 +9,11 @@
  *  - Streaming: a file prefix that ends at a level's prefix_bytes draws
  *    (every level boundary), with the finest level that has arrived; a
  *    prefix shorter than the coarsest level loads nothing, cleanly.
- *  - The state reports what is resident and read. */
+ *  - The state reports what is resident and read.
+ *  - A memory budget smaller than the finest levels settles under a static
+ *    camera (the pixel-error factor and the levels drawn stop changing, no
+ *    more evictions, resident bytes within the budget) and the factor comes
+ *    back to 1 when the objects move away. */
 #include "test_util.h"
 
 #include <GL/glcorearb.h>
@@ -32,19 +36,29 @@ static void add(meso_writer* w, uint32_t type, uint32_t object, uint16_t lod, co
     assert(meso_writer_add(w, &d, data, size, &e) == MESO_OK);
 }
 
-static uint8_t* square_mesh(float z, size_t* size)
+/* The unit square at height z as a g x g grid (finer levels hold more). */
+static uint8_t* square_mesh(float z, uint32_t g, size_t* size)
 {
     meso_mesh_layout l;
-    assert(meso_mesh_compute_layout(4, 6, MESO_MESH_ATTR_POSITIONS | MESO_MESH_ATTR_NORMALS, &l) == MESO_OK);
+    const uint32_t nv = (g + 1) * (g + 1);
+    assert(meso_mesh_compute_layout(nv, 6 * g * g, MESO_MESH_ATTR_POSITIONS | MESO_MESH_ATTR_NORMALS, &l) == MESO_OK);
     uint8_t* m = calloc(1, (size_t)l.size);
     assert(m);
     meso_mesh_write_header(&l, m);
-    const float p[12] = {0, 0, z, 1, 0, z, 1, 1, z, 0, 1, z};
-    const float n[12] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
-    const uint32_t ix[6] = {0, 1, 2, 0, 2, 3};
-    memcpy(m + l.positions_offset, p, sizeof p);
-    memcpy(m + l.normals_offset, n, sizeof n);
-    memcpy(m + l.indices_offset, ix, sizeof ix);
+    float* p = (float*)(m + l.positions_offset);
+    float* n = (float*)(m + l.normals_offset);
+    uint32_t* ix = (uint32_t*)(m + l.indices_offset);
+    for (uint32_t j = 0; j <= g; ++j)
+        for (uint32_t i = 0; i <= g; ++i) {
+            const uint32_t v = j * (g + 1) + i;
+            p[3 * v] = (float)i / (float)g, p[3 * v + 1] = (float)j / (float)g, p[3 * v + 2] = z;
+            n[3 * v + 2] = 1.0f;
+        }
+    for (uint32_t j = 0; j < g; ++j)
+        for (uint32_t i = 0; i < g; ++i) {
+            const uint32_t a = j * (g + 1) + i, t[6] = {a, a + 1, a + g + 2, a, a + g + 2, a + g + 1};
+            memcpy(ix + 6 * (j * g + i), t, sizeof t);
+        }
     *size = (size_t)l.size;
     return m;
 }
@@ -62,7 +76,7 @@ static uint8_t* levelled_file(size_t* size)
     uint8_t lods[LEVELS * MESO_LODS_RECORD_SIZE];
     for (uint16_t k = 0; k < LEVELS; ++k) {
         size_t ms;
-        uint8_t* m = square_mesh(lift[k], &ms);
+        uint8_t* m = square_mesh(lift[k], 8u >> k, &ms);
         add(w, MESO_CHUNK_MESH, 1, k, m, ms);
         free(m);
         meso_level_record r = {1, k, MESO_LEVEL_NATIVE, lift[k], {0, 0, lift[k]}, {1, 1, lift[k]}};
@@ -200,6 +214,98 @@ static void every_level_prefix_draws(meso_rt* rt, const uint8_t* data, size_t si
     meso_file_close(whole);
 }
 
+/* Six levelled objects side by side at depth `dist`, one frame. */
+enum { OBJS = 6 };
+static void frame(meso_rt* rt, const meso_rt_object* objs, double dist)
+{
+    meso_rt_draw_desc d = {0};
+    const double eye[3] = {0.5, 0.5 - dist * sin(M_PI / 3), dist * cos(M_PI / 3)}, c[3] = {0.5, 0.5, 0}, up[3] = {0, 0, 1};
+    meso_camera_look_at(d.view, eye, c, up);
+    meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.01, 1000.0);
+    test_fbo_clear(&fb, 0, 0, 0);
+    for (int i = 0; i < OBJS; ++i) {
+        memset(d.model, 0, sizeof d.model);
+        d.model[0] = d.model[5] = d.model[10] = d.model[15] = 1.0f;
+        d.model[12] = (float)(1.2 * (i - OBJS / 2));
+        d.model[13] = (float)(1.5 * i); /* further away, one after the other */
+        assert(meso_rt_draw(rt, objs[i], &d) == MESO_OK);
+    }
+    meso_rt_frame_end(rt);
+}
+
+static void budget_settles_and_comes_back(const uint8_t* data, size_t size)
+{
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
+    meso_level_info li[LEVELS];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, LEVELS, &n, NULL) == MESO_OK);
+    /* What the six objects hold unbudgeted, close up: measured. */
+    uint64_t free_bytes = 0;
+    {
+        meso_rt* rt = NULL;
+        assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
+        meso_rt_object objs[OBJS];
+        for (int i = 0; i < OBJS; ++i)
+            assert(meso_rt_load_object_levels(rt, f, 1, &objs[i]) == MESO_OK);
+        frame(rt, objs, 2.0);
+        meso_rt_budget_state bs;
+        meso_rt_budget_state_get(rt, &bs);
+        free_bytes = bs.bytes_wanted;
+        assert(bs.pixel_error_scale == 1.0 && bs.frames == 1);
+        meso_rt_destroy(rt);
+    }
+    const uint64_t budget = free_bytes * 6 / 10;
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .memory_budget = budget}, &rt) ==
+           MESO_OK);
+    meso_rt_object objs[OBJS];
+    for (int i = 0; i < OBJS; ++i)
+        assert(meso_rt_load_object_levels(rt, f, 1, &objs[i]) == MESO_OK);
+    int32_t drawn[OBJS];
+    double scale = 0.0;
+    uint64_t evictions = 0;
+    for (int k = 0; k < 60; ++k) {
+        frame(rt, objs, 2.0);
+        meso_rt_budget_state bs;
+        meso_rt_budget_state_get(rt, &bs);
+        assert(bs.bytes_resident <= budget || k < 5);
+        if (k == 40) {
+            scale = bs.pixel_error_scale;
+            evictions = bs.evictions;
+            for (int i = 0; i < OBJS; ++i) {
+                meso_rt_levels_state ls;
+                meso_rt_levels_state_get(rt, objs[i], &ls);
+                drawn[i] = ls.last_drawn;
+            }
+        }
+        if (k > 40) { /* settled: nothing changes any more */
+            assert(bs.pixel_error_scale == scale && bs.evictions == evictions && bs.bytes_wanted <= budget);
+            for (int i = 0; i < OBJS; ++i) {
+                meso_rt_levels_state ls;
+                meso_rt_levels_state_get(rt, objs[i], &ls);
+                assert(ls.last_drawn == drawn[i]);
+            }
+        }
+    }
+    printf("  budget %llu of %llu bytes: pixel error x %.3f, %llu evictions, levels", (unsigned long long)budget,
+           (unsigned long long)free_bytes, scale, (unsigned long long)evictions);
+    for (int i = 0; i < OBJS; ++i)
+        printf(" %d", drawn[i]);
+    printf("\n");
+    assert(scale > 1.0);
+    /* Far away everything fits at factor 1 again. */
+    for (int k = 0; k < 80; ++k)
+        frame(rt, objs, 60.0);
+    meso_rt_budget_state bs;
+    meso_rt_budget_state_get(rt, &bs);
+    printf("  far away: pixel error x %.3f, %llu bytes resident\n", bs.pixel_error_scale,
+           (unsigned long long)bs.bytes_resident);
+    assert(bs.pixel_error_scale == 1.0 && bs.bytes_resident <= budget);
+    meso_rt_destroy(rt);
+    meso_file_close(f);
+}
+
 int main(void)
 {
     char why[256];
@@ -218,6 +324,7 @@ int main(void)
     assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
     error_holds_in_pixels_where_chosen(rt, f);
     every_level_prefix_draws(rt, data, size);
+    budget_settles_and_comes_back(data, size);
     meso_file_close(f);
     meso_rt_destroy(rt);
     test_fbo_destroy(&fb);
