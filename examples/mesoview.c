@@ -21,7 +21,11 @@
  * no re-bake either way). Frusta use the step limit keys for their relief
  * march (relief_steps). Cells: M cycles first hit / reflection / refraction,
  * N the bounces (0..3), L toggles the thesis's linear search (8 voxels a
- * step) against the exact traversal. The title shows ms/frame and, on
+ * step) against the exact traversal. Objects stored with levels of detail
+ * (FORMAT.md 7.10) are loaded with meso_rt_load_object_levels: O and P halve
+ * and double the pixel error each draw may have (0.125..64 px, below
+ * 0.125 the finest levels), and the title shows the levels drawn and the
+ * bytes resident. The title shows ms/frame and, on
  * OpenGL 4.3+, ray steps per ray-cast fragment counted by the shaders. GLFW lives only in examples/: libmeso itself
  * never sees a window. Draco-encoded chunks are decoded with the baker's
  * decoder, passed in through meso_open_desc as any host would pass its own.
@@ -62,7 +66,8 @@ static const char* const usage =
     "X slice axis (view / levels), "
     ", . slice count, [ ] error bound, - = step limit,\n"
     "B bisection steps, D distance map on/off, A animation on/off,\n"
-    "M cells mode, N cells bounces, L cells linear search on/off\n";
+    "M cells mode, N cells bounces, L cells linear search on/off,\n"
+    "O P levels of detail: halve / double the pixel error\n";
 
 static const char* const cell_mode_names[3] = {"first", "reflect", "refract"};
 
@@ -120,6 +125,10 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
         d->cells.bounces = (d->cells.bounces + 1) % 4;
     else if (key == GLFW_KEY_L)
         d->cells.step = d->cells.step > 0.0f ? 0.0f : 8.0f;
+    else if (key == GLFW_KEY_O) /* below 1/8 px: the finest levels (< 0) */
+        d->pixel_error = d->pixel_error < 0.0f ? -1.0f : d->pixel_error > 0.125f ? d->pixel_error * 0.5f : -1.0f;
+    else if (key == GLFW_KEY_P)
+        d->pixel_error = d->pixel_error < 0.0f ? 0.125f : fminf(d->pixel_error * 2.0f, 64.0f);
     else
         return;
     k->changed = 1;
@@ -469,6 +478,7 @@ int main(int argc, char** argv)
     shell_anim anims[64];
     frusta_anim fanims[64];
     int nobj = 0, nanim = 0, nfanim = 0;
+    meso_file* view_file = NULL; /* open until the end: levelled objects read their levels from it */
     double lo[3] = {-1, -1, -1}, hi[3] = {1, 1, 1};
     if (file) {
         meso_decoder dec = meso_bake_draco_decoder();
@@ -488,7 +498,12 @@ int main(int argc, char** argv)
         if (meso_file_objects(f, recs, 64, &count, &err) != MESO_OK)
             fprintf(stderr, "mesoview error: %s\n", err.message);
         for (uint32_t i = 0; i < count && i < 64; ++i) {
-            if (meso_rt_load_object(rt, f, recs[i].id, &objs[nobj]) != MESO_OK)
+            /* Objects with levels keep them (the file stays open until the
+             * end); the others are uploaded whole, as before. */
+            uint32_t levels = 1;
+            meso_file_levels(f, recs[i].id, NULL, 0, &levels, NULL);
+            if ((levels > 1 ? meso_rt_load_object_levels(rt, f, recs[i].id, &objs[nobj])
+                            : meso_rt_load_object(rt, f, recs[i].id, &objs[nobj])) != MESO_OK)
                 continue;
             if (anim_load(f, rt, objs[nobj], recs[i].id, &anims[nanim]))
                 ++nanim;
@@ -502,7 +517,7 @@ int main(int argc, char** argv)
             }
             ++nobj;
         }
-        meso_file_close(f);
+        view_file = f;
         if (nobj == 0)
             fprintf(stderr, "mesoview warning: %s has no object this build can draw\n", file);
     }
@@ -550,12 +565,13 @@ int main(int argc, char** argv)
                 total.steps += stats.steps;
             }
             stats = total;
+            meso_rt_frame_end(rt);
         }
         const double t_now = glfwGetTime();
         ms_avg = frame == 0 ? 1e3 * (t_now - t_last) : 0.9 * ms_avg + 100.0 * (t_now - t_last);
         t_last = t_now;
         if (frame % 10 == 0 || kn.changed) {
-            char title[256];
+            char title[384];
             snprintf(title, sizeof(title),
                      "mesoview  %s%s%s%.0d%s  err %.3g px  steps %d  bisect %d%s%s  cells %s/%d%s  %.1f ms/frame",
                      technique_names[kn.d.shell.technique],
@@ -570,6 +586,20 @@ int main(int argc, char** argv)
                      kn.d.shell.bisection_steps, kn.d.shell.no_distance_map ? "  no-dist" : "",
                      kn.animate ? "  animated" : "", cell_mode_names[kn.d.cells.mode], kn.d.cells.bounces,
                      kn.d.cells.step > 0 ? " linear" : "", ms_avg);
+            meso_rt_budget_state bs;
+            meso_rt_budget_state_get(rt, &bs);
+            char lods[96] = "";
+            for (int i = 0, len = 0; i < nobj && len < 80; ++i) {
+                meso_rt_levels_state ls;
+                if (meso_rt_levels_state_get(rt, objs[i], &ls) == MESO_OK && ls.level_count > 1)
+                    len += snprintf(lods + len, sizeof(lods) - (size_t)len, "%s%d/%u", len ? "," : "",
+                                    (int)ls.last_drawn, ls.level_count);
+            }
+            if (lods[0])
+                snprintf(title + strlen(title), sizeof(title) - strlen(title), "  lod %s at %s%.3g px, %.0f KiB",
+                         lods, kn.d.pixel_error < 0 ? "finest " : "",
+                         kn.d.pixel_error < 0 ? 0.0 : kn.d.pixel_error == 0 ? 1.0 : (double)kn.d.pixel_error,
+                         (double)bs.bytes_resident / 1024.0);
             if (stats.supported && stats.fragments)
                 snprintf(title + strlen(title), sizeof(title) - strlen(title), "  %.1f steps/fragment",
                          (double)stats.steps / (double)stats.fragments);
@@ -610,6 +640,7 @@ int main(int argc, char** argv)
         free(anims[i].dir);
     }
     meso_rt_destroy(rt);
+    meso_file_close(view_file);
     glfwDestroyWindow(win);
     glfwTerminate();
     return rc;
