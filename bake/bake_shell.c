@@ -409,6 +409,47 @@ static meso_result color_prepare(shell_bake* s, int from_mesh, meso_error* err)
  * texture coordinates of the texture function), SDIR, STHK, the texture
  * function and its distance map. Everything per vertex is written for the
  * output vertices: the mesh's, plus the copies split off at uv seams. */
+/* The error of the base mesh drawn in the shell's place (FORMAT.md §7.10,
+ * level 1, form MESO_LEVEL_MESH): a point the shell draws is
+ * Phi(u, v, w) = sum l_k bottom_k + w sum l_k (top_k - bottom_k) (§7.2),
+ * at most max_k max(|bottom_k - p_k|, |top_k - p_k|) from the base point
+ * sum l_k p_k (a convex combination of the corner offsets); an exterior
+ * shell's bottom is the base, so a height field that never rises above
+ * hmax puts it within hmax max_k |d_k|. The other way, the surface a ray
+ * meets above a base point lies in the same column, so the same bound
+ * holds: two-sided, as §7.10 asks. hmax is the largest stored texel of
+ * every frame (1 for volumes and shells without a texture: their surface
+ * may reach w = 1). Rounded up to f32. */
+static float standin_error(const shell_bake* s)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const mesoi_shell_texture* tx = &s->tx;
+    const uint32_t nv = s->m.vertex_count;
+    const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    double dmax = 0.0;
+    for (size_t i = 0; i < (size_t)nv * (size_t)layers; ++i) {
+        const float* d = s->d + 3 * i;
+        dmax = fmax(dmax, sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]));
+    }
+    double hmax = 1.0;
+    if (a->texture && tx->fn.kind == MESO_TEXFN_HEIGHT && a->kind == MESO_SHELL_EXTERIOR) {
+        const size_t n = (size_t)tx->fn.dims[0] * tx->fn.dims[1] * tx->fn.dims[2] * (a->frames ? a->frames : 1);
+        const uint8_t* b = a->frames ? tx->fn_frames : (const uint8_t*)tx->fn.encoded;
+        const int wide = tx->fn.dtype == MESO_DTYPE_U16;
+        uint32_t top = 0;
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t v = wide ? (uint32_t)b[2 * i] | (uint32_t)b[2 * i + 1] << 8 : b[i];
+            top = v > top ? v : top;
+        }
+        hmax = top / (wide ? 65535.0 : 255.0);
+    }
+    const double e = hmax * dmax;
+    float f = (float)e;
+    if ((double)f < e)
+        f = nextafterf(f, INFINITY);
+    return f;
+}
+
 static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* err)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -509,7 +550,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                      .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
                                                base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
         meso_cmap_record_encode(&cr, cmap);
-        mesoi_chunk chunks[10] = {
+        mesoi_chunk chunks[12] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -545,6 +586,39 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_CMAP, .object = 1, .dtype = MESO_DTYPE_BYTES,
                                                  .components = 1, .dims = {1, 1, 1}},
                                         .data = cmap, .size = sizeof(cmap)};
+        }
+        /* Level 1: the base mesh as a stand-in (the same MESH bytes at lod
+         * 1; FORMAT.md §7.10), and the LODS records of both levels. */
+        uint8_t lods[2 * MESO_LODS_RECORD_SIZE];
+        if (!a->levels) {
+            meso_level_record l0 = {.object = 1, .lod = 0, .form = MESO_LEVEL_NATIVE};
+            meso_level_record l1 = {.object = 1, .lod = 1, .form = MESO_LEVEL_MESH, .error = standin_error(s)};
+            memcpy(l0.bbox_min, rec.bbox_min, sizeof l0.bbox_min);
+            memcpy(l0.bbox_max, rec.bbox_max, sizeof l0.bbox_max);
+            for (int k = 0; k < 3; ++k) {
+                l1.bbox_min[k] = INFINITY;
+                l1.bbox_max[k] = -INFINITY;
+            }
+            for (uint32_t v = 0; v < m->vertex_count; ++v)
+                for (int k = 0; k < 3; ++k) {
+                    l1.bbox_min[k] = fminf(l1.bbox_min[k], m->positions[3 * v + (size_t)k]);
+                    l1.bbox_max[k] = fmaxf(l1.bbox_max[k], m->positions[3 * v + (size_t)k]);
+                }
+            meso_level_record_encode(&l0, lods);
+            meso_level_record_encode(&l1, lods + MESO_LODS_RECORD_SIZE);
+            chunks[n] = chunks[0];
+            chunks[n++].desc.lod = 1;
+            chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES, .components = 1,
+                                                 .dims = {2, 1, 1}},
+                                        .data = lods, .size = sizeof lods};
+            cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
+            for (int L = 0; L < 2; ++L) {
+                cJSON* o = cJSON_CreateObject();
+                cJSON_AddNumberToObject(o, "lod", L);
+                cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
+                cJSON_AddNumberToObject(o, "error", L ? (double)l1.error : 0.0);
+                cJSON_AddItemToArray(jl, o);
+            }
         }
         if (r == MESO_OK)
             r = mesoi_output_build(meta, rep, &rec, chunks, n, out, err);

@@ -411,6 +411,11 @@ typedef struct meso_bake_shell_options {
      * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a
      * volume texture) or from-mesh (the glTF input's base colour at the mesh's own uv). */
     const char* color;
+    /* Levels of detail (FORMAT.md §7.10): 0 (auto): level 0 and, as level 1,
+     * the base mesh drawn as a plain mesh (a stand-in for when the whole
+     * shell is thinner than the error on screen) with its measured error;
+     * 1: level 0 only (the file of earlier bakes). */
+    int levels;
 } meso_bake_shell_options;
 
 typedef struct meso_bake_shell_report {

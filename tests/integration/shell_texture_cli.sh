@@ -118,7 +118,7 @@ vertex_count() { "$inspect" info "$1" --format json | tr -d ' \t\n' | grep -o '"
 floats() { od -An -v -tf4 -j "$2" -N $(($3 * 4)) "$1" | tr -s ' \n' '\n\n' | grep -v '^$'; }
 # shared FILE.meso: every MESH position has a single director (SDIR layer 0)
 shared() {
-  "$inspect" dump "$1" MESH -o "$tmp/s.mesh" >/dev/null 2>&1 && "$inspect" dump "$1" SDIR -o "$tmp/s.sdir" >/dev/null 2>&1 || return 1
+  "$inspect" dump "$1" MESH:1:0 -o "$tmp/s.mesh" >/dev/null 2>&1 && "$inspect" dump "$1" SDIR -o "$tmp/s.sdir" >/dev/null 2>&1 || return 1
   n=$(od -An -tu4 -N4 "$tmp/s.mesh" | tr -d ' ') off=$(od -An -tu8 -j16 -N8 "$tmp/s.mesh" | tr -d ' ')
   floats "$tmp/s.mesh" "$off" $((3 * n)) | paste -d ' ' - - - >"$tmp/s.pos"
   test "$(wc -l <"$tmp/s.pos" | tr -d ' ')" = "$n" || return 1

@@ -97,6 +97,10 @@ static const char* const usage_shell_end =
     "      --frames N          store N frames (1..256) at T + k / FPS, looped (FORMAT.md 7.2\n"
     "                          \"Animated texture functions\"); frame k equals a bake at that time\n"
     "      --fps F             frames per second (default: N / the texture's period: a seamless loop)\n"
+    "Levels of detail:\n"
+    "      --levels auto|1     auto (default): also store the base mesh as level 1, drawn as a plain\n"
+    "                          mesh where the whole shell is thinner than the error on screen, with\n"
+    "                          its error (the largest offset of the surface drawn); 1: level 0 only\n"
     "Reporting:\n"
     "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
     MEMORY_OPTION_HELP
@@ -203,7 +207,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
             "--smooth", "--texture", "--color", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps",
-            "--update"};
+            "--update", "--levels"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -215,6 +219,11 @@ static int parse_args(int argc, char** argv, shell_args* a)
             o->texture = v;
         else if (!strcmp(s, "--update"))
             o->update = v;
+        else if (!strcmp(s, "--levels")) {
+            if (strcmp(v, "auto") && strcmp(v, "1"))
+                return usage_error("--levels expects auto or 1, got '%s'", v);
+            o->levels = !strcmp(v, "1");
+        }
         else if (!strcmp(s, "--color"))
             o->color = v;
         else if (!strcmp(s, "--time")) {

@@ -1,0 +1,174 @@
+/* A shell's level 1 (FORMAT.md §7.10): the base mesh drawn in the shell's
+ * place, with the error mesobake states for it. Checked against the exact
+ * CPU reference: every surface point the reference ray caster hits, from
+ * several views, lies within the stated error of the stand-in mesh (brute
+ * force over its triangles), and the bound is not loose (the farthest hit
+ * reaches most of it: brick tops and volume surfaces do rise that far).
+ * Exterior height field, exterior volume and envelope shells; `--levels 1`
+ * writes no level.
+ * usage: test_shell_standin MESOBAKE */
+#include "test_util.h"
+
+#include <string.h>
+
+#include "meso_file.h"
+#include "meso_layout.h"
+#include "shell_reference.h"
+
+static double seg_clamp(double t) { return t < 0 ? 0 : t > 1 ? 1 : t; }
+
+/* Distance from p to triangle abc (exact: region tests on the plane). */
+static double point_triangle(const double p[3], const float* a, const float* b, const float* c)
+{
+    double ab[3], ac[3], ap[3], n[3];
+    for (int k = 0; k < 3; ++k) {
+        ab[k] = (double)b[k] - a[k];
+        ac[k] = (double)c[k] - a[k];
+        ap[k] = p[k] - a[k];
+    }
+    n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+    n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+    n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+    const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    double best = INFINITY;
+    if (nn > 0) {
+        /* Barycentrics of the projection; inside: the plane distance. */
+        const double d00 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
+        const double d01 = ab[0] * ac[0] + ab[1] * ac[1] + ab[2] * ac[2];
+        const double d11 = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2];
+        const double d20 = ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2];
+        const double d21 = ap[0] * ac[0] + ap[1] * ac[1] + ap[2] * ac[2];
+        const double den = d00 * d11 - d01 * d01;
+        const double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
+        if (v >= 0 && w >= 0 && v + w <= 1)
+            best = fabs(ap[0] * n[0] + ap[1] * n[1] + ap[2] * n[2]) / sqrt(nn);
+    }
+    const float* e[3][2] = {{a, b}, {b, c}, {c, a}};
+    for (int i = 0; i < 3; ++i) { /* the edges */
+        double d[3], q[3], dd = 0, t = 0;
+        for (int k = 0; k < 3; ++k) {
+            d[k] = (double)e[i][1][k] - e[i][0][k];
+            dd += d[k] * d[k];
+            t += (p[k] - e[i][0][k]) * d[k];
+        }
+        t = dd > 0 ? seg_clamp(t / dd) : 0;
+        double s = 0;
+        for (int k = 0; k < 3; ++k) {
+            q[k] = e[i][0][k] + t * d[k] - p[k];
+            s += q[k] * q[k];
+        }
+        best = fmin(best, sqrt(s));
+    }
+    return best;
+}
+
+static void look(double view[16], const double eye[3])
+{
+    /* Right-handed look-at towards the origin, up +y. */
+    double f[3] = {-eye[0], -eye[1], -eye[2]}, up[3] = {0, 1, 0}, s[3], u[3];
+    double fl = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    for (int k = 0; k < 3; ++k)
+        f[k] /= fl;
+    s[0] = f[1] * up[2] - f[2] * up[1], s[1] = f[2] * up[0] - f[0] * up[2], s[2] = f[0] * up[1] - f[1] * up[0];
+    const double sl = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    for (int k = 0; k < 3; ++k)
+        s[k] /= sl;
+    u[0] = s[1] * f[2] - s[2] * f[1], u[1] = s[2] * f[0] - s[0] * f[2], u[2] = s[0] * f[1] - s[1] * f[0];
+    memset(view, 0, sizeof(double) * 16);
+    for (int k = 0; k < 3; ++k) {
+        view[4 * k + 0] = s[k];
+        view[4 * k + 1] = u[k];
+        view[4 * k + 2] = -f[k];
+    }
+    view[12] = -(s[0] * eye[0] + s[1] * eye[1] + s[2] * eye[2]);
+    view[13] = -(u[0] * eye[0] + u[1] * eye[1] + u[2] * eye[2]);
+    view[14] = f[0] * eye[0] + f[1] * eye[1] + f[2] * eye[2];
+    view[15] = 1;
+}
+
+static void check(const char* mesobake, const char* dir, const char* name, const char* args)
+{
+    char path[512], cmd[10240];
+    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
+    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' %s -o '%s' >/dev/null", mesobake, test_data("spot_uv.obj"),
+             args, path);
+    assert(system(cmd) == 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_level_info li[4];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, 4, &n, NULL) == MESO_OK && n == 2);
+    assert(li[1].rec.form == MESO_LEVEL_MESH && li[1].rec.error > 0);
+    const double err = li[1].rec.error;
+    /* The stand-in mesh (lod 1). */
+    const int32_t mi = meso_file_find(f, MESO_CHUNK_MESH, 1, 1);
+    assert(mi >= 0);
+    const meso_chunk_info* mc = meso_file_chunk(f, (uint32_t)mi);
+    uint8_t* mb = malloc((size_t)mc->decoded_size);
+    assert(mb && meso_file_read_chunk(f, (uint32_t)mi, mb, (size_t)mc->decoded_size, NULL) == MESO_OK);
+    meso_mesh_view mv;
+    assert(meso_mesh_parse(mb, (size_t)mc->decoded_size, &mv, NULL) == MESO_OK);
+    const uint32_t tris = mv.layout.index_count / 3;
+
+    meso_ref_shell rs;
+    assert(meso_ref_shell_load(f, 1, &rs, NULL) == MESO_OK);
+    double worst = 0;
+    size_t hits = 0;
+    static const double eyes[3][3] = {{0, 0.3, 3.2}, {2.6, 1.4, -1.2}, {-1.8, -2.2, 1.5}};
+    for (int e = 0; e < 3; ++e) {
+        meso_ref_view v = {.width = 40, .height = 40, .samples_per_prism = 256};
+        look(v.view, eyes[e]);
+        const double t = tan(0.5 * 40.0 * M_PI / 180.0), zn = 0.1, zf = 20;
+        v.proj[0] = 1 / t, v.proj[5] = 1 / t, v.proj[10] = -(zf + zn) / (zf - zn), v.proj[11] = -1;
+        v.proj[14] = -2 * zf * zn / (zf - zn);
+        meso_ref_image img;
+        assert(meso_ref_render(&rs, &v, &img) == MESO_OK);
+        for (int p = 0; p < v.width * v.height; ++p) {
+            if (!img.coverage[p])
+                continue;
+            const double q[3] = {img.hit[3 * p], img.hit[3 * p + 1], img.hit[3 * p + 2]};
+            double d = INFINITY;
+            for (uint32_t k = 0; k < tris; ++k)
+                d = fmin(d, point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
+                                           mv.positions + 3 * mv.indices[3 * k + 2]));
+            worst = fmax(worst, d);
+            ++hits;
+        }
+        meso_ref_image_free(&img);
+    }
+    printf("  %-9s stated error %.6g, farthest of %zu reference hits %.6g (%.0f %%)\n", name, err, hits, worst,
+           100.0 * worst / err);
+    fflush(stdout);
+    assert(hits > 1000);
+    assert(worst <= err * (1 + 1e-5) + 1e-7); /* the stated error holds */
+    assert(worst >= 0.5 * err);               /* and is not a loose guess */
+    meso_ref_shell_free(&rs);
+    free(mb);
+    meso_file_close(f);
+}
+
+int main(int argc, char** argv)
+{
+    assert(argc == 2);
+    char dir[256];
+    test_temp_dir(dir, sizeof dir, "standin");
+    check(argv[1], dir, "bricks", "--texture bricks:32 --thickness-rel 0.04");
+    check(argv[1], dir, "volume", "--texture weave:32 --thickness-rel 0.04");
+    check(argv[1], dir, "envelope", "--texture bricks:32 --kind envelope --thickness-rel 0.02");
+    /* --levels 1: the file of earlier bakes, one level. */
+    char path[512], cmd[10240];
+    snprintf(path, sizeof path, "%s/one.meso", dir);
+    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' --texture bricks:32 --levels 1 -o '%s' >/dev/null", argv[1],
+             test_data("spot_low_resolution.obj"), path);
+    assert(system(cmd) == 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, NULL, 0, &n, NULL) == MESO_OK && n == 1);
+    assert(meso_file_find(f, MESO_CHUNK_LODS, UINT32_MAX, UINT16_MAX) < 0);
+    meso_file_close(f);
+    test_temp_dir_remove(dir);
+    puts("test_shell_standin: ok");
+    return 0;
+}
