@@ -23,8 +23,9 @@ check() { # DESCRIPTION COMMAND...
 }
 # Previews run headless GL; LeakSanitizer reports bytes inside the Mesa
 # driver, so only the preview calls run without leak detection (as the GL
-# tests do, tests/meson.build gl_env); the baker keeps it.
-export MESA_SHADER_CACHE_DISABLE=true EGL_PLATFORM=surfaceless
+# tests do, tests/meson.build gl_env); the baker keeps it. Mesa's shader
+# cache: the build's when meson gives one (gl_cache), else none.
+export MESA_SHADER_CACHE_DISABLE="${MESA_SHADER_CACHE_DISABLE:-true}" EGL_PLATFORM=surfaceless
 preview() { ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" "$inspect" preview "$@"; }
 # chunks FILE OBJECT: that object's chunk rows without index, object and offset
 chunks() { "$inspect" info "$1" | awk -v o="$2" 'NF == 14 && $4 == o && $1 ~ /^[0-9]+$/ {
