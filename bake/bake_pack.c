@@ -19,8 +19,11 @@
  *    the report warns (E3482).
  *  - File-wide chunks: the inputs' META and RPRT are kept inside the packed
  *    file's, per object (META "objects"[k].meta, RPRT "objects"[k].report);
- *    any other file-wide chunk is refused (E3483): it would belong to no
- *    object and its meaning in a merged file is unknown.
+ *    the LODS records (levels of detail, FORMAT.md §7.10) of every object
+ *    with more than one level go, renumbered, into the packed file's one
+ *    LODS chunk (lod_table.c); any other file-wide chunk is refused
+ *    (E3483): it would belong to no object and its meaning in a merged
+ *    file is unknown.
  *  - Memory: the output's chunks are held until written (the writer owns the
  *    only copy), so the estimate is the inputs' total size, checked against
  *    --max-memory before anything is read.
@@ -38,6 +41,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "lod_table.h"
 #include "memory_budget.h"
 #include "mesh_chunk.h"
 
@@ -112,7 +116,29 @@ typedef struct pack_state {
     uint32_t objects, cap;
     cJSON *meta, *meta_objects, *inputs, *rep, *rep_objects, *warnings;
     meso_bake_pack_report* report;
+    mesoi_lod_table lods; /* the objects' levels, renumbered */
 } pack_state;
+
+/* The levels of input object `src` as object `id` of the packed file
+ * (nothing for an object of one level: no record says the same). */
+static meso_result add_levels(pack_state* p, meso_file* f, uint32_t src, uint32_t id, meso_error* err)
+{
+    uint32_t n = 0;
+    meso_result r = meso_file_levels(f, src, NULL, 0, &n, err);
+    if (r != MESO_OK || n < 2)
+        return r;
+    meso_level_info* lv = calloc(n, sizeof(*lv));
+    if (!lv)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "pack: out of memory");
+    r = meso_file_levels(f, src, lv, n, &n, err);
+    for (uint32_t i = 0; i < n && r == MESO_OK; ++i) {
+        meso_level_record rec = lv[i].rec;
+        rec.object = id;
+        r = mesoi_lod_table_add(&p->lods, &rec, err);
+    }
+    free(lv);
+    return r;
+}
 
 /* Every object of input `k` (open, verified): OBJT records renumbered and
  * renamed, chunks copied as stored. */
@@ -145,7 +171,7 @@ static meso_result add_input(pack_state* p, meso_file* f, const char* path, uint
     for (uint32_t c = 0; c < chunks && r == MESO_OK; ++c) {
         const meso_chunk_info* ci = meso_file_chunk(f, c);
         if (ci->object == 0 && ci->type != MESO_CHUNK_META && ci->type != MESO_CHUNK_RPRT &&
-            ci->type != MESO_CHUNK_OBJT) {
+            ci->type != MESO_CHUNK_OBJT && ci->type != MESO_CHUNK_LODS) {
             char cc[5] = {(char)ci->type, (char)(ci->type >> 8), (char)(ci->type >> 16), (char)(ci->type >> 24), 0};
             for (int i = 0; i < 4; ++i)
                 if (cc[i] < 0x20 || cc[i] > 0x7e)
@@ -170,6 +196,7 @@ static meso_result add_input(pack_state* p, meso_file* f, const char* path, uint
         p->recs[p->objects] = rec;
         memcpy(p->names[p->objects], rec.name, 32);
         ++p->objects;
+        r = add_levels(p, f, in[i].id, id, err);
         for (uint32_t c = 0; c < chunks && r == MESO_OK; ++c) {
             const meso_chunk_info* ci = meso_file_chunk(f, c);
             if (ci->object != in[i].id)
@@ -295,8 +322,11 @@ meso_result meso_bake_pack(const meso_bake_pack_options* o, meso_bake_output** o
     else
         cJSON_Delete(p.warnings);
     if (r == MESO_OK)
+        r = mesoi_lod_table_write(&p.lods, p.writer, err);
+    if (r == MESO_OK)
         r = mesoi_output_finish(p.meta, p.rep, p.recs, p.objects, &p.writer, out, err);
     meso_writer_destroy(p.writer);
+    mesoi_lod_table_free(&p.lods);
     cJSON_Delete(p.meta);
     cJSON_Delete(p.rep);
     free(p.recs);

@@ -321,7 +321,24 @@ typedef struct meso_bake_mesh_options {
     int draco_position_bits; /* 1..30; 0 = 14 */
     int draco_normal_bits;   /* 2..30; 0 = 10 */
     int draco_uv_bits;       /* 1..30; 0 = 12 */
+    int levels;              /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto (halve the
+                                triangles per level while a level keeps < 85 % of the previous one's and that
+                                had > 256, at most 8 levels), 1 = the finest only (no LODS chunk, the file of
+                                earlier versions), N = at most N (1..MESO_BAKE_MESH_MAX_LEVELS). Coarse levels
+                                need meshoptimizer: without it auto gives one level, N > 1 fails UNSUPPORTED */
 } meso_bake_mesh_options;
+
+#define MESO_BAKE_MESH_MAX_LEVELS 16
+
+/* One level of a mesh bake. */
+typedef struct meso_bake_mesh_level {
+    uint32_t vertices;
+    uint32_t triangles;
+    double error;         /* object units: measured upper bound of the distance to level 0's surface
+                             (0 at level 0; non-decreasing) */
+    double sample_radius; /* the sampling radius included in `error` (0 at level 0) */
+    size_t mesh_bytes;    /* stored MESH payload */
+} meso_bake_mesh_level;
 
 typedef struct meso_bake_mesh_report {
     meso_bake_mesh_fixes fixes;
@@ -332,6 +349,8 @@ typedef struct meso_bake_mesh_report {
     size_t mesh_bytes; /* stored MESH payload */
     int has_normals;   /* the input had normals (or OpenMesh computed them) */
     int has_uvs;
+    uint32_t level_count; /* levels written, level 0 included (1: no LODS chunk) */
+    meso_bake_mesh_level level[MESO_BAKE_MESH_MAX_LEVELS];
 } meso_bake_mesh_report;
 
 /* Zero: the CLI's defaults (raw encoding). */

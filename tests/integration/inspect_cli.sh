@@ -39,18 +39,20 @@ CODE_HDR_MAGIC=$(issue_code HDR_MAGIC)
     { echo "cannot read issue codes from $HDR" >&2; exit 1; }
 
 # ---------------------------------------------------------------- bake inputs
-run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/a.meso"
+# One level each (--levels 1): the checks below address "the" MESH chunk;
+# levels of detail have their own test (mesh_levels_cli.sh).
+run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/a.meso" --levels 1
 if [ "$rc" -eq 5 ]; then
     echo "SKIP: mesobake has no mesh import in this build" >&2
     exit 77
 fi
 expect_rc 0 "bake sphere"
-run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/a2.meso"
+run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/a2.meso" --levels 1
 expect_rc 0 "bake sphere again"
-run "$MB" mesh -i "$DATA/torus.obj" -o "$T/torus.meso"
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/torus.meso" --levels 1
 expect_rc 0 "bake torus"
 have_draco=1
-run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/d.meso" --draco
+run "$MB" mesh -i "$DATA/sphere.obj" -o "$T/d.meso" --draco --levels 1
 if [ "$rc" -eq 5 ]; then have_draco=0; else expect_rc 0 "bake sphere --draco"; fi
 
 # ------------------------------------------------------------------- info

@@ -399,10 +399,13 @@ int main(int argc, char** argv)
     snprintf(tmp, sizeof tmp, "/tmp/meso_validate_objects.XXXXXX");
     assert(mkdtemp(tmp));
     char args[1024];
-    snprintf(args, sizeof args, "mesh -i '%s/sphere.obj'", data);
+    /* One level: the cases below mutate "the" MESH chunk. */
+    snprintf(args, sizeof args, "mesh -i '%s/sphere.obj' --levels 1", data);
     bake_file("mesh", args);
-    snprintf(args, sizeof args, "mesh -i '%s/sphere.obj' --draco", data);
+    snprintf(args, sizeof args, "mesh -i '%s/sphere.obj' --draco --levels 1", data);
     bake_file("draco", args);
+    snprintf(args, sizeof args, "mesh -i '%s/sphere.obj' --draco", data); /* levels of detail (LODS) */
+    bake_file("levels", args);
     /* One level: the cases below drop "the" MESH (a stand-in at lod 1 would stand in for it). */
     snprintf(args, sizeof args, "shell -i '%s/spot_uv.obj' --texture weave --dist-res 8x8x4 --levels 1", data);
     bake_file("shell", args);
@@ -416,9 +419,9 @@ int main(int argc, char** argv)
              data);
     bake_file("color", args);
 
-    const char* names[] = {"mesh", "draco", "shell", "frusta", "cells", "anim", "color"};
+    const char* names[] = {"mesh", "draco", "levels", "shell", "frusta", "cells", "anim", "color"};
     char path[600];
-    for (int i = 0; i < 7; i++) {
+    for (int i = 0; i < 8; i++) {
         snprintf(path, sizeof path, "%s/%s.meso", tmp, names[i]);
         expect_valid(path, names[i]);
     }

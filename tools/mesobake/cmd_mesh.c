@@ -1,4 +1,5 @@
-/* cmd_mesh.c — `mesobake mesh`: import a mesh as a MESH object. */
+/* cmd_mesh.c — `mesobake mesh`: import a mesh as a MESH object, with its
+ * levels of detail (bake/mesh_levels.c). */
 #include <stdio.h>
 #include <string.h>
 
@@ -17,8 +18,19 @@ static const char* const usage_mesh =
     "  -o, --output FILE       .meso file to write (atomically; a symbolic link is written\n"
     "                          through, a device, FIFO or directory refused)\n"
     "      --name NAME         object name (default: the input's base name, 31 bytes max)\n"
+    "Levels of detail:\n"
+    "      --levels auto|N     auto (default): simplified levels (meshoptimizer), each with half\n"
+    "                          the previous one's triangles, while a level keeps under 85 % of\n"
+    "                          them and the previous had more than 256, at most 8 levels; each\n"
+    "                          level's error (its largest distance to the finest surface, both\n"
+    "                          ways) is measured and stored (LODS). N (1..16): at most N levels;\n"
+    "                          1 = the finest only (no LODS chunk). Vertices split at uv or\n"
+    "                          normal seams are welded for the simplifier and keep their own\n"
+    "                          normals and uvs\n"
+    "  -j, --threads N         threads for measuring the errors (default: all cores); the\n"
+    "                          output does not depend on N\n"
     "Compression:\n"
-    "      --draco             store the mesh Draco-compressed (quantised)\n"
+    "      --draco             store the mesh (every level) Draco-compressed (quantised)\n"
     "      --draco-bits P,N,T  quantisation bits for positions (1..30), normals (2..30: Draco's\n"
     "                          octahedral normals need two) and uvs (1..30); default 14,10,12\n"
     "Reporting:\n"
@@ -83,6 +95,21 @@ int cmd_mesh(int argc, char** argv)
             memory_option(a, argv[++i], &o.common.max_memory, &bad);
             if (bad)
                 return bad;
+        } else if (!strcmp(a, "--levels") && has_val) {
+            long n;
+            const char* v = argv[++i];
+            if (!strcmp(v, "auto"))
+                o.levels = 0;
+            else if (meso_bake_parse_long(v, 1, MESO_BAKE_MESH_MAX_LEVELS, &n))
+                o.levels = (int)n;
+            else
+                return usage_error("--levels expects auto or a level count in 1..%d, got '%s'",
+                                   MESO_BAKE_MESH_MAX_LEVELS, v);
+        } else if ((!strcmp(a, "-j") || !strcmp(a, "--threads")) && has_val) {
+            long n;
+            if (!meso_bake_parse_long(argv[++i], 1, 256, &n))
+                return usage_error("-j expects a thread count in 1..256, got '%s'", argv[i]);
+            o.common.threads = (int)n;
         } else if (!strcmp(a, "--draco")) {
             o.draco = 1;
         } else if (!strcmp(a, "--draco-bits") && has_val) {
@@ -94,7 +121,8 @@ int cmd_mesh(int argc, char** argv)
         } else if (a[0] == '-' && a[1] != '\0') {
             int known = !strcmp(a, "-i") || !strcmp(a, "--input") || !strcmp(a, "-o") || !strcmp(a, "--output") ||
                         !strcmp(a, "--name") || !strcmp(a, "--report") || !strcmp(a, "--draco-bits") ||
-                        !strcmp(a, "--max-memory") || !strcmp(a, "--node");
+                        !strcmp(a, "--max-memory") || !strcmp(a, "--node") || !strcmp(a, "--levels") ||
+                        !strcmp(a, "-j") || !strcmp(a, "--threads");
             return usage_error(known ? "option '%s' needs a value" : "unrecognized option '%s'", a);
         } else {
             return usage_error("unexpected argument '%s'", a);

@@ -1,7 +1,7 @@
 /*
  * info.c — `mesoinspect info FILE [--format text|json|mini-json]`: header,
- * objects (OBJT, with MESH counts), every chunk with its recomputed CRC32C,
- * and the META and RPRT JSON. Schema: schema/info.schema.json.
+ * objects (OBJT, with MESH counts and levels of detail), every chunk with its
+ * recomputed CRC32C, and the META and RPRT JSON. Schema: schema/info.schema.json.
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,7 +13,8 @@
 static const char* const usage_info =
     "Usage: mesoinspect info FILE [--format text|json|mini-json]\n"
     "\n"
-    "Print the header, the objects (OBJT records with their MESH counts), every\n"
+    "Print the header, the objects (OBJT records with their MESH counts), each\n"
+    "object's levels of detail (lod, form, error, triangles, bytes, prefix bytes), every\n"
     "chunk (type, flags, object, lod, encoding, element type, offset, stored and\n"
     "decoded size, CRC32C recomputed: ok or BAD), the bake metadata (META) and\n"
     "the quality report (RPRT).\n"
@@ -124,6 +125,44 @@ static int mesh_stats(const meso_file* f, int32_t idx, mi_mesh_stats* st)
         return 0;
     const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)idx);
     return mi_mesh_header(mi_stored(f, (uint32_t)idx), (size_t)(c->stored_size < 64 ? c->stored_size : 64), st);
+}
+
+/* The levels of object `id`, finest first (meso_file_levels: one level for
+ * an object without LODS records); NULL with *n = 0 and a warning when the
+ * LODS chunk cannot be read. */
+static meso_level_info* object_levels(info_state* s, uint32_t id, uint32_t* n)
+{
+    *n = 0;
+    meso_error err = {0};
+    uint32_t count = 0;
+    meso_level_info* lv = NULL;
+    meso_result r = meso_file_levels(s->f, id, NULL, 0, &count, &err);
+    if (r == MESO_OK) {
+        lv = calloc(count ? count : 1, sizeof(*lv));
+        r = lv ? meso_file_levels(s->f, id, lv, count, &count, &err) : MESO_ERR_OUT_OF_MEMORY;
+    }
+    if (r != MESO_OK) {
+        char msg[400];
+        snprintf(msg, sizeof(msg), "levels of object %u: %s", id, err.message[0] ? err.message : meso_result_string(r));
+        warn(s, msg);
+        free(lv);
+        return NULL;
+    }
+    *n = count;
+    return lv;
+}
+
+static const char* form_name(uint16_t form)
+{
+    return form == MESO_LEVEL_NATIVE ? "native" : form == MESO_LEVEL_MESH ? "mesh" : "unknown";
+}
+
+/* Triangles of the MESH chunk level `lod` of `id` draws, or -1 when none. */
+static int64_t level_triangles(const meso_file* f, uint32_t id, uint16_t lod)
+{
+    mi_mesh_stats st;
+    return mesh_stats(f, meso_file_find_level(f, MESO_CHUNK_MESH, id, lod), &st) ? (int64_t)(st.index_count / 3)
+                                                                                : -1;
 }
 
 static cJSON* vec3(const float v[3])
@@ -261,6 +300,32 @@ static void print_text(info_state* s, const meso_object_record* objs, uint32_t n
         }
         mi_table_print(&t, 2);
         mi_table_free(&t);
+
+        /* Levels of detail: one line per object and level (FORMAT.md §7.10). */
+        printf("\nLevels:\n");
+        mi_table_init(&t, 7, (1u << 0) | (1u << 1) | (1u << 3) | (1u << 4) | (1u << 5) | (1u << 6));
+        const char* lhead[7] = {"object", "lod", "form", "error", "triangles", "bytes", "prefix_bytes"};
+        mi_table_row(&t, lhead);
+        for (uint32_t i = 0; i < nobj; ++i) {
+            uint32_t nl = 0;
+            meso_level_info* lv = object_levels(s, objs[i].id, &nl);
+            for (uint32_t k = 0; k < nl; ++k) {
+                char id[16], lod[16], err[32], tri[24] = "-", bytes[24], prefix[24];
+                snprintf(id, sizeof(id), "%u", objs[i].id);
+                snprintf(lod, sizeof(lod), "%u", (unsigned)lv[k].rec.lod);
+                snprintf(err, sizeof(err), "%.6g", (double)lv[k].rec.error);
+                const int64_t nt = level_triangles(f, objs[i].id, lv[k].rec.lod);
+                if (nt >= 0)
+                    snprintf(tri, sizeof(tri), "%lld", (long long)nt);
+                snprintf(bytes, sizeof(bytes), "%llu", (unsigned long long)lv[k].bytes);
+                snprintf(prefix, sizeof(prefix), "%llu", (unsigned long long)lv[k].prefix_bytes);
+                const char* row[7] = {id, lod, form_name(lv[k].rec.form), err, tri, bytes, prefix};
+                mi_table_row(&t, row);
+            }
+            free(lv);
+        }
+        mi_table_print(&t, 2);
+        mi_table_free(&t);
     }
 
     printf("\nChunks (%u):\n", n);
@@ -365,6 +430,26 @@ static cJSON* build_json(info_state* s, const meso_object_record* objs, uint32_t
         } else {
             cJSON_AddNullToObject(jo, "mesh");
         }
+        cJSON* ja = cJSON_AddArrayToObject(jo, "levels");
+        uint32_t nl = 0;
+        meso_level_info* lv = object_levels(s, o->id, &nl);
+        for (uint32_t k = 0; k < nl; ++k) {
+            cJSON* jl = cJSON_CreateObject();
+            cJSON_AddNumberToObject(jl, "lod", lv[k].rec.lod);
+            cJSON_AddStringToObject(jl, "form", form_name(lv[k].rec.form));
+            cJSON_AddNumberToObject(jl, "error", (double)lv[k].rec.error);
+            cJSON_AddNumberToObject(jl, "bytes", (double)lv[k].bytes);
+            cJSON_AddNumberToObject(jl, "prefix_bytes", (double)lv[k].prefix_bytes);
+            cJSON_AddItemToObject(jl, "bbox_min", vec3(lv[k].rec.bbox_min));
+            cJSON_AddItemToObject(jl, "bbox_max", vec3(lv[k].rec.bbox_max));
+            const int64_t nt = level_triangles(f, o->id, lv[k].rec.lod);
+            if (nt >= 0)
+                cJSON_AddNumberToObject(jl, "triangles", (double)nt);
+            else
+                cJSON_AddNullToObject(jl, "triangles");
+            cJSON_AddItemToArray(ja, jl);
+        }
+        free(lv);
         cJSON_AddItemToArray(oa, jo);
     }
 

@@ -1,0 +1,146 @@
+#!/bin/sh
+# mesh_levels_cli.sh MESOBAKE MESOINSPECT DATA_DIR
+#
+# `mesobake mesh --levels` and `mesoinspect info`'s levels (issue 14): the
+# bundled torus gets coarse levels (one MESH per lod, fewer triangles each,
+# errors non-decreasing from 0), `mesoinspect info --format json` lists them
+# with bytes and prefix_bytes equal to what the chunk listing of the same
+# file gives (recomputed here from offsets and stored sizes: FORMAT.md
+# §7.10), the text output has one line per level, --levels 1 writes no
+# LODS and one MESH, --levels N caps the count, Draco levels validate in
+# full, -j 1 and -j 2 give the same bytes, pack keeps the levels, bad
+# values exit 1.
+set -u
+MB=$1
+MI=$2
+DATA=$3
+. "$(dirname "$0")/check_lib.sh"
+
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/t.meso" --report "$T/r.json"
+if [ "$rc" -eq 5 ]; then
+    echo "SKIP: mesobake has no mesh import or meshoptimizer in this build" >&2
+    exit 77
+fi
+expect_rc 0 "bake torus with levels"
+run "$MI" validate --full "$T/t.meso"
+expect_rc 0 "levels validate in full"
+run "$MI" info --format json "$T/t.meso"
+expect_rc 0 "info --format json"
+cp "$T/out" "$T/info.json"
+NF=$(grep -c '^f ' "$DATA/torus.obj")
+run python3 - "$T/info.json" "$T/r.json" "$NF" "$(wc -c <"$T/t.meso")" <<'PY'
+import json, sys
+info = json.load(open(sys.argv[1])); rep = json.load(open(sys.argv[2]))
+nf = int(sys.argv[3]); size = int(sys.argv[4])
+def fail(msg): print(msg); sys.exit(1)
+obj = info["objects"][0]; lv = obj["levels"]; chunks = info["chunks"]
+if len(lv) < 3: fail("fewer than 3 levels: %d" % len(lv))
+pad = lambda c: (c["offset"] + c["stored_size"] + 63) // 64 * 64
+head = max(pad(c) for c in chunks if c["type"] in ("META", "OBJT", "LODS"))
+meshes = [c for c in chunks if c["type"] == "MESH"]
+if len(meshes) != len(lv): fail("%d MESH chunks for %d levels" % (len(meshes), len(lv)))
+prev_err, prev_tri = -1.0, None
+for L, l in enumerate(lv):
+    if l["lod"] != L or l["form"] != "native": fail("level %d: lod/form %r" % (L, l))
+    m = [c for c in meshes if c["lod"] == L]
+    if len(m) != 1: fail("level %d: %d MESH chunks" % (L, len(m)))
+    m = m[0]
+    if l["bytes"] != m["stored_size"]: fail("level %d bytes %d != MESH stored %d" % (L, l["bytes"], m["stored_size"]))
+    if l["prefix_bytes"] != max(head, pad(m)): fail("level %d prefix %d != %d" % (L, l["prefix_bytes"], max(head, pad(m))))
+    if l["prefix_bytes"] > size: fail("prefix beyond the file")
+    tri = m["mesh"]["triangle_count"]
+    if l["triangles"] != tri: fail("level %d triangles %r != chunk %d" % (L, l["triangles"], tri))
+    if L == 0 and (tri != nf or l["error"] != 0): fail("level 0: %d triangles (OBJ %d), error %g" % (tri, nf, l["error"]))
+    if prev_tri is not None and not tri < prev_tri: fail("triangles not decreasing at level %d" % L)
+    if l["error"] < prev_err: fail("error decreasing at level %d" % L)
+    if abs(l["error"] - rep["levels"][L]["error"]) > 1e-6 * max(1, l["error"]): fail("info and report errors differ")
+    if rep["levels"][L]["triangles"] != tri: fail("report triangles differ")
+    prev_err, prev_tri = l["error"], tri
+# coarse first in the file: each coarser level's prefix is shorter
+if not all(lv[i]["prefix_bytes"] > lv[i + 1]["prefix_bytes"] for i in range(len(lv) - 1)): fail("prefixes not nested")
+print(len(lv))
+PY
+expect_rc 0 "levels in info --format json against the chunk listing"
+NLEV=$(cat "$T/out")
+
+# text: one line per level under "Levels:"
+run "$MI" info "$T/t.meso"
+LINES=$(awk '/^Levels:/ { on = 1; next } on && /^$/ { exit } on && $1 == "1" { n++ } END { print n + 0 }' "$T/out")
+expect_eq "$LINES" "$NLEV" "text info: one line per level"
+
+# --levels 1: the finest only, no LODS
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/one.meso" --levels 1
+expect_rc 0 "--levels 1"
+run "$MI" info --format json "$T/one.meso"
+cp "$T/out" "$T/j.json"
+run python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+types = [c["type"] for c in d["chunks"]]
+assert "LODS" not in types and types.count("MESH") == 1, types
+assert len(d["objects"][0]["levels"]) == 1 and d["objects"][0]["levels"][0]["error"] == 0
+' "$T/j.json"
+expect_rc 0 "--levels 1: one MESH, no LODS, one level"
+
+# --levels 3 caps the chain
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/three.meso" --levels 3
+expect_rc 0 "--levels 3"
+run "$MI" info --format json "$T/three.meso"
+cp "$T/out" "$T/j.json"
+run python3 -c 'import json, sys; assert len(json.load(open(sys.argv[1]))["objects"][0]["levels"]) == 3' "$T/j.json"
+expect_rc 0 "--levels 3: three levels"
+
+# threads never change the bytes
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/j1.meso" -j 1
+expect_rc 0 "-j 1"
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/j2.meso" -j 2
+expect_rc 0 "-j 2"
+same_bytes "$T/j1.meso" "$T/j2.meso" "-j 1 and -j 2"
+same_bytes "$T/j1.meso" "$T/t.meso" "-j 1 and all cores"
+
+# Draco: every level compressed, validates in full
+run "$MB" mesh -i "$DATA/torus.obj" -o "$T/d.meso" --draco
+if [ "$rc" -ne 5 ]; then
+    expect_rc 0 "--draco with levels"
+    run "$MI" validate --full "$T/d.meso"
+    expect_rc 0 "Draco levels validate in full"
+    run "$MI" info --format json "$T/d.meso"
+    cp "$T/out" "$T/j.json"
+    run python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+m = [c for c in d["chunks"] if c["type"] == "MESH"]
+assert len(m) == len(d["objects"][0]["levels"]) >= 3 and all(c["encoding"] == 1 for c in m), m
+' "$T/j.json"
+    expect_rc 0 "--draco: one Draco MESH per level"
+fi
+
+# pack keeps each object's levels, renumbered, in one LODS chunk
+run "$MB" pack "$T/one.meso" "$T/t.meso" -o "$T/pack.meso"
+expect_rc 0 "pack a one-level and a levelled file"
+run "$MI" validate --full "$T/pack.meso"
+expect_rc 0 "packed levels validate in full"
+run "$MI" info --format json "$T/pack.meso"
+cp "$T/out" "$T/p.json"
+run python3 -c '
+import json, sys
+p = json.load(open(sys.argv[1])); t = json.load(open(sys.argv[2]))
+a, b = p["objects"]
+assert len(a["levels"]) == 1 and a["levels"][0]["error"] == 0, a["levels"]
+src = t["objects"][0]["levels"]
+assert [l["error"] for l in b["levels"]] == [l["error"] for l in src], (b["levels"], src)
+assert [l["triangles"] for l in b["levels"]] == [l["triangles"] for l in src]
+assert [l["bytes"] for l in b["levels"]] == [l["bytes"] for l in src]
+' "$T/p.json" "$T/info.json"
+expect_rc 0 "packed object 2 has the levels of the levelled input"
+
+# bad values
+for bad in 0 17 x -1; do
+    run "$MB" mesh -i "$DATA/torus.obj" -o "$T/bad.meso" --levels "$bad"
+    expect_rc 1 "--levels $bad"
+    expect_err "levels" "--levels $bad names the option"
+done
+[ ! -e "$T/bad.meso" ] && ok || fail "a refused command wrote its output"
+
+echo "mesh_levels_cli: $checks checks, $failures failures"
+[ "$failures" -eq 0 ]
