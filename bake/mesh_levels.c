@@ -13,6 +13,8 @@
  *   groups that cannot simplify);
  * - no level is made from one of at most 256 triangles, and there are at
  *   most 8 levels (level 0 included);
+ * - of the faces meshopt leaves twice on the same vertices the first stays
+ *   (drop_duplicate_faces);
  * - meshopt's own error target is left open (1.0 = the whole extent): the
  *   count is the target, the error is measured afterwards, not predicted.
  *   meshopt_SimplifyLockBorder is never passed: an open mesh's border is
@@ -37,6 +39,11 @@
  * (the triangle stays inside one uv chart), or without uvs whose normals
  * are closest to the triangle's face normal; the lowest index on ties.
  * `split_seams` = 1 skips the weld (the tests show what it changes).
+ *
+ * Draco (mesobake mesh --draco) encodes every level with the same bits. At
+ * 29-30 position or normal bits Draco 1.5.5's sequential encoder builds an
+ * entropy table over the whole quantised range for the sphere's coarse
+ * levels and takes minutes (level 0 does not); not fixed here.
  *
  * Normals of a coarse level: each vertex keeps its own (the level's
  * vertices are level 0's). Recomputing them from the coarse triangles would
@@ -244,12 +251,63 @@ static meso_result weld(const meso_mesh* m, int split_seams, float** wpos, uint3
     return MESO_OK;
 }
 
+/* A face's vertices in ascending order (either winding), and the face. */
+typedef struct face_key {
+    uint32_t v[3];
+    uint32_t face;
+} face_key;
+
+static int by_face_key(const void* a, const void* b)
+{
+    const face_key* x = a;
+    const face_key* y = b;
+    for (int k = 0; k < 3; ++k)
+        if (x->v[k] != y->v[k])
+            return x->v[k] < y->v[k] ? -1 : 1;
+    return x->face < y->face ? -1 : x->face > y->face ? 1 : 0;
+}
+
+/* meshopt_simplify (0.18) now and then leaves two faces on the same three
+ * vertices (measured on the armadillo: one such pair in 5 of its 7
+ * levels), of one winding or of both (a doubled sheet). The first of them
+ * stays, the others go: dropping both of a reversed pair instead removes
+ * what the sheet covers (the armadillo's level 7 error doubled, spot's
+ * level 5 too). Returns the new index count; kept faces keep their order. */
+static size_t drop_duplicate_faces(uint32_t* idx, size_t n, face_key* keys, uint8_t* keep)
+{
+    const size_t nt = n / 3;
+    for (size_t t = 0; t < nt; ++t) {
+        uint32_t a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2], x;
+        if (a > b)
+            x = a, a = b, b = x;
+        if (b > c)
+            x = b, b = c, c = x;
+        if (a > b)
+            x = a, a = b, b = x;
+        keys[t] = (face_key){{a, b, c}, (uint32_t)t};
+        keep[t] = 1;
+    }
+    qsort(keys, nt, sizeof(*keys), by_face_key); /* ties by face: the first comes first */
+    for (size_t i = 1; i < nt; ++i)
+        if (!memcmp(keys[i].v, keys[i - 1].v, sizeof(keys[i].v)))
+            keep[keys[i].face] = 0;
+    size_t out = 0;
+    for (size_t t = 0; t < nt; ++t)
+        if (keep[t]) {
+            memmove(idx + out, idx + 3 * t, 3 * sizeof(uint32_t));
+            out += 3;
+        }
+    return out;
+}
+
 static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_options* o, int max_levels,
                                meso_mesh_level** levels, uint32_t* count, meso_error* err)
 {
     float* wpos = NULL;
     uint32_t wcount = 0, *windex = NULL, *cur = NULL, *next = NULL, *corners = NULL, *scratch = NULL;
     weld_map wm = {NULL, NULL};
+    face_key* keys = NULL;
+    uint8_t* keep = NULL;
     meso_mesh_level* out = calloc((size_t)max_levels, sizeof(*out));
     uint32_t made = 0;
     const size_t ni = 3 * (size_t)m->triangle_count;
@@ -259,7 +317,9 @@ static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_option
         next = malloc(sizeof(uint32_t) * (ni ? ni : 1));
         corners = malloc(sizeof(uint32_t) * (ni ? ni : 1));
         scratch = malloc(sizeof(uint32_t) * (m->vertex_count ? m->vertex_count : 1));
-        r = cur && next && corners && scratch ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+        keys = malloc(sizeof(face_key) * (m->triangle_count ? m->triangle_count : 1));
+        keep = malloc(m->triangle_count ? m->triangle_count : 1);
+        r = cur && next && corners && scratch && keys && keep ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
     }
     if (r != MESO_OK) {
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "mesh levels: out of memory");
@@ -271,7 +331,8 @@ static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_option
     double running = 0;
     while ((int)made + 1 < max_levels && cur_n / 3 > MESO_MESH_LEVELS_MIN_TRIANGLES) {
         const size_t target = (cur_n / 3 / 2) * 3;
-        const size_t got = meshopt_simplify(next, cur, cur_n, wpos, wcount, 3 * sizeof(float), target, 1.0f, 0, NULL);
+        size_t got = meshopt_simplify(next, cur, cur_n, wpos, wcount, 3 * sizeof(float), target, 1.0f, 0, NULL);
+        got = drop_duplicate_faces(next, got, keys, keep);
         if (got == 0 || (double)got > 0.85 * (double)cur_n)
             break; /* terminal */
         for (size_t t = 0; t < got / 3; ++t)
@@ -300,6 +361,8 @@ done:
     free(next);
     free(corners);
     free(scratch);
+    free(keys);
+    free(keep);
     if (r != MESO_OK) {
         meso_mesh_levels_free(out, made);
         return r;
