@@ -35,7 +35,7 @@ nf = int(sys.argv[3]); size = int(sys.argv[4])
 def fail(msg): print(msg); sys.exit(1)
 obj = info["objects"][0]; lv = obj["levels"]; chunks = info["chunks"]
 if len(lv) < 3: fail("fewer than 3 levels: %d" % len(lv))
-pad = lambda c: (c["offset"] + c["stored_size"] + 63) // 64 * 64
+pad = lambda c: c["offset"] + c["stored_size"]  # where its stored bytes end (FORMAT.md 7.10)
 head = max(pad(c) for c in chunks if c["type"] in ("META", "OBJT", "LODS"))
 meshes = [c for c in chunks if c["type"] == "MESH"]
 if len(meshes) != len(lv): fail("%d MESH chunks for %d levels" % (len(meshes), len(lv)))

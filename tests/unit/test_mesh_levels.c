@@ -440,7 +440,7 @@ static void baked_file_levels(void)
     for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
         const meso_chunk_info* c = meso_file_chunk(f, i);
         if (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS) {
-            const uint64_t end = (c->offset + c->stored_size + 63) / 64 * 64;
+            const uint64_t end = c->offset + c->stored_size; /* stored bytes end (padding not needed) */
             head_end = end > head_end ? end : head_end;
         }
     }
@@ -455,7 +455,7 @@ static void baked_file_levels(void)
                 mc = c;
             }
         }
-        assert(mc);
+        const uint64_t end = mc->offset + mc->stored_size;
         const uint64_t end = (mc->offset + mc->stored_size + 63) / 64 * 64;
         assert(lv[L].bytes == mc->stored_size);
         assert(lv[L].prefix_bytes == (end > head_end ? end : head_end));
