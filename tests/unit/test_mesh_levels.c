@@ -455,8 +455,8 @@ static void baked_file_levels(void)
                 mc = c;
             }
         }
-        const uint64_t end = mc->offset + mc->stored_size;
-        const uint64_t end = (mc->offset + mc->stored_size + 63) / 64 * 64;
+        assert(mc);
+        const uint64_t end = mc->offset + mc->stored_size; /* stored bytes end (padding not needed) */
         assert(lv[L].bytes == mc->stored_size);
         assert(lv[L].prefix_bytes == (end > head_end ? end : head_end));
         assert(rep.level[L].mesh_bytes == mc->stored_size);
