@@ -142,9 +142,11 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
         return MESO_ERR_INVALID_ARG;
     if (!desc->allocator.alloc_fn != !desc->allocator.free_fn)
         return MESO_ERR_INVALID_ARG; /* both or neither (STYLE.md §5) */
-    if ((unsigned)desc->state_policy > MESO_STATE_HOST_OWNS) {
+    if ((unsigned)desc->state_policy > MESO_STATE_HOST_OWNS || (unsigned)desc->texture_filter >= MESO_FILTER_COUNT) {
         if (desc->log_fn)
-            desc->log_fn(desc->log_user, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_desc.state_policy");
+            desc->log_fn(desc->log_user, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
+                         (unsigned)desc->texture_filter >= MESO_FILTER_COUNT ? "meso_rt_desc.texture_filter"
+                                                                             : "meso_rt_desc.state_policy");
         return MESO_ERR_INVALID_ARG;
     }
 
@@ -186,6 +188,7 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
     rt->check_gl_errors = desc->check_gl_errors != 0;
     rt->budget = desc->memory_budget;
     rt->tau_scale = 1.0;
+    rt->mipmaps = desc->texture_filter == MESO_FILTER_MIPMAP;
     /* OpenGL ES says so at the start of GL_VERSION ("OpenGL ES 3.2 Mesa ..."). */
     rt->gles = version && strncmp((const char*)version, "OpenGL ES", 9) == 0;
     if (rt->gl_version < (rt->gles ? 32 : 33)) {

@@ -80,6 +80,21 @@ typedef enum meso_rt_state_policy {
                                (engines with their own state cache) */
 } meso_rt_state_policy;
 
+/* How the textures that give a shell its appearance are filtered
+ * (meso_rt_desc.texture_filter): height fields and volumes where they shade
+ * (normals, the occlusion term) and colour maps. The intersection search
+ * always reads the finest level (the distance maps bound that level only).
+ * Relief frusta and cells shade from level 0 either way (not yet filtered). */
+typedef enum meso_texture_filter {
+    MESO_FILTER_MIPMAP = 0, /* a full mip chain built at upload; shading samples the level of the pixel's
+                               footprint on the surface (trilinear), and the forward pass's built-in
+                               shading averages up to 4 x 4 taps over the footprint, so far objects do not
+                               shimmer */
+    MESO_FILTER_LEVEL0,     /* one level, bilinear: what the exact reference computes, and what the runtime
+                               did before mip levels (for comparisons; aliases when minified) */
+    MESO_FILTER_COUNT
+} meso_texture_filter;
+
 typedef struct meso_rt_desc {
     meso_gl_get_proc_fn gl_get_proc_address; /* required: glfwGetProcAddress, eglGetProcAddress, ... */
     meso_allocator allocator;                /* optional (default malloc/free) */
@@ -92,6 +107,9 @@ typedef struct meso_rt_desc {
                              glGetError; failed uploads are still found (from the texture or buffer
                              GL made) and refused [0] */
     int prepare;          /* 1: meso_rt_prepare(rt, 0) inside create, so no draw compiles a shader [0] */
+    meso_texture_filter texture_filter; /* appearance textures: mip levels or level 0 only; fixed for the
+                                           context's life (objects upload their levels at load)
+                                           [MESO_FILTER_MIPMAP] */
     /* Shading hook: GLSL 3.30 source (copied at create) that defines
      *
      *     vec3 meso_shade(vec3 albedo, vec3 n_world, vec3 p_world, vec3 v_world);

@@ -91,11 +91,67 @@ float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count)
     return f;
 }
 
-/* A new 2D or 3D texture of `dims` texels at level 0 (the only level),
- * `filter` both ways, repeating in s and t, clamped in r; the unit's
+/* Bytes of one texel of (format, type) as the uploads use them. */
+static size_t texel_bytes(GLenum format, GLenum type, int* components)
+{
+    *components = format == GL_RGBA ? 4 : format == GL_RG ? 2 : 1;
+    const size_t size = type == GL_UNSIGNED_BYTE ? 1 : type == GL_UNSIGNED_SHORT ? 2 : 4;
+    return size * (size_t)*components;
+}
+
+/* Levels 1.. of the bound texture from level 0's `data`, by the box filter
+ * on the host (rt_mip_box.c): one level at a time, each from the one above. */
+static meso_result upload_levels_host(meso_rt* rt, GLenum target, const uint32_t dims[3], int dims3, int levels,
+                                      GLint internal, GLenum format, GLenum type, const void* data)
+{
+    mesoi_gl* gl = &rt->gl;
+    int components = 1;
+    const size_t bytes = texel_bytes(format, type, &components);
+    uint32_t d1[3];
+    for (int k = 0; k < 3; ++k)
+        d1[k] = mesoi_mip_size(dims[k], 1); /* a 2D texture has dims[2] = 1 */
+    /* Level 1 is the largest: two buffers of its size, used in turn. */
+    const size_t n1 = (size_t)d1[0] * d1[1] * d1[2] * bytes;
+    uint8_t* buf = mesoi_rt_alloc(rt, 2 * n1);
+    if (!buf)
+        return MESO_ERR_OUT_OF_MEMORY;
+    const void* fine = data;
+    uint32_t fd[3] = {dims[0], dims[1], dims[2]};
+    for (int l = 1; l < levels; ++l) {
+        uint8_t* coarse = buf + (size_t)(l & 1) * n1;
+        if (!dims3)
+            fd[2] = 1; /* a 2D texture: the box stays in its plane */
+        mesoi_mip_box(fine, fd, components, type, coarse);
+        for (int k = 0; k < 3; ++k)
+            fd[k] = mesoi_mip_size(fd[k], 1);
+        if (dims3)
+            gl->TexImage3D(target, l, internal, (GLsizei)fd[0], (GLsizei)fd[1], (GLsizei)fd[2], 0, format, type,
+                           coarse);
+        else
+            gl->TexImage2D(target, l, internal, (GLsizei)fd[0], (GLsizei)fd[1], 0, format, type, coarse);
+        fine = coarse;
+    }
+    mesoi_rt_free(rt, buf);
+    return MESO_OK;
+}
+
+/* glGenerateMipmap takes the format: OpenGL (desktop) for every format the
+ * uploads use; OpenGL ES only for colour-renderable, filterable ones, which
+ * R8 and SRGB8_ALPHA8 are everywhere and R16_EXT, R16F, R32F are not (they
+ * need further extensions), so those are filtered on the host. */
+static int gl_generates(const meso_rt* rt, GLint internal)
+{
+    return !rt->gles || internal == GL_R8 || internal == GL_SRGB8_ALPHA8;
+}
+
+/* A new 2D or 3D texture of `dims` texels, repeating in s and t, clamped
+ * in r. Without `mips` (or under MESO_FILTER_LEVEL0): level 0 only,
+ * `filter` both ways. With: the full chain of levels down to 1 texel (by
+ * glGenerateMipmap, or by the host where GL may not), trilinear when
+ * minified (GL_LINEAR_MIPMAP_LINEAR), `filter` when magnified. The unit's
  * binding and the unpack state restored. */
 static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, GLint internal, GLenum format,
-                                GLenum type, GLint filter, const void* data, GLuint* out)
+                                GLenum type, GLint filter, int mips, const void* data, GLuint* out)
 {
     mesoi_gl* gl = &rt->gl;
     const GLenum target = dims3 ? GL_TEXTURE_3D : GL_TEXTURE_2D;
@@ -111,6 +167,7 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
             *out = 0;
             return MESO_ERR_GL;
         }
+    const int levels = mips && rt->mipmaps ? mesoi_mip_levels(dims, dims3) : 1;
     GLint prev_tex = 0;
     gl->GetIntegerv(dims3 ? GL_TEXTURE_BINDING_3D : GL_TEXTURE_BINDING_2D, &prev_tex);
     mesoi_unpack unpack;
@@ -122,27 +179,37 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
                        data);
     else
         gl->TexImage2D(target, 0, internal, (GLsizei)dims[0], (GLsizei)dims[1], 0, format, type, data);
-    gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
+    gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, levels > 1 ? GL_LINEAR_MIPMAP_LINEAR : filter);
     gl->TexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
     gl->TexParameteri(target, GL_TEXTURE_WRAP_S, GL_REPEAT);
     gl->TexParameteri(target, GL_TEXTURE_WRAP_T, GL_REPEAT);
     if (dims3)
         gl->TexParameteri(target, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
-    gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
+    gl->TexParameteri(target, GL_TEXTURE_MAX_LEVEL, levels - 1);
     /* A refused or failed TexImage leaves level 0 empty: that is the check,
      * so the host's GL error queue is left alone. */
-    GLint width = 0;
+    GLint width = 0, last = 1;
     gl->GetTexLevelParameteriv(target, 0, GL_TEXTURE_WIDTH, &width);
+    meso_result r = MESO_OK;
+    if (levels > 1 && width == (GLint)dims[0]) {
+        if (gl_generates(rt, internal))
+            gl->GenerateMipmap(target);
+        else
+            r = upload_levels_host(rt, target, dims, dims3, levels, internal, format, type, data);
+        gl->GetTexLevelParameteriv(target, levels - 1, GL_TEXTURE_WIDTH, &last);
+    }
     gl->BindTexture(target, (GLuint)prev_tex);
     mesoi_unpack_restore(rt, &unpack);
-    if (width != (GLint)dims[0]) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created", dims[0],
-                  dims[1], dims[2]);
+    if (r == MESO_OK && (width != (GLint)dims[0] || last != 1)) {
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created%s", dims[0],
+                  dims[1], dims[2], width == (GLint)dims[0] ? " (its mip levels)" : "");
+        r = MESO_ERR_GL;
+    }
+    if (r != MESO_OK) {
         gl->DeleteTextures(1, out);
         *out = 0;
-        return MESO_ERR_GL;
     }
-    return MESO_OK;
+    return r;
 }
 
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
@@ -165,14 +232,14 @@ meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dt
         data = converted;
     }
     const meso_result r = upload_image(rt, dims, dims3, (GLint)internal, GL_RED, type, nearest ? GL_NEAREST : GL_LINEAR,
-                                       data, out);
+                                       !nearest, data, out);
     mesoi_rt_free(rt, converted);
     return r;
 }
 
-meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], const void* data, GLuint* out)
+meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], int dims3, const void* data, GLuint* out)
 {
-    return upload_image(rt, dims, 1, GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, data, out);
+    return upload_image(rt, dims, dims3, GL_SRGB8_ALPHA8, GL_RGBA, GL_UNSIGNED_BYTE, GL_LINEAR, 1, data, out);
 }
 
 meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out)
@@ -392,12 +459,14 @@ GLuint mesoi_program_init(meso_rt* rt, mesoi_program* p, GLuint vs, GLuint fs, c
     const GLuint block = rt->hook ? gl->GetUniformBlockIndex(p->id, "MesoHook") : GL_INVALID_INDEX;
     if (block != GL_INVALID_INDEX)
         gl->UniformBlockBinding(p->id, block, rt->hook_binding);
-    if (sampler_count > 0) { /* units never change: set once */
+    const GLint mips = gl->GetUniformLocation(p->id, "u_mips");
+    if (sampler_count > 0 || mips >= 0) { /* units and the context's filter never change: set once */
         GLint prev = 0;
         gl->GetIntegerv(GL_CURRENT_PROGRAM, &prev);
         gl->UseProgram(p->id);
         for (int i = 0; i < sampler_count; ++i)
             gl->Uniform1i(gl->GetUniformLocation(p->id, samplers[i]), i);
+        gl->Uniform1i(mips, rt->mipmaps); /* raycast_common.glsl tex_level; -1: ignored */
         gl->UseProgram((GLuint)prev);
     }
     return p->id;

@@ -564,7 +564,7 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
     }
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
     if (r == MESO_OK && ri >= 0)
-        r = mesoi_upload_texture(rt, f, ri, 0, 0, &s->relief_tex);
+        r = mesoi_upload_texture(rt, f, ri, 0, 0, &s->relief_tex); /* level 0 is fetched (texelFetch): its mips go unused */
     if (r == MESO_OK && coli >= 0)
         r = upload_color(rt, f, id, coli, s);
     if (r == MESO_OK) {

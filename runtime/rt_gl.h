@@ -67,6 +67,7 @@
     X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                       \
     X(PFNGLTEXIMAGE3DPROC, TexImage3D)                                       \
     X(PFNGLTEXPARAMETERIPROC, TexParameteri)                                 \
+    X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                               \
     X(PFNGLPIXELSTOREIPROC, PixelStorei)                                     \
     X(PFNGLCULLFACEPROC, CullFace)                                           \
     X(PFNGLFRONTFACEPROC, FrontFace)                                         \

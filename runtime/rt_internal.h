@@ -66,6 +66,7 @@ struct meso_rt {
     int stats_ok; /* fragment shaders can count into a shader storage buffer (GL 4.3, or ES with fragment SSBOs) */
     meso_rt_state_policy state_policy;
     int check_gl_errors;
+    int mipmaps; /* meso_rt_desc.texture_filter is MESO_FILTER_MIPMAP: appearance textures get mip levels */
     /* Programs per meso_rt_pass (shaders/pass_out.glsl MESO_PASS), built on
      * first use or in meso_rt_prepare. */
     mesoi_program mesh_programs[MESO_PASS_COUNT];
@@ -174,17 +175,20 @@ int32_t mesoi_find_chunk(const meso_rt* rt, meso_file* f, uint32_t type, uint32_
  * allocation; logs and fails cleanly. */
 meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, size_t* size);
 /* Uploads a TX2D / TX3D / DIST / RELF chunk of one component as a 2D or 3D
- * texture, linear (or `nearest`) and repeating in s and t. */
+ * texture, linear (or `nearest`) and repeating in s and t; linear ones get
+ * their mip levels (trilinear) unless the context is MESO_FILTER_LEVEL0,
+ * nearest ones (distance maps: conservative for level 0 only) never. */
 meso_result mesoi_upload_texture(meso_rt* rt, meso_file* f, int32_t ci, int dims3, int nearest, GLuint* out);
 /* The same from texels in memory: a new texture (*out) of `dims` values
  * of `dtype` (U8, U16, or F32 when `nearest`); the unit's 2D/3D binding and
  * the unpack state are restored; MESO_ERR_GL (logged) when GL made no level 0. MESO_ERR_UNSUPPORTED for other types. */
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
                                 const void* data, GLuint* out);
-/* An RGBA8 colour chunk (COLR) as a 3D GL_SRGB8_ALPHA8 texture (fetches
- * are linear), filtered linearly at level 0, repeating in s and t and
- * clamped in r; bindings and unpack state restored as mesoi_upload_texels. */
-meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], const void* data, GLuint* out);
+/* An RGBA8 colour chunk (COLR) as a 3D (or, !dims3, 2D: dims[2] 1)
+ * GL_SRGB8_ALPHA8 texture (fetches are linear), filtered linearly with mip
+ * levels as mesoi_upload_texture, repeating in s and t and clamped in r;
+ * bindings and unpack state restored as mesoi_upload_texels. */
+meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], int dims3, const void* data, GLuint* out);
 /* A texture buffer over a new buffer object holding `size` bytes of `data`;
  * 0 (logged, *buf 0, nothing left behind) when GL could not store them. */
 GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf);
@@ -333,6 +337,17 @@ typedef struct mesoi_unpack {
 } mesoi_unpack;
 void mesoi_unpack_default(meso_rt* rt, mesoi_unpack* u);
 void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u);
+
+/* rt_mip_box.c: mip levels on the host (for formats glGenerateMipmap may
+ * not take). mip_size: an axis of `n` texels at `level` (halved, rounded
+ * down, at least 1); mip_levels: the levels of a full chain for `dims`
+ * (2D: dims[2] ignored); mip_box: the level below `fine` (fine_dims, 2D
+ * with fine_dims[2] = 1), `components` interleaved values of GL type
+ * `type` (GL_UNSIGNED_BYTE, GL_UNSIGNED_SHORT or GL_FLOAT) per texel, into
+ * `coarse` (mip_size(fine_dims[k], 1) texels a side). */
+uint32_t mesoi_mip_size(uint32_t n, int level);
+int mesoi_mip_levels(const uint32_t dims[3], int dims3);
+void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components, GLenum type, void* coarse);
 
 /* rt_mesh.c */
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions

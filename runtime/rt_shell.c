@@ -155,7 +155,7 @@ static meso_result load_color(meso_rt* rt, meso_file* f, uint32_t id, mesoi_shel
     size_t size = 0;
     r = mesoi_read_whole(rt, f, ci, &texels, &size);
     if (r == MESO_OK)
-        r = mesoi_upload_srgba8(rt, c->dims, texels, &s->color_tex);
+        r = mesoi_upload_srgba8(rt, c->dims, 1, texels, &s->color_tex);
     mesoi_rt_free(rt, texels);
     s->color_scale[0] = m.scale[0];
     s->color_scale[1] = m.scale[1];

@@ -62,8 +62,8 @@ static const mesoi_program* slice_program(meso_rt* rt, meso_rt_pass mpass, int p
     snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n#define SLICE_PASS %d\n#define MESO_SINGLE 1\n",
              mesoi_glsl_prelude(rt, 0),
              (int)MESO_SHELL_SLICES, pass);
-    const char* vs[5] = {head, mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_shell_texfn,
-                         mesoi_glsl_shell_slices_vert};
+    const char* vs[6] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_shell_common,
+                         mesoi_glsl_shell_texfn, mesoi_glsl_shell_slices_vert};
     const char* pre[4] = {mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
                           mesoi_glsl_shell_texfn};
     static const char* const names[MESO_PASS_COUNT][PASS_COUNT] = {
@@ -72,7 +72,7 @@ static const mesoi_program* slice_program(meso_rt* rt, meso_rt_pass mpass, int p
         {"slices none gbuffer"}};
     static const char* const samplers[SLICE_UNITS] = {"u_verts", "u_index", "u_height", "u_volume",
                                                       "u_dist",  "u_color", "u_first",  "u_second"};
-    const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "shell_slices_vert.glsl", .pre = pre,
+    const mesoi_program_src src = {.vs = vs, .vs_count = 6, .vs_file = "shell_slices_vert.glsl", .pre = pre,
                                    .pre_count = 4, .frag = mesoi_glsl_shell_slices_frag,
                                    .frag_file = "shell_slices_frag.glsl", .own_outputs = pass != PASS_NONE,
                                    .name = names[mpass][pass], .samplers = samplers, .sampler_count = SLICE_UNITS};

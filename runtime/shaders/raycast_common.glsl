@@ -69,6 +69,72 @@ void write_depth(vec3 p)
     gl_FragDepth = window_depth(p);
 }
 
+// --- texture footprints (meso_rt.h meso_texture_filter) -----------------------
+//
+// What shades a shell's hit (normals from height gradients, colours,
+// occlusion) reads the mip level of the pixel's footprint, chosen
+// explicitly (textureLod), because implicit derivatives are undefined in
+// the ray casters' non-uniform control flow (and a 2x2 quad's neighbours
+// may belong to another prism, or miss).
+//
+// The footprint is the ray differential of Igehy ("Tracing Ray
+// Differentials", SIGGRAPH 1999, sec. 3) carried to the surface the texture
+// is mapped on: the rays half a pixel either side (in x, in y) meet
+// the tangent plane of the surface the texture lies on (for shells the
+// layer through the hit, spanned by d/ds and d/dt' of the map), and the
+// offsets, taken back through the map's Jacobian, are the texture
+// coordinates' derivatives per pixel. The level
+// is then OpenGL's isotropic one (OpenGL 4.6 sec. 8.14.1: log2 of the longer
+// of the two, in texels), so a grazing view blurs along the shorter axis as
+// trilinear filtering does; the layer's plane, not the relief's own facet,
+// because the texture is a function over the layer (its filtered levels
+// are too) and the facet's normal is what the level is needed for.
+uniform int u_mips; // 1: MESO_FILTER_MIPMAP (levels uploaded); 0: level 0 only, as before
+
+// The derivatives per pixel (x, y) of texture coordinates c at the
+// object-space hit p, for J = d(object point)/dc there (3 x 3, invertible):
+// its first two columns span the surface the texture lies on (shells:
+// d/ds, d/dt', d/dw, shell_texfn.glsl tex_jacobian).
+// Where the ray through window point px meets the plane through p of
+// normal nrm, relative to p; a ray (nearly) parallel to it: a point
+// farther than any texture's extent, so the coarsest level.
+vec3 plane_offset(vec3 nrm, vec3 p, vec2 px, float far)
+{
+    vec3 o = unproject(px, u_depth_ndc.x);
+    vec3 d = unproject(px, u_depth_ndc.y) - o;
+    float den = dot(nrm, d);
+    if (abs(den) <= 1e-6 * length(nrm) * length(d))
+        return vec3(far, 0.0, 0.0);
+    return o + (dot(nrm, p - o) / den) * d - p;
+}
+
+// One column of tex_footprint: central differences half a pixel either
+// way along `axis` (so a mirrored view gets the mirrored footprint).
+vec3 tex_differential(mat3 J, mat3 Ji, vec3 nrm, vec3 p, vec2 axis)
+{
+    float far = 1e6 * length(J[0]);
+    return Ji * (plane_offset(nrm, p, gl_FragCoord.xy + 0.5 * axis, far) -
+                 plane_offset(nrm, p, gl_FragCoord.xy - 0.5 * axis, -far));
+}
+
+mat2x3 tex_footprint(mat3 J, vec3 p)
+{
+    vec3 nrm = cross(J[0], J[1]);
+    mat3 Ji = inverse(J);
+    return mat2x3(tex_differential(J, Ji, nrm, p, vec2(1.0, 0.0)), tex_differential(J, Ji, nrm, p, vec2(0.0, 1.0)));
+}
+
+// The level (>= 0) of footprint fp on a texture of `texels` (1 on unused
+// axes); 0 without mip levels.
+float tex_level(mat2x3 fp, vec3 texels)
+{
+    if (u_mips == 0)
+        return 0.0;
+    float rho = max(length(fp[0] * texels), length(fp[1] * texels));
+    return rho > 1.0 ? log2(rho) : 0.0;
+}
+
+
 // Counts the fragment and discards it on a miss.
 void finish(bool hit)
 {

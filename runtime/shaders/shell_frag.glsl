@@ -189,8 +189,9 @@ vec3 phi_curved(Prism P, vec3 q)
 
 // --- shading ---------------------------------------------------------------
 
-// n = J^-T g with J = dmap/d(s,t',w) by central differences in (u,v,w).
-vec3 mapped_normal(Prism P, vec3 q, vec3 g, bool curved)
+// J = dmap/d(s,t',w) (tex_jacobian) by central differences in (u,v,w);
+// the normal is J^-T g (jacobian_normal).
+mat3 map_jacobian(Prism P, vec3 q, bool curved)
 {
     const float h = 1e-3;
     vec3 ju, jv, jw;
@@ -203,7 +204,15 @@ vec3 mapped_normal(Prism P, vec3 q, vec3 g, bool curved)
         jv = (phi(P, q + vec3(0, h, 0)) - phi(P, q - vec3(0, h, 0))) / (2.0 * h);
         jw = (phi(P, q + vec3(0, 0, h)) - phi(P, q - vec3(0, 0, h))) / (2.0 * h);
     }
-    return jacobian_normal(P, ju, jv, jw, g);
+    return tex_jacobian(P, ju, jv, jw);
+}
+// The hit's colour, normal and depth term through pass_out.glsl's emit_obj,
+// shaded at the level of the pixel's footprint (shell_texfn.glsl
+// shading_at). J: tex_jacobian at the hit p, stw its texture point.
+void shade_hit(mat3 J, vec3 stw, vec3 p, vec3 rd)
+{
+    Shading h = shading_at(J, stw, p, rd);
+    emit_obj(h.color, h.albedo, occlusion(h.w), facing(h.n, rd), p, rd);
 }
 
 // --- rays (fragment_ray, write_depth, finish: raycast_common.glsl) --------
@@ -330,10 +339,7 @@ void main()
         vec3 q = mix(q0, q1, f);
         vec3 p = ro + (te + f * (tx - te)) * rd;
 #if MESO_PASS != MESO_PASS_DEPTH
-        mat3 J = M * inverse(Tm); // world = X0 + J (texture - C0)
-        vec3 n = transpose(inverse(J)) * tex_gradient(q);
-        vec3 alb = albedo_at(q);
-        emit_obj(shade(alb, n, q.z, rd), alb, occlusion(q.z), facing(n, rd), p, rd);
+        shade_hit(M * inverse(Tm), q, p, rd); // world = X0 + J (texture - C0)
 #endif
         write_depth(p);
     }
@@ -538,11 +544,7 @@ void main()
         }
         vec3 p = phi(P, hi);
 #if MESO_PASS != MESO_PASS_DEPTH
-        vec3 stw = vec3(tex_st(P, hi.xy), whi);
-        vec3 g = tex_gradient(stw);
-        vec3 n = mapped_normal(P, curved ? vec3(hi.xy, whi) : hi, g, curved);
-        vec3 alb = albedo_at(stw);
-        emit_obj(shade(alb, n, whi, rd), alb, occlusion(whi), facing(n, rd), p, rd);
+        shade_hit(map_jacobian(P, curved ? vec3(hi.xy, whi) : hi, curved), vec3(tex_st(P, hi.xy), whi), p, rd);
 #endif
         write_depth(p);
     }

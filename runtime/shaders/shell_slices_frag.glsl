@@ -79,15 +79,19 @@ float slice_alpha(vec3 stw)
     return 1.0;
 }
 
-// Object-space normal of the texture at stw, for the prism P: its smooth
-// mapping Phi is bilinear, so the Jacobian at q = (u, v, w) is exact.
-vec3 slice_normal(Prism P, vec3 q, vec3 stw)
+// The texture's shading at stw (shell_texfn.glsl shading_at: normal,
+// albedo, w at the footprint's level) for the prism P at q = (u, v, w),
+// object point p: its smooth mapping Phi is bilinear, so the Jacobian at q
+// is exact.
+Shading slice_shading(Prism P, vec3 q, vec3 stw, vec3 p, vec3 rd)
 {
     float t = 1.0 - q.x - q.y;
     vec3 ju = (P.b[1] - P.b[0]) + q.z * (P.n[1] - P.n[0]);
     vec3 jv = (P.b[2] - P.b[0]) + q.z * (P.n[2] - P.n[0]);
     vec3 jw = t * P.n[0] + q.x * P.n[1] + q.y * P.n[2];
-    return normalize(jacobian_normal(P, ju, jv, jw, tex_gradient(stw)));
+    Shading h = shading_at(tex_jacobian(P, ju, jv, jw), stw, p, rd);
+    h.n = normalize(h.n);
+    return h;
 }
 
 // (u, v, w) in P of texture coordinates stw (the inverse of tex_st).
@@ -119,12 +123,11 @@ void main()
         discard;
 #if SLICE_PASS == 0
 #if MESO_PASS != MESO_PASS_DEPTH
-    vec3 n = slice_normal(P, v_q, v_stw);
-    vec3 alb = albedo_at(v_stw);
-    emit_obj(shade(alb, n, v_stw.z, rd), alb, occlusion(v_stw.z), facing(n, rd), v_pos, rd);
+    Shading h = slice_shading(P, v_q, v_stw, v_pos, rd);
+    emit_obj(h.color, h.albedo, occlusion(h.w), facing(h.n, rd), v_pos, rd);
 #endif
 #else
-    vec3 col = shade(albedo_at(v_stw), slice_normal(P, v_q, v_stw), v_stw.z, rd);
+    vec3 col = slice_shading(P, v_q, v_stw, v_pos, rd).color;
     o_tex = vec4(v_stw, a);
     o_color = vec4(col, gl_FragCoord.z);
 #endif
@@ -142,12 +145,13 @@ void main()
         f = 1.0; // another chart
     vec3 t3 = mix(v_stw, T1.xyz, f);
     vec3 p3 = mix(v_pos, p1, f);
+    Shading h = slice_shading(P, prism_coords(P, t3), t3, p3, rd);
 #if SLICE_PASS == 2
-    vec3 n = mix(slice_normal(P, v_q, v_stw), slice_normal(P, prism_coords(P, T1.xyz), T1.xyz), f);
-#else
-    vec3 n = slice_normal(P, prism_coords(P, t3), t3);
+    // Normal interpolation: the two slices' normals mixed, shaded once.
+    h.n = mix(slice_shading(P, v_q, v_stw, p3, rd).n, slice_shading(P, prism_coords(P, T1.xyz), T1.xyz, p3, rd).n, f);
+    h.color = shade(h.albedo, h.n, h.w, rd);
 #endif
-    o_color = vec4(shade(albedo_at(t3), n, t3.z, rd), window_depth(p3));
+    o_color = vec4(h.color, window_depth(p3));
 #endif
 #endif
 }

@@ -177,7 +177,15 @@ int main(void)
     scene_w = W, scene_h = H;
     ctx c = {0};
     CHECK(test_fbo_create(&c.fbo, W, H));
-    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &c.rt) == MESO_OK);
+    /* MESO_FILTER_LEVEL0: the exact reference shades from level 0 (it has
+     * no texture levels), and these scenes minify their textures in places,
+     * where the default mip-mapped shading differs from it by design
+     * (measured: colour MAE 0.0166 and a normal error of 4.9 degrees mean on the height-field slices, over
+     * the tolerances, which bound the ray casting and mapping this test is
+     * about). The filtering is measured by tests/gl/test_rt_mips.c against
+     * a supersampled render. */
+    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .texture_filter = MESO_FILTER_LEVEL0},
+                         &c.rt) == MESO_OK);
     CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
     {
         void (*p)(void) = meso_egl_proc("glGetIntegerv");
