@@ -3,6 +3,7 @@
  * lod >= its own (checked against a brute-force scan of the TOC); its bytes
  * and prefix come from the TOC; the writer lays levels out coarse first; and
  * every broken rule is refused with its issue code (4921, 4922, 6401). */
+#undef NDEBUG /* the checks are asserts: they must run in release builds too */
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "sample.h"
