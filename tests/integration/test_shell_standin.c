@@ -11,6 +11,7 @@
 
 #include <string.h>
 
+#include "camera.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "shell_reference.h"
@@ -62,30 +63,6 @@ static double point_triangle(const double p[3], const float* a, const float* b, 
     return best;
 }
 
-static void look(double view[16], const double eye[3])
-{
-    /* Right-handed look-at towards the origin, up +y. */
-    double f[3] = {-eye[0], -eye[1], -eye[2]}, up[3] = {0, 1, 0}, s[3], u[3];
-    double fl = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-    for (int k = 0; k < 3; ++k)
-        f[k] /= fl;
-    s[0] = f[1] * up[2] - f[2] * up[1], s[1] = f[2] * up[0] - f[0] * up[2], s[2] = f[0] * up[1] - f[1] * up[0];
-    const double sl = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    for (int k = 0; k < 3; ++k)
-        s[k] /= sl;
-    u[0] = s[1] * f[2] - s[2] * f[1], u[1] = s[2] * f[0] - s[0] * f[2], u[2] = s[0] * f[1] - s[1] * f[0];
-    memset(view, 0, sizeof(double) * 16);
-    for (int k = 0; k < 3; ++k) {
-        view[4 * k + 0] = s[k];
-        view[4 * k + 1] = u[k];
-        view[4 * k + 2] = -f[k];
-    }
-    view[12] = -(s[0] * eye[0] + s[1] * eye[1] + s[2] * eye[2]);
-    view[13] = -(u[0] * eye[0] + u[1] * eye[1] + u[2] * eye[2]);
-    view[14] = f[0] * eye[0] + f[1] * eye[1] + f[2] * eye[2];
-    view[15] = 1;
-}
-
 static void check(const char* mesobake, const char* dir, const char* name, const char* args)
 {
     char path[512], cmd[10240];
@@ -118,10 +95,9 @@ static void check(const char* mesobake, const char* dir, const char* name, const
     static const double eyes[3][3] = {{0, 0.3, 3.2}, {2.6, 1.4, -1.2}, {-1.8, -2.2, 1.5}};
     for (int e = 0; e < 3; ++e) {
         meso_ref_view v = {.width = 40, .height = 40, .samples_per_prism = 256};
-        look(v.view, eyes[e]);
-        const double t = tan(0.5 * 40.0 * M_PI / 180.0), zn = 0.1, zf = 20;
-        v.proj[0] = 1 / t, v.proj[5] = 1 / t, v.proj[10] = -(zf + zn) / (zf - zn), v.proj[11] = -1;
-        v.proj[14] = -2 * zf * zn / (zf - zn);
+        static const double at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+        meso_camera_look_at_d(v.view, eyes[e], at, up);
+        meso_camera_perspective_d(v.proj, 40.0 * M_PI / 180.0, 1.0, 0.1, 20.0);
         meso_ref_image img;
         assert(meso_ref_render(&rs, &v, &img) == MESO_OK);
         for (int p = 0; p < v.width * v.height; ++p) {
