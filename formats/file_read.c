@@ -36,6 +36,7 @@ const char* meso_result_string(meso_result r)
     case MESO_ERR_GL: return "OpenGL error";
     case MESO_ERR_UNSUPPORTED: return "not supported";
     case MESO_ERR_NOT_FOUND: return "not found";
+    case MESO_ERR_PENDING: return "not arrived yet";
     default: return "unknown result";
     }
 }
@@ -139,11 +140,16 @@ meso_result mesoi_read_at(meso_file* f, uint64_t off, void* dst, size_t size, me
         }
         return MESO_OK;
     }
-    default:
-        if (f->io.read_fn(f->io.user, off, dst, size) != 0)
+    default: {
+        const int rc = f->io.read_fn(f->io.user, off, dst, size);
+        if (rc == MESO_IO_PENDING)
+            return mesoi_file_error(err, MESO_ERR_PENDING, MESO_ISSUE_IO_READ, off, -1,
+                                    "%zu bytes at offset %llu have not arrived yet", size, (unsigned long long)off);
+        if (rc != 0)
             return mesoi_file_error(err, MESO_ERR_IO, MESO_ISSUE_IO_READ, off, -1,
                                     "read callback failed for %zu bytes at offset %llu", size, (unsigned long long)off);
         return MESO_OK;
+    }
     }
 }
 

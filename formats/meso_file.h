@@ -56,6 +56,8 @@ typedef enum meso_result {
     MESO_ERR_GL,               /* (runtime) a GL call or entry point failed */
     MESO_ERR_UNSUPPORTED,      /* valid but not supported by this build (e.g. Draco without a decoder) */
     MESO_ERR_NOT_FOUND,        /* no chunk / object matches */
+    MESO_ERR_PENDING,          /* the host's reader has not received those bytes yet (MESO_IO_PENDING):
+                                  nothing is wrong, ask again later */
     MESO_RESULT_COUNT
 } meso_result;
 
@@ -163,8 +165,15 @@ typedef struct meso_chunk_info {
 
 typedef struct meso_file meso_file;
 
-/* Host read callback (engine virtual file systems): read exactly `size`
- * bytes at `offset` into `dst`. Return 0 on success, non-zero on failure. */
+/* Host read callback (engine virtual file systems, network streams): read
+ * exactly `size` bytes at `offset` into `dst`. Return 0 on success,
+ * MESO_IO_PENDING when those bytes have not arrived yet (a stream still
+ * downloading: the read gives MESO_ERR_PENDING and may be asked again
+ * later), any other non-zero value on failure (MESO_ERR_IO). Reads of
+ * different chunks may be asked from several threads at once when the host
+ * runs libmeso's stream requests on worker threads (meso_rt_stream_run);
+ * the path, mmap and memory readers allow that. */
+#define MESO_IO_PENDING (-11)
 typedef struct meso_io {
     int (*read_fn)(void* user, uint64_t offset, void* dst, size_t size);
     uint64_t size; /* total size of the stream in bytes; required */

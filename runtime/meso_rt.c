@@ -187,6 +187,7 @@ meso_result meso_rt_create(const meso_rt_desc* desc, meso_rt** out)
     rt->state_policy = desc->state_policy;
     rt->check_gl_errors = desc->check_gl_errors != 0;
     rt->budget = desc->memory_budget;
+    rt->stream_requests = desc->stream_requests != 0;
     rt->tau_scale = 1.0;
     rt->mipmaps = desc->texture_filter == MESO_FILTER_MIPMAP;
     /* OpenGL ES says so at the start of GL_VERSION ("OpenGL ES 3.2 Mesa ..."). */
@@ -233,6 +234,7 @@ void meso_rt_destroy(meso_rt* rt)
     if (!rt)
         return;
     mesoi_objects_destroy(rt);
+    mesoi_stream_destroy(rt); /* requests of released objects the host held */
     /* A deleted program stays current (MESO_STATE_HOST_OWNS leaves the last
      * one bound) and its name turns invalid: unbind ours first, so the
      * host's next glGetIntegerv(GL_CURRENT_PROGRAM) / glUseProgram pair

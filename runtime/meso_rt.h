@@ -159,6 +159,13 @@ typedef struct meso_rt_desc {
      * the levels of the lower factor would fit. Each object's coarsest
      * level always stays. 0: no budget [0] */
     uint64_t memory_budget;
+    /* Streaming of levelled objects (meso_rt_stream_take). 0: a draw that
+     * picks a level not uploaded yet reads, decodes and uploads it itself,
+     * on the calling (GL) thread. 1: it only requests it and draws the best
+     * level uploaded (nothing while none is); the host runs the requests'
+     * reads and decodes on any thread and uploads them at a byte budget per
+     * frame, so no draw waits on the file [0] */
+    uint32_t stream_requests;
 } meso_rt_desc;
 
 typedef struct meso_rt meso_rt;
@@ -229,11 +236,13 @@ MESO_API meso_result meso_rt_load_object(meso_rt* rt, meso_file* file, uint32_t 
  * the coarsest whose error, projected at the level's nearest bound, is at
  * most the draw's `pixel_error` (meso_rt_draw_desc). Only the coarsest
  * level is uploaded here; a finer one is read from `file` and uploaded the
- * first time a draw picks it. When that read fails (a stream that has not
- * delivered those bytes yet, a damaged chunk: logged once, not retried)
- * the draw takes the finest coarser level it can read, else the nearest
- * finer one uploaded before, so
- * `file` must stay open until the object is released. A mesh stand-in
+ * first time a draw picks it (or, with meso_rt_desc.stream_requests, is
+ * requested: >>streaming below). While a level cannot be had (bytes a
+ * stream has not delivered yet, MESO_IO_PENDING: asked again on a later
+ * frame; a damaged chunk: logged once, not retried) the draw takes the
+ * finest coarser level it can read, else the nearest finer one uploaded
+ * before, else draws nothing; so `file` must stay open until the object
+ * is released and its taken stream requests are given back. A mesh stand-in
  * level (form MESO_LEVEL_MESH) is drawn as a mesh. A file without levels
  * gives one level (the object as meso_rt_load_object loads it). The
  * kind-specific calls (meso_rt_shell_*, meso_rt_frusta_*) do not apply to
@@ -249,7 +258,8 @@ typedef struct meso_rt_levels_state {
     uint32_t resident_mask;   /* bit L: level L is uploaded (levels >= 32 are not reported) */
     int32_t last_drawn;       /* lod of the last draw, -1 before the first */
     uint64_t bytes_resident;  /* sum of the uploaded levels' chunk bytes (meso_level_info.bytes) */
-    uint64_t bytes_read;      /* every byte read from the file for this object, uploads that failed included */
+    uint64_t bytes_read;      /* every byte read from the file for this object, uploads that failed included
+                                 (reads that found their bytes not arrived yet are not counted) */
 } meso_rt_levels_state;
 MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object obj, meso_rt_levels_state* out);
 
@@ -270,6 +280,53 @@ typedef struct meso_rt_budget_state {
     uint64_t evictions;       /* levels evicted so far */
 } meso_rt_budget_state;
 MESO_API void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* out);
+
+/* >>streaming ------------------------------------------------------------- */
+
+/* Levelled objects in a file that is still arriving. A meso_io reader
+ * answers MESO_IO_PENDING for bytes it has not received; the level is then
+ * asked for again on a later frame (a failure of any other kind is logged
+ * once and not retried). meso_rt_load_object_levels succeeds once the
+ * object's record and level table have arrived, and the object draws as
+ * soon as its coarsest level has: until then its draws draw nothing and
+ * return MESO_OK (meso_rt_levels_state.resident_mask is 0).
+ *
+ * With meso_rt_desc.stream_requests = 1, no draw reads the file. A draw
+ * that picks a level not uploaded yet files a request for it (one per
+ * level) and draws the best uploaded level meanwhile. The host moves the
+ * requests through three steps each frame:
+ *
+ *   n = meso_rt_stream_take(rt, reqs, 16);          GL thread
+ *   for each: meso_rt_stream_run(reqs[i]);           any thread, in parallel
+ *   meso_rt_stream_give(rt, reqs, n);                GL thread
+ *   meso_rt_stream_upload(rt, 4 << 20);              GL thread, bytes per frame
+ *
+ * `run` reads, checks (CRC, the kind's checks) and decodes the level's
+ * chunks into memory with the context's allocator (which must then be
+ * thread-safe, as malloc is); it touches neither GL nor the context.
+ * `upload` turns decoded levels into GL objects, oldest first, until
+ * `max_bytes` of chunk bytes are uploaded (at least one level per call).
+ * A request whose object is released meanwhile is freed when given back.
+ * Every taken request must be given back before meso_rt_destroy. */
+typedef struct meso_rt_request meso_rt_request;
+/* Up to `max` requests no one has taken, the oldest first; returns how many. */
+MESO_API uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max);
+/* Reads and decodes one taken request. MESO_OK; MESO_ERR_PENDING when its
+ * bytes have not all arrived (give it back: it is taken again later);
+ * another error when they are bad (given back, the level is marked failed
+ * and not asked for again). */
+MESO_API meso_result meso_rt_stream_run(meso_rt_request* req);
+/* Gives taken requests back, run or not (a request not run is taken again). */
+MESO_API void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n);
+/* Uploads decoded requests until `max_bytes` chunk bytes are uploaded (0:
+ * all). Returns the chunk bytes uploaded. */
+MESO_API uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes);
+/* Requests waiting to be taken, taken, and decoded waiting for upload. */
+typedef struct meso_rt_stream_state {
+    uint32_t waiting, taken, decoded;
+    uint64_t uploads;        /* levels uploaded through requests so far */
+} meso_rt_stream_state;
+MESO_API void meso_rt_stream_state_get(const meso_rt* rt, meso_rt_stream_state* out);
 
 /* Free the object's GL resources. Stale or zero handles are ignored. */
 MESO_API void meso_rt_release_object(meso_rt* rt, meso_rt_object obj);

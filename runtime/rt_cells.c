@@ -134,12 +134,19 @@ static meso_result upload_chunk_3d(meso_rt* rt, meso_file* f, int32_t ci, GLint 
 static meso_result read_grid(meso_rt* rt, meso_file* f, uint32_t id, int32_t ci, mesoi_cells* c)
 {
     uint8_t rec[MESO_CELL_RECORD_SIZE];
-    meso_error err;
-    meso_result r = meso_file_read_chunk(f, (uint32_t)ci, rec, sizeof(rec), &err);
-    if (r != MESO_OK) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
-        return r;
+    void* data = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size); /* streamed: handed over (rt_stream.c) */
+    if (r == MESO_OK && size != sizeof rec) { /* the cells check refuses it first (6301..) */
+        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: CELL has %zu bytes, not %zu", id,
+                  size, sizeof rec);
+        r = MESO_ERR_CORRUPT;
     }
+    if (r == MESO_OK)
+        memcpy(rec, data, sizeof rec);
+    mesoi_rt_free(rt, data);
+    if (r != MESO_OK)
+        return r;
     uint64_t T = 1;
     for (int a = 0; a < 3; ++a) {
         c->tiles[a] = mesoi_ld32(rec + MESO_CELL_OFF_TILES + 4 * a);
@@ -174,7 +181,8 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     /* The check reads TILE and MEMB anyway; they are uploaded from its copies. */
     uint8_t *tile = NULL, *memb = NULL;
     meso_error err;
-    meso_result r = mesoi_file_check_cells_keep(f, id, &tile, &memb, &err);
+    meso_result r = mesoi_stream_take_cells(rt, &tile, &memb) ? MESO_OK /* checked off the GL thread */
+                                                                 : mesoi_file_check_cells_keep(f, id, &tile, &memb, &err);
     if (r != MESO_OK) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
         return r;

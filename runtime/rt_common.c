@@ -43,13 +43,20 @@ meso_result mesoi_read_whole(meso_rt* rt, meso_file* f, int32_t ci, void** out, 
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "chunk %d too large for this platform", ci);
         return MESO_ERR_UNSUPPORTED;
     }
-    void* data = mesoi_rt_alloc(rt, (size_t)c->decoded_size);
+    void* data = mesoi_stream_take_chunk(rt, ci); /* a streamed level: decoded already (rt_stream.c) */
+    if (data) {
+        *out = data;
+        *size = (size_t)c->decoded_size;
+        return MESO_OK;
+    }
+    data = mesoi_rt_alloc(rt, (size_t)c->decoded_size);
     if (!data)
         return MESO_ERR_OUT_OF_MEMORY;
     meso_error err;
     meso_result r = meso_file_read_chunk(f, (uint32_t)ci, data, (size_t)c->decoded_size, &err);
     if (r != MESO_OK) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
+        if (r != MESO_ERR_PENDING) /* not arrived yet is not an error */
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
         mesoi_rt_free(rt, data);
         return r;
     }

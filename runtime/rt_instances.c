@@ -171,7 +171,9 @@ meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc*
         return MESO_ERR_INVALID_ARG;
     }
     meso_result r = mesoi_levels_pick(rt, h, d, NULL, 0, &h);
-    return r == MESO_OK ? draw_kind(rt, mesoi_lookup(rt, h), d, NULL, 0) : r;
+    if (r != MESO_OK || h.id == 0)
+        return r; /* h.id 0: no level has arrived yet */
+    return draw_kind(rt, mesoi_lookup(rt, h), d, NULL, 0);
 }
 
 meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d,
@@ -185,7 +187,9 @@ meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_
         return MESO_ERR_INVALID_ARG;
     }
     meso_result r = mesoi_levels_pick(rt, h, d, instances, count, &h);
-    return r == MESO_OK ? draw_kind(rt, mesoi_lookup(rt, h), d, instances, count) : r;
+    if (r != MESO_OK || h.id == 0)
+        return r; /* h.id 0: no level has arrived yet */
+    return draw_kind(rt, mesoi_lookup(rt, h), d, instances, count);
 }
 
 /* >>lists -------------------------------------------------------------------- */

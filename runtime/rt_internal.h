@@ -94,6 +94,12 @@ struct meso_rt {
     /* The memory budget of levelled objects (rt_levels.c). */
     uint64_t budget, bytes_resident, bytes_wanted, frame, evictions;
     double tau_scale;
+    /* Streaming (rt_stream.c): meso_rt_desc.stream_requests, every request
+     * not freed (oldest first), the one being uploaded, levels uploaded. */
+    int stream_requests;
+    struct meso_rt_request* requests;
+    struct meso_rt_request* prefetch;
+    uint64_t stream_uploads;
     mesoi_object* objects;
     uint32_t object_capacity;
 };
@@ -389,12 +395,48 @@ meso_result mesoi_find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_objec
 int mesoi_kind_drawn(uint32_t kind); /* a kind this runtime draws */
 /* A live slot with no GL resources (a levelled object's own handle). */
 meso_result mesoi_empty_slot(meso_rt* rt, const meso_object_record* rec, meso_rt_object* out);
+/* rt_levels.c: a levelled object's levels (meso_rt_load_object_levels). */
+typedef struct mesoi_levels {
+    meso_file* file;
+    meso_object_record rec;
+    uint32_t count;
+    meso_level_info* info;   /* [count], finest first */
+    meso_rt_object* slot;    /* [count]: the uploaded level's slot, id 0 when not uploaded */
+    uint8_t* failed;         /* [count]: its upload failed (not retried) */
+    uint64_t* used;          /* [count]: the frame a draw last used it (rt->frame), for eviction */
+    uint64_t* pending;       /* [count]: the frame (rt->frame + 1) its bytes last had not arrived; asked again
+                                on a later frame */
+    struct meso_rt_request** request; /* [count]: its stream request (rt_stream.c), NULL when none */
+    int32_t last_drawn;
+    uint64_t bytes_read;
+    uint64_t want_frame;     /* the frame want_now/want_lower belong to */
+    uint32_t want_now, want_lower; /* the finest level this frame's draws wanted, at the budget's factor and
+                                      at the next lower one */
+} mesoi_levels;
+/* Upload level l now (reading the file, or the stream request being
+ * uploaded, rt->prefetch); MESO_ERR_PENDING when its bytes have not arrived
+ * (not remembered), another error is remembered in lv->failed. */
+meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l);
+/* Room for level l under the memory budget, evicting levels this frame
+ * does not use; 0 when it cannot be made. */
+int mesoi_levels_make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l);
 /* rt_levels.c: the level of a levelled object `o` the draw picks (uploaded
  * on first use); *out is `o` itself for a plain object. `o` may move (the
  * slot table can grow): use *out. */
 meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                               uint32_t count, meso_rt_object* out);
 void mesoi_levels_release(meso_rt* rt, mesoi_object* o);
+/* rt_stream.c: file a request for level l (once); detach a released
+ * object's requests; free every request (meso_rt_destroy); the chunk
+ * `ci` of the request being uploaded (rt->prefetch), handed over (the
+ * caller frees it with mesoi_rt_free); NULL when it has none. */
+meso_result mesoi_stream_request(meso_rt* rt, mesoi_levels* lv, uint32_t l);
+void mesoi_stream_detach(meso_rt* rt, mesoi_levels* lv);
+void mesoi_stream_destroy(meso_rt* rt);
+void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci);
+/* The CELLS check the request being uploaded ran (its TILE and MEMB copies,
+ * the file's allocator's); 0 when there is none. */
+int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb);
 
 /* meso_rt.c */
 void* mesoi_rt_alloc(meso_rt* rt, size_t size);

@@ -26,21 +26,6 @@
 #include <math.h>
 #include <string.h>
 
-typedef struct mesoi_levels {
-    meso_file* file;
-    meso_object_record rec;
-    uint32_t count;
-    meso_level_info* info;   /* [count], finest first */
-    meso_rt_object* slot;    /* [count]: the uploaded level's slot, id 0 when not uploaded */
-    uint8_t* failed;         /* [count]: its upload failed (not retried) */
-    uint64_t* used;          /* [count]: the frame a draw last used it (rt->frame), for eviction */
-    int32_t last_drawn;
-    uint64_t bytes_read;
-    uint64_t want_frame;     /* the frame want_now/want_lower belong to */
-    uint32_t want_now, want_lower; /* the finest level this frame's draws wanted, at the budget's factor and
-                                      at the next lower one */
-} mesoi_levels;
-
 static void levels_free(meso_rt* rt, mesoi_levels* lv)
 {
     if (!lv)
@@ -49,23 +34,32 @@ static void levels_free(meso_rt* rt, mesoi_levels* lv)
     mesoi_rt_free(rt, lv->slot);
     mesoi_rt_free(rt, lv->failed);
     mesoi_rt_free(rt, lv->used);
+    mesoi_rt_free(rt, lv->pending);
+    mesoi_rt_free(rt, lv->request);
     mesoi_rt_free(rt, lv);
 }
 
-/* Upload level `l` into its own slot; a failure is remembered (a file that
- * cannot give the level now will not give it on the next frame either). */
-static meso_result upload_level(meso_rt* rt, mesoi_levels* lv, uint32_t l)
+/* Upload level `l` into its own slot. A failure is remembered (a file that
+ * cannot give the level now will not give it on the next frame either);
+ * bytes that have not arrived yet are not: the level is asked for again
+ * on a later frame. */
+meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l)
 {
     if (lv->slot[l].id)
         return MESO_OK;
     if (lv->failed[l])
         return MESO_ERR_NOT_FOUND;
+    if (lv->pending[l] == rt->frame + 1 && !rt->prefetch)
+        return MESO_ERR_PENDING; /* asked already this frame */
     const uint32_t kind = lv->info[l].rec.form == MESO_LEVEL_MESH ? (uint32_t)MESO_OBJECT_MESH : lv->rec.kind;
-    lv->bytes_read += lv->info[l].bytes;
     const meso_result r = mesoi_load_slot(rt, lv->file, &lv->rec, kind, lv->info[l].rec.lod, &lv->slot[l]);
-    if (r == MESO_OK)
+    if (!rt->prefetch && r != MESO_ERR_PENDING)
+        lv->bytes_read += lv->info[l].bytes; /* a request counts its own reads */
+    if (r == MESO_OK) {
         rt->bytes_resident += lv->info[l].bytes;
-    if (r != MESO_OK) {
+    } else if (r == MESO_ERR_PENDING) {
+        lv->pending[l] = rt->frame + 1;
+    } else {
         lv->failed[l] = 1;
         mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
                   "object %u: level %u could not be uploaded; drawing the nearest level uploaded", lv->rec.id, l);
@@ -98,26 +92,34 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         r = MESO_ERR_UNSUPPORTED;
     }
     meso_error err;
-    if (r == MESO_OK && (r = meso_file_levels(f, object_id, NULL, 0, &lv->count, &err)) != MESO_OK)
+    if (r == MESO_OK && (r = meso_file_levels(f, object_id, NULL, 0, &lv->count, &err)) != MESO_OK &&
+        r != MESO_ERR_PENDING)
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
     if (r == MESO_OK) {
         lv->info = mesoi_rt_alloc(rt, sizeof(meso_level_info) * lv->count);
         lv->slot = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * lv->count);
         lv->failed = mesoi_rt_alloc(rt, lv->count);
         lv->used = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
-        if (!lv->info || !lv->slot || !lv->failed || !lv->used)
+        lv->pending = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
+        lv->request = mesoi_rt_alloc(rt, sizeof(struct meso_rt_request*) * lv->count);
+        if (!lv->info || !lv->slot || !lv->failed || !lv->used || !lv->pending || !lv->request)
             r = MESO_ERR_OUT_OF_MEMORY;
     }
     if (r == MESO_OK) {
         memset(lv->slot, 0, sizeof(meso_rt_object) * lv->count);
         memset(lv->failed, 0, lv->count);
         memset(lv->used, 0, sizeof(uint64_t) * lv->count);
+        memset(lv->pending, 0, sizeof(uint64_t) * lv->count);
+        memset(lv->request, 0, sizeof(struct meso_rt_request*) * lv->count);
         if ((r = meso_file_levels(f, object_id, lv->info, lv->count, &lv->count, &err)) != MESO_OK)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
     }
-    /* The coarsest level now, so that every draw has something to show. */
-    if (r == MESO_OK)
-        r = upload_level(rt, lv, lv->count - 1);
+    /* The coarsest level now, so that every draw has something to show; a
+     * stream that has not delivered it yet shows the object once it has. */
+    if (r == MESO_OK && rt->stream_requests)
+        r = mesoi_stream_request(rt, lv, lv->count - 1);
+    else if (r == MESO_OK && (r = mesoi_levels_upload(rt, lv, lv->count - 1)) == MESO_ERR_PENDING)
+        r = MESO_OK;
     meso_rt_object parent = {0};
     if (r == MESO_OK)
         r = mesoi_empty_slot(rt, &lv->rec, &parent);
@@ -138,6 +140,7 @@ void mesoi_levels_release(meso_rt* rt, mesoi_object* o)
     if (!lv)
         return;
     o->levels = NULL;
+    mesoi_stream_detach(rt, lv);
     for (uint32_t l = 0; l < lv->count; ++l)
         if (lv->slot[l].id) {
             meso_rt_release_object(rt, lv->slot[l]);
@@ -235,9 +238,7 @@ static int evict_one(meso_rt* rt)
     return 1;
 }
 
-/* Room for level l of lv under the budget, evicting what this frame does
- * not use; 0 when it cannot be made. */
-static int make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l)
+int mesoi_levels_make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l)
 {
     if (!rt->budget)
         return 1;
@@ -314,16 +315,33 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         lv->want_lower = lower < lv->want_lower ? lower : lv->want_lower;
     }
     /* The level wanted, else the finest coarser one that can be had, else
-     * the nearest finer one uploaded before. */
+     * the nearest finer one uploaded before. With stream requests, a level
+     * not uploaded is requested and never read here. */
     int32_t got = -1;
-    for (uint32_t l = want; got < 0 && l < lv->count; ++l)
-        if ((lv->slot[l].id || make_room(rt, lv, l)) && upload_level(rt, lv, l) == MESO_OK)
+    int waiting = 0; /* some level is still arriving */
+    for (uint32_t l = want; got < 0 && l < lv->count; ++l) {
+        if (lv->slot[l].id) {
             got = (int32_t)l;
+        } else if (rt->stream_requests) {
+            if (!lv->failed[l]) {
+                waiting = 1;
+                if (l == want && mesoi_stream_request(rt, lv, l) != MESO_OK)
+                    return MESO_ERR_OUT_OF_MEMORY;
+            }
+        } else if (mesoi_levels_make_room(rt, lv, l)) {
+            const meso_result r = mesoi_levels_upload(rt, lv, l);
+            if (r == MESO_OK)
+                got = (int32_t)l;
+            waiting |= r == MESO_ERR_PENDING;
+        }
+    }
     for (uint32_t l = want; got < 0 && l-- > 0;)
         if (lv->slot[l].id)
             got = (int32_t)l;
-    if (got < 0)
-        return MESO_ERR_NOT_FOUND;
+    if (got < 0) {
+        out->id = 0; /* nothing has arrived yet: nothing to draw */
+        return waiting ? MESO_OK : MESO_ERR_NOT_FOUND;
+    }
     lv->last_drawn = got;
     lv->used[got] = rt->frame + 1;
     *out = lv->slot[got];

@@ -56,7 +56,8 @@ meso_result mesoi_find_record(meso_rt* rt, meso_file* f, uint32_t id, meso_objec
     meso_error err;
     meso_result r = meso_file_objects(f, batch, 16, &count, &err);
     if (r != MESO_OK) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
+        if (r != MESO_ERR_PENDING) /* not arrived yet: the result says so, nothing is wrong */
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
         return r;
     }
     if (count > 16) {

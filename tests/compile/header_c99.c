@@ -13,7 +13,7 @@ int main(void)
     bad |= MESO_FORMAT_MAJOR != 1;
     bad |= MESO_HDR_SIZE != 64 || MESO_TOC_ENTRY_SIZE != 64 || MESO_ALIGN != 64;
     bad |= MESO_CHUNK_MESH != 0x4853454Du; /* 'M' 'E' 'S' 'H' little-endian */
-    bad |= MESO_RESULT_COUNT <= MESO_ERR_NOT_FOUND;
+    bad |= MESO_RESULT_COUNT <= MESO_ERR_PENDING;
     bad |= MESO_LOGITEM_COUNT <= MESO_LOGITEM_OK;
     /* A zero draw desc means every default; common fields and each kind's
      * knobs take designated initialisers. */

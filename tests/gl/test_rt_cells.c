@@ -29,6 +29,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 #include <unistd.h>
 
 #include "cell_reference.h"
@@ -459,6 +460,65 @@ static void test_state_contract(ctx* c)
     unload(c, &l);
 }
 
+/* A cells level streamed through requests (meso_rt_desc.stream_requests:
+ * read, checked and decoded on a worker thread, uploaded from the decoded
+ * copies, rt_stream.c) draws pixel for pixel what a synchronous load draws. */
+static int run_all(void* arg)
+{
+    for (meso_rt_request** q = arg; *q; ++q)
+        CHECK(meso_rt_stream_run(*q) == MESO_OK);
+    return 0;
+}
+
+static void test_streamed(ctx* c)
+{
+    const char* p = bake(c, "streamed", "sphere.obj", "--tiles 3 --tile-res 8");
+    loaded l = load(c, p);
+    const camera cam = view_box(&l, dirs[0], 1.0);
+    meso_rt_draw_desc d = {0};
+    camera_matrices(&cam, d.view, d.proj);
+    d.pixel_error = -1.0f; /* the finest level */
+    test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
+    CHECK(meso_rt_draw(c->rt, l.obj, &d) == MESO_OK);
+    uint8_t* want = malloc((size_t)W * H * 4);
+    CHECK(want);
+    test_fbo_read(&c->fbo, want, NULL);
+    meso_rt* rt = NULL;
+    CHECK(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) ==
+          MESO_OK);
+    meso_file* f = NULL;
+    CHECK(meso_file_open_path(p, NULL, &f, NULL) == MESO_OK);
+    meso_rt_object obj;
+    CHECK(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    meso_rt_levels_state st = {0};
+    for (int round = 0; round < 4 && st.last_drawn != 0; ++round) {
+        test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
+        CHECK(meso_rt_draw(rt, obj, &d) == MESO_OK); /* requests the level it wants, draws what is there */
+        meso_rt_request* reqs[5] = {0};
+        const uint32_t n = meso_rt_stream_take(rt, reqs, 4);
+        thrd_t t;
+        CHECK(thrd_create(&t, run_all, reqs) == thrd_success && thrd_join(t, NULL) == thrd_success);
+        meso_rt_stream_give(rt, reqs, n);
+        meso_rt_stream_upload(rt, 0);
+        meso_rt_frame_end(rt);
+        test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
+        CHECK(meso_rt_draw(rt, obj, &d) == MESO_OK);
+        CHECK(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+    }
+    CHECK_MSG(st.last_drawn == 0, "streamed cells: level %d drawn", st.last_drawn);
+    test_fbo_read(&c->fbo, c->rgba, NULL);
+    size_t differ = 0;
+    for (size_t i = 0; i < (size_t)W * H * 4; ++i)
+        differ += c->rgba[i] != want[i];
+    printf("cells streamed through requests: %zu bytes of the image differ from a synchronous load\n", differ);
+    CHECK(differ == 0);
+    meso_rt_release_object(rt, obj);
+    meso_rt_destroy(rt);
+    meso_file_close(f);
+    free(want);
+    unload(c, &l);
+}
+
 /* Loads `bytes` and expects a refusal, logged, with no object. */
 static void expect_refused(ctx* c, const char* what, const uint8_t* bytes, size_t size)
 {
@@ -552,6 +612,7 @@ int main(int argc, char** argv)
     test_camera_inside(&c);
     test_grazing(&c);
     test_state_contract(&c);
+    test_streamed(&c);
     test_malformed(&c);
 
     test_temp_dir_remove(c.dir);

@@ -9,6 +9,13 @@
  *  - Streaming: a file prefix that ends at a level's prefix_bytes draws
  *    (every level boundary), with the finest level that has arrived; a
  *    prefix shorter than the coarsest level loads nothing, cleanly.
+ *  - A reader that answers "not yet" (MESO_IO_PENDING): the object loads
+ *    before anything has arrived, draws nothing, asks once per frame and
+ *    draws each level as it arrives, the finest as the whole file does.
+ *  - Stream requests (meso_rt_desc.stream_requests): no draw reads; the
+ *    requests run on a worker thread, upload at a byte budget, and draw
+ *    the synchronous loads' images; released-while-held and bad-bytes
+ *    requests end cleanly.
  *  - The state reports what is resident and read.
  *  - A memory budget smaller than the finest levels settles under a static
  *    camera (the pixel-error factor and the levels drawn stop changing, no
@@ -18,6 +25,7 @@
 
 #include <GL/glcorearb.h>
 #include <string.h>
+#include <threads.h>
 
 #include "camera.h"
 #include "egl_context.h"
@@ -104,6 +112,26 @@ static int prefix_read(void* user, uint64_t off, void* dst, size_t n)
     if (off > p->limit || n > p->limit - off)
         return -1;
     memcpy(dst, p->data + off, n);
+    return 0;
+}
+
+/* A stream still arriving: bytes past `arrived` answer MESO_IO_PENDING;
+ * past `broken` (when not 0) the read fails. Counts the reads. */
+typedef struct growing_io {
+    const uint8_t* data;
+    _Atomic uint64_t arrived, reads;
+    uint64_t broken;
+} growing_io;
+
+static int growing_read(void* user, uint64_t off, void* dst, size_t n)
+{
+    growing_io* g = user;
+    g->reads++;
+    if (g->broken && off + n > g->broken)
+        return -1;
+    if (off > g->arrived || n > g->arrived - off)
+        return MESO_IO_PENDING;
+    memcpy(dst, g->data + off, n);
     return 0;
 }
 
@@ -212,6 +240,177 @@ static void every_level_prefix_draws(meso_rt* rt, const uint8_t* data, size_t si
     assert(meso_rt_load_object_levels(rt, f, 1, &obj) != MESO_OK && obj.id == 0);
     meso_file_close(f);
     meso_file_close(whole);
+}
+
+static int covered_columns(const int top[W])
+{
+    int c = 0;
+    for (int x = 0; x < W; ++x)
+        c += top[x] >= 0;
+    return c;
+}
+
+/* A reader that answers "not yet": the object loads before its coarsest
+ * level has arrived and draws nothing (MESO_OK), a level that has not
+ * arrived is asked for once per frame, not once per draw, and each level
+ * draws once it has arrived, as the whole file draws it. */
+static void pending_reads_are_asked_again(meso_rt* rt, const uint8_t* data, size_t size, const meso_level_info* li)
+{
+    int want[W], top[W];
+    {
+        meso_file* whole = NULL;
+        assert(meso_file_open_memory(data, size, NULL, &whole, NULL) == MESO_OK);
+        meso_rt_object o;
+        assert(meso_rt_load_object_levels(rt, whole, 1, &o) == MESO_OK);
+        draw_at(rt, o, 2.0, -1.0f, want); /* the finest level, from the whole file */
+        meso_rt_release_object(rt, o);
+        meso_file_close(whole);
+    }
+    growing_io g = {.data = data, .arrived = li[LEVELS - 1].prefix_bytes - 1};
+    const meso_io io = {.read_fn = growing_read, .size = size, .user = &g};
+    meso_file* f = NULL;
+    assert(meso_file_open_io(&io, NULL, &f, NULL) == MESO_OK);
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK && obj.id != 0);
+    meso_rt_levels_state st;
+    draw_at(rt, obj, 2.0, -1.0f, top);
+    assert(covered_columns(top) == 0);
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK && st.resident_mask == 0 && st.last_drawn == -1);
+    const uint64_t reads = g.reads;
+    draw_at(rt, obj, 2.0, -1.0f, top); /* the same frame: not asked again */
+    assert(g.reads == reads && covered_columns(top) == 0);
+    for (int k = LEVELS - 1; k >= 0; --k) {
+        g.arrived = li[k].prefix_bytes;
+        meso_rt_frame_end(rt);
+        draw_at(rt, obj, 2.0, -1.0f, top);
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        printf("  arrived %llu bytes: level %d drawn, %d columns\n", (unsigned long long)g.arrived, st.last_drawn,
+               covered_columns(top));
+        assert(st.last_drawn == k && covered_columns(top) > W / 4);
+    }
+    assert(memcmp(top, want, sizeof top) == 0);
+    meso_rt_release_object(rt, obj);
+    meso_file_close(f);
+}
+
+static int run_requests(void* arg)
+{
+    meso_rt_request** reqs = arg;
+    for (; *reqs; ++reqs)
+        meso_rt_stream_run(*reqs);
+    return 0;
+}
+
+/* Take, run on a worker thread, give back: how many were taken. */
+static uint32_t stream_step(meso_rt* rt)
+{
+    meso_rt_request* reqs[9] = {0};
+    const uint32_t n = meso_rt_stream_take(rt, reqs, 8);
+    thrd_t t;
+    assert(thrd_create(&t, run_requests, reqs) == thrd_success);
+    assert(thrd_join(t, NULL) == thrd_success);
+    meso_rt_stream_give(rt, reqs, n);
+    return n;
+}
+
+/* meso_rt_desc.stream_requests: no draw reads the file; the requests are
+ * read and decoded on another thread, uploaded at a byte budget per call,
+ * and the levels they upload draw exactly as the synchronous loads do. A
+ * request whose object is released while taken is freed when given back;
+ * one whose bytes are bad marks its level failed. */
+static void requests_decode_off_thread(const uint8_t* data, size_t size, const meso_level_info* li)
+{
+    int want[LEVELS][W], top[W];
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
+    {
+        meso_file* whole = NULL;
+        assert(meso_file_open_memory(data, size, NULL, &whole, NULL) == MESO_OK);
+        for (int k = 0; k < LEVELS; k += LEVELS - 1) { /* the finest and coarsest, drawn synchronously */
+            meso_rt_object o;
+            assert(meso_rt_load_object_levels(rt, whole, 1, &o) == MESO_OK);
+            draw_at(rt, o, 2.0, k == LEVELS - 1 ? 1e9f : -1.0f, want[k]);
+            meso_rt_levels_state st;
+            assert(meso_rt_levels_state_get(rt, o, &st) == MESO_OK);
+            assert(st.last_drawn == (k == LEVELS - 1 ? k : 0));
+            meso_rt_release_object(rt, o);
+        }
+        meso_file_close(whole);
+    }
+    meso_rt_destroy(rt);
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) ==
+           MESO_OK);
+    growing_io g = {.data = data, .arrived = li[LEVELS - 1].prefix_bytes};
+    const meso_io io = {.read_fn = growing_read, .size = size, .user = &g};
+    meso_file* f = NULL;
+    assert(meso_file_open_io(&io, NULL, &f, NULL) == MESO_OK);
+    meso_rt_object obj[2];
+    for (int i = 0; i < 2; ++i)
+        assert(meso_rt_load_object_levels(rt, f, 1, &obj[i]) == MESO_OK);
+    meso_rt_stream_state ss;
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.waiting == 2 && ss.taken == 0 && ss.decoded == 0);
+    uint64_t reads = g.reads;
+    draw_at(rt, obj[0], 2.0, -1.0f, top); /* wants level 0: requests it, draws nothing yet */
+    assert(g.reads == reads && covered_columns(top) == 0);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.waiting == 3);
+    assert(stream_step(rt) == 3); /* the two coarsest decode, level 0 has not arrived */
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.waiting == 1 && ss.decoded == 2 && ss.taken == 0);
+    /* One byte of budget uploads one level (at least one per call). */
+    assert(meso_rt_stream_upload(rt, 1) == li[LEVELS - 1].bytes);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.decoded == 1 && ss.uploads == 1);
+    assert(meso_rt_stream_upload(rt, 0) == li[LEVELS - 1].bytes);
+    meso_rt_frame_end(rt);
+    reads = g.reads;
+    draw_at(rt, obj[0], 2.0, -1.0f, top);
+    meso_rt_levels_state st;
+    assert(meso_rt_levels_state_get(rt, obj[0], &st) == MESO_OK && st.last_drawn == LEVELS - 1);
+    assert(g.reads == reads && memcmp(top, want[LEVELS - 1], sizeof top) == 0);
+    g.arrived = size;
+    assert(stream_step(rt) == 1);
+    assert(meso_rt_stream_upload(rt, 0) == li[0].bytes);
+    meso_rt_frame_end(rt);
+    draw_at(rt, obj[0], 2.0, -1.0f, top);
+    assert(meso_rt_levels_state_get(rt, obj[0], &st) == MESO_OK && st.last_drawn == 0);
+    assert(memcmp(top, want[0], sizeof top) == 0);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.uploads == 3);
+    printf("  requests: level 0 drawn after %llu uploads, %llu bytes read, the same image as a synchronous load\n",
+           (unsigned long long)ss.uploads, (unsigned long long)st.bytes_read);
+    /* Released while the host holds its request: freed when given back. */
+    draw_at(rt, obj[1], 2.0, -1.0f, top); /* requests level 0 of the second object */
+    meso_rt_request* held[2] = {0};
+    assert(meso_rt_stream_take(rt, held, 2) == 1);
+    meso_rt_release_object(rt, obj[1]);
+    assert(meso_rt_stream_run(held[0]) == MESO_OK);
+    meso_rt_stream_give(rt, held, 1);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.waiting == 0 && ss.taken == 0 && ss.decoded == 0);
+    meso_rt_release_object(rt, obj[0]);
+    meso_file_close(f);
+    /* Bad bytes: the level is marked failed, never asked for again. */
+    growing_io b = {.data = data, .arrived = size, .broken = li[0].prefix_bytes - 1};
+    const meso_io bio = {.read_fn = growing_read, .size = size, .user = &b};
+    assert(meso_file_open_io(&bio, NULL, &f, NULL) == MESO_OK);
+    meso_rt_object o;
+    assert(meso_rt_load_object_levels(rt, f, 1, &o) == MESO_OK);
+    assert(stream_step(rt) == 1 && meso_rt_stream_upload(rt, 0) == li[LEVELS - 1].bytes);
+    meso_rt_frame_end(rt);
+    draw_at(rt, o, 2.0, -1.0f, top);
+    meso_rt_request* one[2] = {0};
+    assert(meso_rt_stream_take(rt, one, 2) == 1);
+    assert(meso_rt_stream_run(one[0]) == MESO_ERR_IO);
+    meso_rt_stream_give(rt, one, 1);
+    meso_rt_frame_end(rt);
+    draw_at(rt, o, 2.0, -1.0f, top);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.waiting == 0 && meso_rt_levels_state_get(rt, o, &st) == MESO_OK && st.last_drawn == LEVELS - 1);
+    meso_rt_release_object(rt, o);
+    meso_file_close(f);
+    meso_rt_destroy(rt);
 }
 
 /* Six levelled objects side by side at depth `dist`, one frame. */
@@ -324,6 +523,13 @@ int main(void)
     assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
     error_holds_in_pixels_where_chosen(rt, f);
     every_level_prefix_draws(rt, data, size);
+    {
+        meso_level_info li[LEVELS];
+        uint32_t n = 0;
+        assert(meso_file_levels(f, 1, li, LEVELS, &n, NULL) == MESO_OK && n == LEVELS);
+        pending_reads_are_asked_again(rt, data, size, li);
+        requests_decode_off_thread(data, size, li);
+    }
     budget_settles_and_comes_back(data, size);
     meso_file_close(f);
     meso_rt_destroy(rt);

@@ -22,7 +22,8 @@ static inline int meso_exit_for(meso_result r)
 {
     switch (r) {
     case MESO_OK: return MESO_EXIT_OK;
-    case MESO_ERR_IO: return MESO_EXIT_IO;
+    case MESO_ERR_IO:
+    case MESO_ERR_PENDING: return MESO_EXIT_IO; /* a stream that has not delivered the bytes asked for */
     case MESO_ERR_TRUNCATED:
     case MESO_ERR_BAD_MAGIC:
     case MESO_ERR_VERSION_TOO_NEW:

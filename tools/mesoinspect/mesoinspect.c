@@ -384,6 +384,7 @@ const char* mi_result_id(meso_result r)
     case MESO_ERR_GL: return "gl";
     case MESO_ERR_UNSUPPORTED: return "unsupported";
     case MESO_ERR_NOT_FOUND: return "not_found";
+    case MESO_ERR_PENDING: return "pending";
     default: return "unknown";
     }
 }

@@ -417,8 +417,8 @@ static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const u
 }
 
 /* --stream-bytes: a reader over FILE that has received only its first
- * `limit` bytes; a read reaching past them fails, as a network reader's
- * "not yet" would. */
+ * `limit` bytes; a read reaching past them answers "not yet"
+ * (MESO_IO_PENDING), as a network reader would. */
 typedef struct partial_file {
     FILE* fp;
     uint64_t limit;
@@ -427,9 +427,9 @@ typedef struct partial_file {
 static int partial_read(void* user, uint64_t offset, void* dst, size_t size)
 {
     partial_file* p = user;
-    if (offset > p->limit || size > p->limit - offset || offset > (uint64_t)LONG_MAX)
-        return -1;
-    if (fseek(p->fp, (long)offset, SEEK_SET) != 0 || fread(dst, 1, size, p->fp) != size)
+    if (offset > p->limit || size > p->limit - offset)
+        return MESO_IO_PENDING;
+    if (offset > (uint64_t)LONG_MAX || fseek(p->fp, (long)offset, SEEK_SET) != 0 || fread(dst, 1, size, p->fp) != size)
         return -1;
     return 0;
 }
@@ -575,6 +575,13 @@ static int render(const char* path, const char* out, int width, int height, uint
         /* Levelled: each draw picks its level (--pixel-error); the file
          * stays open until the objects are released. */
         r = meso_rt_load_object_levels(rt, f, rec->id, &objs[nobj]);
+        meso_rt_levels_state ls = {.resident_mask = 1};
+        if (r == MESO_OK && knobs->stream_bytes)
+            meso_rt_levels_state_get(rt, objs[nobj], &ls);
+        if (r == MESO_OK && ls.resident_mask == 0) { /* loaded, nothing arrived: it would draw nothing */
+            meso_rt_release_object(rt, objs[nobj]);
+            r = MESO_ERR_PENDING;
+        }
         if (r != MESO_OK && r != MESO_ERR_UNSUPPORTED && knobs->stream_bytes) {
             fprintf(stderr, "mesoinspect note: object %u (%s): none of its levels is within the first %llu bytes\n",
                     rec->id, rec->name, (unsigned long long)partial.limit);

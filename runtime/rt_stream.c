@@ -1,0 +1,308 @@
+/*
+ * rt_stream.c — levels streamed off the GL thread (issue 14, "decoding
+ * happens off the GL thread"; meso_rt.h >>streaming).
+ *
+ * With meso_rt_desc.stream_requests, a draw that picks a level not uploaded
+ * files a request for it (one per level, rt_levels.c) and draws the best
+ * level uploaded. A request moves WAITING -> TAKEN (meso_rt_stream_take, GL
+ * thread) -> run (any thread: reads, CRC checks and decodes every chunk the
+ * level draws into memory, and for a CELLS level the whole
+ * meso_file_check_cells, whose TILE and MEMB copies it keeps) -> given back
+ * (GL thread): DECODED, or WAITING again when its bytes had not arrived, or
+ * freed with its level marked failed -> uploaded (meso_rt_stream_upload, GL
+ * thread, oldest first, up to a byte budget per call).
+ *
+ * The upload runs the kind's ordinary loader with rt->prefetch set: every
+ * chunk the loader asks for through mesoi_read_whole is handed over from
+ * the request instead of being read, so the loaders have one code path for
+ * both modes and a streamed level is byte for byte the level a synchronous
+ * load uploads. A chunk the request does not hold (none today) is read from
+ * the file as before.
+ *
+ * Decided: `run` touches no context state, so requests may run in parallel
+ * on any threads. It allocates with a copy of the context's allocator, so
+ * the handed-over buffers are freed by mesoi_rt_free like any read. A
+ * request whose object is released while the host holds it is detached
+ * (lv = NULL) and freed when given back; the context frees every request
+ * on destroy, so taken ones must come back first (meso_rt.h says so).
+ */
+#include "file_internal.h"
+#include "rt_internal.h"
+
+#include <string.h>
+
+enum { REQ_WAITING = 0, REQ_TAKEN, REQ_DECODED };
+
+struct meso_rt_request {
+    struct meso_rt_request* next; /* rt->requests, oldest first */
+    mesoi_levels* lv;             /* NULL once the object is released */
+    uint32_t level;
+    int state;
+    /* What run needs, copied at take (run never touches the context). */
+    meso_file* file;
+    meso_allocator alloc;
+    uint32_t object, kind;
+    uint16_t lod, form;
+    /* Run's results. */
+    uint32_t count;                 /* chunks decoded */
+    int32_t* chunk;                 /* [count] TOC indices */
+    void** data;                    /* [count] decoded bytes (alloc); NULL once handed over */
+    uint8_t *tile, *memb;           /* CELLS: the check's copies (the file's allocator) */
+    int cells_checked;
+    uint64_t bytes;                 /* stored bytes read */
+    meso_result result;
+};
+
+static void* req_alloc(const meso_rt_request* q, size_t n) { return q->alloc.alloc_fn(n ? n : 1, q->alloc.user); }
+
+static void req_free(const meso_rt_request* q, void* p)
+{
+    if (p)
+        q->alloc.free_fn(p, q->alloc.user);
+}
+
+/* Drop what run produced (back to a request that may run again). */
+static void req_clear(meso_rt_request* q)
+{
+    for (uint32_t k = 0; k < q->count; ++k)
+        req_free(q, q->data ? q->data[k] : NULL);
+    req_free(q, q->chunk);
+    req_free(q, q->data);
+    q->chunk = NULL;
+    q->data = NULL;
+    q->count = 0;
+    if (q->file) {
+        mesoi_file_free(&q->file->alloc, q->tile);
+        mesoi_file_free(&q->file->alloc, q->memb);
+    }
+    q->tile = q->memb = NULL;
+    q->cells_checked = 0;
+    q->bytes = 0;
+}
+
+/* Unlink q from rt->requests, clear its level's pointer and free it. */
+static void req_destroy(meso_rt* rt, meso_rt_request* q)
+{
+    for (meso_rt_request** p = &rt->requests; *p; p = &(*p)->next)
+        if (*p == q) {
+            *p = q->next;
+            break;
+        }
+    if (q->lv)
+        q->lv->request[q->level] = NULL;
+    req_clear(q);
+    mesoi_rt_free(rt, q);
+}
+
+meso_result mesoi_stream_request(meso_rt* rt, mesoi_levels* lv, uint32_t l)
+{
+    if (lv->request[l] || lv->slot[l].id || lv->failed[l])
+        return MESO_OK;
+    meso_rt_request* q = mesoi_rt_alloc(rt, sizeof *q);
+    if (!q)
+        return MESO_ERR_OUT_OF_MEMORY;
+    memset(q, 0, sizeof *q);
+    q->lv = lv;
+    q->level = l;
+    q->state = REQ_WAITING;
+    meso_rt_request** p = &rt->requests;
+    while (*p)
+        p = &(*p)->next;
+    *p = q;
+    lv->request[l] = q;
+    return MESO_OK;
+}
+
+void mesoi_stream_detach(meso_rt* rt, mesoi_levels* lv)
+{
+    for (meso_rt_request *q = rt->requests, *next; q; q = next) {
+        next = q->next;
+        if (q->lv != lv)
+            continue;
+        lv->request[q->level] = NULL;
+        q->lv = NULL;
+        if (q->state != REQ_TAKEN) /* the host does not hold it: free it now */
+            req_destroy(rt, q);
+    }
+}
+
+void mesoi_stream_destroy(meso_rt* rt)
+{
+    while (rt->requests)
+        req_destroy(rt, rt->requests);
+}
+
+void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci)
+{
+    meso_rt_request* q = rt->prefetch;
+    for (uint32_t k = 0; q && k < q->count; ++k)
+        if (q->chunk[k] == ci && q->data[k]) {
+            void* p = q->data[k];
+            q->data[k] = NULL;
+            return p;
+        }
+    return NULL;
+}
+
+uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
+{
+    uint32_t n = 0;
+    for (meso_rt_request* q = rt ? rt->requests : NULL; q && n < max; q = q->next) {
+        if (q->state != REQ_WAITING || !q->lv)
+            continue;
+        const mesoi_levels* lv = q->lv;
+        q->file = lv->file;
+        q->alloc = rt->alloc;
+        q->object = lv->rec.id;
+        q->form = lv->info[q->level].rec.form;
+        q->lod = lv->info[q->level].rec.lod;
+        q->kind = q->form == MESO_LEVEL_MESH ? (uint32_t)MESO_OBJECT_MESH : lv->rec.kind;
+        q->result = MESO_OK;
+        q->state = REQ_TAKEN;
+        out[n++] = q;
+    }
+    return n;
+}
+
+/* Whether chunk i is one the level draws and the loader reads through
+ * mesoi_read_whole (FORMAT.md §7.10: per type the smallest lod >= the
+ * level's; a MESH stand-in reads MESH alone; TILE and MEMB of a CELLS level
+ * come from the cells check). */
+static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint32_t i)
+{
+    if (c->object != q->object)
+        return 0;
+    if (q->form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH)
+        return 0;
+    if (q->kind == MESO_OBJECT_CELLS && (c->type == MESO_CHUNK_TILE || c->type == MESO_CHUNK_MEMB))
+        return 0;
+    return meso_file_find_level(q->file, c->type, q->object, q->lod) == (int32_t)i;
+}
+
+meso_result meso_rt_stream_run(meso_rt_request* q)
+{
+    if (!q || q->state != REQ_TAKEN)
+        return MESO_ERR_INVALID_ARG;
+    req_clear(q);
+    meso_file* f = q->file;
+    const uint32_t total = meso_file_chunk_count(f);
+    uint32_t want = 0;
+    for (uint32_t i = 0; i < total; ++i)
+        want += (uint32_t)level_reads(q, meso_file_chunk(f, i), i);
+    q->chunk = req_alloc(q, sizeof(int32_t) * want);
+    q->data = req_alloc(q, sizeof(void*) * want);
+    if (!q->chunk || !q->data) {
+        req_clear(q);
+        return q->result = MESO_ERR_OUT_OF_MEMORY;
+    }
+    meso_result r = MESO_OK;
+    meso_error err;
+    for (uint32_t i = 0; i < total && r == MESO_OK; ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        if (!level_reads(q, c, i))
+            continue;
+        if (c->decoded_size > (uint64_t)PTRDIFF_MAX) {
+            r = MESO_ERR_UNSUPPORTED;
+            break;
+        }
+        void* p = req_alloc(q, (size_t)c->decoded_size);
+        if (!p) {
+            r = MESO_ERR_OUT_OF_MEMORY;
+            break;
+        }
+        r = meso_file_read_chunk(f, i, p, (size_t)c->decoded_size, &err);
+        if (r != MESO_OK) {
+            req_free(q, p);
+            break;
+        }
+        q->chunk[q->count] = (int32_t)i;
+        q->data[q->count++] = p;
+        q->bytes += c->stored_size;
+    }
+    if (r == MESO_OK && q->kind == MESO_OBJECT_CELLS) {
+        r = mesoi_file_check_cells_keep(f, q->object, &q->tile, &q->memb, &err);
+        q->cells_checked = r == MESO_OK;
+    }
+    if (r != MESO_OK)
+        req_clear(q);
+    return q->result = r;
+}
+
+void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n)
+{
+    for (uint32_t i = 0; rt && reqs && i < n; ++i) {
+        meso_rt_request* q = reqs[i];
+        if (!q || q->state != REQ_TAKEN)
+            continue;
+        if (!q->lv) { /* its object was released meanwhile */
+            req_destroy(rt, q);
+            continue;
+        }
+        q->lv->bytes_read += q->bytes;
+        if (q->result == MESO_OK && (q->count || q->cells_checked)) {
+            q->state = REQ_DECODED;
+        } else if (q->result == MESO_OK || q->result == MESO_ERR_PENDING) {
+            req_clear(q); /* not run, or not arrived: taken again later */
+            q->state = REQ_WAITING;
+        } else {
+            q->lv->failed[q->level] = 1;
+            mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                      "object %u: level %u could not be read (%s); drawing the nearest level uploaded", q->object,
+                      q->level, meso_result_string(q->result));
+            req_destroy(rt, q);
+        }
+    }
+}
+
+uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
+{
+    uint64_t done = 0;
+    meso_rt_request* q = rt ? rt->requests : NULL;
+    while (q && (max_bytes == 0 || done < max_bytes)) {
+        meso_rt_request* next = q->next;
+        if (q->state == REQ_DECODED) {
+            mesoi_levels* lv = q->lv;
+            const uint32_t l = q->level;
+            if (!lv->slot[l].id && mesoi_levels_make_room(rt, lv, l)) {
+                rt->prefetch = q;
+                const meso_result r = mesoi_levels_upload(rt, lv, l);
+                rt->prefetch = NULL;
+                if (r == MESO_OK) {
+                    done += lv->info[l].bytes;
+                    rt->stream_uploads++;
+                }
+            }
+            /* Uploaded, failed (remembered in lv->failed), or no room under
+             * the budget: a later draw that still wants it asks again. */
+            req_destroy(rt, q);
+        }
+        q = next;
+    }
+    return done;
+}
+
+void meso_rt_stream_state_get(const meso_rt* rt, meso_rt_stream_state* out)
+{
+    if (!out)
+        return;
+    memset(out, 0, sizeof *out);
+    for (const meso_rt_request* q = rt ? rt->requests : NULL; q; q = q->next) {
+        out->waiting += q->state == REQ_WAITING;
+        out->taken += q->state == REQ_TAKEN;
+        out->decoded += q->state == REQ_DECODED;
+    }
+    out->uploads = rt ? rt->stream_uploads : 0;
+}
+
+/* The cells check a CELLS request ran, handed to the loader (rt_cells.c). */
+int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb)
+{
+    meso_rt_request* q = rt->prefetch;
+    if (!q || !q->cells_checked)
+        return 0;
+    *tile = q->tile;
+    *memb = q->memb;
+    q->tile = q->memb = NULL;
+    q->cells_checked = 0;
+    return 1;
+}
