@@ -37,7 +37,7 @@
  *   repair) of every vertex (every 4th on meshes above 3000 vertices);
  *   reference = exact summation (θ = 0) at 0.5°; sweep θ × angle tolerance.
  *   Error per vertex |d − d_ref| / h and the angle between d and d_ref.
- *   near_radius = 0 as in bake_shell.c's trace options.
+ *   near_radius = 0 and cutoff = 0 (no localisation) as in bake_shell.c's trace options.
  * thickness: normal, lp, hybrid, each without and with repair, thickness
  *   1..40 % of the diagonal, exterior and interior; full validation.
  * goals: every mesh file of tests/data (or of the folder named by
