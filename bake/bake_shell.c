@@ -237,8 +237,15 @@ static meso_result directors(shell_bake* s, meso_error* err)
         if (redo)
             memcpy(dl, s->prior.d + 3 * (size_t)nv * (size_t)layer, sizeof(float) * 3 * (size_t)nv);
         t = meso_seconds();
-        r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors, s->run.common.threads,
-                                         redo, dl, s->lp_side, &hs, &ts, err);
+        /* One checker for hybrid rounds, repair and regrow: each starts
+         * from the verdicts the one before left, not from a full check. */
+        meso_shell_checker* ck = NULL;
+        r = meso_shell_checker_create(m, sign, s->run.common.threads, &ck, err);
+        if (r == MESO_OK && redo)
+            r = meso_shell_checker_prime(ck, dl, redo, err);
+        if (r == MESO_OK)
+            r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors,
+                                             s->run.common.threads, redo, dl, s->lp_side, &hs, &ts, ck, err);
         for (uint32_t v = 0; v < nv; ++v)
             s->lp_mask[v] |= s->lp_side[v];
         s->rep->hybrid_rounds += hs.rounds;
@@ -259,7 +266,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
             t = meso_seconds();
             if (r == MESO_OK)
                 r = meso_shell_repair_in(m, dl, sign, 30, s->run.common.threads, redo, &shortened, &rounds, &left,
-                                         err);
+                                         ck, err);
             if (r == MESO_OK)
                 mesoi_run_stage(&s->run, "repair", f1, f1,
                                 "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
@@ -269,7 +276,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
              * envelope did, tests/gl/test_rt_shell_baked.c). */
             if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
                 r = meso_shell_regrow_in(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, s->run.common.threads, redo,
-                                         &grown, err);
+                                         &grown, ck, err);
                 if (r == MESO_OK)
                     mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
                                     grown, mesoi_run_ms(&s->run));
@@ -279,6 +286,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
             s->rep->vertices_shortened += shortened;
             s->rep->vertices_regrown += grown;
         }
+        meso_shell_checker_destroy(ck);
     }
     uint32_t lp_count = 0;
     for (uint32_t v = 0; s->lp_mask && v < nv; ++v)

@@ -660,18 +660,35 @@ static inline int far_enough(double rad, double r2, double theta, double near_r)
     return near_r <= 0.0 || sqrt(r2) - rad > near_r;
 }
 
-static void add_leaf_triangle(const meso_lp_field* f, const double* v, const double x[3], double theta,
-                              double near_r, eval_acc* acc, meso_lp_stats* st)
+/* A triangle's bounding sphere about its centroid g: g, R = x − g and the
+ * squared radius. */
+static inline void tri_sphere(const double* v, const double x[3], double g[3], double R[3], double* rad2)
 {
-    double g[3], R[3], rad2 = 0.0;
     for (int k = 0; k < 3; ++k)
         g[k] = (v[k] + v[3 + k] + v[6 + k]) / 3.0;
+    *rad2 = 0.0;
     for (int c = 0; c < 3; ++c) {
         double d[3];
         sub3(v + 3 * c, g, d);
-        rad2 = fmax(rad2, dot3(d, d));
+        *rad2 = fmax(*rad2, dot3(d, d));
     }
     sub3(x, g, R);
+}
+
+/* Does a cluster of radius rad at squared distance r2 lie entirely beyond
+ * the cut-off (localisation)? */
+static inline int beyond(double rad, double r2, double cut_r)
+{
+    return r2 > (cut_r + rad) * (cut_r + rad);
+}
+
+static void add_leaf_triangle(const meso_lp_field* f, const double* v, const double x[3], double theta,
+                              double near_r, double cut_r, eval_acc* acc, meso_lp_stats* st)
+{
+    double g[3], R[3], rad2;
+    tri_sphere(v, x, g, R, &rad2);
+    if (cut_r > 0.0 && beyond(sqrt(rad2), dot3(R, R), cut_r))
+        return;
     if (!far_enough(sqrt(rad2), dot3(R, R), theta, near_r)) {
         add_exact(f, v, x, acc);
         if (st)
@@ -699,8 +716,8 @@ static void add_leaf_triangle(const meso_lp_field* f, const double* v, const dou
         st->far_triangles++;
 }
 
-meso_result meso_lp_eval_ex(const meso_lp_field* f, const double xin[3], double theta, double near_radius, double* d,
-                            double grad[3], meso_lp_stats* st)
+static meso_result eval(const meso_lp_field* f, const double xin[3], double theta, double near_radius, double cutoff,
+                        double* d, double grad[3], meso_lp_stats* st)
 {
     if (!f || !xin || !d)
         return MESO_ERR_INVALID_ARG;
@@ -712,13 +729,18 @@ meso_result meso_lp_eval_ex(const meso_lp_field* f, const double xin[3], double 
     double x[3];
     for (int k = 0; k < 3; ++k)
         x[k] = (xin[k] - f->origin[k]) / f->scale;
-    double near_r = near_radius / f->scale;
+    const double near_r = near_radius / f->scale, cut_r = cutoff / f->scale;
     eval_acc acc = {0.0, {0.0, 0.0, 0.0}, 0};
     if (!(theta > 0.0)) {
-        for (uint32_t t = 0; t < f->nt; ++t)
-            add_exact(f, f->tri + 9 * (size_t)t, x, &acc);
-        if (st)
-            st->exact_triangles += f->nt;
+        for (uint32_t t = 0; t < f->nt; ++t) {
+            const double* v = f->tri + 9 * (size_t)t;
+            double g[3], R[3], rad2;
+            if (cut_r > 0.0 && (tri_sphere(v, x, g, R, &rad2), beyond(sqrt(rad2), dot3(R, R), cut_r)))
+                continue;
+            add_exact(f, v, x, &acc);
+            if (st)
+                st->exact_triangles++;
+        }
     } else {
         uint32_t stack[STACK_DEPTH];
         int top = 0;
@@ -730,13 +752,15 @@ meso_result meso_lp_eval_ex(const meso_lp_field* f, const double xin[3], double 
             double R[3];
             sub3(x, nd->c, R);
             double r2 = dot3(R, R);
-            if (far_enough(nd->radius, r2, theta, near_r)) {
+            if (cut_r > 0.0 && beyond(nd->radius, r2, cut_r)) {
+                /* localised: not summed */
+            } else if (far_enough(nd->radius, r2, theta, near_r)) {
                 add_multipole(f, nd, R, r2, &acc);
                 if (st)
                     st->multipoles++;
             } else if (nd->right == 0) {
                 for (uint32_t t = nd->first; t < nd->first + nd->count; ++t)
-                    add_leaf_triangle(f, f->tri + 9 * (size_t)t, x, theta, near_r, &acc, st);
+                    add_leaf_triangle(f, f->tri + 9 * (size_t)t, x, theta, near_r, cut_r, &acc, st);
             } else {
                 /* Second child first on the stack so the first is summed first. */
                 stack[top++] = nd->right;
@@ -753,6 +777,20 @@ meso_result meso_lp_eval_ex(const meso_lp_field* f, const double xin[3], double 
         for (int k = 0; k < 3; ++k)
             grad[k] = ds * acc.J[k] / acc.I;
     return MESO_OK;
+}
+
+meso_result meso_lp_eval_ex(const meso_lp_field* f, const double x[3], double theta, double near_radius, double* d,
+                            double grad[3], meso_lp_stats* st)
+{
+    return eval(f, x, theta, near_radius, 0.0, d, grad, st);
+}
+
+meso_result meso_lp_eval_local(const meso_lp_field* f, const double x[3], double theta, double cutoff, double* d,
+                               double grad[3], meso_lp_stats* st)
+{
+    if (!(cutoff > 0.0))
+        return MESO_ERR_INVALID_ARG;
+    return eval(f, x, theta, 0.0, cutoff, d, grad, st);
 }
 
 meso_result meso_lp_eval(const meso_lp_field* f, const double x[3], double* d, double grad[3])

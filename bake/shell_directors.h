@@ -21,6 +21,9 @@ typedef struct meso_trace_options {
     double min_step;    /* fraction of h below which a step is accepted as is (default 1/1024) */
     double theta;       /* Barnes-Hut opening angle (<= 0: exact summation) */
     double near_radius; /* triangles closer than this are integrated exactly (0: θ decides alone) */
+    double cutoff;      /* mesh units: integrate only the surface within this distance of x, the
+                         * paper's localisation (meso_lp_eval_local, e.g. 2h); 0 (bakes): all of
+                         * it. Overrides near_radius. */
     int smooth_iterations; /* Laplacian smoothing rounds of traced directors (shell_hybrid.c) */
     /* Optional progress report from the tracing loop (called by one thread
      * at a time, about every 1 %, with done <= total vertices). */

@@ -146,13 +146,15 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
                                       uint8_t* lp_mask, meso_hybrid_stats* hs, meso_trace_stats* ts,
                                       meso_error* err)
 {
-    return meso_shell_side_directors_in(field, m, normals, sign, opt, mode, threads, NULL, d, lp_mask, hs, ts, err);
+    return meso_shell_side_directors_in(field, m, normals, sign, opt, mode, threads, NULL, d, lp_mask, hs, ts, NULL,
+                                        err);
 }
 
 meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_mesh* m, const float* normals,
                                          int sign, const meso_trace_options* opt, meso_shell_directors mode,
                                          int threads, const uint8_t* redo, float* d, uint8_t* lp_mask,
-                                         meso_hybrid_stats* hs, meso_trace_stats* ts, meso_error* err)
+                                         meso_hybrid_stats* hs, meso_trace_stats* ts, meso_shell_checker* shared,
+                                         meso_error* err)
 {
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     memset(hs, 0, sizeof(*hs));
@@ -186,11 +188,12 @@ meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_
             memcpy(raw, d, sizeof(float) * 3 * (size_t)nv);
         uint32_t nbad = 0;
         const int rings = rings_for(m, opt->thickness);
-        meso_shell_checker* ck = NULL;
-        if (r == MESO_OK)
+        meso_shell_checker* ck = shared;
+        if (r == MESO_OK && !ck)
             r = meso_shell_checker_create(m, sign, threads, &ck, err);
-        if (r == MESO_OK && redo)
+        if (r == MESO_OK && redo && !shared)
             r = meso_shell_checker_prime(ck, d, redo, err);
+        const double checks0 = ck ? meso_shell_checker_seconds(ck) : 0;
         while (r == MESO_OK) {
             memcpy(d, raw, sizeof(float) * 3 * (size_t)nv);
             if (smooth && hs->vertices_lp && (r = smooth_directors(m, d, mask, smooth, err)) != MESO_OK)
@@ -212,8 +215,9 @@ meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_
         }
         hs->vertices_lp = 0; /* recounted below */
         hs->bad_faces_left = nbad;
-        hs->seconds_checks = ck ? meso_shell_checker_seconds(ck) : 0;
-        meso_shell_checker_destroy(ck);
+        hs->seconds_checks = ck ? meso_shell_checker_seconds(ck) - checks0 : 0;
+        if (!shared)
+            meso_shell_checker_destroy(ck);
         free(raw);
     }
     for (uint32_t v = 0; v < nv; ++v)
@@ -272,12 +276,12 @@ static int feasible_direction(const meso_mesh* m, const uint32_t* first, const u
 meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
                               uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left, meso_error* err)
 {
-    return meso_shell_repair_in(m, d, sign, max_rounds, threads, NULL, shortened, rounds, bad_left, err);
+    return meso_shell_repair_in(m, d, sign, max_rounds, threads, NULL, shortened, rounds, bad_left, NULL, err);
 }
 
 meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
                                  const uint8_t* redo, uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left,
-                                 meso_error* err)
+                                 meso_shell_checker* shared, meso_error* err)
 {
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     uint8_t* bad = calloc(nt ? nt : 1, 1);
@@ -306,9 +310,9 @@ meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_
         }
     free(fill);
     uint32_t nbad = 0, round = 0;
-    meso_shell_checker* ck = NULL;
-    meso_result r = meso_shell_checker_create(m, sign, threads, &ck, err);
-    if (r == MESO_OK && redo)
+    meso_shell_checker* ck = shared;
+    meso_result r = ck ? MESO_OK : meso_shell_checker_create(m, sign, threads, &ck, err);
+    if (r == MESO_OK && redo && !shared)
         r = meso_shell_checker_prime(ck, d, redo, err);
     while (r == MESO_OK) {
         r = meso_shell_checker_bad_faces(ck, d, bad, &nbad, err);
@@ -355,7 +359,8 @@ meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_
     *shortened = n;
     *rounds = round;
     *bad_left = nbad;
-    meso_shell_checker_destroy(ck);
+    if (!shared)
+        meso_shell_checker_destroy(ck);
     free(bad), free(touched), free(now), free(first), free(faces);
     return r;
 }

@@ -6,6 +6,7 @@
 #ifndef MESO_SHELL_HYBRID_H
 #define MESO_SHELL_HYBRID_H
 
+#include "shell_checker.h"
 #include "shell_directors.h"
 
 typedef struct meso_hybrid_stats {
@@ -42,11 +43,15 @@ meso_result meso_shell_side_directors(const meso_lp_field* field, const meso_mes
  * what d holds on entry, which must be a shell that passed every check
  * outside the redo region (the previous bake's). The rounds check only
  * the faces around the redo region (meso_shell_checker_prime). redo NULL:
- * meso_shell_side_directors. */
+ * meso_shell_side_directors. ck: NULL, or a checker
+ * (shell_checker.h) for this mesh and side that the caller made (and
+ * primed with redo) and keeps using: repair and regrow then start from
+ * the verdicts the last round left instead of checking every face again. */
 meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_mesh* m, const float* normals,
                                          int sign, const meso_trace_options* opt, meso_shell_directors mode,
                                          int threads, const uint8_t* redo, float* d, uint8_t* lp_mask,
-                                         meso_hybrid_stats* hs, meso_trace_stats* ts, meso_error* err);
+                                         meso_hybrid_stats* hs, meso_trace_stats* ts, meso_shell_checker* ck,
+                                         meso_error* err);
 
 /* Repair (issue #4, --repair): shorten the directors of the vertices of
  * still-bad faces by a factor 0.8 per round, until no face is bad or
@@ -59,9 +64,10 @@ meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_
 meso_result meso_shell_repair(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
                               uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left, meso_error* err);
 /* The same, changing only the directors of vertices with redo[v], the rest
- * known valid (as for meso_shell_side_directors_in); redo NULL: all. */
+ * known valid (as for meso_shell_side_directors_in); redo NULL: all. ck:
+ * NULL or the caller's checker (as for meso_shell_side_directors_in). */
 meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_t max_rounds, int threads,
                                  const uint8_t* redo, uint32_t* shortened, uint32_t* rounds, uint32_t* bad_left,
-                                 meso_error* err);
+                                 meso_shell_checker* ck, meso_error* err);
 
 #endif

@@ -72,11 +72,12 @@ static meso_result settle(meso_shell_checker* chk, const meso_mesh* m, const flo
 meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
                               int threads, uint32_t* grown, meso_error* err)
 {
-    return meso_shell_regrow_in(m, d, target, sign, rounds, threads, NULL, grown, err);
+    return meso_shell_regrow_in(m, d, target, sign, rounds, threads, NULL, grown, NULL, err);
 }
 
 meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
-                                 int threads, const uint8_t* redo, uint32_t* grown, meso_error* err)
+                                 int threads, const uint8_t* redo, uint32_t* grown, meso_shell_checker* shared,
+                                 meso_error* err)
 {
     const uint32_t nv = m->vertex_count, nt = m->triangle_count;
     const size_t nd = 3 * (size_t)nv;
@@ -107,10 +108,10 @@ meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* targ
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "regrow: out of memory");
     /* Each pass moves a few directors: the incremental checker re-tests only
      * the faces around them, with the verdicts of a full check. */
-    meso_shell_checker* chk = NULL;
-    if (r == MESO_OK)
+    meso_shell_checker* chk = shared;
+    if (r == MESO_OK && !chk)
         r = meso_shell_checker_create(m, sign, threads, &chk, err);
-    if (r == MESO_OK && redo)
+    if (r == MESO_OK && redo && !shared)
         r = meso_shell_checker_prime(chk, d, redo, err);
     uint32_t nbad = 0;
     if (r == MESO_OK) {
@@ -177,7 +178,8 @@ meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* targ
         n += memcmp(d + 3 * (size_t)v, orig + 3 * (size_t)v, 3 * sizeof(float)) != 0;
     if (grown)
         *grown = n;
-    meso_shell_checker_destroy(chk);
+    if (!shared)
+        meso_shell_checker_destroy(chk);
     free(cand), free(orig), free(hi), free(bad), free(moved), free(contested), free(taken), free(vf_first), free(vf);
     return r;
 }

@@ -26,6 +26,7 @@
 #include <stdint.h>
 
 #include "meso_bake.h"
+#include "shell_checker.h"
 
 /* Bisection rounds of a bake (bake_shell.c): the last step is 1/64 of what
  * repair took. */
@@ -42,8 +43,11 @@ meso_result meso_shell_regrow(const meso_mesh* m, float* d, const float* target,
 /* The same where only the vertices with redo[v] may have been shortened and
  * the rest of d is known valid (an incremental re-bake, shell_update.h): the
  * first check covers only the faces around redo (meso_shell_checker_prime).
- * redo NULL: meso_shell_regrow. */
+ * redo NULL: meso_shell_regrow. ck: NULL, or the checker repair used (then
+ * the first check re-tests only what changed since its last call; redo is
+ * then the caller's to prime). */
 meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* target, int sign, uint32_t rounds,
-                                 int threads, const uint8_t* redo, uint32_t* grown, meso_error* err);
+                                 int threads, const uint8_t* redo, uint32_t* grown, meso_shell_checker* ck,
+                                 meso_error* err);
 
 #endif /* MESO_SHELL_REGROW_H */

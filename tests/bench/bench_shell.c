@@ -20,7 +20,8 @@
  * trace options {thickness, angle_tol, θ, smooth_iterations} are built as in
  * bake_shell.c (no progress callback);
  * hybrid = meso_shell_side_directors MESO_DIRECTORS_HYBRID followed by meso_shell_repair and, when
- * that left no bad face, meso_shell_regrow (repair's seconds include it).
+ * that left no bad face, meso_shell_regrow (repair's seconds include it), the
+ * three sharing one incremental checker as in bake_shell.c.
  *
  * size: spot subdivided 1:4 (edge midpoints, shared; no smoothing, so the
  *   surface keeps spot's shape and concavities) levels 0..MAX_LEVEL
@@ -36,7 +37,7 @@
  *   repair) of every vertex (every 4th on meshes above 3000 vertices);
  *   reference = exact summation (θ = 0) at 0.5°; sweep θ × angle tolerance.
  *   Error per vertex |d − d_ref| / h and the angle between d and d_ref.
- *   near_radius = 0 as in bake_shell.c's trace options.
+ *   near_radius = 0 and cutoff = 0 (no localisation) as in bake_shell.c's trace options.
  * thickness: normal, lp, hybrid, each without and with repair, thickness
  *   1..40 % of the diagonal, exterior and interior; full validation.
  * goals: every mesh file of tests/data (or of the folder named by
@@ -290,6 +291,7 @@ typedef struct side_result {
     meso_trace_stats ts;
     uint32_t shortened, repair_rounds, bad_left, regrown;
     meso_shell_report rep;
+    meso_shell_checker* ck; /* hybrid rounds -> repair -> regrow, as bake_shell.c; side_validate frees it */
 } side_result;
 
 /* Directors of one side into d (3 nv floats). */
@@ -298,8 +300,9 @@ static void side_directors(const shell_ctx* c, int sign, meso_shell_directors mo
     meso_error err = {0};
     const meso_trace_options o = trace_opts(c->h, THETA, ANGLE_TOL_DEG, smooth_rounds());
     const double t = meso_seconds();
-    check(meso_shell_side_directors(c->field, &c->m, c->normals, sign, &o, mode, THREADS, d, NULL, &out->hs,
-                                    &out->ts, &err),
+    check(meso_shell_checker_create(&c->m, sign, THREADS, &out->ck, &err), "checker", &err);
+    check(meso_shell_side_directors_in(c->field, &c->m, c->normals, sign, &o, mode, THREADS, NULL, d, NULL, &out->hs,
+                                       &out->ts, out->ck, &err),
           "directors", &err);
     out->t_dir = meso_seconds() - t;
 }
@@ -313,12 +316,13 @@ static void side_repair(const shell_ctx* c, int sign, float* d, side_result* out
     if (!before)
         die("out of memory", NULL);
     memcpy(before, d, sizeof(float) * nd);
-    check(meso_shell_repair(&c->m, d, sign, REPAIR_ROUNDS, THREADS, &out->shortened, &out->repair_rounds, &out->bad_left,
-                            &err),
+    check(meso_shell_repair_in(&c->m, d, sign, REPAIR_ROUNDS, THREADS, NULL, &out->shortened, &out->repair_rounds,
+                               &out->bad_left, out->ck, &err),
           "repair", &err);
     if (out->shortened && !out->bad_left)
-        check(meso_shell_regrow(&c->m, d, before, sign, MESO_SHELL_REGROW_ROUNDS, THREADS, &out->regrown, &err), "regrow",
-              &err);
+        check(meso_shell_regrow_in(&c->m, d, before, sign, MESO_SHELL_REGROW_ROUNDS, THREADS, NULL, &out->regrown,
+                                   out->ck, &err),
+              "regrow", &err);
     free(before);
     out->t_repair = meso_seconds() - t;
 }
@@ -330,6 +334,8 @@ static void side_validate(const shell_ctx* c, int sign, const float* d, side_res
     memset(&out->rep, 0, sizeof(out->rep));
     check(meso_shell_validate(&c->m, d, NULL, c->h, sign, NULL, &out->rep, &err), "validate", &err);
     out->t_validate = meso_seconds() - t;
+    meso_shell_checker_destroy(out->ck);
+    out->ck = NULL;
 }
 
 /* >>size */

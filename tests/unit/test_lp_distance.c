@@ -536,6 +536,63 @@ static void test_far_field(void)
 
 /* >>6. bad input ------------------------------------------------------------ */
 
+/* >>localisation: meso_lp_eval_local over a sphere A and a far copy B
+ * (100 units away, entirely beyond the cut-off) is the field of A alone up
+ * to the area normalisation: with the same I and J, d scales by
+ * (A_total / A_A)^(1/3) (d = (I/A)^(−1/p), p = 3) and so does ∇d = d J / I.
+ * Exact summation must agree to rounding; Barnes–Hut (different trees) to
+ * its error. And a cut-off that takes in all of A but not B must differ
+ * from the whole surface. */
+static void test_localised(void)
+{
+    meso_mesh a;
+    if (!test_load_mesh(test_data("sphere.obj"), &a))
+        assert(0 && "sphere.obj");
+    const uint32_t nv = a.vertex_count, nt = a.triangle_count;
+    float* pos = malloc(sizeof(float) * 6 * nv);
+    uint32_t* idx = malloc(sizeof(uint32_t) * 6 * nt);
+    assert(pos && idx);
+    for (uint32_t i = 0; i < 3 * nv; ++i) {
+        pos[i] = a.positions[i];
+        pos[3 * nv + i] = a.positions[i] + (i % 3 == 0 ? 100.0f : 0.0f);
+    }
+    for (uint32_t i = 0; i < 3 * nt; ++i) {
+        idx[i] = a.indices[i];
+        idx[3 * nt + i] = a.indices[i] + nv;
+    }
+    meso_mesh both = a;
+    both.positions = pos, both.indices = idx, both.vertex_count = 2 * nv, both.triangle_count = 2 * nt;
+    const meso_lp_options o = {.p = 3};
+    meso_lp_field* fa = make_field(&a, &o);
+    meso_lp_field* fb = make_field(&both, &o);
+    const double scale = cbrt(meso_lp_field_area(fb) / meso_lp_field_area(fa));
+    assert(fabs(scale - cbrt(2.0)) < 1e-4); /* B in floats 100 units out: areas to ~1e-6 */
+    const double pts[][3] = {{1.3, 0.2, -0.1}, {0.1, -1.6, 0.4}, {-0.5, 0.5, 0.4}, {2.5, 2.0, 1.0}};
+    for (size_t i = 0; i < sizeof(pts) / sizeof(pts[0]); ++i)
+        for (int bh = 0; bh < 2; ++bh) {
+            const double theta = bh ? 0.5 : 0.0, tol = bh ? 2e-2 : 1e-10;
+            double da, ga[3], dl, gl[3], dw, gw[3];
+            assert(meso_lp_eval_ex(fa, pts[i], theta, 0.0, &da, ga, NULL) == MESO_OK);
+            assert(meso_lp_eval_local(fb, pts[i], theta, 10.0, &dl, gl, NULL) == MESO_OK);
+            assert(meso_lp_eval_ex(fb, pts[i], theta, 0.0, &dw, gw, NULL) == MESO_OK);
+            assert(fabs(dl - scale * da) <= tol * dl);
+            for (int k = 0; k < 3; ++k)
+                assert(fabs(gl[k] - scale * ga[k]) <= tol * norm(gl));
+            /* B adds ~area/100^3 to I: the whole-surface d is smaller */
+            if (!bh)
+                assert(dw < dl);
+        }
+    double d, g[3];
+    assert(meso_lp_eval_local(fb, pts[0], 0.5, 0.0, &d, g, NULL) == MESO_ERR_INVALID_ARG);
+    const double lonely[3] = {50.0, 0.0, 0.0}; /* no triangle within 1 */
+    assert(meso_lp_eval_local(fb, lonely, 0.5, 1.0, &d, g, NULL) == MESO_ERR_INVALID_ARG);
+    meso_lp_field_destroy(fa);
+    meso_lp_field_destroy(fb);
+    free(pos);
+    free(idx);
+    meso_mesh_free(&a);
+}
+
 static void expect_error(const float* pos, uint32_t nv, const uint32_t* idx, uint32_t nt, const meso_lp_options* o,
                          const char* needle)
 {
@@ -687,6 +744,7 @@ int main(void)
     TEST_RUN(test_barnes_hut);
     TEST_RUN(test_symmetric_fields);
     TEST_RUN(test_far_field);
+    TEST_RUN(test_localised);
     TEST_RUN(test_bad_input);
     TEST_RUN(test_threads_and_speed);
     fprintf(stderr, "lp_distance: all tests passed\n");
