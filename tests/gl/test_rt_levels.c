@@ -114,6 +114,17 @@ static int prefix_read(void* user, uint64_t off, void* dst, size_t n)
 
 static test_fbo fb;
 
+/* Clears, draws `obj` with `d` and returns the depth buffer (malloc'd). */
+static float* draw_depth(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
+{
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw(rt, obj, d) == MESO_OK);
+    float* depth = malloc(sizeof(float) * W * H);
+    assert(depth);
+    test_fbo_read(&fb, NULL, depth);
+    return depth;
+}
+
 /* Draws `obj` seen from distance `dist` (square's centre, 60 degrees off
  * its normal) and returns per column the highest covered row (-1: none). */
 static void draw_at(meso_rt* rt, meso_rt_object obj, double dist, float tau, int top[W])
@@ -124,11 +135,7 @@ static void draw_at(meso_rt* rt, meso_rt_object obj, double dist, float tau, int
     meso_camera_look_at(d.view, eye, c, up);
     meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.01, 1000.0);
     d.pixel_error = tau;
-    test_fbo_clear(&fb, 0, 0, 0);
-    assert(meso_rt_draw(rt, obj, &d) == MESO_OK);
-    float* depth = malloc(sizeof(float) * W * H);
-    assert(depth);
-    test_fbo_read(&fb, NULL, depth);
+    float* depth = draw_depth(rt, obj, &d);
     for (int x = 0; x < W; ++x) {
         top[x] = -1;
         for (int y = 0; y < H; ++y)
@@ -248,11 +255,7 @@ static int frusta_coverage(meso_rt* rt, meso_rt_object obj, const double c[3], d
     meso_camera_look_at(d.view, eye, c, up);
     meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.05 * radius, 1000.0 * radius);
     d.pixel_error = tau;
-    test_fbo_clear(&fb, 0, 0, 0);
-    assert(meso_rt_draw(rt, obj, &d) == MESO_OK);
-    float* depth = malloc(sizeof(float) * W * H);
-    assert(depth);
-    test_fbo_read(&fb, NULL, depth);
+    float* depth = draw_depth(rt, obj, &d);
     int n = 0;
     for (int i = 0; i < W * H; ++i)
         n += mask[i] = depth[i] < 1.0f;

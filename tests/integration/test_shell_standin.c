@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "camera.h"
-#include "point_triangle.h"
+#include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "shell_reference.h"
@@ -33,13 +33,8 @@ static void check(const char* mesobake, const char* dir, const char* name, const
     assert(li[1].rec.form == MESO_LEVEL_MESH && li[1].rec.error > 0);
     const double err = li[1].rec.error;
     /* The stand-in mesh (lod 1). */
-    const int32_t mi = meso_file_find(f, MESO_CHUNK_MESH, 1, 1);
-    assert(mi >= 0);
-    const meso_chunk_info* mc = meso_file_chunk(f, (uint32_t)mi);
-    uint8_t* mb = malloc((size_t)mc->decoded_size);
-    assert(mb && meso_file_read_chunk(f, (uint32_t)mi, mb, (size_t)mc->decoded_size, NULL) == MESO_OK);
     meso_mesh_view mv;
-    assert(meso_mesh_parse(mb, (size_t)mc->decoded_size, &mv, NULL) == MESO_OK);
+    uint8_t* mb = test_read_level_mesh(f, 1, &mv);
     const uint32_t tris = mv.layout.index_count / 3;
 
     meso_ref_shell rs;
@@ -92,12 +87,7 @@ int main(int argc, char** argv)
     snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' --texture bricks:32 --levels 1 -o '%s' >/dev/null", argv[1],
              test_data("spot_low_resolution.obj"), path);
     assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    uint32_t n = 0;
-    assert(meso_file_levels(f, 1, NULL, 0, &n, NULL) == MESO_OK && n == 1);
-    assert(meso_file_find(f, MESO_CHUNK_LODS, UINT32_MAX, UINT16_MAX) < 0);
-    meso_file_close(f);
+    test_assert_one_level(path);
     test_temp_dir_remove(dir);
     puts("test_shell_standin: ok");
     return 0;
