@@ -5,7 +5,8 @@
  * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
  * optional relief map (§3) and colour map (sampled at the relief
  * coordinates), as one .meso frusta object: SKEL, FRUS, FSEG, BALL, RELF
- * and COLR (FORMAT.md §7.2 kind 4).
+ * and COLR (FORMAT.md §7.2 kind 4); with levels (the default), a triangle
+ * tessellation as level 1 (a MESH at lod 1, frusta_standin.h) and LODS.
  */
 #include "bake_internal.h"
 
@@ -18,8 +19,11 @@
 
 #include "color_map.h"
 #include "frusta_chunks.h"
+#include "frusta_standin.h"
+#include "meso_clock.h"
 #include "frustum_model.h"
 #include "memory_budget.h"
+#include "mesh_chunk.h"
 #include "skeleton_swc.h"
 #include "texture_function.h"
 #if MESO_HAVE_CGAL
@@ -184,8 +188,8 @@ static void report_json(cJSON* rep, const meso_bake_frusta_report* s)
 /* The file: META, RPRT, OBJT, SKEL, FRUS, FSEG, BALL (when there are balls),
  * RELF (with a relief), COLR (with a colour map). */
 static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
-                            const meso_texfn* relief, const meso_color_map* color,
-                            const meso_bake_frusta_report* s, meso_bake_output** out, meso_error* err)
+                            const meso_texfn* relief, const meso_color_map* color, const meso_frusta_standin* st,
+                            meso_bake_frusta_report* s, meso_bake_output** out, meso_error* err)
 {
     uint8_t *frus = NULL, *fseg = NULL, *ball = NULL;
     meso_result r = meso_frusta_object_encode(obj, &frus, &fseg, &ball, err);
@@ -221,9 +225,50 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     r = mesoi_add_input_provenance(inputs, a->input, err);
     if (r == MESO_OK && a->relief_color)
         r = mesoi_add_input_provenance(inputs, a->relief_color, err);
+    meso_mesh_chunk mc = {0};
+    uint8_t lods[2 * MESO_LODS_RECORD_SIZE];
+    meso_level_record lv[2] = {{.object = 1, .lod = 0, .form = MESO_LEVEL_NATIVE},
+                               {.object = 1, .lod = 1, .form = MESO_LEVEL_MESH}};
+    if (r == MESO_OK && st) { /* level 1: the stand-in (frusta_standin.h) */
+        r = meso_bake_mesh_chunk(&st->mesh, NULL, &mc, err);
+        memcpy(lv[0].bbox_min, rec.bbox_min, sizeof lv[0].bbox_min);
+        memcpy(lv[0].bbox_max, rec.bbox_max, sizeof lv[0].bbox_max);
+        memcpy(lv[1].bbox_min, st->bbox_min, sizeof lv[1].bbox_min);
+        memcpy(lv[1].bbox_max, st->bbox_max, sizeof lv[1].bbox_max);
+        lv[1].error = (float)st->error;
+        meso_level_record_encode(&lv[0], lods);
+        meso_level_record_encode(&lv[1], lods + MESO_LODS_RECORD_SIZE);
+        s->level_count = 2;
+        s->standin_triangles = st->mesh.triangle_count;
+        s->standin_vertices = st->mesh.vertex_count;
+        s->standin_bytes = mc.size;
+        s->standin_error = st->error;
+        s->standin_relief_error = st->relief_error;
+        s->standin_chord_error = st->chord_error;
+        cJSON_AddNumberToObject(params, "levels", a->levels); /* as mesh bakes: 0 auto; absent for 1 */
+    }
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
-    mesoi_chunk chunks[6];
+    if (st) {
+        cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
+        for (int L = 0; L < 2; ++L) {
+            cJSON* o = cJSON_CreateObject();
+            cJSON_AddNumberToObject(o, "lod", L);
+            cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
+            cJSON_AddNumberToObject(o, "error", L ? (double)lv[1].error : 0.0);
+            if (L) {
+                cJSON_AddNumberToObject(o, "triangles", s->standin_triangles);
+                cJSON_AddNumberToObject(o, "vertices", s->standin_vertices);
+                cJSON_AddNumberToObject(o, "bytes", (double)s->standin_bytes);
+                cJSON_AddNumberToObject(o, "relief_error", s->standin_relief_error);
+                cJSON_AddNumberToObject(o, "chord_error", s->standin_chord_error);
+                cJSON_AddNumberToObject(o, "cells_around_min", st->nu_min);
+                cJSON_AddNumberToObject(o, "cells_around_max", st->nu_max);
+            }
+            cJSON_AddItemToArray(jl, o);
+        }
+    }
+    mesoi_chunk chunks[8];
     int count = 0;
     chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
                                     .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};
@@ -245,8 +290,17 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8,
                                                  .components = 4, .dims = {color->width, color->height, 1}},
                                         .data = color->rgba, .size = 4 * (size_t)color->width * color->height};
+    if (st && mc.data) {
+        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
+                                                 .lod = 1, .encoding = mc.encoding, .decoded_size = mc.decoded_size},
+                                        .data = mc.data, .size = mc.size};
+        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES, .components = 1,
+                                                 .dims = {2, 1, 1}},
+                                        .data = lods, .size = sizeof lods};
+    }
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
+    free(mc.data);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     free(frus);
@@ -308,11 +362,13 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     if (!a.relief_repeat)
         a.relief_repeat = 1;
     if (!(a.max_joint_angle >= 0 && a.max_joint_angle <= 180) || !(a.relief_repeat > 0 && a.relief_repeat <= 1e4) ||
-        !(a.relief_depth >= 0) || !(a.tolerance >= 0) || !(fabs(a.twist) <= MESO_BAKE_MAX_TWIST))
+        !(a.relief_depth >= 0) || !(a.tolerance >= 0) || !(fabs(a.twist) <= MESO_BAKE_MAX_TWIST) ||
+        a.levels < 0 || a.levels > (int)MESO_BAKE_FRUSTA_MAX_LEVELS)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
                               "frusta options: max_joint_angle in [0, 180], relief_repeat in (0, 10000], "
-                              "relief_depth and tolerance >= 0, |twist| <= %g degrees per unit length",
-                              MESO_BAKE_MAX_TWIST);
+                              "relief_depth and tolerance >= 0, |twist| <= %g degrees per unit length, levels "
+                              "0 (auto) or 1..%u",
+                              MESO_BAKE_MAX_TWIST, MESO_BAKE_FRUSTA_MAX_LEVELS);
     if (a.relief_depth > 0 && !a.relief)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "frusta options: relief_depth needs a relief");
     meso_bake_frusta_report rep_local;
@@ -388,10 +444,33 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
         meso_frusta_relief_params rp = {.depth = depth, .u_repeat = a.relief_repeat};
         r = meso_frusta_object_build(skel, &m, &rp, &obj, err);
     }
+    meso_frusta_standin st = {0};
+    int with_standin = 0;
+    s->level_count = 1;
+    if (r == MESO_OK && a.levels != 1) {
+        const double t = meso_seconds();
+        meso_error serr = {0};
+        const meso_result sr = meso_frusta_standin_build(&obj, a.relief ? &relief : NULL, &st, &serr);
+        if (sr == MESO_OK) {
+            with_standin = 1;
+            mesoi_run_stage(&run, "levels", 0.9, 0.9,
+                            "level 1: %u triangles (%u..%u cells around), error %.4g (relief %.4g, chord %.4g) "
+                            "(%.0f ms)",
+                            st.mesh.triangle_count, st.nu_min, st.nu_max, st.error, st.relief_error,
+                            st.chord_error, 1e3 * (meso_seconds() - t));
+        } else if (sr == MESO_ERR_UNSUPPORTED)
+            mesoi_run_stage(&run, "levels", 0.9, 0.9, "one level: %s", serr.message);
+        else {
+            r = sr;
+            if (err)
+                *err = serr;
+        }
+    }
     if (r == MESO_OK) {
         fill_report(&m, &obj, s);
-        r = assemble(&a, &obj, &relief, &color, s, out, err);
+        r = assemble(&a, &obj, &relief, &color, with_standin ? &st : NULL, s, out, err);
     }
+    meso_frusta_standin_free(&st);
     meso_texfn_free(&relief);
     meso_color_map_free(&color);
     meso_frusta_object_free(&obj);

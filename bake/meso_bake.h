@@ -553,7 +553,14 @@ typedef struct meso_bake_frusta_options {
                                    each segment's twist is twist x its length (a .skel node's
                                    twist=DEG replaces it for its segment); finite, |twist| <=
                                    MESO_BAKE_MAX_TWIST, and no segment over 1000 turns */
+    int levels;                 /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto (today
+                                   level 0 and, as level 1, a triangle tessellation drawn as a plain mesh
+                                   with its measured error; bake/frusta_standin.h), 1 = level 0 only (no
+                                   LODS chunk, the file of earlier bakes), N = at most N
+                                   (1..MESO_BAKE_FRUSTA_MAX_LEVELS; today at most 2 are made) */
 } meso_bake_frusta_options;
+
+#define MESO_BAKE_FRUSTA_MAX_LEVELS 16
 
 /* Largest |meso_bake_frusta_options.twist|: 1000 turns per unit length. */
 #define MESO_BAKE_MAX_TWIST 360000.0
@@ -566,6 +573,12 @@ typedef struct meso_bake_frusta_report {
     double fit_error_max, fit_error_mean; /* mesh input: to the mesh; else how far the fit moved radii */
     double seam_gap_max, seam_gap_mean, radius_change_max;
     double relief_depth;                  /* used (0 without relief) */
+    /* Levels (FORMAT.md §7.10): */
+    uint32_t level_count;      /* levels written, level 0 included (1: no LODS chunk) */
+    uint32_t standin_triangles, standin_vertices; /* level 1's mesh (0 without it) */
+    size_t standin_bytes;      /* its stored MESH payload */
+    double standin_error;      /* its stated error (object units): relief + chord + rounding terms */
+    double standin_relief_error, standin_chord_error; /* the first two terms */
 } meso_bake_frusta_report;
 
 /* The CLI's defaults (max_joint_angle 150, relief_repeat 1). Zero-initialised

@@ -116,15 +116,18 @@ static uint64_t stored_end(const meso_chunk_info* c) { return c->offset + c->sto
 
 /* Bytes and prefix of level `lod` of `object`: the chunks it draws are, per
  * type the object has, the one with the smallest lod >= `lod` (MESH alone
- * for a MESH stand-in); the prefix also covers the file-wide chunks. */
-static void level_extent(const meso_file* f, uint32_t object, uint16_t lod, uint16_t form, meso_level_info* out)
+ * for a MESH stand-in; a frusta object's native levels draw no MESH: its
+ * MESH is the stand-in's); the prefix also covers the file-wide chunks. */
+static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uint16_t lod, uint16_t form,
+                         meso_level_info* out)
 {
     uint64_t bytes = 0, end = 64u + (uint64_t)f->chunk_count * f->toc_entry_size;
     for (uint32_t i = 0; i < f->chunk_count; i++) {
         const meso_chunk_info* c = &f->chunks[i];
         if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
             end = stored_end(c) > end ? stored_end(c) : end;
-        if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH))
+        if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH) ||
+            (form == MESO_LEVEL_NATIVE && kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH))
             continue;
         if (meso_file_find_level(f, c->type, object, lod) != (int32_t)i)
             continue;
@@ -202,7 +205,7 @@ meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_info* out
             continue;
         if (k < cap) {
             out[k].rec = lr;
-            level_extent(f, object, lr.lod, lr.form, &out[k]);
+            level_extent(f, object, rec->kind, lr.lod, lr.form, &out[k]);
         }
         k++;
     }
@@ -212,7 +215,7 @@ meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_info* out
             out[0].rec.object = object;
             memcpy(out[0].rec.bbox_min, rec->bbox_min, sizeof rec->bbox_min);
             memcpy(out[0].rec.bbox_max, rec->bbox_max, sizeof rec->bbox_max);
-            level_extent(f, object, 0, MESO_LEVEL_NATIVE, &out[0]);
+            level_extent(f, object, rec->kind, 0, MESO_LEVEL_NATIVE, &out[0]);
         }
         k = 1;
     }

@@ -167,13 +167,15 @@ uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
 /* Whether chunk i is one the level draws and the loader reads through
  * mesoi_read_whole (FORMAT.md §7.10: per type the smallest lod >= the
  * level's; a MESH stand-in reads MESH alone; TILE and MEMB of a CELLS level
- * come from the cells check). */
+ * come from the cells check) — the chunks meso_file_levels counts. */
 static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint32_t i)
 {
     if (c->object != q->object)
         return 0;
     if (q->form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH)
         return 0;
+    if (q->kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH)
+        return 0; /* a frusta object's MESH is its stand-in's (file_levels.c) */
     if (q->kind == MESO_OBJECT_CELLS && (c->type == MESO_CHUNK_TILE || c->type == MESO_CHUNK_MEMB))
         return 0;
     return meso_file_find_level(q->file, c->type, q->object, q->lod) == (int32_t)i;

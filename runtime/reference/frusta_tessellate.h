@@ -19,8 +19,11 @@
  * only), so a coarse tessellation can show hairline cracks there, as it
  * would in an engine.
  *
- * Not part of libmeso: the benchmarks (tests/bench/bench_frusta_render.c)
- * and mesoinspect use it, beside the references.
+ * The tessellation itself is formats/frusta_tessellation.c (the baker's
+ * mesh stand-in level uses it too); these are its grid rule and the
+ * reference's relief sampler. Not part of libmeso: the benchmarks
+ * (tests/bench/bench_frusta_render.c) and mesoinspect use it, beside the
+ * references.
  */
 #ifndef MESO_FRUSTA_TESSELLATE_H
 #define MESO_FRUSTA_TESSELLATE_H
@@ -28,6 +31,7 @@
 #include <stdint.h>
 
 #include "frusta_pose.h"
+#include "frusta_tessellation.h"
 #include "shell_map.h"
 
 #ifdef __cplusplus
@@ -35,13 +39,7 @@ extern "C" {
 #endif
 
 /* An indexed triangle mesh (malloc'd arrays; free with meso_ref_tess_free). */
-typedef struct meso_ref_tess_mesh {
-    uint32_t vertex_count, index_count;
-    float* positions; /* 3 per vertex */
-    float* normals;   /* 3 per vertex, unit (0 where the grid degenerates) */
-    uint32_t* owner;  /* per vertex: frustum i (its lateral grid or caps) < count, else ball count + j */
-    uint32_t* indices;
-} meso_ref_tess_mesh;
+typedef meso_frusta_tess_mesh meso_ref_tess_mesh;
 
 /* Largest grid the tessellation takes (nu), so every count fits in 32 bits
  * for any sane object. */

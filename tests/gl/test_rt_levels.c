@@ -20,7 +20,11 @@
  *  - A memory budget smaller than the finest levels settles under a static
  *    camera (the pixel-error factor and the levels drawn stop changing, no
  *    more evictions, resident bytes within the budget) and the factor comes
- *    back to 1 when the objects move away. */
+ *    back to 1 when the objects move away.
+ *  - A frusta object baked by mesobake (tests/data/saguaro.skel with a
+ *    brick relief) draws its native level near and its tessellated
+ *    stand-in (level 1, form mesh) far away, covering the same pixels as
+ *    the native level there (its error is under a pixel). */
 #include "test_util.h"
 
 #include <GL/glcorearb.h>
@@ -31,6 +35,7 @@
 #include "egl_context.h"
 #include "gl_api.h"
 #include "gl_fbo.h"
+#include "meso_bake.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
 
@@ -137,6 +142,17 @@ static int growing_read(void* user, uint64_t off, void* dst, size_t n)
 
 static test_fbo fb;
 
+/* Clears, draws `obj` with `d` and returns the depth buffer (malloc'd). */
+static float* draw_depth(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
+{
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw(rt, obj, d) == MESO_OK);
+    float* depth = malloc(sizeof(float) * W * H);
+    assert(depth);
+    test_fbo_read(&fb, NULL, depth);
+    return depth;
+}
+
 /* Draws `obj` seen from distance `dist` (square's centre, 60 degrees off
  * its normal) and returns per column the highest covered row (-1: none). */
 static void draw_at(meso_rt* rt, meso_rt_object obj, double dist, float tau, int top[W])
@@ -147,11 +163,7 @@ static void draw_at(meso_rt* rt, meso_rt_object obj, double dist, float tau, int
     meso_camera_look_at(d.view, eye, c, up);
     meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.01, 1000.0);
     d.pixel_error = tau;
-    test_fbo_clear(&fb, 0, 0, 0);
-    assert(meso_rt_draw(rt, obj, &d) == MESO_OK);
-    float* depth = malloc(sizeof(float) * W * H);
-    assert(depth);
-    test_fbo_read(&fb, NULL, depth);
+    float* depth = draw_depth(rt, obj, &d);
     for (int x = 0; x < W; ++x) {
         top[x] = -1;
         for (int y = 0; y < H; ++y)
@@ -432,6 +444,80 @@ static void frame(meso_rt* rt, const meso_rt_object* objs, double dist)
     meso_rt_frame_end(rt);
 }
 
+/* Covered pixels of the frusta object seen from `dist` times its radius. */
+static int frusta_coverage(meso_rt* rt, meso_rt_object obj, const double c[3], double radius, double dist, float tau,
+                           uint8_t* mask)
+{
+    meso_rt_draw_desc d = {0};
+    const double eye[3] = {c[0] + 0.3 * dist * radius, c[1] + 0.2 * dist * radius, c[2] + dist * radius};
+    const double up[3] = {0, 1, 0};
+    meso_camera_look_at(d.view, eye, c, up);
+    meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.05 * radius, 1000.0 * radius);
+    d.pixel_error = tau;
+    float* depth = draw_depth(rt, obj, &d);
+    int n = 0;
+    for (int i = 0; i < W * H; ++i)
+        n += mask[i] = depth[i] < 1.0f;
+    free(depth);
+    return n;
+}
+
+static void frusta_standin_far_away(meso_rt* rt)
+{
+    meso_bake_frusta_options o = meso_bake_frusta_defaults();
+    o.input = test_data("saguaro.skel");
+    o.relief = "bricks:32";
+    meso_bake_output* out = NULL;
+    meso_error err;
+    assert(meso_bake_frusta(&o, &out, NULL, &err) == MESO_OK);
+    const size_t size = meso_bake_output_size(out);
+    uint8_t* data = malloc(size);
+    assert(data && meso_bake_output_copy(out, data, size, NULL) == MESO_OK);
+    meso_bake_output_free(out);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
+    meso_level_info li[2];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, 2, &n, NULL) == MESO_OK && n == 2 && li[1].rec.form == MESO_LEVEL_MESH);
+    double c[3], radius = 0;
+    for (int k = 0; k < 3; ++k) {
+        c[k] = 0.5 * ((double)li[0].rec.bbox_min[k] + li[0].rec.bbox_max[k]);
+        radius += 0.25 * pow((double)li[0].rec.bbox_max[k] - li[0].rec.bbox_min[k], 2);
+    }
+    radius = sqrt(radius);
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    uint8_t* fine = malloc(W * H);
+    uint8_t* lod = malloc(W * H);
+    assert(fine && lod);
+    meso_rt_levels_state st;
+    int far_seen = 0;
+    for (double dist = 3; dist < 100; dist *= 2) {
+        const int nf = frusta_coverage(rt, obj, c, radius, dist, -1.0f, fine);
+        const int nl = frusta_coverage(rt, obj, c, radius, dist, 1.0f, lod);
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        int differ = 0;
+        for (int i = 0; i < W * H; ++i)
+            differ += fine[i] != lod[i];
+        printf("  frusta at %5.0f radii: level %d, %d px covered (finest %d), %d differ\n", dist, st.last_drawn, nl, nf,
+               differ);
+        fflush(stdout);
+        assert(nf > 0 && nl > 0);
+        if (dist < 4)
+            assert(st.last_drawn == 0); /* near: the native level */
+        if (st.last_drawn == 1)
+            assert(differ <= nf / 3 + 4); /* the stand-in covers what the native level covers, give or take
+                                             its silhouette's pixels */
+        far_seen |= st.last_drawn == 1;
+    }
+    assert(far_seen); /* far away: the stand-in */
+    free(fine);
+    free(lod);
+    meso_rt_release_object(rt, obj);
+    meso_file_close(f);
+    free(data);
+}
+
 static void budget_settles_and_comes_back(const uint8_t* data, size_t size)
 {
     meso_file* f = NULL;
@@ -530,6 +616,7 @@ int main(void)
         pending_reads_are_asked_again(rt, data, size, li);
         requests_decode_off_thread(data, size, li);
     }
+    frusta_standin_far_away(rt);
     budget_settles_and_comes_back(data, size);
     meso_file_close(f);
     meso_rt_destroy(rt);

@@ -231,4 +231,16 @@ cp "$tmp/arm1.meso" "$tmp/keep_me.meso"
 check "failed bake: existing output untouched" cmp -s "$tmp/arm1.meso" "$tmp/keep_me.meso"
 "$bake" frusta --help | grep -q -- "--relief-depth"
 check "--help documents --relief-depth" test $? = 0
+# Levels (FORMAT.md 7.10): a mesh stand-in at lod 1 by default, none with
+# --levels 1 (the stand-in's error bound: test_frusta_standin); bad counts exit 1.
+check "levels: the default file has a MESH and LODS" test -n "$(row "$tmp/arm1.meso" MESH)" -a -n "$(row "$tmp/arm1.meso" LODS)"
+check "levels: report lists them" key "$tmp/arm.json" levels
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/one.meso" --relief bricks:64 --relief-depth 0.05 --levels 1 >/dev/null 2>&1
+check "--levels 1: no MESH, no LODS" test -z "$(row "$tmp/one.meso" MESH)$(row "$tmp/one.meso" LODS)"
+for v in 0 17 two; do
+  "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/lv.meso" --levels "$v" >/dev/null 2>&1
+  check "--levels '$v': exit 1" test $? = 1
+done
+"$bake" frusta --help | grep -q -- "--levels auto|N"
+check "--help documents --levels" test $? = 0
 exit $fail

@@ -12,56 +12,10 @@
 #include <string.h>
 
 #include "camera.h"
+#include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "shell_reference.h"
-
-static double seg_clamp(double t) { return t < 0 ? 0 : t > 1 ? 1 : t; }
-
-/* Distance from p to triangle abc (exact: region tests on the plane). */
-static double point_triangle(const double p[3], const float* a, const float* b, const float* c)
-{
-    double ab[3], ac[3], ap[3], n[3];
-    for (int k = 0; k < 3; ++k) {
-        ab[k] = (double)b[k] - a[k];
-        ac[k] = (double)c[k] - a[k];
-        ap[k] = p[k] - a[k];
-    }
-    n[0] = ab[1] * ac[2] - ab[2] * ac[1];
-    n[1] = ab[2] * ac[0] - ab[0] * ac[2];
-    n[2] = ab[0] * ac[1] - ab[1] * ac[0];
-    const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-    double best = INFINITY;
-    if (nn > 0) {
-        /* Barycentrics of the projection; inside: the plane distance. */
-        const double d00 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2];
-        const double d01 = ab[0] * ac[0] + ab[1] * ac[1] + ab[2] * ac[2];
-        const double d11 = ac[0] * ac[0] + ac[1] * ac[1] + ac[2] * ac[2];
-        const double d20 = ap[0] * ab[0] + ap[1] * ab[1] + ap[2] * ab[2];
-        const double d21 = ap[0] * ac[0] + ap[1] * ac[1] + ap[2] * ac[2];
-        const double den = d00 * d11 - d01 * d01;
-        const double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
-        if (v >= 0 && w >= 0 && v + w <= 1)
-            best = fabs(ap[0] * n[0] + ap[1] * n[1] + ap[2] * n[2]) / sqrt(nn);
-    }
-    const float* e[3][2] = {{a, b}, {b, c}, {c, a}};
-    for (int i = 0; i < 3; ++i) { /* the edges */
-        double d[3], q[3], dd = 0, t = 0;
-        for (int k = 0; k < 3; ++k) {
-            d[k] = (double)e[i][1][k] - e[i][0][k];
-            dd += d[k] * d[k];
-            t += (p[k] - e[i][0][k]) * d[k];
-        }
-        t = dd > 0 ? seg_clamp(t / dd) : 0;
-        double s = 0;
-        for (int k = 0; k < 3; ++k) {
-            q[k] = e[i][0][k] + t * d[k] - p[k];
-            s += q[k] * q[k];
-        }
-        best = fmin(best, sqrt(s));
-    }
-    return best;
-}
 
 static void check(const char* mesobake, const char* dir, const char* name, const char* args)
 {
@@ -79,13 +33,8 @@ static void check(const char* mesobake, const char* dir, const char* name, const
     assert(li[1].rec.form == MESO_LEVEL_MESH && li[1].rec.error > 0);
     const double err = li[1].rec.error;
     /* The stand-in mesh (lod 1). */
-    const int32_t mi = meso_file_find(f, MESO_CHUNK_MESH, 1, 1);
-    assert(mi >= 0);
-    const meso_chunk_info* mc = meso_file_chunk(f, (uint32_t)mi);
-    uint8_t* mb = malloc((size_t)mc->decoded_size);
-    assert(mb && meso_file_read_chunk(f, (uint32_t)mi, mb, (size_t)mc->decoded_size, NULL) == MESO_OK);
     meso_mesh_view mv;
-    assert(meso_mesh_parse(mb, (size_t)mc->decoded_size, &mv, NULL) == MESO_OK);
+    uint8_t* mb = test_read_level_mesh(f, 1, &mv);
     const uint32_t tris = mv.layout.index_count / 3;
 
     meso_ref_shell rs;
@@ -106,7 +55,7 @@ static void check(const char* mesobake, const char* dir, const char* name, const
             const double q[3] = {img.hit[3 * p], img.hit[3 * p + 1], img.hit[3 * p + 2]};
             double d = INFINITY;
             for (uint32_t k = 0; k < tris; ++k)
-                d = fmin(d, point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
+                d = fmin(d, test_point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
                                            mv.positions + 3 * mv.indices[3 * k + 2]));
             worst = fmax(worst, d);
             ++hits;
@@ -138,12 +87,7 @@ int main(int argc, char** argv)
     snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' --texture bricks:32 --levels 1 -o '%s' >/dev/null", argv[1],
              test_data("spot_low_resolution.obj"), path);
     assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    uint32_t n = 0;
-    assert(meso_file_levels(f, 1, NULL, 0, &n, NULL) == MESO_OK && n == 1);
-    assert(meso_file_find(f, MESO_CHUNK_LODS, UINT32_MAX, UINT16_MAX) < 0);
-    meso_file_close(f);
+    test_assert_one_level(path);
     test_temp_dir_remove(dir);
     puts("test_shell_standin: ok");
     return 0;

@@ -3,8 +3,9 @@
  * skeleton_swc.h, or one extracted from a closed mesh) skinned with conical
  * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
  * optional relief map (§3) and colour map, as one .meso frusta object:
- * SKEL, FRUS, FSEG, BALL, RELF and COLR (FORMAT.md §7.2 kind 4). The bake
- * is meso_bake_frusta
+ * SKEL, FRUS, FSEG, BALL, RELF and COLR (FORMAT.md §7.2 kind 4), and by
+ * default a triangle tessellation as level 1 (MESH at lod 1, LODS; FORMAT.md
+ * §7.10). The bake is meso_bake_frusta
  * (bake/bake_frusta.c); this file parses the options.
  */
 #include <math.h>
@@ -64,6 +65,16 @@ static const char* const usage_frusta =
     "                          1000 turns per segment\n";
 
 static const char* const usage_frusta_end =
+    "Levels of detail:\n"
+    "      --levels auto|N     auto (default): also store level 1, the frusta as a plain triangle\n"
+    "                          mesh (a MESH at lod 1) drawn where its error is under the pixel\n"
+    "                          budget: every frustum, cap and ball tessellated at the mid-relief\n"
+    "                          cone (relief not in the vertices), a few cells around each part;\n"
+    "                          its error (object units, both ways, stored in LODS and reported as\n"
+    "                          levels[1]) is half the relief's height range, scaled by how far a\n"
+    "                          tilted cutting plane lets the surface slide, plus the chord error.\n"
+    "                          N (1..16): at most N levels (today at most 2 are made); 1: level 0\n"
+    "                          only, no LODS chunk (the file of earlier bakes)\n"
     "Other:\n"
     "      --report FILE       the bake report as JSON: segments, joints, branch_points,\n"
     "                          cap_intersections_found, cap_intersections_unhandled,\n"
@@ -121,7 +132,7 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             continue;
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tolerance",
-            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat", "--relief-color", "--twist"};
+            "--max-joint-angle", "--relief", "--relief-depth", "--relief-repeat", "--relief-color", "--twist", "--levels"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -133,7 +144,16 @@ static int parse_args(int argc, char** argv, frusta_args* a)
             o->relief = v;
         else if (!strcmp(s, "--relief-color"))
             o->relief_color = v;
-        else if (!strcmp(s, "--tolerance")) {
+        else if (!strcmp(s, "--levels")) {
+            long n;
+            if (!strcmp(v, "auto"))
+                o->levels = 0;
+            else if (meso_bake_parse_long(v, 1, MESO_BAKE_FRUSTA_MAX_LEVELS, &n))
+                o->levels = (int)n;
+            else
+                return usage_error("--levels expects auto or a level count in 1..%u, got '%s'",
+                                   MESO_BAKE_FRUSTA_MAX_LEVELS, v);
+        } else if (!strcmp(s, "--tolerance")) {
             if (!meso_bake_parse_positive(v, &o->tolerance))
                 return usage_error("--tolerance expects a positive length, got '%s'", v);
         } else if (!strcmp(s, "--max-joint-angle")) {
