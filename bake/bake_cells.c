@@ -298,6 +298,13 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
     if (r != MESO_OK)
         return r;
     s->surface_faces = se.faces;
+    if (se.too_many) {
+        mesoi_run_warning(run, 0,
+                          "the cells draw more than %u voxel faces: the stand-in's error is not measured, so no "
+                          "levels (--levels 1 asks for none)",
+                          MESO_CELLS_STANDIN_MAX_FACES);
+        return MESO_OK;
+    }
     if (!isfinite(se.bound) || !(se.bound < 1e30)) {
         mesoi_run_warning(run, 0, "no cell is inside the mesh: nothing drawn, so no stand-in level");
         return MESO_OK;

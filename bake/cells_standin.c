@@ -51,6 +51,10 @@
  * distance to S' (mesh_levels.c): Hausdorff distances obey the triangle
  * inequality.
  *
+ * At most MESO_CELLS_STANDIN_MAX_FACES faces are measured (a bigger
+ * surface gets no bound, and the bake no stand-in): the demo's torus of
+ * sphere cells at 768 voxels across has 4.4 M faces and took 40 s and
+ * 860 MB this way, against 0.8 s for the bake without levels.
  * Cost: one pass over the voxels of the tiles that are not OUTSIDE (six
  * neighbour tests per SOLID voxel), 72 bytes per face for the soup, 96 for
  * its f64 copy and the triangle grid over it; the queries run on OpenMP.
@@ -71,6 +75,7 @@ typedef struct soup {
     float* xyz;
     uint32_t* tri;
     uint64_t faces, cap;
+    int count_only; /* 1: add_face counts */
 } soup;
 
 static int solid(const meso_voxel_grid* g, const meso_split_cells* sc, const meso_membership* mb, int64_t i, int64_t j,
@@ -88,6 +93,10 @@ static int solid(const meso_voxel_grid* g, const meso_split_cells* sc, const mes
 /* The face of voxel (i, j, k) on side `dir` (axis dir / 2, + when odd). */
 static int add_face(soup* s, const meso_voxel_grid* g, int64_t i, int64_t j, int64_t k, int dir)
 {
+    if (s->count_only) {
+        ++s->faces;
+        return 1;
+    }
     if (s->faces == s->cap) {
         const uint64_t cap = s->cap ? 2 * s->cap : 4096;
         if (cap > (UINT32_MAX / 4))
@@ -312,7 +321,19 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells stand-in: no mesh, or split cells and grid disagree");
     soup s = {0};
     const int64_t R = g->tile_res;
-    int ok = 1;
+    int ok = 1, too_many = 0;
+    /* Pass 0 counts (and stops past the limit), pass 1 lists. */
+    for (int pass = 0; pass < 2 && ok; ++pass) {
+    if (pass == 1) {
+        s.cap = s.faces ? s.faces : 1;
+        s.faces = 0;
+        s.count_only = 0;
+        s.xyz = malloc(sizeof(float) * 12 * s.cap);
+        s.tri = malloc(sizeof(uint32_t) * 6 * s.cap);
+        ok = s.xyz && s.tri;
+    } else {
+        s.count_only = 1;
+    }
     for (uint32_t tz = 0; ok && tz < g->tiles[2]; ++tz)
         for (uint32_t ty = 0; ok && ty < g->tiles[1]; ++ty)
             for (uint32_t tx = 0; ok && tx < g->tiles[0]; ++tx) {
@@ -327,11 +348,26 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
                             for (int dir = 0; ok && dir < 6; ++dir) {
                                 const int64_t step = (dir & 1) ? 1 : -1;
                                 const int a = dir / 2;
-                                if (!solid(g, sc, mb, i + (a == 0) * step, j + (a == 1) * step, k + (a == 2) * step))
-                                    ok = add_face(&s, g, i, j, k, dir);
+                                if (!solid(g, sc, mb, i + (a == 0) * step, j + (a == 1) * step, k + (a == 2) * step)) {
+                                    if (s.faces == MESO_CELLS_STANDIN_MAX_FACES) {
+                                        too_many = 1;
+                                        ok = 0;
+                                    } else {
+                                        ok = add_face(&s, g, i, j, k, dir);
+                                    }
+                                }
                             }
                         }
             }
+    }
+    if (too_many) { /* not measured: no bound */
+        free(s.xyz);
+        free(s.tri);
+        out->faces = s.faces;
+        out->bound = INFINITY;
+        out->too_many = 1;
+        return MESO_OK;
+    }
     meso_result r = ok ? MESO_OK
                        : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0,
                                         "cells stand-in: out of memory for the surface's voxel faces (%llu so far)",
