@@ -7,6 +7,11 @@
  * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h),
  * and with `--colour from-mesh[:G]` the mesh's base colour as a TX3D colour
  * grid (mesh_colour_grid.h; COLR then holds the default hash colours).
+ * Levels of detail (FORMAT.md §7.10, `--levels`): level 1 is the base mesh
+ * drawn as a plain mesh, its error measured against the voxel faces the
+ * object draws (cells_standin.h); coarser levels are the base mesh's
+ * simplifications (mesh_levels.h), each with error = the base's + the
+ * simplification's (the triangle inequality of Hausdorff distances).
  * Error messages name the options as mesobake spells them (--tile-map ...).
  */
 #include "bake_internal.h"
@@ -20,6 +25,8 @@
 #include <cjson/cJSON.h>
 
 #include "cells_chunks.h"
+#include "cells_standin.h"
+#include "mesh_levels.h"
 #include "mesh_colour_grid.h"
 #include "memory_budget.h"
 #include "mesh_check.h"
@@ -260,15 +267,87 @@ typedef struct colour_grid {
     uint8_t* rgba; /* NULL: none */
 } colour_grid;
 
-static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m, const meso_voxel_grid* g,
-                            uint32_t R, const meso_split_cells* sc, const meso_cells_chunks* cc,
-                            const colour_grid* cg, const meso_bake_cells_report* s, meso_bake_output** out,
-                            meso_error* err)
+/* The stand-in levels: level 1 the base mesh (error e0), level 1 + k the
+ * base mesh's simplified level k (error e0 + its own). */
+typedef struct standin_levels {
+    uint32_t count;           /* stand-in levels (0: none, no LODS) */
+    double e0;                /* the base mesh's error */
+    meso_mesh_level* chain;   /* the simplified meshes, count - 1 of them */
+    uint32_t chain_count;
+} standin_levels;
+
+/* f32 no smaller than x: a stored bound stays a bound. */
+static float f32_up(double x)
 {
-    meso_mesh_chunk mesh_chunk = {0};
-    meso_result r = meso_bake_mesh_chunk(m, NULL, &mesh_chunk, err);
+    float f = (float)x;
+    if ((double)f < x)
+        f = nextafterf(f, INFINITY);
+    return f;
+}
+
+static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_options* a, const meso_mesh* m,
+                               const meso_voxel_grid* g, const meso_split_cells* sc, const meso_membership* mb,
+                               standin_levels* out, meso_bake_cells_report* s, meso_error* err)
+{
+    memset(out, 0, sizeof *out);
+    if (a->levels == 1)
+        return MESO_OK;
+    const double t = meso_seconds();
+    meso_cells_standin_error se;
+    meso_result r = meso_cells_standin_measure(m, g, sc, mb, run->common.threads, &se, err);
     if (r != MESO_OK)
         return r;
+    s->surface_faces = se.faces;
+    if (se.too_many) {
+        mesoi_run_warning(run, 0,
+                          "the cells draw more than %u voxel faces: the stand-in's error is not measured, so no "
+                          "levels (--levels 1 asks for none)",
+                          MESO_CELLS_STANDIN_MAX_FACES);
+        return MESO_OK;
+    }
+    if (!isfinite(se.bound) || !(se.bound < 1e30)) {
+        mesoi_run_warning(run, 0, "no cell is inside the mesh: nothing drawn, so no stand-in level");
+        return MESO_OK;
+    }
+    out->e0 = se.bound;
+    out->count = 1;
+#if !MESO_HAVE_MESHOPTIMIZER
+    if (a->levels == 0)
+        mesoi_run_warning(run, 0, "built without meshoptimizer: the base mesh is the only stand-in");
+    else
+#endif
+        if (a->levels != 2) {
+        const meso_mesh_levels_options lo = {.max_levels = a->levels ? a->levels - 1 : 0,
+                                             .threads = run->common.threads};
+        r = meso_mesh_levels_build(m, &lo, &out->chain, &out->chain_count, err);
+        if (r != MESO_OK)
+            return r;
+        out->count += out->chain_count;
+    }
+    mesoi_run_stage(run, "levels", 0.97, 0.97,
+                    "stand-in: base mesh within %g of the %llu voxel faces drawn (sampled %g, radius %g); %u "
+                    "simplified levels (%.0f ms)",
+                    se.bound, (unsigned long long)se.faces, se.sampled, se.radius, out->chain_count,
+                    1e3 * (meso_seconds() - t));
+    return MESO_OK;
+}
+
+static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m, const meso_voxel_grid* g,
+                            uint32_t R, const meso_split_cells* sc, const meso_cells_chunks* cc,
+                            const colour_grid* cg, const standin_levels* lv, meso_bake_cells_report* s,
+                            meso_bake_output** out, meso_error* err)
+{
+    meso_mesh_chunk mesh_chunk = {0};
+    meso_mesh_chunk level_chunk[MESO_BAKE_CELLS_MAX_LEVELS] = {{0}};
+    meso_result r = meso_bake_mesh_chunk(m, NULL, &mesh_chunk, err);
+    for (uint32_t k = 0; r == MESO_OK && lv->count && k < lv->chain_count; ++k)
+        r = meso_bake_mesh_chunk(&lv->chain[k].mesh, NULL, &level_chunk[k], err);
+    if (r != MESO_OK) {
+        free(mesh_chunk.data);
+        for (uint32_t k = 0; k < MESO_BAKE_CELLS_MAX_LEVELS; ++k)
+            free(level_chunk[k].data);
+        return r;
+    }
     meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_CELLS};
     for (int k = 0; k < 3; ++k) {
         rec.bbox_min[k] = (float)g->origin[k];
@@ -282,12 +361,14 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     cJSON_AddNumberToObject(params, "tiles", g->tiles[0]);
     cJSON_AddStringToObject(params, "colour", a->colour);
     cJSON_AddStringToObject(params, "voxelizer", a->voxelizer);
+    if (a->levels != 1) /* --levels 1 keeps the META of earlier versions */
+        cJSON_AddNumberToObject(params, "levels", a->levels);
     r = mesoi_add_provenance(cJSON_AddArrayToObject(meta, "inputs"), a->input, a->mesh, err);
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
 
     const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED, S = sc->split_count;
-    mesoi_chunk chunks[8];
+    mesoi_chunk chunks[8 + MESO_BAKE_CELLS_MAX_LEVELS + 1];
     chunks[0] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
                                        .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
                               .data = mesh_chunk.data, .size = mesh_chunk.size};
@@ -303,11 +384,68 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     if (cg->rgba) /* the mesh's base colour (FORMAT.md 7.2 kind 3): replaces COLR's as the albedo */
         chunks[count++] = typed_chunk(MESO_CHUNK_TX3D, 0, MESO_DTYPE_U8, 4, cg->dims[0], cg->dims[1], cg->dims[2],
                                       cg->rgba, 4 * (size_t)cg->dims[0] * cg->dims[1] * cg->dims[2]);
+    /* The stand-ins (FORMAT.md §7.10 form MESH): the base mesh's bytes again
+     * at lod 1, the simplified meshes at lod 2.., and the LODS records. */
+    uint8_t lods[MESO_BAKE_CELLS_MAX_LEVELS * MESO_LODS_RECORD_SIZE];
+    s->level_count = 1;
+    s->level_triangles[0] = m->triangle_count;
+    if (lv->count) {
+        cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
+        for (uint32_t L = 0; L <= lv->count; ++L) {
+            meso_level_record lr = {.object = 1, .lod = (uint16_t)L,
+                                    .form = L ? MESO_LEVEL_MESH : MESO_LEVEL_NATIVE};
+            const meso_mesh* lm = L <= 1 ? m : &lv->chain[L - 2].mesh;
+            double e = 0;
+            if (L == 0) {
+                memcpy(lr.bbox_min, rec.bbox_min, sizeof lr.bbox_min);
+                memcpy(lr.bbox_max, rec.bbox_max, sizeof lr.bbox_max);
+            } else if (L == 1) {
+                double lo[3], hi[3];
+                meso_mesh_bounds(m, lo, hi);
+                for (int k = 0; k < 3; ++k) {
+                    lr.bbox_min[k] = (float)lo[k];
+                    lr.bbox_max[k] = (float)hi[k];
+                }
+                e = lv->e0;
+                chunks[count] = chunks[0];
+                chunks[count++].desc.lod = 1;
+            } else {
+                const meso_mesh_level* c = &lv->chain[L - 2];
+                for (int k = 0; k < 3; ++k) {
+                    lr.bbox_min[k] = (float)c->bbox_min[k];
+                    lr.bbox_max[k] = (float)c->bbox_max[k];
+                }
+                e = lv->e0 + c->error;
+                chunks[count++] = (mesoi_chunk){
+                    .desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1, .lod = (uint16_t)L,
+                             .encoding = level_chunk[L - 2].encoding, .decoded_size = level_chunk[L - 2].decoded_size},
+                    .data = level_chunk[L - 2].data, .size = level_chunk[L - 2].size};
+            }
+            lr.error = f32_up(e);
+            meso_level_record_encode(&lr, lods + (size_t)MESO_LODS_RECORD_SIZE * L);
+            s->level_error[L] = lr.error;
+            s->level_triangles[L] = lm->triangle_count;
+            cJSON* o = cJSON_CreateObject();
+            cJSON_AddNumberToObject(o, "lod", L);
+            cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
+            cJSON_AddNumberToObject(o, "error", (double)lr.error);
+            cJSON_AddNumberToObject(o, "triangles", lm->triangle_count);
+            cJSON_AddNumberToObject(o, "mesh_bytes", (double)(L >= 2 ? level_chunk[L - 2].size : mesh_chunk.size));
+            cJSON_AddItemToArray(jl, o);
+        }
+        cJSON_AddNumberToObject(rep, "surface_faces", (double)s->surface_faces);
+        s->level_count = lv->count + 1;
+        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES,
+                                                 .components = 1, .dims = {lv->count + 1, 1, 1}},
+                                        .data = lods, .size = (size_t)MESO_LODS_RECORD_SIZE * (lv->count + 1)};
+    }
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     free(mesh_chunk.data);
+    for (uint32_t k = 0; k < MESO_BAKE_CELLS_MAX_LEVELS; ++k)
+        free(level_chunk[k].data);
     return r;
 }
 
@@ -330,9 +468,10 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "voxelizer '%s': expected auto, vdb, parity or winding",
                               a->voxelizer);
     if (a->tiles > MESO_BAKE_MAX_TILES || a->tile_res > MESO_BAKE_MAX_TILE_RES || (a->tiles && a->cell_size > 0) ||
-        !(a->cell_size >= 0 && a->cell_size < 1e30))
+        !(a->cell_size >= 0 && a->cell_size < 1e30) || a->levels < 0 || a->levels > (int)MESO_BAKE_CELLS_MAX_LEVELS)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
-                              "cells options: tiles 0..16384 or cell_size > 0 (not both), tile_res 0..1024");
+                              "cells options: tiles 0..16384 or cell_size > 0 (not both), tile_res 0..1024, levels 0..%u",
+                              MESO_BAKE_CELLS_MAX_LEVELS);
     meso_bake_cells_report rep_local;
     meso_bake_cells_report* s = report ? report : &rep_local;
     memset(s, 0, sizeof(*s));
@@ -436,8 +575,13 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
         s->tile_map_bytes = cc.tile_size;
         s->normal_map_bytes = cc.nrmm_size;
         s->colour_map_bytes = cc.colr_size;
-        r = assemble(a, &m, &g, R, &sc, &cc, &cg, s, out, err);
     }
+    standin_levels lv = {0};
+    if (r == MESO_OK)
+        r = make_levels(&run, a, &m, &g, &sc, &mb, &lv, s, err);
+    if (r == MESO_OK)
+        r = assemble(a, &m, &g, R, &sc, &cc, &cg, &lv, s, out, err);
+    meso_mesh_levels_free(lv.chain, lv.chain_count);
     meso_cells_chunks_free(&cc);
     free(cg.rgba);
     meso_mesh_materials_free(&mats);

@@ -509,7 +509,15 @@ typedef struct meso_bake_cells_options {
     const char* tile_map;  /* voronoi[:SEEDS[:RNG]] | spheres[:N[:RADIUS]] | FILE.raw:R; NULL = "voronoi" */
     const char* colour;    /* hash[:SEED] | FILE.raw:R | from-mesh[:G]; NULL = "hash" */
     const char* voxelizer; /* auto | parity | vdb | winding; NULL = "auto" */
+    int levels;            /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto: level 1 the
+                              base mesh drawn as a plain mesh in the object's place, with its measured error
+                              (bake/cells_standin.c), then the base mesh's simplified levels (meshoptimizer,
+                              as meso_bake_mesh's auto), each stand-in's error the base's plus its own;
+                              1 = level 0 only (no LODS chunk, the file of earlier bakes); N = at most N
+                              (1..MESO_BAKE_CELLS_MAX_LEVELS) */
 } meso_bake_cells_options;
+
+#define MESO_BAKE_CELLS_MAX_LEVELS 9 /* level 0, the base mesh, 7 simplified meshes */
 
 typedef struct meso_bake_cells_report {
     meso_bake_mesh_fixes fixes;
@@ -523,6 +531,10 @@ typedef struct meso_bake_cells_report {
     const char* voxelizer;                /* the one used: "parity" or "winding" (static) */
     size_t membership_bytes, tile_map_bytes, normal_map_bytes, colour_map_bytes;
     uint64_t memory_estimate;             /* bytes, checked against max_memory */
+    uint32_t level_count;                 /* levels written, level 0 included (1: no LODS chunk) */
+    double level_error[MESO_BAKE_CELLS_MAX_LEVELS];   /* object units, stored rounded up to f32 */
+    uint32_t level_triangles[MESO_BAKE_CELLS_MAX_LEVELS]; /* stand-ins (levels >= 1); level 0: the base mesh */
+    uint64_t surface_faces;               /* voxel faces of the drawn surface the stand-in error was measured on */
 } meso_bake_cells_report;
 
 /* All zero (NULL specs mean the defaults above). */

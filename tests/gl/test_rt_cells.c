@@ -5,7 +5,8 @@
  * cells (empty space in the map) in the bundled sphere and torus, first hit
  * from several directions, specular self-reflection with 0..3 bounces,
  * refraction, the host's own environment cube map (and its binding kept),
- * the camera inside the object, the thesis's linear search
+ * the camera inside the object, mesh stand-in levels far away, the
+ * thesis's linear search
  * against the exact traversal on thin plates at grazing angles (its known
  * failure, reproduced and measured), the GL state contract and malformed
  * files.
@@ -263,6 +264,78 @@ static void test_first_hit(ctx* c)
         check_close(name, render_compare(c, name, &l, &cam, NULL), 0.01);
     }
     unload(c, &l);
+}
+
+/* Levels of detail (FORMAT.md §7.10, meso_rt_load_object_levels): the
+ * Voronoi bake of test_first_hit carries mesh stand-ins (mesobake cells
+ * --levels auto). With a pixel error of 4, close up the cells themselves
+ * are drawn (level 0); moved away, at the first distance at which a
+ * stand-in is drawn, its image matches the reference's cells within the
+ * pixel error (+1 for rasterising): every pixel either covers has one the
+ * other covers within 5 pixels. (At 1 px the sphere's stand-in, 16 voxels
+ * of carving, is drawn only once it covers a dozen pixels.) */
+enum { TAU = 4 };
+
+static void test_levels(ctx* c)
+{
+    char path[256];
+    snprintf(path, sizeof path, "%s/voronoi.meso", c->dir);
+    meso_object_record rec;
+    double lo[3], hi[3];
+    meso_file* f = open_single_object(path, &rec, lo, hi);
+    meso_ref_cells ref;
+    meso_error err;
+    CHECK_MSG(meso_ref_cells_load(f, rec.id, &ref, &err) == MESO_OK, "%s", err.message);
+    meso_rt_object obj;
+    CHECK_MSG(meso_rt_load_object_levels(c->rt, f, rec.id, &obj) == MESO_OK, "%s", c->log.message);
+    int standin = 0;
+    for (double scale = 1; scale <= 64 && !standin; scale *= 2) {
+        const camera cam = view_box(&(loaded){.lo = {lo[0], lo[1], lo[2]}, .hi = {hi[0], hi[1], hi[2]}}, dirs[0],
+                                    scale);
+        meso_rt_draw_desc d = {.pixel_error = (float)TAU};
+        camera_matrices(&cam, d.view, d.proj);
+        test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
+        CHECK_MSG(meso_rt_draw(c->rt, obj, &d) == MESO_OK, "%s", c->log.message);
+        test_fbo_read(&c->fbo, c->rgba, c->depth);
+        meso_rt_levels_state st;
+        CHECK(meso_rt_levels_state_get(c->rt, obj, &st) == MESO_OK && st.level_count >= 2);
+        if (scale == 1)
+            CHECK_MSG(st.last_drawn == 0, "close up: level %d drawn, not the cells", st.last_drawn);
+        if (st.last_drawn < 1)
+            continue;
+        standin = 1;
+        meso_ref_view v = {.width = W, .height = H};
+        for (int i = 0; i < 16; ++i)
+            v.view[i] = d.view[i], v.proj[i] = d.proj[i];
+        meso_ref_image img;
+        CHECK(meso_ref_cells_render(&ref, &v, NULL, &img) == MESO_OK);
+        long gl = 0, rf = 0, lonely = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const int g = c->depth[y * W + x] < 1.0f, r = img.coverage[y * W + x];
+                gl += g;
+                rf += r;
+                if (g == r)
+                    continue;
+                int near = 0; /* the other image covers a pixel within TAU + 1 */
+                for (int dy = -TAU - 1; dy <= TAU + 1 && !near; ++dy)
+                    for (int dx = -TAU - 1; dx <= TAU + 1 && !near; ++dx) {
+                        const int xx = x + dx, yy = y + dy;
+                        if (xx >= 0 && yy >= 0 && xx < W && yy < H)
+                            near = g ? img.coverage[yy * W + xx] : c->depth[yy * W + xx] < 1.0f;
+                    }
+                lonely += !near;
+            }
+        printf("%-28s distance x%.0f: level %d drawn, covered gl %ld ref %ld, %ld pixels with no partner within %d\n",
+               "levels_standin", scale, st.last_drawn, gl, rf, lonely, TAU + 1);
+        CHECK_MSG(rf > 100 && lonely == 0, "stand-in at x%.0f: %ld of %ld/%ld pixels without a partner", scale, lonely,
+                  gl, rf);
+        meso_ref_image_free(&img);
+    }
+    CHECK_MSG(standin, "no stand-in level drawn up to 64 times the fill distance");
+    meso_rt_release_object(c->rt, obj);
+    meso_ref_cells_free(&ref);
+    meso_file_close(f);
 }
 
 /* The mesh's colour grid (--colour from-mesh, FORMAT.md 7.2 kind 3 TX3D):
@@ -606,6 +679,7 @@ int main(int argc, char** argv)
     c.depth = malloc(sizeof(float) * W * H);
 
     test_first_hit(&c);
+    test_levels(&c);
     test_colour_grid(&c);
     test_reflection_refraction(&c);
     test_environment(&c);

@@ -15,6 +15,7 @@
 #include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
+#include "point_triangle.h"
 #include "shell_reference.h"
 
 static void check(const char* mesobake, const char* dir, const char* name, const char* args)

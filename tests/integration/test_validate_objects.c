@@ -413,7 +413,8 @@ int main(int argc, char** argv)
     bake_file("frusta", args);
     snprintf(args, sizeof args, "shell -i '%s/sphere.obj' --texture boil:16 --frames 4 --dist-res 8x8x8", data);
     bake_file("anim", args);
-    snprintf(args, sizeof args, "cells -i '%s/sphere.obj' --tiles 2 --tile-res 8", data);
+    /* One level: the cases below mutate and drop "the" MESH too. */
+    snprintf(args, sizeof args, "cells -i '%s/sphere.obj' --tiles 2 --tile-res 8 --levels 1", data);
     bake_file("cells", args);
     snprintf(args, sizeof args, "shell -i '%s/gltf/box.gltf' --texture ribs:16 --dist-res 8x8x4 --tiling 2 --color from-mesh",
              data);

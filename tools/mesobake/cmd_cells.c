@@ -4,7 +4,8 @@
  * the base mesh, CELL, TILE, SPLT, MEMB, NRMM and COLR (FORMAT.md §7.2
  * kind 3, §7.8). Stages: tile map (tile_map.h) → split cells
  * (split_cells.h) → exact sparse voxelization and membership
- * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h).
+ * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h)
+ * → levels of detail (cells_standin.h, mesh_levels.h).
  * The bake is meso_bake_cells (bake/bake_cells.c); this file parses the
  * options.
  */
@@ -46,10 +47,19 @@ static const char* const usage_cells =
     "                          parity, vdb: exact ray parity (closed meshes only; 'vdb' is an alias:\n"
     "                          the exact path replaced OpenVDB, which misclassifies near the surface)\n"
     "                          winding: generalized winding number (open or defective meshes)\n"
+    "Levels of detail:\n"
+    "      --levels auto|N     auto (default): also store the base mesh as level 1, drawn as a\n"
+    "                          plain mesh in the object's place, with its error: a measured bound\n"
+    "                          of the distance between it and the cells' voxel faces drawn, both\n"
+    "                          ways (empty cells carve below the mesh); then the base mesh's\n"
+    "                          simplified levels (meshoptimizer, as mesobake mesh --levels auto),\n"
+    "                          each with the base's error plus its own (LODS). N (1..9): at most\n"
+    "                          N levels; 1 = level 0 only (no LODS chunk), 2 = the base mesh only\n"
     "Other:\n"
     "  -j, --threads N         threads (default: all cores); the output does not depend on it\n"
     "      --report FILE       the bake report as JSON: tiles, split_cells, cells_inside,\n"
-    "                          cells_outside, cells_intersected, bytes, seconds_total, voxelizer, ...\n"
+    "                          cells_outside, cells_intersected, bytes, seconds_total, voxelizer,\n"
+    "                          levels (lod, form, error, triangles, mesh_bytes), ...\n"
     MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this text\n";
@@ -79,7 +89,7 @@ static int parse_args(int argc, char** argv, cells_args* a)
             continue;
         }
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--tiles", "--cell-size",
-            "--tile-res", "--tile-map", "--colour", "--color", "--voxelizer", "-j", "--threads"};
+            "--tile-res", "--tile-map", "--colour", "--color", "--voxelizer", "-j", "--threads", "--levels"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -95,6 +105,14 @@ static int parse_args(int argc, char** argv, cells_args* a)
             if (strcmp(v, "auto") && strcmp(v, "vdb") && strcmp(v, "parity") && strcmp(v, "winding"))
                 return usage_error("--voxelizer expects auto, vdb, parity or winding, got '%s'", v);
             o->voxelizer = v;
+        } else if (!strcmp(s, "--levels")) {
+            if (!strcmp(v, "auto"))
+                o->levels = 0;
+            else if (meso_bake_parse_long(v, 1, MESO_BAKE_CELLS_MAX_LEVELS, &n))
+                o->levels = (int)n;
+            else
+                return usage_error("--levels expects auto or a level count in 1..%u, got '%s'",
+                                   MESO_BAKE_CELLS_MAX_LEVELS, v);
         } else if (!strcmp(s, "--tiles")) {
             if (!meso_bake_parse_long(v, 1, MESO_BAKE_MAX_TILES, &n))
                 return usage_error("--tiles expects an integer in 1..16384, got '%s'", v);

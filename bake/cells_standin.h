@@ -1,0 +1,39 @@
+/*
+ * cells_standin.h — the error of a mesh drawn in a cells object's place
+ * (internal; FORMAT.md §7.10 form MESH, issue 14): a measured upper bound
+ * of the two-sided distance between the surface the cells object draws
+ * and a stand-in mesh. cells_standin.c says what is measured and why it is
+ * a bound.
+ */
+#ifndef MESO_CELLS_STANDIN_H
+#define MESO_CELLS_STANDIN_H
+
+#include <stdint.h>
+
+#include "membership.h"
+#include "split_cells.h"
+#include "voxelize.h"
+
+/* The largest surface measured: about 170 bytes per face are held while
+ * measuring (cells_standin.c). */
+#define MESO_CELLS_STANDIN_MAX_FACES (1u << 20)
+
+typedef struct meso_cells_standin_error {
+    double bound;      /* the error to store: two-sided, object units */
+    double sampled;    /* largest sample distance, either way (max(d_A, d_B) in cells_standin.c) */
+    double radius;     /* the larger sampling radius included in bound (h / sqrt(2) or the stand-in's) */
+    uint64_t faces;    /* voxel faces of the cells surface (counted up to the limit) */
+    int too_many;      /* 1: more than MESO_CELLS_STANDIN_MAX_FACES faces; bound = +inf, not measured */
+} meso_cells_standin_error;
+
+/* The bound for stand-in mesh `m` (at least one triangle) against the
+ * solid of the split cells `sc` tagged INSIDE by `mb` over grid `g`.
+ * A solid without faces (nothing INSIDE) gets bound = +inf (no stand-in
+ * can be within a finite distance of nothing), one with more than
+ * MESO_CELLS_STANDIN_MAX_FACES too (too_many = 1: not measured). threads <= 0: all cores;
+ * the result does not depend on it. */
+meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid* g, const meso_split_cells* sc,
+                                       const meso_membership* mb, int threads, meso_cells_standin_error* out,
+                                       meso_error* err);
+
+#endif /* MESO_CELLS_STANDIN_H */

@@ -1,0 +1,238 @@
+/* A cells object's mesh stand-ins (FORMAT.md §7.10 form MESH; issue 14):
+ * level 1 the base mesh, coarser levels its simplifications, each with the
+ * error mesobake states. Checked against the exact CPU reference, both
+ * ways, from several views:
+ *  - every surface point the reference ray caster hits (the voxel faces the
+ *    object draws, carved by the empty cells) lies within the stated error
+ *    of the level's mesh (brute force over its triangles);
+ *  - every point the same pixel rays hit on the level's mesh (brute force
+ *    ray-triangle) lies within the stated error of the drawn surface: the
+ *    faces between SOLID and non-SOLID voxels of meso_ref_cells_solid,
+ *    listed by brute force over the grid;
+ * and the bound is not loose (the farthest point reaches a fair part of
+ * it). Level 1 and the coarsest level are checked (the levels between are
+ * made the same way). The file validates in full, the report has "levels", errors do not
+ * decrease, and `--levels 1` writes one level and no LODS.
+ * usage: test_cells_standin MESOBAKE */
+#include "test_util.h"
+
+#include <string.h>
+
+#include "camera.h"
+#include "cell_reference.h"
+#include "meso_file.h"
+#include "meso_layout.h"
+#include "point_triangle.h"
+#include "ref_common.h"
+
+/* The drawn surface: one axis-aligned unit square per SOLID voxel face
+ * whose neighbour is not SOLID (lo corner and axis). */
+typedef struct faces {
+    double* lo; /* 3 per face: the face's min corner */
+    int* axis;  /* the normal's axis */
+    size_t n, cap;
+} faces;
+
+static void list_faces(const meso_ref_cells* c, faces* fs)
+{
+    memset(fs, 0, sizeof *fs);
+    const int64_t N[3] = {(int64_t)c->tiles[0] * c->res, (int64_t)c->tiles[1] * c->res,
+                          (int64_t)c->tiles[2] * c->res};
+    for (int64_t k = 0; k < N[2]; ++k)
+        for (int64_t j = 0; j < N[1]; ++j)
+            for (int64_t i = 0; i < N[0]; ++i) {
+                if (!meso_ref_cells_solid(c, i, j, k))
+                    continue;
+                for (int dir = 0; dir < 6; ++dir) {
+                    const int a = dir / 2;
+                    const int64_t s = dir & 1 ? 1 : -1;
+                    int64_t q[3] = {i, j, k};
+                    q[a] += s;
+                    if (meso_ref_cells_solid(c, q[0], q[1], q[2]))
+                        continue;
+                    if (fs->n == fs->cap) {
+                        fs->cap = fs->cap ? 2 * fs->cap : 1024;
+                        fs->lo = realloc(fs->lo, sizeof(double) * 3 * fs->cap);
+                        fs->axis = realloc(fs->axis, sizeof(int) * fs->cap);
+                        assert(fs->lo && fs->axis);
+                    }
+                    const int64_t v[3] = {i, j, k};
+                    for (int d = 0; d < 3; ++d)
+                        fs->lo[3 * fs->n + (size_t)d] = c->origin[d] + (double)(v[d] + (d == a && s > 0)) * c->voxel;
+                    fs->axis[fs->n++] = a;
+                }
+            }
+}
+
+/* Distance from p to the nearest listed face (a square of edge h). */
+static double face_distance(const faces* fs, double h, const double p[3])
+{
+    double best = INFINITY;
+    for (size_t f = 0; f < fs->n; ++f) {
+        double s = 0;
+        for (int d = 0; d < 3; ++d) {
+            const double lo = fs->lo[3 * f + (size_t)d], hi = d == fs->axis[f] ? lo : lo + h;
+            const double e = p[d] < lo ? lo - p[d] : p[d] > hi ? p[d] - hi : 0;
+            s += e * e;
+        }
+        best = fmin(best, s);
+    }
+    return sqrt(best);
+}
+
+/* Nearest t in [0, 1] where o + t d meets triangle abc (Möller-Trumbore);
+ * INFINITY for none. */
+static double ray_triangle(const double o[3], const double d[3], const float* a, const float* b, const float* c)
+{
+    double e1[3], e2[3], pv[3], tv[3], qv[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = (double)b[k] - a[k];
+        e2[k] = (double)c[k] - a[k];
+        tv[k] = o[k] - a[k];
+    }
+    pv[0] = d[1] * e2[2] - d[2] * e2[1];
+    pv[1] = d[2] * e2[0] - d[0] * e2[2];
+    pv[2] = d[0] * e2[1] - d[1] * e2[0];
+    const double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+    if (fabs(det) < 1e-300)
+        return INFINITY;
+    const double u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) / det;
+    qv[0] = tv[1] * e1[2] - tv[2] * e1[1];
+    qv[1] = tv[2] * e1[0] - tv[0] * e1[2];
+    qv[2] = tv[0] * e1[1] - tv[1] * e1[0];
+    const double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) / det;
+    const double t = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) / det;
+    return u < 0 || v < 0 || u + v > 1 || t < 0 || t > 1 ? INFINITY : t;
+}
+
+typedef struct mesh {
+    uint8_t* bytes;
+    meso_mesh_view v;
+    uint32_t tris;
+} mesh;
+
+static void read_mesh(meso_file* f, int32_t ci, mesh* m)
+{
+    assert(ci >= 0);
+    const meso_chunk_info* mc = meso_file_chunk(f, (uint32_t)ci);
+    m->bytes = malloc((size_t)mc->decoded_size);
+    assert(m->bytes && meso_file_read_chunk(f, (uint32_t)ci, m->bytes, (size_t)mc->decoded_size, NULL) == MESO_OK);
+    assert(meso_mesh_parse(m->bytes, (size_t)mc->decoded_size, &m->v, NULL) == MESO_OK);
+    m->tris = m->v.layout.index_count / 3;
+}
+
+static const float* corner(const mesh* m, uint32_t t, int k)
+{
+    return m->v.positions + 3 * (size_t)m->v.indices[3 * (size_t)t + (size_t)k];
+}
+
+int main(int argc, char** argv)
+{
+    assert(argc == 2);
+    char dir[256], path[512], report[512], cmd[10240];
+    test_temp_dir(dir, sizeof dir, "cells_standin");
+    snprintf(path, sizeof path, "%s/cells.meso", dir);
+    snprintf(report, sizeof report, "%s/report.json", dir);
+    snprintf(cmd, sizeof cmd, "'%s' cells -i '%s' --tiles 4 --tile-res 16 -j 2 --report '%s' -o '%s' >/dev/null",
+             argv[1], test_data("sphere.obj"), report, path);
+    assert(system(cmd) == 0);
+    FILE* rf = fopen(report, "rb");
+    assert(rf);
+    char text[65536];
+    const size_t got = fread(text, 1, sizeof text - 1, rf);
+    text[got] = 0;
+    fclose(rf);
+    assert(strstr(text, "\"levels\""));
+
+    meso_file* f = NULL;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_level_info li[16];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= 3); /* base mesh + simplified ones */
+    meso_ref_cells rc;
+    assert(meso_ref_cells_load(f, 1, &rc, NULL) == MESO_OK);
+    faces fs;
+    list_faces(&rc, &fs);
+    assert(fs.n > 1000);
+
+    /* The views, and the reference's hits once. */
+    enum { VIEWS = 3, S = 40 };
+    static const double eyes[VIEWS][3] = {{0, 0.3, 3.2}, {2.6, 1.4, -1.2}, {-1.8, -2.2, 1.5}};
+    meso_ref_view views[VIEWS];
+    meso_ref_image imgs[VIEWS];
+    for (int e = 0; e < VIEWS; ++e) {
+        views[e] = (meso_ref_view){.width = S, .height = S, .threads = 2};
+        static const double at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+        meso_camera_look_at_d(views[e].view, eyes[e], at, up);
+        meso_camera_perspective_d(views[e].proj, 40.0 * M_PI / 180.0, 1.0, 0.1, 20.0);
+        assert(meso_ref_cells_render(&rc, &views[e], NULL, &imgs[e]) == MESO_OK);
+    }
+    for (uint32_t L = 1; L < n; ++L) {
+        assert(li[L].rec.form == MESO_LEVEL_MESH && li[L].rec.error > 0);
+        assert(li[L].rec.error >= li[L - 1].rec.error);
+        if (L != 1 && L != n - 1) /* the levels between follow the same rule: time */
+            continue;
+        const double err = li[L].rec.error;
+        mesh m;
+        read_mesh(f, meso_file_find_level(f, MESO_CHUNK_MESH, 1, (uint16_t)L), &m);
+        double worst_native = 0, worst_standin = 0;
+        size_t native_hits = 0, standin_hits = 0;
+        for (int e = 0; e < VIEWS; ++e) {
+            mesoi_ref_camera cam;
+            assert(mesoi_ref_camera_init(&views[e], &cam));
+            for (int y = 0; y < S; ++y)
+                for (int x = 0; x < S; ++x) {
+                    const size_t p = (size_t)y * S + (size_t)x;
+                    if (imgs[e].coverage[p]) { /* native -> stand-in */
+                        const double q[3] = {imgs[e].hit[3 * p], imgs[e].hit[3 * p + 1], imgs[e].hit[3 * p + 2]};
+                        double d = INFINITY;
+                        for (uint32_t t = 0; t < m.tris; ++t)
+                            d = fmin(d, point_triangle(q, corner(&m, t, 0), corner(&m, t, 1), corner(&m, t, 2)));
+                        worst_native = fmax(worst_native, d);
+                        ++native_hits;
+                    }
+                    double o[3], dv[3], best = INFINITY; /* stand-in -> native */
+                    mesoi_ref_pixel_ray(&cam, x, y, S, S, o, dv);
+                    for (uint32_t t = 0; t < m.tris; ++t)
+                        best = fmin(best, ray_triangle(o, dv, corner(&m, t, 0), corner(&m, t, 1), corner(&m, t, 2)));
+                    if (best == INFINITY)
+                        continue;
+                    const double q[3] = {o[0] + best * dv[0], o[1] + best * dv[1], o[2] + best * dv[2]};
+                    worst_standin = fmax(worst_standin, face_distance(&fs, rc.voxel, q));
+                    ++standin_hits;
+                }
+        }
+        printf("  level %u: %u triangles, stated error %.6g (%.2f voxels); farthest of %zu reference hits %.6g "
+               "(%.0f %%), of %zu stand-in hits %.6g (%.0f %%)\n",
+               L, m.tris, err, err / rc.voxel, native_hits, worst_native, 100.0 * worst_native / err, standin_hits,
+               worst_standin, 100.0 * worst_standin / err);
+        fflush(stdout);
+        assert(native_hits > 1000 && standin_hits > 1000);
+        assert(worst_native <= err * (1 + 1e-5) + 1e-7); /* the stated error holds both ways */
+        assert(worst_standin <= err * (1 + 1e-5) + 1e-7);
+        if (L == 1) /* and is not a loose guess */
+            assert(fmax(worst_native, worst_standin) >= 0.4 * err);
+        free(m.bytes);
+    }
+    for (int e = 0; e < VIEWS; ++e)
+        meso_ref_image_free(&imgs[e]);
+    free(fs.lo);
+    free(fs.axis);
+    meso_ref_cells_free(&rc);
+    meso_file_close(f);
+
+    /* --levels 1: the file of earlier bakes, one level; --levels 2: the base mesh only. */
+    for (int want = 1; want <= 2; ++want) {
+        snprintf(cmd, sizeof cmd, "'%s' cells -i '%s' --tiles 4 --tile-res 8 -j 2 --levels %d -o '%s' >/dev/null",
+                 argv[1], test_data("sphere.obj"), want, path);
+        assert(system(cmd) == 0);
+        assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+        assert(meso_file_levels(f, 1, NULL, 0, &n, NULL) == MESO_OK && n == (uint32_t)want);
+        assert((meso_file_find(f, MESO_CHUNK_LODS, UINT32_MAX, UINT16_MAX) < 0) == (want == 1));
+        meso_file_close(f);
+    }
+    test_temp_dir_remove(dir);
+    puts("test_cells_standin: ok");
+    return 0;
+}
