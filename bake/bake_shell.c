@@ -231,7 +231,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
         const int sign = (a->kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
         const double f0 = 0.2 + 0.6 * layer / layers, f1 = 0.2 + 0.6 * (layer + 1) / layers;
         mesoi_run_stage(&s->run, "directors", f0, f1 - 0.05, NULL);
-        meso_hybrid_stats hs;
+        meso_hybrid_stats hs = {0};
         float* dl = s->d + 3 * (size_t)nv * (size_t)layer;
         const uint8_t* redo = s->prior.redo; /* --update: only these; the rest are the old bake's */
         if (redo)
@@ -246,7 +246,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
         if (r == MESO_OK)
             r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors,
                                              s->run.common.threads, redo, dl, s->lp_side, &hs, &ts, ck, err);
-        for (uint32_t v = 0; v < nv; ++v)
+        for (uint32_t v = 0; r == MESO_OK && v < nv; ++v)
             s->lp_mask[v] |= s->lp_side[v];
         s->rep->hybrid_rounds += hs.rounds;
         s->rep->seconds_directors += meso_seconds() - t;

@@ -302,8 +302,10 @@ MESO_API void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* 
  *   meso_rt_stream_upload(rt, 4 << 20);              GL thread, bytes per frame
  *
  * `run` reads, checks (CRC, the kind's checks) and decodes the level's
- * chunks into memory with the context's allocator (which must then be
- * thread-safe, as malloc is); it touches neither GL nor the context.
+ * chunks into memory; it touches neither GL nor the context. Run on other
+ * threads, it calls the context's allocator, the file's allocator and the
+ * file's decoders (meso_open_desc) there, so those must then be
+ * thread-safe, as malloc and the Draco adapter are.
  * `upload` turns decoded levels into GL objects, oldest first, until
  * `max_bytes` of chunk bytes are uploaded (at least one level per call).
  * A request whose object is released meanwhile is freed when given back.

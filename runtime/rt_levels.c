@@ -124,6 +124,8 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
     if (r == MESO_OK)
         r = mesoi_empty_slot(rt, &lv->rec, &parent);
     if (r != MESO_OK) {
+        if (lv->request)
+            mesoi_stream_detach(rt, lv); /* the coarsest level's request, filed above */
         for (uint32_t l = 0; lv->slot && l < lv->count; ++l)
             meso_rt_release_object(rt, lv->slot[l]);
         levels_free(rt, lv);
@@ -322,12 +324,16 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     for (uint32_t l = want; got < 0 && l < lv->count; ++l) {
         if (lv->slot[l].id) {
             got = (int32_t)l;
+        } else if (lv->failed[l]) {
+            continue;
         } else if (rt->stream_requests) {
-            if (!lv->failed[l]) {
-                waiting = 1;
-                if (l == want && mesoi_stream_request(rt, lv, l) != MESO_OK)
-                    return MESO_ERR_OUT_OF_MEMORY;
-            }
+            /* The finest level at or above the wanted one that can still
+             * be had (the wanted one unless it failed). */
+            if (!waiting && mesoi_stream_request(rt, lv, l) != MESO_OK)
+                return MESO_ERR_OUT_OF_MEMORY;
+            waiting = 1;
+        } else if (lv->pending[l] == rt->frame + 1) {
+            waiting = 1; /* asked this frame already: no eviction for it */
         } else if (mesoi_levels_make_room(rt, lv, l)) {
             const meso_result r = mesoi_levels_upload(rt, lv, l);
             if (r == MESO_OK)

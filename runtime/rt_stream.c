@@ -176,8 +176,9 @@ static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint3
         return 0;
     if (q->kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH)
         return 0; /* a frusta object's MESH is its stand-in's (file_levels.c) */
-    if (q->kind == MESO_OBJECT_CELLS && (c->type == MESO_CHUNK_TILE || c->type == MESO_CHUNK_MEMB))
-        return 0;
+    if (q->kind == MESO_OBJECT_CELLS &&
+        (c->type == MESO_CHUNK_TILE || c->type == MESO_CHUNK_MEMB || c->type == MESO_CHUNK_SPLT))
+        return 0; /* TILE, MEMB: the check's copies; SPLT: checked there, not drawn */
     return meso_file_find_level(q->file, c->type, q->object, q->lod) == (int32_t)i;
 }
 
@@ -225,8 +226,11 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
         r = mesoi_file_check_cells_keep(f, q->object, &q->tile, &q->memb, &err);
         q->cells_checked = r == MESO_OK;
     }
-    if (r != MESO_OK)
+    if (r != MESO_OK) {
+        const uint64_t bytes = q->bytes; /* bytes read count, failed or not */
         req_clear(q);
+        q->bytes = bytes;
+    }
     return q->result = r;
 }
 
@@ -240,7 +244,8 @@ void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n)
             req_destroy(rt, q);
             continue;
         }
-        q->lv->bytes_read += q->bytes;
+        if (q->result != MESO_ERR_PENDING) /* as a synchronous read that found its bytes not arrived */
+            q->lv->bytes_read += q->bytes;
         if (q->result == MESO_OK && (q->count || q->cells_checked)) {
             q->state = REQ_DECODED;
         } else if (q->result == MESO_OK || q->result == MESO_ERR_PENDING) {
@@ -265,7 +270,9 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
         if (q->state == REQ_DECODED) {
             mesoi_levels* lv = q->lv;
             const uint32_t l = q->level;
-            if (!lv->slot[l].id && mesoi_levels_make_room(rt, lv, l)) {
+            /* The coarsest level always stays (meso_rt_desc.memory_budget):
+             * it is uploaded whatever the budget, as a synchronous load does. */
+            if (!lv->slot[l].id && (l + 1 == lv->count || mesoi_levels_make_room(rt, lv, l))) {
                 rt->prefetch = q;
                 const meso_result r = mesoi_levels_upload(rt, lv, l);
                 rt->prefetch = NULL;

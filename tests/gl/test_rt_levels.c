@@ -417,9 +417,35 @@ static void requests_decode_off_thread(const uint8_t* data, size_t size, const m
     assert(meso_rt_stream_run(one[0]) == MESO_ERR_IO);
     meso_rt_stream_give(rt, one, 1);
     meso_rt_frame_end(rt);
+    /* Level 0 failed: the draw asks for the finest level that can still be
+     * had (level 1, which lies before the broken bytes) and draws it. */
+    draw_at(rt, o, 2.0, -1.0f, top);
+    assert(meso_rt_levels_state_get(rt, o, &st) == MESO_OK && st.last_drawn == LEVELS - 1);
+    assert(stream_step(rt) == 1 && meso_rt_stream_upload(rt, 0) == li[1].bytes);
+    meso_rt_frame_end(rt);
     draw_at(rt, o, 2.0, -1.0f, top);
     meso_rt_stream_state_get(rt, &ss);
-    assert(ss.waiting == 0 && meso_rt_levels_state_get(rt, o, &st) == MESO_OK && st.last_drawn == LEVELS - 1);
+    assert(meso_rt_levels_state_get(rt, o, &st) == MESO_OK && st.last_drawn == 1 && ss.waiting == 0);
+    meso_rt_release_object(rt, o);
+    meso_file_close(f);
+    meso_rt_destroy(rt);
+    /* A budget smaller than the coarsest level: the coarsest still comes in
+     * and stays (as a synchronous load's does). */
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1,
+                                          .memory_budget = 1},
+                          &rt) == MESO_OK);
+    assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
+    assert(meso_rt_load_object_levels(rt, f, 1, &o) == MESO_OK);
+    assert(stream_step(rt) == 1 && meso_rt_stream_upload(rt, 0) == li[LEVELS - 1].bytes);
+    for (int k = 0; k < 3; ++k) {
+        draw_at(rt, o, 2.0, -1.0f, top); /* wants level 0, which never fits */
+        stream_step(rt);
+        meso_rt_stream_upload(rt, 0);
+        meso_rt_frame_end(rt);
+    }
+    draw_at(rt, o, 2.0, -1.0f, top);
+    assert(meso_rt_levels_state_get(rt, o, &st) == MESO_OK && st.last_drawn == LEVELS - 1);
+    assert(memcmp(top, want[LEVELS - 1], sizeof top) == 0);
     meso_rt_release_object(rt, o);
     meso_file_close(f);
     meso_rt_destroy(rt);
