@@ -31,7 +31,7 @@ static double standin_distance(const double q[3], const meso_mesh_view* mv)
     double d = INFINITY;
     const uint32_t tris = mv->layout.index_count / 3;
     for (uint32_t k = 0; k < tris; ++k)
-        d = fmin(d, test_point_triangle(q, mv->positions + 3 * mv->indices[3 * k],
+        d = fmin(d, point_triangle(q, mv->positions + 3 * mv->indices[3 * k],
                                         mv->positions + 3 * mv->indices[3 * k + 1],
                                         mv->positions + 3 * mv->indices[3 * k + 2]));
     return d;

@@ -15,7 +15,6 @@
 #include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
-#include "point_triangle.h"
 #include "shell_reference.h"
 
 static void check(const char* mesobake, const char* dir, const char* name, const char* args)
@@ -56,7 +55,7 @@ static void check(const char* mesobake, const char* dir, const char* name, const
             const double q[3] = {img.hit[3 * p], img.hit[3 * p + 1], img.hit[3 * p + 2]};
             double d = INFINITY;
             for (uint32_t k = 0; k < tris; ++k)
-                d = fmin(d, test_point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
+                d = fmin(d, point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
                                            mv.positions + 3 * mv.indices[3 * k + 2]));
             worst = fmax(worst, d);
             ++hits;
