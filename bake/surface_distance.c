@@ -52,6 +52,21 @@ static double one_way(const double* axyz, const uint32_t* atri, uint32_t ant, co
         mine.query = 0;
         if (!mine.stamp)
             failed = 1;
+        /* Only the largest distance is wanted, and the distance to a set is
+         * 1-Lipschitz: d(p) <= d(q) + |p - q| for the last sample q this
+         * thread measured, and d(p) <= the distance from p to q's nearest
+         * triangle. A sample whose bound is not above the thread's largest
+         * so far cannot raise the result, so it is not measured.
+         * The result is bit for bit the one measuring every sample gives
+         * (the max of the same numbers); on a coarse level, whose error is
+         * many sample spacings, most samples are skipped. Measured on a
+         * bumpy 180k-triangle torus (`mesobake mesh -j 1`, 8 levels, user
+         * CPU): 20.0 s before; 13.5 s with triangle_grid.c's finer cells;
+         * 9.7 s with the Lipschitz bound; 6.2 s with the nearest-triangle
+         * bound too. On 980k triangles (-j 2): 265 s -> 24 s wall. */
+        int known = 0;
+        uint32_t known_tri = 0;
+        double known_d = 0, known_p[3] = {0, 0, 0};
 #ifdef _OPENMP
 #pragma omp for schedule(dynamic, 64)
 #endif
@@ -79,8 +94,17 @@ static double one_way(const double* axyz, const uint32_t* atri, uint32_t ant, co
                     double p[3];
                     for (int k = 0; k < 3; ++k)
                         p[k] = v[0][k] + s * (v[1][k] - v[0][k]) + t * (v[2][k] - v[0][k]);
-                    const double d = mesoi_tri_grid_distance(&mine, p);
+                    if (known && (known_d + sqrt((p[0] - known_p[0]) * (p[0] - known_p[0]) +
+                                                 (p[1] - known_p[1]) * (p[1] - known_p[1]) +
+                                                 (p[2] - known_p[2]) * (p[2] - known_p[2])) <=
+                                      worst ||
+                                  mesoi_tri_grid_triangle_distance(&mine, known_tri, p) <= worst))
+                        continue; /* cannot raise the max: see the loop's comment */
+                    double bw[2];
+                    const double d = mesoi_tri_grid_closest(&mine, p, &known_tri, bw);
                     worst = d > worst ? d : worst;
+                    known = 1, known_d = d;
+                    memcpy(known_p, p, sizeof(p));
                 }
         }
         free(mine.stamp);

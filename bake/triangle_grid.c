@@ -77,6 +77,14 @@ static double point_triangle_distance(const double p[3], const double a[3], cons
     return dist3(p, q);
 }
 
+double mesoi_tri_grid_triangle_distance(const mesoi_tri_grid* g, uint32_t f, const double p[3])
+{
+    const uint32_t* t = g->tri + 3 * (size_t)f;
+    double bw[2];
+    return point_triangle_distance(p, g->xyz + 3 * (size_t)t[0], g->xyz + 3 * (size_t)t[1], g->xyz + 3 * (size_t)t[2],
+                                   bw);
+}
+
 void mesoi_tri_grid_free(mesoi_tri_grid* g)
 {
     free(g->start);
@@ -101,13 +109,28 @@ meso_result mesoi_tri_grid_build(const double* xyz, const uint32_t* tri, uint32_
     double ext = 0;
     for (int k = 0; k < 3; ++k)
         ext = hi[k] - lo[k] > ext ? hi[k] - lo[k] : ext;
-    /* About one triangle per surface cell, at most 160 cells a side. */
+    /* About one triangle per surface cell: sqrt(triangles) cells along the
+     * longest side, and at most GRID_CELLS_MAX cells in all (64 MiB of
+     * starts), the cells grown by 1/8 at a time until they fit. The cap
+     * was 160 cells a side: a 1M-triangle mesh then held ~20 triangles a
+     * cell and a query tested ~600, which made measuring its levels' errors
+     * take minutes (mesh_levels.c). Which cells a query visits changes
+     * nothing it returns: the distance is exact and ties go to the lowest
+     * triangle whatever the order. */
+    enum { GRID_CELLS_MAX = 1 << 24 };
     int res = (int)ceil(sqrt((double)g->nt));
-    res = res < 4 ? 4 : res > 160 ? 160 : res;
+    res = res < 4 ? 4 : res;
     g->cell = ext > 0 ? ext / res : 1;
-    for (int k = 0; k < 3; ++k) {
-        g->lo[k] = lo[k];
-        g->dim[k] = (int)floor((hi[k] - lo[k]) / g->cell) + 1;
+    for (;;) {
+        double cells_d = 1;
+        for (int k = 0; k < 3; ++k) {
+            g->lo[k] = lo[k];
+            g->dim[k] = (int)floor((hi[k] - lo[k]) / g->cell) + 1;
+            cells_d *= g->dim[k];
+        }
+        if (cells_d <= GRID_CELLS_MAX)
+            break;
+        g->cell *= 1.125;
     }
     const size_t cells = (size_t)g->dim[0] * g->dim[1] * g->dim[2];
     g->start = calloc(cells + 1, sizeof(uint32_t));

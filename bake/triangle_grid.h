@@ -27,7 +27,7 @@ typedef struct mesoi_tri_grid {
 } mesoi_tri_grid;
 
 /* A grid over [lo, hi], which must hold the mesh and every query point;
- * about one triangle per surface cell, at most 160 cells a side. The mesh
+ * about one triangle per surface cell, at most 2^24 cells. The mesh
  * arrays are borrowed until mesoi_tri_grid_free. On failure `g` is freed. */
 meso_result mesoi_tri_grid_build(const double* xyz, const uint32_t* tri, uint32_t nt, const double lo[3],
                                  const double hi[3], mesoi_tri_grid* g, meso_error* err);
@@ -40,6 +40,10 @@ double mesoi_tri_grid_distance(mesoi_tri_grid* g, const double p[3]);
  * ones) with the barycentrics of its 2nd and 3rd corners at the closest
  * point (the 1st: 1 - bw[0] - bw[1]). */
 double mesoi_tri_grid_closest(mesoi_tri_grid* g, const double p[3], uint32_t* tri, double bw[2]);
+
+/* Distance from p to triangle f of the grid's mesh (the same exact
+ * computation a query makes). */
+double mesoi_tri_grid_triangle_distance(const mesoi_tri_grid* g, uint32_t f, const double p[3]);
 
 void mesoi_tri_grid_free(mesoi_tri_grid* g);
 

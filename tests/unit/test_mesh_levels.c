@@ -384,6 +384,72 @@ static void parallel_planes_known_answer(void)
     assert(fabs(bound - (0.5 + radius)) < 1e-7);
 }
 
+/* surface_distance.c skips samples that cannot raise the max (Lipschitz
+ * and nearest-triangle bounds). Its result must be exactly the max over
+ * every sample of its scheme (corners of n x n sub-triangles, n = ceil(
+ * longest edge / spacing)), here measured sample by sample with the test's
+ * own closest point over every triangle: a coarse sphere against a fine one
+ * (the coarse level's error is many spacings: most samples are skipped),
+ * and against itself rotated (errors about one spacing). */
+static double brute_scheme(const meso_mesh* a, const meso_mesh* b, double spacing, double* radius)
+{
+    double worst = 0;
+    for (uint32_t f = 0; f < a->triangle_count; ++f) {
+        double v[3][3], longest = 0;
+        for (int j = 0; j < 3; ++j)
+            for (int k = 0; k < 3; ++k)
+                v[j][k] = a->positions[3 * (size_t)a->indices[3 * (size_t)f + (size_t)j] + (size_t)k];
+        for (int j = 0; j < 3; ++j) {
+            double l2 = 0;
+            for (int k = 0; k < 3; ++k)
+                l2 += (v[j][k] - v[(j + 1) % 3][k]) * (v[j][k] - v[(j + 1) % 3][k]);
+            longest = sqrt(l2) > longest ? sqrt(l2) : longest;
+        }
+        const int n = (int)fmax(1, ceil(longest / spacing));
+        *radius = fmax(*radius, longest / n / sqrt(3.0));
+        for (int i = 0; i <= n; ++i)
+            for (int j = 0; j <= n - i; ++j) {
+                double p[3];
+                for (int k = 0; k < 3; ++k)
+                    p[k] = v[0][k] + (double)i / n * (v[1][k] - v[0][k]) + (double)j / n * (v[2][k] - v[0][k]);
+                const double d = mesh_dist(p, b);
+                worst = d > worst ? d : worst;
+            }
+    }
+    return worst;
+}
+
+static void skipped_samples_change_nothing(void)
+{
+    meso_mesh fine = split_sphere(24, 12, 24), coarse = split_sphere(6, 4, 6), turned = split_sphere(24, 12, 24);
+    for (uint32_t v = 0; v < turned.vertex_count; ++v) { /* 0.1 rad about z */
+        float* p = turned.positions + 3 * (size_t)v;
+        const double x = p[0], y = p[1];
+        p[0] = (float)(cos(0.1) * x - sin(0.1) * y);
+        p[1] = (float)(sin(0.1) * x + cos(0.1) * y);
+    }
+    const meso_mesh* other[2] = {&coarse, &turned};
+    const double spacing = 0.05;
+    for (int c = 0; c < 2; ++c) {
+        double brute_radius = 0;
+        const double ab = brute_scheme(other[c], &fine, spacing, &brute_radius);
+        const double ba = brute_scheme(&fine, other[c], spacing, &brute_radius);
+        const double want = (ab > ba ? ab : ba) + brute_radius;
+        for (int threads = 1; threads <= 2; ++threads) {
+            double bound = 0, radius = 0;
+            meso_error err = {0};
+            assert(meso_surface_distance(other[c], &fine, spacing, threads, &bound, &radius, &err) == MESO_OK);
+            printf("    every sample measured (%s, %d threads): %.9g, surface_distance %.9g\n",
+                   c ? "rotated" : "coarse", threads, want, bound);
+            assert(fabs(radius - brute_radius) <= 1e-12);
+            assert(fabs(bound - want) <= 1e-9);
+        }
+    }
+    meso_mesh_free(&fine);
+    meso_mesh_free(&coarse);
+    meso_mesh_free(&turned);
+}
+
 /* ---- the bake --------------------------------------------------------------- */
 
 static uint8_t* bake(const meso_mesh* m, int levels, int threads, size_t* size, meso_bake_mesh_report* rep)
@@ -497,6 +563,7 @@ int main(void)
 {
     printf("mesh levels:\n");
     parallel_planes_known_answer();
+    skipped_samples_change_nothing();
     seam_split_sphere_gets_levels();
     bundled_meshes_error_brute();
     baked_file_levels();
