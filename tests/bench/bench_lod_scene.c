@@ -21,7 +21,9 @@
  * it can draw (its objects' coarsest prefix_bytes) against its size.
  *
  * Output: one CSV (section, setting, metric, value). 320 x 240 pixels.
- * usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR */
+ * With PNG: the scene at 1 px beside the level each pixel's object drew
+ * (white the finest, then blue, green, yellow, orange, magenta, violet).
+ * usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR [PNG] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,6 +34,7 @@
 #include "gl_fbo.h"
 #include "meso_clock.h"
 #include "meso_rt.h"
+#include "png_io.h"
 
 enum { W = 320, H = 240, N = 64, FRAMES = 5 };
 
@@ -215,6 +218,58 @@ static void row(const char* section, const char* setting, const char* metric, do
     fflush(csv);
 }
 
+/* The scene's picture for the README (PNG_PATH, when set): the frame at
+ * the setting, and beside it which level each visible pixel's object drew
+ * (the object drawn alone, its depth equal to the frame's). */
+static const char* png_path;
+
+static void write_picture(scene* s, float tau, const uint8_t* img, const float* depth)
+{
+    static const uint8_t palette[8][3] = {{240, 240, 240}, {80, 160, 255}, {80, 200, 120}, {250, 200, 60},
+                                          {240, 120, 60},  {200, 70, 160}, {140, 90, 220}, {120, 120, 120}};
+    uint8_t* out = malloc((size_t)4 * 2 * W * H);
+    float* alone = malloc(sizeof(float) * W * H);
+    if (!out || !alone)
+        die("memory");
+    for (int y = 0; y < H; ++y) {
+        memcpy(out + (size_t)y * 2 * W * 4, img + (size_t)y * W * 4, (size_t)W * 4);
+        for (int x = 0; x < W; ++x) {
+            uint8_t* o = out + ((size_t)y * 2 * W + W + x) * 4;
+            o[0] = 24, o[1] = 26, o[2] = 30, o[3] = 255;
+        }
+    }
+    meso_rt_draw_desc d = {0};
+    camera(&d);
+    d.pixel_error = tau;
+    for (int k = 0; k < N; ++k) {
+        meso_rt_levels_state ls;
+        meso_rt_levels_state_get(s->rt, s->obj[k], &ls);
+        if (ls.last_drawn < 0)
+            continue;
+        test_fbo_clear(&fbo, 0, 0, 0);
+        memcpy(d.model, s->model[k], sizeof d.model);
+        if (meso_rt_draw(s->rt, s->obj[k], &d) != MESO_OK)
+            die("draw");
+        test_fbo_read(&fbo, NULL, alone);
+        const uint8_t* c = palette[ls.last_drawn < 7 ? ls.last_drawn : 7];
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const size_t p = (size_t)y * W + x;
+                if (alone[p] < 1.0f && alone[p] == depth[p]) {
+                    uint8_t* o = out + ((size_t)y * 2 * W + W + x) * 4;
+                    o[0] = c[0], o[1] = c[1], o[2] = c[2];
+                }
+            }
+    }
+    meso_rt_frame_end(s->rt);
+    char why[256];
+    if (meso_png_write_rgba8(png_path, out, 2 * W, H, 1, why, sizeof why) != 0)
+        die(why);
+    printf("  wrote %s\n", png_path);
+    free(out);
+    free(alone);
+}
+
 static void bench_setting(float tau, const char* name)
 {
     scene s;
@@ -270,6 +325,10 @@ static void bench_setting(float tau, const char* name)
     row("scene", name, "mae", abs_sum / (3.0 * W * H));
     row("scene", name, "bad_px", (double)bad / ((double)W * H));
     row("scene", name, "mean_lod", (double)level_sum / N);
+    if (png_path && tau == 1.0f) {
+        test_fbo_read(&fbo, img, depth); /* the counted frame: same levels, same image */
+        write_picture(&s, tau, img, depth);
+    }
     free(img);
     free(depth);
     scene_free(&s);
@@ -277,11 +336,12 @@ static void bench_setting(float tau, const char* name)
 
 int main(int argc, char** argv)
 {
-    if (argc != 5) {
-        fprintf(stderr, "usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR\n");
+    if (argc != 5 && argc != 6) {
+        fprintf(stderr, "usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR [PNG]\n");
         return 2;
     }
     work = argv[4];
+    png_path = argc == 6 ? argv[5] : NULL;
     char why[256];
     meso_egl* egl = meso_egl_create(why, sizeof why);
     if (!egl)

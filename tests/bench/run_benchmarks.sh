@@ -148,3 +148,18 @@ if [ "${MESO_BENCH_SKIP_INSTANCES:-0}" != 1 ]; then
     echo "== bench_instances"
     "$build/tests/bench/bench_instances" "$results/instances.csv" "$build/tools/mesobake" "$src/tests/data"
 fi
+
+# Levels of detail (issue 14): the 64-object scene at pixel errors 0.5..16
+# and the finest level everywhere (lod_scene.csv, lod_scene.png, the chart
+# lod_scene_chart.png; ~10 min), and a ~105 MB mesh file streamed at
+# 10 MB/s (stream.csv; ~3 min, most of it the 2.2M-triangle bake). Skip
+# with MESO_BENCH_SKIP_LOD=1.
+if [ "${MESO_BENCH_SKIP_LOD:-0}" != 1 ]; then
+    ninja -C "$build" tests/bench/bench_lod_scene tests/bench/bench_stream tools/mesobake
+    echo "== bench_lod_scene"
+    "$build/tests/bench/bench_lod_scene" "$results/lod_scene.csv" "$build/tools/mesobake" "$src/tests/data" \
+        "$build/tests/bench" "$results/lod_scene.png"
+    gnuplot -e "dir='$results'" "$src/tests/bench/plot_lod_scene.gp"
+    echo "== bench_stream"
+    "$build/tests/bench/bench_stream" "$results/stream.csv" "$build/tools/mesobake" "$build/tests/bench"
+fi
