@@ -26,15 +26,16 @@
 
 #include "cells_chunks.h"
 #include "cells_standin.h"
-#include "mesh_levels.h"
 #include "mesh_colour_grid.h"
 #include "memory_budget.h"
 #include "mesh_check.h"
 #include "mesh_chunk.h"
 #include "meso_clock.h"
 #include "meso_layout.h"
+#include "standin_levels.h"
 
 _Static_assert(MESO_BAKE_MAX_TILES == MESO_VOXELIZE_MAX_RES, "tiles x tile_res share one bound");
+_Static_assert(MESO_BAKE_CELLS_MAX_LEVELS == MESOI_STANDIN_MAX_LEVELS, "the stand-ins hold every level");
 
 meso_bake_cells_options meso_bake_cells_defaults(void)
 {
@@ -267,27 +268,9 @@ typedef struct colour_grid {
     uint8_t* rgba; /* NULL: none */
 } colour_grid;
 
-/* The stand-in levels: level 1 the base mesh (error e0), level 1 + k the
- * base mesh's simplified level k (error e0 + its own). */
-typedef struct standin_levels {
-    uint32_t count;           /* stand-in levels (0: none, no LODS) */
-    double e0;                /* the base mesh's error */
-    meso_mesh_level* chain;   /* the simplified meshes, count - 1 of them */
-    uint32_t chain_count;
-} standin_levels;
-
-/* f32 no smaller than x: a stored bound stays a bound. */
-static float f32_up(double x)
-{
-    float f = (float)x;
-    if ((double)f < x)
-        f = nextafterf(f, INFINITY);
-    return f;
-}
-
 static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_options* a, const meso_mesh* m,
                                const meso_voxel_grid* g, const meso_split_cells* sc, const meso_membership* mb,
-                               standin_levels* out, meso_bake_cells_report* s, meso_error* err)
+                               mesoi_standin_levels* out, meso_bake_cells_report* s, meso_error* err)
 {
     memset(out, 0, sizeof *out);
     if (a->levels == 1)
@@ -309,21 +292,13 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
         mesoi_run_warning(run, 0, "no cell is inside the mesh: nothing drawn, so no stand-in level");
         return MESO_OK;
     }
-    out->e0 = se.bound;
-    out->count = 1;
 #if !MESO_HAVE_MESHOPTIMIZER
     if (a->levels == 0)
         mesoi_run_warning(run, 0, "built without meshoptimizer: the base mesh is the only stand-in");
-    else
 #endif
-        if (a->levels != 2) {
-        const meso_mesh_levels_options lo = {.max_levels = a->levels ? a->levels - 1 : 0,
-                                             .threads = run->common.threads};
-        r = meso_mesh_levels_build(m, &lo, &out->chain, &out->chain_count, err);
-        if (r != MESO_OK)
-            return r;
-        out->count += out->chain_count;
-    }
+    r = mesoi_standin_levels_build(m, se.bound, a->levels, run->common.threads, out, err);
+    if (r != MESO_OK)
+        return r;
     mesoi_run_stage(run, "levels", 0.97, 0.97,
                     "stand-in: base mesh within %g of the %llu voxel faces drawn (sampled %g, radius %g); %u "
                     "simplified levels (%.0f ms)",
@@ -334,20 +309,13 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
 
 static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m, const meso_voxel_grid* g,
                             uint32_t R, const meso_split_cells* sc, const meso_cells_chunks* cc,
-                            const colour_grid* cg, const standin_levels* lv, meso_bake_cells_report* s,
+                            const colour_grid* cg, mesoi_standin_levels* lv, meso_bake_cells_report* s,
                             meso_bake_output** out, meso_error* err)
 {
     meso_mesh_chunk mesh_chunk = {0};
-    meso_mesh_chunk level_chunk[MESO_BAKE_CELLS_MAX_LEVELS] = {{0}};
     meso_result r = meso_bake_mesh_chunk(m, NULL, &mesh_chunk, err);
-    for (uint32_t k = 0; r == MESO_OK && lv->count && k < lv->chain_count; ++k)
-        r = meso_bake_mesh_chunk(&lv->chain[k].mesh, NULL, &level_chunk[k], err);
-    if (r != MESO_OK) {
-        free(mesh_chunk.data);
-        for (uint32_t k = 0; k < MESO_BAKE_CELLS_MAX_LEVELS; ++k)
-            free(level_chunk[k].data);
+    if (r != MESO_OK)
         return r;
-    }
     meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_CELLS};
     for (int k = 0; k < 3; ++k) {
         rec.bbox_min[k] = (float)g->origin[k];
@@ -368,7 +336,7 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     report_json(rep, s);
 
     const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED, S = sc->split_count;
-    mesoi_chunk chunks[8 + MESO_BAKE_CELLS_MAX_LEVELS + 1];
+    mesoi_chunk chunks[8 + MESOI_STANDIN_MAX_LEVELS + 1];
     chunks[0] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
                                        .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
                               .data = mesh_chunk.data, .size = mesh_chunk.size};
@@ -386,66 +354,22 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
                                       cg->rgba, 4 * (size_t)cg->dims[0] * cg->dims[1] * cg->dims[2]);
     /* The stand-ins (FORMAT.md §7.10 form MESH): the base mesh's bytes again
      * at lod 1, the simplified meshes at lod 2.., and the LODS records. */
-    uint8_t lods[MESO_BAKE_CELLS_MAX_LEVELS * MESO_LODS_RECORD_SIZE];
     s->level_count = 1;
     s->level_triangles[0] = m->triangle_count;
     if (lv->count) {
-        cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
-        for (uint32_t L = 0; L <= lv->count; ++L) {
-            meso_level_record lr = {.object = 1, .lod = (uint16_t)L,
-                                    .form = L ? MESO_LEVEL_MESH : MESO_LEVEL_NATIVE};
-            const meso_mesh* lm = L <= 1 ? m : &lv->chain[L - 2].mesh;
-            double e = 0;
-            if (L == 0) {
-                memcpy(lr.bbox_min, rec.bbox_min, sizeof lr.bbox_min);
-                memcpy(lr.bbox_max, rec.bbox_max, sizeof lr.bbox_max);
-            } else if (L == 1) {
-                double lo[3], hi[3];
-                meso_mesh_bounds(m, lo, hi);
-                for (int k = 0; k < 3; ++k) {
-                    lr.bbox_min[k] = (float)lo[k];
-                    lr.bbox_max[k] = (float)hi[k];
-                }
-                e = lv->e0;
-                chunks[count] = chunks[0];
-                chunks[count++].desc.lod = 1;
-            } else {
-                const meso_mesh_level* c = &lv->chain[L - 2];
-                for (int k = 0; k < 3; ++k) {
-                    lr.bbox_min[k] = (float)c->bbox_min[k];
-                    lr.bbox_max[k] = (float)c->bbox_max[k];
-                }
-                e = lv->e0 + c->error;
-                chunks[count++] = (mesoi_chunk){
-                    .desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1, .lod = (uint16_t)L,
-                             .encoding = level_chunk[L - 2].encoding, .decoded_size = level_chunk[L - 2].decoded_size},
-                    .data = level_chunk[L - 2].data, .size = level_chunk[L - 2].size};
-            }
-            lr.error = f32_up(e);
-            meso_level_record_encode(&lr, lods + (size_t)MESO_LODS_RECORD_SIZE * L);
-            s->level_error[L] = lr.error;
-            s->level_triangles[L] = lm->triangle_count;
-            cJSON* o = cJSON_CreateObject();
-            cJSON_AddNumberToObject(o, "lod", L);
-            cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
-            cJSON_AddNumberToObject(o, "error", (double)lr.error);
-            cJSON_AddNumberToObject(o, "triangles", lm->triangle_count);
-            cJSON_AddNumberToObject(o, "mesh_bytes", (double)(L >= 2 ? level_chunk[L - 2].size : mesh_chunk.size));
-            cJSON_AddItemToArray(jl, o);
+        count += (int)mesoi_standin_levels_append(lv, m, &chunks[0], rec.bbox_min, rec.bbox_max, chunks + count, rep);
+        for (uint32_t L = 1; L <= lv->count; ++L) {
+            s->level_error[L] = lv->error[L];
+            s->level_triangles[L] = lv->triangles[L];
         }
         cJSON_AddNumberToObject(rep, "surface_faces", (double)s->surface_faces);
         s->level_count = lv->count + 1;
-        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES,
-                                                 .components = 1, .dims = {lv->count + 1, 1, 1}},
-                                        .data = lods, .size = (size_t)MESO_LODS_RECORD_SIZE * (lv->count + 1)};
     }
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     free(mesh_chunk.data);
-    for (uint32_t k = 0; k < MESO_BAKE_CELLS_MAX_LEVELS; ++k)
-        free(level_chunk[k].data);
     return r;
 }
 
@@ -576,12 +500,12 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
         s->normal_map_bytes = cc.nrmm_size;
         s->colour_map_bytes = cc.colr_size;
     }
-    standin_levels lv = {0};
+    mesoi_standin_levels lv = {0};
     if (r == MESO_OK)
         r = make_levels(&run, a, &m, &g, &sc, &mb, &lv, s, err);
     if (r == MESO_OK)
         r = assemble(a, &m, &g, R, &sc, &cc, &cg, &lv, s, out, err);
-    meso_mesh_levels_free(lv.chain, lv.chain_count);
+    mesoi_standin_levels_free(&lv);
     meso_cells_chunks_free(&cc);
     free(cg.rgba);
     meso_mesh_materials_free(&mats);

@@ -28,6 +28,9 @@
 #include "shell_regrow.h"
 #include "shell_update.h"
 #include "shell_validate.h"
+#include "standin_levels.h"
+
+_Static_assert(MESO_BAKE_SHELL_MAX_LEVELS == MESOI_STANDIN_MAX_LEVELS, "the stand-ins hold every level");
 
 meso_bake_shell_options meso_bake_shell_defaults(void)
 {
@@ -60,6 +63,7 @@ static meso_result normalise(const meso_bake_shell_options* o, meso_bake_shell_o
                       : !(a->theta >= 0 && a->theta <= 1.5)                       ? "theta must be in [0, 1.5]"
                       : !(a->angle_tol_deg > 0 && a->angle_tol_deg <= 90)         ? "angle_tol_deg must be in (0, 90]"
                       : a->smooth < 0 || a->smooth > 1000                         ? "smooth must be in 0..1000"
+                      : a->levels < 0 || a->levels > MESO_BAKE_SHELL_MAX_LEVELS    ? "levels must be in 0..9"
                       : !(a->tiling[0] > 0 && a->tiling[0] <= 1e6 && a->tiling[1] > 0 && a->tiling[1] <= 1e6)
                           ? "tiling must be in (0, 1e6]"
                       : a->dist_dtype != MESO_DTYPE_U8 && a->dist_dtype != MESO_DTYPE_U16 &&
@@ -467,6 +471,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
     float *pos_out = NULL, *normals_out = NULL, *sdir_out = NULL, *thick = NULL;
     meso_mesh_chunk chunk = {0};
+    mesoi_standin_levels standins = {0};
     meso_mesh base = *m;
     base.normals = s->normals;
     if (tx->uvs)
@@ -558,7 +563,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                      .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
                                                base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
         meso_cmap_record_encode(&cr, cmap);
-        mesoi_chunk chunks[12] = {
+        mesoi_chunk chunks[11 + MESOI_STANDIN_MAX_LEVELS] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -596,43 +601,21 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                         .data = cmap, .size = sizeof(cmap)};
         }
         /* Level 1: the base mesh as a stand-in (the same MESH bytes at lod
-         * 1; FORMAT.md §7.10), and the LODS records of both levels. */
-        uint8_t lods[2 * MESO_LODS_RECORD_SIZE];
-        if (!a->levels) {
-            meso_level_record l0 = {.object = 1, .lod = 0, .form = MESO_LEVEL_NATIVE};
-            meso_level_record l1 = {.object = 1, .lod = 1, .form = MESO_LEVEL_MESH, .error = standin_error(s)};
-            memcpy(l0.bbox_min, rec.bbox_min, sizeof l0.bbox_min);
-            memcpy(l0.bbox_max, rec.bbox_max, sizeof l0.bbox_max);
-            for (int k = 0; k < 3; ++k) {
-                l1.bbox_min[k] = INFINITY;
-                l1.bbox_max[k] = -INFINITY;
-            }
-            for (uint32_t v = 0; v < m->vertex_count; ++v)
-                for (int k = 0; k < 3; ++k) {
-                    l1.bbox_min[k] = fminf(l1.bbox_min[k], m->positions[3 * v + (size_t)k]);
-                    l1.bbox_max[k] = fmaxf(l1.bbox_max[k], m->positions[3 * v + (size_t)k]);
-                }
-            meso_level_record_encode(&l0, lods);
-            meso_level_record_encode(&l1, lods + MESO_LODS_RECORD_SIZE);
-            chunks[n] = chunks[0];
-            chunks[n++].desc.lod = 1;
-            chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES, .components = 1,
-                                                 .dims = {2, 1, 1}},
-                                        .data = lods, .size = sizeof lods};
-            cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
-            for (int L = 0; L < 2; ++L) {
-                cJSON* o = cJSON_CreateObject();
-                cJSON_AddNumberToObject(o, "lod", L);
-                cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
-                cJSON_AddNumberToObject(o, "error", L ? (double)l1.error : 0.0);
-                cJSON_AddItemToArray(jl, o);
-            }
+         * 1), levels 2..: its simplifications, and the LODS records
+         * (FORMAT.md §7.10; standin_levels.h). */
+        if (r == MESO_OK && a->levels != 1) {
+            r = mesoi_standin_levels_build(&base, standin_error(s), a->levels, s->run.common.threads, &standins,
+                                           err);
+            if (r == MESO_OK)
+                n += mesoi_standin_levels_append(&standins, &base, &chunks[0], rec.bbox_min, rec.bbox_max,
+                                                 chunks + n, rep);
         }
         if (r == MESO_OK)
             r = mesoi_output_build(meta, rep, &rec, chunks, n, out, err);
     }
     cJSON_Delete(meta);
     cJSON_Delete(rep);
+    mesoi_standin_levels_free(&standins);
     free(chunk.data);
     free(thick);
     free(pos_out);

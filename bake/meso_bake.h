@@ -432,10 +432,16 @@ typedef struct meso_bake_shell_options {
     const char* color;
     /* Levels of detail (FORMAT.md §7.10): 0 (auto): level 0 and, as level 1,
      * the base mesh drawn as a plain mesh (a stand-in for when the whole
-     * shell is thinner than the error on screen) with its measured error;
-     * 1: level 0 only (the file of earlier bakes). */
+     * shell is thinner than the error on screen) with its error (the
+     * largest offset of the surface drawn), then the base mesh's simplified
+     * levels (meshoptimizer, as meso_bake_mesh's auto), each with the base
+     * mesh's error plus its own; 1: level 0 only (the file of earlier
+     * bakes); N: at most N levels (2: the base mesh only; at most
+     * MESO_BAKE_SHELL_MAX_LEVELS). */
     int levels;
 } meso_bake_shell_options;
+
+#define MESO_BAKE_SHELL_MAX_LEVELS 9 /* level 0, the base mesh, 7 simplified meshes */
 
 typedef struct meso_bake_shell_report {
     meso_bake_mesh_fixes fixes;

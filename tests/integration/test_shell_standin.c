@@ -1,11 +1,14 @@
-/* A shell's level 1 (FORMAT.md §7.10): the base mesh drawn in the shell's
- * place, with the error mesobake states for it. Checked against the exact
- * CPU reference: every surface point the reference ray caster hits, from
- * several views, lies within the stated error of the stand-in mesh (brute
- * force over its triangles), and the bound is not loose (the farthest hit
- * reaches most of it: brick tops and volume surfaces do rise that far).
- * Exterior height field, exterior volume and envelope shells; `--levels 1`
- * writes no level.
+/* A shell's mesh stand-ins (FORMAT.md §7.10): level 1 the base mesh drawn
+ * in the shell's place, levels 2.. its simplifications, each with the error
+ * mesobake states for it. Checked against the exact CPU reference: every
+ * surface point the reference ray caster hits, from several views, lies
+ * within the stated error of level 1's and of the coarsest level's mesh
+ * (brute force over its triangles), and the bound is not loose: the
+ * farthest hit reaches half of it or more (brick tops and volume surfaces
+ * do rise that far, and the coarsest level's sum of two bounds,
+ * standin_levels.h, stays near the truth). Errors never decrease, each
+ * coarser level lies in a shorter prefix. Exterior height field, exterior volume and envelope shells;
+ * `--levels 1` writes no level, `--levels 2` the base mesh only.
  * usage: test_shell_standin MESOBAKE */
 #include "test_util.h"
 
@@ -17,26 +20,13 @@
 #include "meso_layout.h"
 #include "shell_reference.h"
 
-static void check(const char* mesobake, const char* dir, const char* name, const char* args)
+/* The farthest reference hit from level L's mesh, against its stated error. */
+static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, const char* name)
 {
-    char path[512], cmd[10240];
-    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
-    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' %s -o '%s' >/dev/null", mesobake, test_data("spot_uv.obj"),
-             args, path);
-    assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
-    meso_level_info li[4];
-    uint32_t n = 0;
-    assert(meso_file_levels(f, 1, li, 4, &n, NULL) == MESO_OK && n == 2);
-    assert(li[1].rec.form == MESO_LEVEL_MESH && li[1].rec.error > 0);
-    const double err = li[1].rec.error;
-    /* The stand-in mesh (lod 1). */
+    const double err = li[L].rec.error;
     meso_mesh_view mv;
-    uint8_t* mb = test_read_level_mesh(f, 1, &mv);
+    uint8_t* mb = test_read_level_mesh(f, (uint16_t)L, &mv);
     const uint32_t tris = mv.layout.index_count / 3;
-
     meso_ref_shell rs;
     assert(meso_ref_shell_load(f, 1, &rs, NULL) == MESO_OK);
     double worst = 0;
@@ -62,14 +52,36 @@ static void check(const char* mesobake, const char* dir, const char* name, const
         }
         meso_ref_image_free(&img);
     }
-    printf("  %-9s stated error %.6g, farthest of %zu reference hits %.6g (%.0f %%)\n", name, err, hits, worst,
-           100.0 * worst / err);
+    printf("  %-9s level %u (%u triangles): stated error %.6g, farthest of %zu reference hits %.6g (%.0f %%)\n", name,
+           L, tris, err, hits, worst, 100.0 * worst / err);
     fflush(stdout);
     assert(hits > 1000);
     assert(worst <= err * (1 + 1e-5) + 1e-7); /* the stated error holds */
     assert(worst >= 0.5 * err);               /* and is not a loose guess */
     meso_ref_shell_free(&rs);
     free(mb);
+}
+
+static void check(const char* mesobake, const char* dir, const char* name, const char* args)
+{
+    char path[512], cmd[10240];
+    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
+    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' %s -o '%s' >/dev/null", mesobake, test_data("spot_uv.obj"),
+             args, path);
+    assert(system(cmd) == 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_level_info li[16];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= 4 && n <= 9);
+    for (uint32_t L = 1; L < n; ++L) {
+        assert(li[L].rec.form == MESO_LEVEL_MESH && li[L].rec.error > 0);
+        assert(li[L].rec.error >= li[L - 1].rec.error); /* never finer when coarser */
+        assert(li[L].prefix_bytes < li[L - 1].prefix_bytes);
+    }
+    check_level(f, li, 1, name);
+    check_level(f, li, n - 1, name);
     meso_file_close(f);
 }
 
@@ -88,6 +100,16 @@ int main(int argc, char** argv)
              test_data("spot_low_resolution.obj"), path);
     assert(system(cmd) == 0);
     test_assert_one_level(path);
+    /* --levels 2: the base mesh only. */
+    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' --texture bricks:32 --levels 2 -o '%s' >/dev/null", argv[1],
+             test_data("spot_low_resolution.obj"), path);
+    assert(system(cmd) == 0);
+    meso_file* f = NULL;
+    meso_level_info li[4];
+    uint32_t n = 0;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_levels(f, 1, li, 4, &n, NULL) == MESO_OK && n == 2 && li[1].rec.form == MESO_LEVEL_MESH);
+    meso_file_close(f);
     test_temp_dir_remove(dir);
     puts("test_shell_standin: ok");
     return 0;

@@ -98,9 +98,12 @@ static const char* const usage_shell_end =
     "                          \"Animated texture functions\"); frame k equals a bake at that time\n"
     "      --fps F             frames per second (default: N / the texture's period: a seamless loop)\n"
     "Levels of detail:\n"
-    "      --levels auto|1     auto (default): also store the base mesh as level 1, drawn as a plain\n"
+    "      --levels auto|N     auto (default): also store the base mesh as level 1, drawn as a plain\n"
     "                          mesh where the whole shell is thinner than the error on screen, with\n"
-    "                          its error (the largest offset of the surface drawn); 1: level 0 only\n"
+    "                          its error (the largest offset of the surface drawn), then the base\n"
+    "                          mesh's simplified levels (meshoptimizer, as mesobake mesh --levels\n"
+    "                          auto), each with the base's error plus its own (LODS). N (1..9): at\n"
+    "                          most N levels; 1 = level 0 only (no LODS chunk), 2 = the base mesh only\n"
     "Reporting:\n"
     "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
     MEMORY_OPTION_HELP
@@ -220,9 +223,14 @@ static int parse_args(int argc, char** argv, shell_args* a)
         else if (!strcmp(s, "--update"))
             o->update = v;
         else if (!strcmp(s, "--levels")) {
-            if (strcmp(v, "auto") && strcmp(v, "1"))
-                return usage_error("--levels expects auto or 1, got '%s'", v);
-            o->levels = !strcmp(v, "1");
+            long count = 0;
+            if (!strcmp(v, "auto"))
+                o->levels = 0;
+            else if (meso_bake_parse_long(v, 1, MESO_BAKE_SHELL_MAX_LEVELS, &count))
+                o->levels = (int)count;
+            else
+                return usage_error("--levels expects auto or a level count in 1..%u, got '%s'",
+                                   MESO_BAKE_SHELL_MAX_LEVELS, v);
         }
         else if (!strcmp(s, "--color"))
             o->color = v;

@@ -1,0 +1,53 @@
+/*
+ * standin_levels.h — mesh stand-ins of a native object (FORMAT.md §7.10,
+ * form MESO_LEVEL_MESH), shared by the cells and shell bakes (internal,
+ * mesoi_ prefix). Level 1 is the object's base mesh drawn as a plain mesh,
+ * with the error the kind's bake measured for it (e0: cells_standin.c,
+ * bake_shell.c's standin_error); levels 2 and up are the base mesh's
+ * simplifications (mesh_levels.h, the chain `mesobake mesh` writes), each
+ * with error e0 + its own distance to the base mesh: Hausdorff distances
+ * obey the triangle inequality, so the sum bounds the distance to the
+ * surface level 0 draws.
+ */
+#ifndef MESO_STANDIN_LEVELS_H
+#define MESO_STANDIN_LEVELS_H
+
+#include <cjson/cJSON.h>
+
+#include "bake_internal.h"
+#include "mesh_chunk.h"
+#include "mesh_levels.h"
+#include "meso_layout.h"
+
+/* Level 0, the base mesh and at most 7 simplified meshes. */
+#define MESOI_STANDIN_MAX_LEVELS 9
+
+typedef struct mesoi_standin_levels {
+    uint32_t count;          /* stand-in levels, the base mesh's included (0: none, no LODS) */
+    double e0;               /* the base mesh's error */
+    meso_mesh_level* chain;  /* the simplified meshes, chain_count = count - 1 of them */
+    uint32_t chain_count;
+    meso_mesh_chunk chunk[MESOI_STANDIN_MAX_LEVELS]; /* the simplified meshes' MESH chunks */
+    uint8_t lods[MESOI_STANDIN_MAX_LEVELS * MESO_LODS_RECORD_SIZE];
+    float error[MESOI_STANDIN_MAX_LEVELS];      /* per level (0 for level 0), as stored */
+    uint32_t triangles[MESOI_STANDIN_MAX_LEVELS];
+} mesoi_standin_levels;
+
+/* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base
+ * mesh and its simplified chain), N >= 2 = at most N levels in all, level
+ * 0 included (2: the base mesh only). Built without meshoptimizer, the base
+ * mesh is the only stand-in. */
+meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int levels, int threads,
+                                       mesoi_standin_levels* out, meso_error* err);
+
+/* Appends to `chunks` the stand-ins' chunks: `base_chunk` (the object's
+ * base MESH, level 0's) again at lod 1, the simplified meshes at lod 2..,
+ * and the LODS chunk of every level (level 0's bounds l0_min/l0_max), and
+ * adds the report's "levels" array to `rep`. Returns the chunks appended
+ * (at most MESOI_STANDIN_MAX_LEVELS + 1). `lv` keeps the chunks' bytes. */
+size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* base, const mesoi_chunk* base_chunk,
+                                   const float l0_min[3], const float l0_max[3], mesoi_chunk* chunks, cJSON* rep);
+
+void mesoi_standin_levels_free(mesoi_standin_levels* lv);
+
+#endif /* MESO_STANDIN_LEVELS_H */
