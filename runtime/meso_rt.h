@@ -611,7 +611,15 @@ typedef struct meso_rt_instance {
  * the texture shown; the instances are drawn grouped by frame, the texture
  * shown first, with one instanced call and one frame upload (as
  * meso_rt_shell_set_time) per further frame, so afterwards the shell shows
- * the last group's frame; a NaN time is refused naming the instance. */
+ * the last group's frame; a NaN time is refused naming the instance.
+ * Objects with levels (meso_rt_load_object_levels): each instance draws
+ * the level it would draw alone (its own distance against pixel_error),
+ * one instanced call per level, finest first; the image is that of
+ * separate meso_rt_draw calls. Instances that are not similarities or mix
+ * mirroring are refused as one call; a refusal of one instance's frame,
+ * pose slot or texture-buffer room refuses its level's call, and the
+ * levels before it stay drawn. meso_rt_draw_list's instanced items take
+ * one level for all their instances (the nearest's). */
 MESO_API meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* desc,
                                             const meso_rt_instance* instances, uint32_t count);
 

@@ -571,6 +571,15 @@ static int similarity(const double m[16], double* scale, int* mirrored)
            m[3] == 0.0 && m[7] == 0.0 && m[11] == 0.0 && m[15] == 1.0;
 }
 
+int mesoi_model_similarity(const float* model_in, int* mirrored)
+{
+    double model[16], scale;
+    const int identity = zero16(model_in);
+    for (int i = 0; i < 16; ++i)
+        model[i] = identity ? (i % 5 == 0 ? 1.0 : 0.0) : model_in[i];
+    return similarity(model, &scale, mirrored);
+}
+
 meso_result mesoi_draw_model(meso_rt* rt, mesoi_draw* out, const float* model_in, int need_inverse, int64_t index)
 {
     double model[16], mvp[16], inv[16];

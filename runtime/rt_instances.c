@@ -186,10 +186,57 @@ meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_
                       "meso_rt_draw_instanced: stale handle, NULL desc, NULL instances or count 0 (%u)", count);
         return MESO_ERR_INVALID_ARG;
     }
-    meso_result r = mesoi_levels_pick(rt, h, d, instances, count, &h);
-    if (r != MESO_OK || h.id == 0)
-        return r; /* h.id 0: no level has arrived yet */
-    return draw_kind(rt, mesoi_lookup(rt, h), d, instances, count);
+    /* Per-instance levels: each instance draws the level it would draw
+     * alone, one instanced call per level, finest first (so the nearest
+     * instances fill the depth buffer before the far ones are shaded). */
+    uint8_t* level = count > 1 ? mesoi_rt_alloc(rt, count) : NULL;
+    uint32_t groups = level ? mesoi_levels_per_instance(rt, h, d, instances, count, level) : 0;
+    int mirrored0 = 0, mirrored = 0;
+    for (uint32_t i = 0; groups > 1 && i < count; ++i) /* refused as one call, not group by group */
+        if (!mesoi_model_similarity(instances[i].model, &mirrored) || (i > 0 && mirrored != mirrored0))
+            groups = 0;
+        else
+            mirrored0 = mirrored;
+    if (groups < 2) {
+        mesoi_rt_free(rt, level);
+        meso_result r = mesoi_levels_pick(rt, h, d, instances, count, &h);
+        if (r != MESO_OK || h.id == 0)
+            return r; /* h.id 0: no level has arrived yet */
+        return draw_kind(rt, mesoi_lookup(rt, h), d, instances, count);
+    }
+    meso_rt_instance* group = mesoi_rt_alloc(rt, sizeof(meso_rt_instance) * count);
+    if (!group) {
+        mesoi_rt_free(rt, level);
+        return MESO_ERR_OUT_OF_MEMORY;
+    }
+    meso_rt_draw_stats sum = {0}, one;
+    meso_rt_draw_desc gd = *d;
+    gd.stats = d->stats ? &one : NULL;
+    meso_result r = MESO_OK;
+    for (uint32_t l = 0, left = groups; r == MESO_OK && left > 0 && l < 32; ++l) {
+        uint32_t n = 0;
+        for (uint32_t i = 0; i < count; ++i)
+            if (level[i] == l)
+                group[n++] = instances[i];
+        if (!n)
+            continue;
+        --left;
+        meso_rt_object lh = h;
+        r = mesoi_levels_pick(rt, h, &gd, group, n, &lh);
+        if (r == MESO_OK && lh.id != 0)
+            r = draw_kind(rt, mesoi_lookup(rt, lh), &gd, group, n);
+        if (r == MESO_OK && d->stats && lh.id != 0) {
+            sum.supported |= one.supported;
+            sum.fragments += one.fragments;
+            sum.steps += one.steps;
+            sum.hits += one.hits;
+        }
+    }
+    if (d->stats)
+        *d->stats = sum;
+    mesoi_rt_free(rt, group);
+    mesoi_rt_free(rt, level);
+    return r;
 }
 
 /* >>lists -------------------------------------------------------------------- */

@@ -263,6 +263,9 @@ meso_result mesoi_draw_prepare(meso_rt* rt, const meso_rt_draw_desc* d, int need
  * prepare set pv and light_world; `index` >= 0 names the instance in the
  * logged reason of a refusal. prepare calls it with desc->model unless
  * `instanced`; instanced draws call it once per instance (rt_instances.c). */
+/* Whether a model matrix (all zero: identity) is a similarity, as
+ * mesoi_draw_model requires, and whether it mirrors. */
+int mesoi_model_similarity(const float* model, int* mirrored);
 meso_result mesoi_draw_model(meso_rt* rt, mesoi_draw* s, const float* model, int need_inverse, int64_t index);
 void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, int raycast, int units,
                       const GLenum* targets, const GLuint* textures);
@@ -425,6 +428,12 @@ int mesoi_levels_make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l);
  * slot table can grow): use *out. */
 meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                               uint32_t count, meso_rt_object* out);
+/* rt_levels.c: per instance, the level it would draw alone (level[i]);
+ * returns how many levels differ, 0 when the object has no levels (or more
+ * than 32), the draw asks for the finest, or count < 2 (one level for the
+ * draw). */
+uint32_t mesoi_levels_per_instance(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d,
+                                   const meso_rt_instance* inst, uint32_t count, uint8_t* level);
 void mesoi_levels_release(meso_rt* rt, mesoi_object* o);
 /* rt_stream.c: file a request for level l (once); detach a released
  * object's requests; free every request (meso_rt_destroy); the chunk

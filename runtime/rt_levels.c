@@ -290,6 +290,33 @@ void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* out)
     out->evictions = rt->evictions;
 }
 
+/* The viewport height a draw's pixel error refers to. */
+static double draw_height(meso_rt* rt, const meso_rt_draw_desc* d)
+{
+    if (d->viewport[2] != 0 || d->viewport[3] != 0)
+        return d->viewport[3];
+    GLint vp[4] = {0, 0, 0, 0};
+    rt->gl.GetIntegerv(GL_VIEWPORT, vp);
+    return vp[3];
+}
+
+uint32_t mesoi_levels_per_instance(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d,
+                                   const meso_rt_instance* inst, uint32_t count, uint8_t* level)
+{
+    const mesoi_object* o = mesoi_lookup(rt, h);
+    const double tau = d->pixel_error == 0.0f ? 1.0 : (double)d->pixel_error;
+    if (!o || !o->levels || o->levels->count < 2 || o->levels->count > 32 || tau < 0.0 || count < 2)
+        return 0;
+    const double height = draw_height(rt, d);
+    uint32_t seen = 0, distinct = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        level[i] = (uint8_t)choose(o->levels, d, inst + i, 1, tau * rt->tau_scale, height);
+        distinct += !(seen >> level[i] & 1u);
+        seen |= 1u << level[i];
+    }
+    return distinct;
+}
+
 meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                               uint32_t count, meso_rt_object* out)
 {
@@ -299,12 +326,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         return MESO_OK;
     mesoi_levels* lv = o->levels; /* stable: only the slot table moves */
     const double tau = d->pixel_error == 0.0f ? 1.0 : (double)d->pixel_error;
-    double height = d->viewport[3];
-    if (tau >= 0.0 && lv->count > 1 && d->viewport[2] == 0 && d->viewport[3] == 0) {
-        GLint vp[4] = {0, 0, 0, 0};
-        rt->gl.GetIntegerv(GL_VIEWPORT, vp);
-        height = vp[3];
-    }
+    const double height = tau >= 0.0 && lv->count > 1 ? draw_height(rt, d) : d->viewport[3];
     const uint32_t want = choose(lv, d, inst, count, tau * rt->tau_scale, height);
     const uint32_t lower = rt->tau_scale > 1.0 ? choose(lv, d, inst, count, tau * fmax(1.0, rt->tau_scale / 1.1), height)
                                                : want;

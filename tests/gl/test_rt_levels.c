@@ -21,6 +21,8 @@
  *    camera (the pixel-error factor and the levels drawn stop changing, no
  *    more evictions, resident bytes within the budget) and the factor comes
  *    back to 1 when the objects move away.
+ *  - meso_rt_draw_instanced: each instance draws its own level (the image
+ *    of separate draws, bit for bit).
  *  - A frusta object baked by mesobake (tests/data/saguaro.skel with a
  *    brick relief) draws its native level near and its tessellated
  *    stand-in (level 1, form mesh) far away, covering the same pixels as
@@ -617,6 +619,57 @@ static void budget_settles_and_comes_back(const uint8_t* data, size_t size)
     meso_file_close(f);
 }
 
+/* meso_rt_draw_instanced on a levelled object: each instance draws the
+ * level it would draw alone. Three squares at distances 2, 6 and 30 drawn
+ * in one instanced call give, colour and depth, exactly the image of three
+ * separate meso_rt_draw calls, which pick three different levels (one
+ * level for all, the nearest's, would lift the far squares differently). */
+static void instances_draw_their_own_levels(meso_rt* rt, meso_file* f)
+{
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    static const double dist[3] = {2.0, 6.0, 30.0}, x0[3] = {-0.95, 0.6, 10.0};
+    meso_rt_instance inst[3];
+    memset(inst, 0, sizeof inst);
+    for (int i = 0; i < 3; ++i) {
+        inst[i].model[0] = inst[i].model[5] = inst[i].model[10] = inst[i].model[15] = 1.0f;
+        inst[i].model[12] = (float)x0[i];
+        inst[i].model[13] = -0.5f;
+        inst[i].model[14] = (float)-dist[i];
+    }
+    meso_rt_draw_desc d = {0};
+    const double eye[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    meso_camera_look_at(d.view, eye, at, up);
+    meso_camera_perspective(d.proj, 40.0 * M_PI / 180.0, (double)W / H, 0.05, 100.0);
+    d.pixel_error = 1.0f;
+    uint8_t *ca = malloc(4 * W * H), *cb = malloc(4 * W * H);
+    float *za = malloc(sizeof(float) * W * H), *zb = malloc(sizeof(float) * W * H);
+    assert(ca && cb && za && zb);
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw_instanced(rt, obj, &d, inst, 3) == MESO_OK);
+    test_fbo_read(&fb, ca, za);
+    test_fbo_clear(&fb, 0, 0, 0);
+    int level[3];
+    for (int i = 0; i < 3; ++i) {
+        memcpy(d.model, inst[i].model, sizeof d.model);
+        assert(meso_rt_draw(rt, obj, &d) == MESO_OK);
+        meso_rt_levels_state st;
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        level[i] = st.last_drawn;
+    }
+    test_fbo_read(&fb, cb, zb);
+    size_t covered = 0;
+    for (size_t p = 0; p < (size_t)W * H; ++p)
+        covered += zb[p] < 1.0f;
+    printf("  instanced: levels %d, %d, %d at distances 2, 6, 30; %zu pixels, %s separate draws\n", level[0],
+           level[1], level[2], covered, memcmp(za, zb, sizeof(float) * W * H) ? "NOT as" : "as");
+    assert(level[0] < level[1] && level[1] < level[2]);
+    assert(covered > 100);
+    assert(memcmp(ca, cb, 4 * W * H) == 0 && memcmp(za, zb, sizeof(float) * W * H) == 0);
+    free(ca), free(cb), free(za), free(zb);
+    meso_rt_release_object(rt, obj);
+}
+
 int main(void)
 {
     char why[256];
@@ -634,6 +687,7 @@ int main(void)
     assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
     assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
     error_holds_in_pixels_where_chosen(rt, f);
+    instances_draw_their_own_levels(rt, f);
     every_level_prefix_draws(rt, data, size);
     {
         meso_level_info li[LEVELS];
