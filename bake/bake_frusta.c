@@ -20,6 +20,7 @@
 #include "color_map.h"
 #include "frusta_chunks.h"
 #include "frusta_standin.h"
+#include "standin_levels.h"
 #include "meso_clock.h"
 #include "frustum_model.h"
 #include "memory_budget.h"
@@ -226,19 +227,12 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     if (r == MESO_OK && a->relief_color)
         r = mesoi_add_input_provenance(inputs, a->relief_color, err);
     meso_mesh_chunk mc = {0};
-    uint8_t lods[2 * MESO_LODS_RECORD_SIZE];
-    meso_level_record lv[2] = {{.object = 1, .lod = 0, .form = MESO_LEVEL_NATIVE},
-                               {.object = 1, .lod = 1, .form = MESO_LEVEL_MESH}};
-    if (r == MESO_OK && st) { /* level 1: the stand-in (frusta_standin.h) */
+    mesoi_standin_levels lv = {0};
+    if (r == MESO_OK && st) { /* level 1: the stand-in (frusta_standin.h), 2..: its simplifications */
         r = meso_bake_mesh_chunk(&st->mesh, NULL, &mc, err);
-        memcpy(lv[0].bbox_min, rec.bbox_min, sizeof lv[0].bbox_min);
-        memcpy(lv[0].bbox_max, rec.bbox_max, sizeof lv[0].bbox_max);
-        memcpy(lv[1].bbox_min, st->bbox_min, sizeof lv[1].bbox_min);
-        memcpy(lv[1].bbox_max, st->bbox_max, sizeof lv[1].bbox_max);
-        lv[1].error = (float)st->error;
-        meso_level_record_encode(&lv[0], lods);
-        meso_level_record_encode(&lv[1], lods + MESO_LODS_RECORD_SIZE);
-        s->level_count = 2;
+        if (r == MESO_OK)
+            r = mesoi_standin_levels_build(&st->mesh, st->error, a->levels, a->common.threads, &lv, err);
+        s->level_count = lv.count + 1;
         s->standin_triangles = st->mesh.triangle_count;
         s->standin_vertices = st->mesh.vertex_count;
         s->standin_bytes = mc.size;
@@ -249,26 +243,7 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     }
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
-    if (st) {
-        cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
-        for (int L = 0; L < 2; ++L) {
-            cJSON* o = cJSON_CreateObject();
-            cJSON_AddNumberToObject(o, "lod", L);
-            cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
-            cJSON_AddNumberToObject(o, "error", L ? (double)lv[1].error : 0.0);
-            if (L) {
-                cJSON_AddNumberToObject(o, "triangles", s->standin_triangles);
-                cJSON_AddNumberToObject(o, "vertices", s->standin_vertices);
-                cJSON_AddNumberToObject(o, "bytes", (double)s->standin_bytes);
-                cJSON_AddNumberToObject(o, "relief_error", s->standin_relief_error);
-                cJSON_AddNumberToObject(o, "chord_error", s->standin_chord_error);
-                cJSON_AddNumberToObject(o, "cells_around_min", st->nu_min);
-                cJSON_AddNumberToObject(o, "cells_around_max", st->nu_max);
-            }
-            cJSON_AddItemToArray(jl, o);
-        }
-    }
-    mesoi_chunk chunks[8];
+    mesoi_chunk chunks[7 + MESOI_STANDIN_MAX_LEVELS];
     int count = 0;
     chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
                                     .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};
@@ -290,17 +265,25 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8,
                                                  .components = 4, .dims = {color->width, color->height, 1}},
                                         .data = color->rgba, .size = 4 * (size_t)color->width * color->height};
-    if (st && mc.data) {
-        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
-                                                 .lod = 1, .encoding = mc.encoding, .decoded_size = mc.decoded_size},
-                                        .data = mc.data, .size = mc.size};
-        chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES, .components = 1,
-                                                 .dims = {2, 1, 1}},
-                                        .data = lods, .size = sizeof lods};
+    if (r == MESO_OK && st) {
+        /* The stand-in exists only as level 1 (the native level does not
+         * use it): append puts the tessellation's chunk at lod 1. */
+        const mesoi_chunk tess = {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
+                                           .encoding = mc.encoding, .decoded_size = mc.decoded_size},
+                                  .data = mc.data, .size = mc.size};
+        count += (int)mesoi_standin_levels_append(&lv, &st->mesh, &tess, rec.bbox_min, rec.bbox_max, chunks + count,
+                                                  rep);
+        cJSON* l1 = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(rep, "levels"), 1);
+        cJSON_AddNumberToObject(l1, "vertices", s->standin_vertices);
+        cJSON_AddNumberToObject(l1, "relief_error", s->standin_relief_error);
+        cJSON_AddNumberToObject(l1, "chord_error", s->standin_chord_error);
+        cJSON_AddNumberToObject(l1, "cells_around_min", st->nu_min);
+        cJSON_AddNumberToObject(l1, "cells_around_max", st->nu_max);
     }
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
     free(mc.data);
+    mesoi_standin_levels_free(&lv);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     free(frus);

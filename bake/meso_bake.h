@@ -571,11 +571,12 @@ typedef struct meso_bake_frusta_options {
                                    each segment's twist is twist x its length (a .skel node's
                                    twist=DEG replaces it for its segment); finite, |twist| <=
                                    MESO_BAKE_MAX_TWIST, and no segment over 1000 turns */
-    int levels;                 /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto (today
-                                   level 0 and, as level 1, a triangle tessellation drawn as a plain mesh
-                                   with its measured error; bake/frusta_standin.h), 1 = level 0 only (no
-                                   LODS chunk, the file of earlier bakes), N = at most N
-                                   (1..MESO_BAKE_FRUSTA_MAX_LEVELS; today at most 2 are made) */
+    int levels;                 /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto (level
+                                   0; as level 1, a triangle tessellation drawn as a plain mesh with its
+                                   measured error, bake/frusta_standin.h; then its simplifications, as
+                                   meso_bake_mesh's auto, each with level 1's error plus its own), 1 =
+                                   level 0 only (no LODS chunk, the file of earlier bakes), N = at most N
+                                   (1..MESO_BAKE_FRUSTA_MAX_LEVELS; at most 9 are made) */
 } meso_bake_frusta_options;
 
 #define MESO_BAKE_FRUSTA_MAX_LEVELS 16

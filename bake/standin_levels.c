@@ -24,6 +24,8 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
     out->count = 1;
     if (levels == 2 || !MESO_HAVE_MESHOPTIMIZER)
         return MESO_OK;
+    if (levels > MESOI_STANDIN_MAX_LEVELS)
+        levels = MESOI_STANDIN_MAX_LEVELS;
     const meso_mesh_levels_options lo = {.max_levels = levels ? levels - 1 : MESOI_STANDIN_MAX_LEVELS - 1,
                                          .threads = threads};
     meso_result r = meso_mesh_levels_build(base, &lo, &out->chain, &out->chain_count, err);

@@ -1,7 +1,8 @@
-/* A frusta object's level 1 (FORMAT.md §7.10; bake/frusta_standin.h): the
- * triangle tessellation drawn in the frusta's place, with the error
- * mesobake states for it, checked against the exact CPU reference both
- * ways:
+/* A frusta object's mesh stand-ins (FORMAT.md §7.10; bake/frusta_standin.h,
+ * bake/standin_levels.h): level 1 the triangle tessellation drawn in the
+ * frusta's place, levels 2.. its simplifications, each with the error
+ * mesobake states for it; level 1 and the coarsest are checked against the
+ * exact CPU reference both ways:
  *  - native to stand-in: every surface point the reference ray caster hits,
  *    from several views, lies within the stated error of the stand-in mesh
  *    (brute force over its triangles);
@@ -52,35 +53,20 @@ static double native_distance(const meso_ref_frusta* m, const double q[3], const
     return best;
 }
 
-static void check(const char* mesobake, const char* dir, const char* name, const char* input, const char* args)
+/* Level L's mesh against the native surface, both ways. Level 1's points
+ * are taken to the native surface by reference rays along their normals;
+ * a coarser level's, which may span gaps the normal ray misses, to level
+ * 1's mesh (brute force) plus level 1's error, checked here too: the
+ * triangle inequality makes the sum a distance bound to the native
+ * surface. */
+static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, const char* name,
+                        const meso_mesh_view* level1)
 {
-    char path[512], report[512], cmd[10240];
-    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
-    snprintf(report, sizeof report, "%s/%s.json", dir, name);
-    snprintf(cmd, sizeof cmd, "'%s' frusta -i '%s' %s -o '%s' --report '%s' >/dev/null", mesobake, test_data(input),
-             args, path, report);
-    assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
-    meso_level_info li[4];
-    uint32_t n = 0;
-    assert(meso_file_levels(f, 1, li, 4, &n, NULL) == MESO_OK && n == 2);
-    assert(li[0].rec.form == MESO_LEVEL_NATIVE && li[1].rec.form == MESO_LEVEL_MESH && li[1].rec.error > 0);
-    const double err = li[1].rec.error;
+    const double err = li[L].rec.error;
     meso_mesh_view mv;
-    uint8_t* mb = test_read_level_mesh(f, 1, &mv);
+    uint8_t* mb = test_read_level_mesh(f, (uint16_t)L, &mv);
     const uint32_t tris = mv.layout.index_count / 3;
     assert(tris > 0 && tris < 20000); /* cheap: a polygon stand-in, not the 256k of the paper's Figure 6 */
-    /* The report lists both levels with the stored error. */
-    FILE* rf = fopen(report, "rb");
-    assert(rf);
-    char json[65536];
-    const size_t jn = fread(json, 1, sizeof json - 1, rf);
-    json[jn] = 0;
-    fclose(rf);
-    const char* lv = strstr(json, "\"levels\"");
-    assert(lv && strstr(lv, "\"mesh\"") && strstr(lv, "\"triangles\""));
 
     meso_ref_frusta rm;
     assert(meso_ref_frusta_load(f, 1, &rm, NULL) == MESO_OK);
@@ -140,14 +126,15 @@ static void check(const char* mesobake, const char* dir, const char* name, const
                 q[k] = bary[s][0] * P[0][k] + bary[s][1] * P[1][k] + bary[s][2] * P[2][k];
                 nn[k] = nrm[k] / nl;
             }
-            worst_standin = fmax(worst_standin, native_distance(&rm, q, nn, 4 * err));
+            worst_standin = fmax(worst_standin, L == 1 ? native_distance(&rm, q, nn, 4 * err)
+                                                       : standin_distance(q, level1) + li[1].rec.error);
             ++samples;
         }
     }
-    printf("  %-8s %u triangles, stated error %.6g (%.3g %% of the radius); native hits %zu, farthest %.6g "
-           "(%.0f %%); stand-in samples %zu, farthest %.6g (%.0f %%)\n",
-           name, tris, err, 100 * err / radius, hits, worst_native, 100 * worst_native / err, samples, worst_standin,
-           100 * worst_standin / err);
+    printf("  %-8s level %u, %u triangles, stated error %.6g (%.3g %% of the radius); native hits %zu, farthest "
+           "%.6g (%.0f %%); stand-in samples %zu, farthest %.6g (%.0f %%)\n",
+           name, L, tris, err, 100 * err / radius, hits, worst_native, 100 * worst_native / err, samples,
+           worst_standin, 100 * worst_standin / err);
     fflush(stdout);
     assert(hits > 500 && samples > 500);
     assert(worst_native <= err * (1 + 1e-5)); /* the stated error holds, */
@@ -155,6 +142,42 @@ static void check(const char* mesobake, const char* dir, const char* name, const
     assert(fmax(worst_native, worst_standin) >= 0.3 * err); /* and is not a loose guess */
     meso_ref_frusta_free(&rm);
     free(mb);
+}
+
+static void check(const char* mesobake, const char* dir, const char* name, const char* input, const char* args)
+{
+    char path[512], report[512], cmd[10240];
+    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
+    snprintf(report, sizeof report, "%s/%s.json", dir, name);
+    snprintf(cmd, sizeof cmd, "'%s' frusta -i '%s' %s -o '%s' --report '%s' >/dev/null", mesobake, test_data(input),
+             args, path, report);
+    assert(system(cmd) == 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_level_info li[16];
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= 3 && n <= 9);
+    assert(li[0].rec.form == MESO_LEVEL_NATIVE);
+    for (uint32_t L = 1; L < n; ++L) {
+        assert(li[L].rec.form == MESO_LEVEL_MESH && li[L].rec.error > 0);
+        assert(li[L].rec.error >= li[L - 1].rec.error);
+        assert(li[L].prefix_bytes < li[L - 1].prefix_bytes);
+    }
+    /* The report lists the levels with the stored error. */
+    FILE* rf = fopen(report, "rb");
+    assert(rf);
+    char json[65536];
+    const size_t jn = fread(json, 1, sizeof json - 1, rf);
+    json[jn] = 0;
+    fclose(rf);
+    const char* lv = strstr(json, "\"levels\"");
+    assert(lv && strstr(lv, "\"mesh\"") && strstr(lv, "\"triangles\"") && strstr(lv, "\"chord_error\""));
+    meso_mesh_view mv1;
+    uint8_t* m1 = test_read_level_mesh(f, 1, &mv1);
+    check_level(f, li, 1, name, NULL);
+    check_level(f, li, n - 1, name, &mv1);
+    free(m1);
     meso_file_close(f);
 }
 
