@@ -23,6 +23,22 @@ static inline uint8_t* test_read_level_mesh(meso_file* f, uint16_t lod, meso_mes
     return mb;
 }
 
+/* Object 1's levels of `f` (at most 16, at least min_levels): level 0
+ * native, every coarser one a mesh stand-in with an error no smaller than
+ * the finer one's, in a shorter prefix of the file. Returns the count. */
+static inline uint32_t test_standin_chain(meso_file* f, meso_level_info li[16], uint32_t min_levels)
+{
+    uint32_t n = 0;
+    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= min_levels && n <= 9);
+    assert(li[0].rec.form == MESO_LEVEL_NATIVE);
+    for (uint32_t L = 1; L < n; ++L) {
+        assert(li[L].rec.form == MESO_LEVEL_MESH && li[L].rec.error > 0);
+        assert(li[L].rec.error >= li[L - 1].rec.error); /* never finer when coarser */
+        assert(li[L].prefix_bytes < li[L - 1].prefix_bytes);
+    }
+    return n;
+}
+
 /* The file at `path` (a bake with --levels 1) has one level and no LODS. */
 static inline void test_assert_one_level(const char* path)
 {
