@@ -16,7 +16,7 @@
  * ratio, both shells' validity, and the median process CPU seconds of each
  * (all threads: less noisy than wall time on a shared machine). Stdout also
  * has the update's stages (the report's seconds_*, run with the median
- * wall time).
+ * wall time; MESO_BENCH_VERBOSE=1 prints every bake's stage lines).
  */
 #include "test_util.h"
 
@@ -39,6 +39,14 @@ static void die(const char* what, const meso_error* err)
     exit(1);
 }
 
+
+/* MESO_BENCH_VERBOSE=1: the bakes' stage lines (mesobake -v's). */
+static void print_stage(void* user, const meso_bake_progress* p)
+{
+    (void)user;
+    if (p->event == MESO_BAKE_EVENT_STAGE && p->message)
+        printf("    %s\n", p->message);
+}
 
 static double cpu_seconds(void)
 {
@@ -109,6 +117,8 @@ int main(int argc, char** argv)
         for (size_t ri = 0; ri < sizeof(rels) / sizeof(rels[0]); ++ri) {
             meso_bake_shell_options o = meso_bake_shell_defaults();
             o.common.threads = THREADS;
+            if (getenv("MESO_BENCH_VERBOSE"))
+                o.common.progress = print_stage;
             o.mesh = &m;
             o.thickness_rel = rels[ri];
             meso_bake_shell_report old_rep;
