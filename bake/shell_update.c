@@ -437,7 +437,6 @@ meso_result mesoi_shell_update_validate(const meso_mesh* m, const float* d, doub
         if (!p->redo[v])
             dmax = fmax(dmax, sqrt((double)d[3 * v] * d[3 * v] + (double)d[3 * v + 1] * d[3 * v + 1] +
                                    (double)d[3 * v + 2] * d[3 * v + 2]));
-    (void)h;
     if (!(dmax + longest_edge(m) < p->radius * (1.0 - 1e-9)))
         return MESO_OK;
     memset(out, 0, sizeof(*out));
