@@ -121,9 +121,11 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
 }
 
 /* Refuse what no shell can be built on, before any work: the topology
- * (mesh_check.h) and, with CGAL, a surface that intersects itself. */
-static meso_result require_shellable(const meso_mesh* m, const char* path, double diag, meso_mesh_topology* topo,
-                                     meso_bake_shell_report* rep, meso_error* err)
+ * (mesh_check.h) and, with CGAL, a surface that intersects itself (an
+ * update tests only the pairs its edit touched, once OLD is read:
+ * mesoi_shell_update_base_check; `whole` 0). */
+static meso_result require_shellable(const meso_mesh* m, const char* path, double diag, int whole,
+                                     meso_mesh_topology* topo, meso_bake_shell_report* rep, meso_error* err)
 {
     double t = meso_seconds();
     meso_result r = meso_mesh_topology_compute(m, 1e-14 * diag * diag, topo, err);
@@ -132,7 +134,7 @@ static meso_result require_shellable(const meso_mesh* m, const char* path, doubl
     rep->seconds_topology = meso_seconds() - t;
     t = meso_seconds();
 #if MESO_HAVE_CGAL
-    if (r == MESO_OK) {
+    if (r == MESO_OK && whole) {
         const uint32_t nv = m->vertex_count;
         double* xyz = malloc(sizeof(double) * 3 * (size_t)nv);
         meso_cgal_intersection_count c = {0, 0, 0};
@@ -303,7 +305,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
     return r;
 }
 
-/* Validate the shell as it will be rendered: prisms from bottom to top. */
+/* Validate the shell as it will be rendered: prisms from bottom to top (an
+ * update of an exterior or interior shell: mesoi_shell_update_validate). */
 static meso_result validate(shell_bake* s, meso_error* err)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -326,7 +329,13 @@ static meso_result validate(shell_bake* s, meso_error* err)
         free(pos);
         free(span);
     } else {
-        r = meso_shell_validate(&s->m, s->d, NULL, s->h, a->kind == MESO_SHELL_INTERIOR ? -1 : 1, NULL, &val, err);
+        const int sign = a->kind == MESO_SHELL_INTERIOR ? -1 : 1;
+        int done = 0;
+        r = s->prior.redo ? mesoi_shell_update_validate(&s->m, s->d, s->h, sign, &s->prior, s->run.common.threads,
+                                                        &val, &done, err)
+                          : MESO_OK;
+        if (r == MESO_OK && !done)
+            r = meso_shell_validate(&s->m, s->d, NULL, s->h, sign, NULL, &val, err);
     }
     meso_bake_shell_report* rep = s->rep;
     rep->prisms = val.prisms;
@@ -657,7 +666,8 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     s.rep->seconds_load = meso_seconds() - t;
     s.h = a->thickness > 0 ? a->thickness : a->thickness_rel * diag;
     if (r == MESO_OK)
-        r = require_shellable(&s.m, a->input ? a->input : MESOI_MEMORY_INPUT, diag, &s.topo, s.rep, err);
+        r = require_shellable(&s.m, a->input ? a->input : MESOI_MEMORY_INPUT, diag, !a->update, &s.topo, s.rep,
+                              err);
     t = meso_seconds();
     if (r == MESO_OK && a->texture)
         r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
@@ -665,11 +675,18 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         r = color_prepare(&s, 1, err);
     s.rep->seconds_texture = meso_seconds() - t;
     if (r == MESO_OK && a->update) {
+        t = meso_seconds();
         r = mesoi_shell_prior_load(a->update, a, &s.h, &s.m, s.tx.source, s.tx.indices,
                                    s.m.vertex_count + s.tx.seam_vertices, &s.prior, err);
         s.rep->vertices_moved = s.prior.moved;
         s.rep->vertices_recomputed = s.prior.redo_count;
         s.rep->update_radius = s.prior.radius;
+        s.rep->seconds_load += meso_seconds() - t; /* OLD's read, and the region */
+        t = meso_seconds();
+        if (r == MESO_OK)
+            r = mesoi_shell_update_base_check(&s.m, &s.prior, a->input ? a->input : MESOI_MEMORY_INPUT,
+                                              s.run.common.threads, err);
+        s.rep->seconds_check += meso_seconds() - t;
         if (r == MESO_OK)
             mesoi_run_stage(&s.run, "update", 0.2, 0.2,
                             "update of %s: %u vertices moved, %u of %u recomputed (within %g of a moved face)",

@@ -352,13 +352,40 @@ typedef struct sort_key {
     uint32_t index;
 } sort_key;
 
-static int cmp_key(const void* pa, const void* pb)
+/* By key, ties by index: a total order, so the tree does not depend on the
+ * sort's algorithm. */
+static inline int key_less(const sort_key* a, const sort_key* b)
 {
-    const sort_key* a = pa;
-    const sort_key* b = pb;
-    if (a->key != b->key)
-        return a->key < b->key ? -1 : 1;
-    return (a->index > b->index) - (a->index < b->index); /* total order: deterministic */
+    return a->key < b->key || (a->key == b->key && a->index < b->index);
+}
+
+/* a[0..n) in key_less's order, by merge sort through tmp (n / 2 entries):
+ * the same order qsort gave, and so the same tree; qsort's indirect
+ * comparisons were most of the field stage of an update (issue 15 profile,
+ * armadillo: the tree is rebuilt over every face). */
+static void sort_keys(sort_key* a, sort_key* tmp, uint32_t n)
+{
+    if (n <= 16) {
+        for (uint32_t i = 1; i < n; ++i) {
+            const sort_key x = a[i];
+            uint32_t j = i;
+            for (; j > 0 && key_less(&x, &a[j - 1]); --j)
+                a[j] = a[j - 1];
+            a[j] = x;
+        }
+        return;
+    }
+    const uint32_t h = n / 2;
+    sort_keys(a, tmp, h);
+    sort_keys(a + h, tmp, n - h);
+    if (!key_less(&a[h], &a[h - 1]))
+        return; /* already in order */
+    memcpy(tmp, a, sizeof(sort_key) * h);
+    uint32_t i = 0, j = h, k = 0;
+    while (i < h && j < n)
+        a[k++] = key_less(&a[j], &tmp[i]) ? a[j++] : tmp[i++];
+    while (i < h)
+        a[k++] = tmp[i++];
 }
 
 typedef struct build_ctx {
@@ -366,7 +393,7 @@ typedef struct build_ctx {
     const double* cent; /* 3 per triangle */
     const double* area; /* per triangle */
     uint32_t* perm;     /* tree order -> input index */
-    sort_key* keys;
+    sort_key* keys; /* 2 x triangles: the keys, then sort_keys' scratch */
     lp_node* nodes;
     uint32_t count;
 } build_ctx;
@@ -448,7 +475,7 @@ static uint32_t build_node(build_ctx* b, uint32_t first, uint32_t count)
         b->keys[i].key = b->cent[3 * t + axis];
         b->keys[i].index = t;
     }
-    qsort(b->keys, count, sizeof(sort_key), cmp_key);
+    sort_keys(b->keys, b->keys + count, count);
     for (uint32_t i = 0; i < count; ++i)
         b->perm[first + i] = b->keys[i].index;
     uint32_t half = count / 2;
@@ -519,7 +546,7 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
     double* cent = malloc(sizeof(double) * 3 * (size_t)nt);
     double* area = malloc(sizeof(double) * (size_t)nt);
     uint32_t* perm = malloc(sizeof(uint32_t) * (size_t)nt);
-    sort_key* keys = malloc(sizeof(sort_key) * (size_t)nt);
+    sort_key* keys = malloc(sizeof(sort_key) * 2 * (size_t)nt);
     lp_node* nodes = malloc(sizeof(lp_node) * 2 * (size_t)nt);
     double* tri_out = malloc(sizeof(double) * 9 * (size_t)nt);
     meso_result r = MESO_OK;

@@ -472,8 +472,10 @@ typedef struct meso_bake_shell_report {
     int planar_uvs;                     /* 1: the mesh had no uvs (warning); projected */
     /* Wall-clock seconds per stage (in the --report file, not stored in the
      * .meso file, which stays the same bake after bake): load (read, check
-     * and fix the mesh; the texture function), topology (edges, boundary),
-     * check (the base's self-intersection test), texture (uvs, seams),
+     * and fix the mesh; the texture function; with update, OLD and the
+     * region), topology (edges, boundary), check (the base's
+     * self-intersection test; with update, of the moved faces), texture
+     * (uvs, seams),
      * field (normals, boundary strip, Barnes-Hut tree), directors (tracing
      * and the hybrid rounds, of which directors_checks in the rounds' exact
      * checks), repair (and regrow), validate (the final exact validation),

@@ -4,7 +4,8 @@
  * the prisms of the faces around them and the intersection pairs with one of
  * those faces are tested again; the verdicts of the others are kept from the
  * round before. The final validation of a bake (meso_shell_validate) still
- * checks the whole shell, so a shell's validity never rests on this.
+ * checks the whole shell, so a shell's validity never rests on this (an
+ * update's, on the region argument of shell_update.c instead).
  */
 #ifndef MESO_SHELL_CHECKER_H
 #define MESO_SHELL_CHECKER_H

@@ -10,12 +10,14 @@
 #include <stdint.h>
 
 #include "bake_internal.h"
+#include "shell_validate.h"
 
 /* What an update keeps from OLD and what it recomputes. */
 typedef struct mesoi_shell_prior {
     float* d;              /* layers x 3 nv: OLD's directors per mesh vertex, in the bake's layer order
                               (exterior: outward; interior: inward; envelope: top, then bottom) */
     uint8_t* redo;         /* nv: 1 = recompute this vertex's directors */
+    uint8_t* moved_at;     /* nv: 1 = this vertex's position differs from OLD's */
     uint32_t moved;        /* vertices whose position differs from OLD's */
     uint32_t redo_count;   /* vertices recomputed */
     double radius;         /* the influence radius the region was grown by (mesh units) */
@@ -34,5 +36,21 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
                                    const meso_mesh* m, const uint32_t* out_source, const uint32_t* out_indices,
                                    uint32_t nv_out, mesoi_shell_prior* out, meso_error* err);
 void mesoi_shell_prior_free(mesoi_shell_prior* p);
+
+/* The base's self-intersection test of an update (E3114 when it fails, as
+ * a full bake's): only the triangle pairs with a moved corner (OLD's base,
+ * which mesobake shell checked, holds the rest). */
+meso_result mesoi_shell_update_base_check(const meso_mesh* m, const mesoi_shell_prior* p, const char* path,
+                                          int threads, meso_error* err);
+
+/* The final validation of an update's exterior or interior shell (directors
+ * d, sign +1 / -1, per-side thickness h): every prism and the thickness
+ * ratio as meso_shell_validate, the intersections only of the faces with a
+ * recomputed corner (shell_update.c says why that is the whole shell's
+ * count). *done = 0 when the argument does not apply (no CGAL, or a kept
+ * director too long for the region's radius): validate in full then. */
+meso_result mesoi_shell_update_validate(const meso_mesh* m, const float* d, double h, int sign,
+                                        const mesoi_shell_prior* p, int threads, meso_shell_report* out, int* done,
+                                        meso_error* err);
 
 #endif /* MESO_SHELL_UPDATE_H */

@@ -12,7 +12,14 @@
  *  - an unchanged mesh recomputes nothing and reproduces OLD's directors;
  *  - without a thickness in mesh units, OLD's thickness is kept;
  *  - refusals: another topology (E3118), other parameters (E3117), a file
- *    that is not one shell (E3116), an OLD written with defects (E3119).
+ *    that is not one shell (E3116), an OLD written with defects (E3119);
+ *  - the update's validation (only the faces near the edit,
+ *    mesoi_shell_update_validate) counts what meso_shell_validate counts
+ *    on the whole written shell: on every update above, and on an edit
+ *    that makes the shell fold and intersect (normal directors, no
+ *    repair), where both also equal a full re-bake's; an edit that makes
+ *    the base intersect itself is refused by the update as by a full bake
+ *    (E3114, its test limited to the moved faces).
  * Exterior and interior shells. */
 #include "test_util.h"
 
@@ -22,6 +29,14 @@
 #include "mesh_bump.h"
 #include "meso_bake.h"
 #include "meso_file.h"
+#include "shell_validate.h"
+
+#ifndef DENT_N
+#define DENT_N 100
+#define DENT_A (-2.0)
+#define PUSH_N 30
+#define PUSH_A (-20.0)
+#endif
 
 static meso_mesh load(const char* name)
 {
@@ -106,6 +121,27 @@ static void compare(const baked* a, const baked* b, double h, double* max, doubl
         *identical += s == 0;
         *above += s > 0.01;
     }
+}
+
+/* The bake's validity counts against meso_shell_validate of its written
+ * shell over base e (no texture: output vertices are e's). */
+static void same_verdict(const meso_mesh* e, const baked* b, meso_shell_kind kind)
+{
+    assert(b->n == e->vertex_count && kind != MESO_SHELL_ENVELOPE);
+    const float* d = b->sdir + (kind == MESO_SHELL_INTERIOR ? 3 * (size_t)b->n : 0);
+    meso_shell_report v;
+    meso_error err = {0};
+    assert(meso_shell_validate(e, d, NULL, b->rep.thickness, kind == MESO_SHELL_INTERIOR ? -1 : 1, NULL, &v, &err) ==
+           MESO_OK);
+    printf("  validation: inverted %u (undecided %u), self %llu, cross %llu; whole shell: %u (%u), %llu, %llu\n",
+           b->rep.inverted_prisms, b->rep.undecided_prisms, (unsigned long long)b->rep.offset_self_intersections,
+           (unsigned long long)b->rep.offset_base_intersections, v.inverted_prisms, v.undecided_prisms,
+           (unsigned long long)v.offset_self_intersections, (unsigned long long)v.offset_base_intersections);
+    assert(b->rep.inverted_prisms == v.inverted_prisms && b->rep.undecided_prisms == v.undecided_prisms);
+    assert(b->rep.offset_self_intersections == v.offset_self_intersections);
+    assert(b->rep.offset_base_intersections == v.offset_base_intersections);
+    assert(fabs(b->rep.thickness_ratio_mean - v.thickness_ratio_mean) <= 1e-12 &&
+           b->rep.thickness_ratio_min == v.thickness_ratio_min);
 }
 
 /* The longest edge of m. */
@@ -230,7 +266,8 @@ static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_direct
     assert(upd.rep.vertices_recomputed == region);
     assert(upd.rep.vertices_recomputed < nv / 3);
 
-    /* Validity identical. */
+    /* Validity identical, and the update's local count the whole shell's. */
+    same_verdict(&e, &upd, kind);
     assert(upd.rep.inverted_prisms == 0 && full.rep.inverted_prisms == 0);
     assert(upd.rep.offset_self_intersections == 0 && full.rep.offset_self_intersections == 0);
     assert(upd.rep.offset_base_intersections == 0 && full.rep.offset_base_intersections == 0);
@@ -278,6 +315,56 @@ static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_direct
     meso_mesh_free(&m);
 }
 
+/* Edits the update must judge as the whole shell's validation does: a dent
+ * that makes normal offsets fold and meet (no repair: the defects stay, and
+ * are written), and a push through the torus's tube that makes the base
+ * intersect itself (refused, E3114, by both). */
+static void check_defects(const char* dir)
+{
+    meso_mesh m = load("torus.obj");
+    const uint32_t nv = m.vertex_count;
+    char old_path[4200];
+    snprintf(old_path, sizeof(old_path), "%s/old_normal.meso", dir);
+    meso_bake_shell_options o = meso_bake_shell_defaults();
+    o.mesh = &m;
+    o.directors = MESO_DIRECTORS_NORMAL;
+    o.no_repair = 1;
+    o.thickness_rel = 0.03;
+    baked old = bake(&o, old_path);
+    assert(old.r == MESO_OK && old.rep.inverted_prisms == 0 && old.rep.offset_self_intersections == 0 &&
+           old.rep.offset_base_intersections == 0);
+    const double h = old.rep.thickness;
+    o.thickness = h;
+    float* pos = NULL;
+    meso_mesh e = edited_copy(&m, &pos);
+    mesh_bump(pos, nv, nv / 3, nv / DENT_N, DENT_A * h);
+    o.mesh = &e;
+    o.update = old_path;
+    baked upd = bake(&o, NULL);
+    assert(upd.r == MESO_OK);
+    o.update = NULL;
+    baked full = bake(&o, NULL);
+    assert(full.r == MESO_OK);
+    same_verdict(&e, &upd, MESO_SHELL_EXTERIOR);
+    same_verdict(&e, &full, MESO_SHELL_EXTERIOR);
+    assert(upd.rep.inverted_prisms > 0 && upd.rep.offset_self_intersections > 0);
+    baked_free(&upd), baked_free(&full);
+
+    /* Through the tube: the base meets itself. */
+    memcpy(pos, m.positions, sizeof(float) * 3 * nv);
+    mesh_bump(pos, nv, nv / 3, nv / PUSH_N, PUSH_A * h);
+    o.update = old_path;
+    upd = bake(&o, NULL);
+    o.update = NULL;
+    full = bake(&o, NULL);
+    printf("  through the tube: update %d (E%d), full %d (E%d)\n", upd.r, upd.err.code, full.r, full.err.code);
+    assert(full.r != MESO_OK && full.err.code == 3114);
+    assert(upd.r != MESO_OK && upd.err.code == 3114);
+    baked_free(&old);
+    free(pos);
+    meso_mesh_free(&m);
+}
+
 int main(void)
 {
     char dir[4096];
@@ -286,6 +373,7 @@ int main(void)
     check_kind("torus.obj", MESO_SHELL_EXTERIOR, MESO_DIRECTORS_LP, 0.03, dir);
     check_kind("torus.obj", MESO_SHELL_INTERIOR, MESO_DIRECTORS_LP, 0.02, dir);
     check_kind("blub_fish_low_resolution.obj", MESO_SHELL_EXTERIOR, MESO_DIRECTORS_HYBRID, 0.03, dir);
+    check_defects(dir);
 
     /* OLD that is not one shell: a mesh bake (E3116). */
     char path[4200];
