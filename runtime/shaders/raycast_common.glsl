@@ -46,12 +46,18 @@ ivec2 hit_texel()
     return ivec2(gl_FragCoord.xy - u_viewport.xy);
 }
 
-// The fragment's own depth (its hull entry) lies strictly behind a hit
-// already found at its pixel: its hit, never nearer than its entry, would
-// fail the depth test (rt_shell.c says why, and for which functions).
+// The fragment's own depth (its hull entry) lies behind a hit already
+// found at its pixel: its hit, never nearer than its entry, would fail the
+// depth test (rt_shell.c says why, and for which functions). Behind by more
+// than 64 ulps: a hit on the face two prisms share is that face's entry
+// depth up to rounding (the interpolated depth and the shader's own ray
+// differ by a few ulps), and either prism's may be the nearer one.
 bool behind_hit()
 {
-    return u_hull_reject != 0 && depth_key(gl_FragCoord.z) > imageLoad(u_hits, hit_texel()).r;
+    if (u_hull_reject == 0)
+        return false;
+    uint best = imageLoad(u_hits, hit_texel()).r;
+    return best < 0xFFFFFFFFu - 64u && depth_key(gl_FragCoord.z) > best + 64u;
 }
 #endif
 
