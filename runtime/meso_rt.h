@@ -566,7 +566,10 @@ typedef struct meso_rt_draw_desc {
  * counter-clockwise, clockwise under a mirroring model; meshes: the host's
  * culling, with the front face turned over under a mirroring model), where
  * stats are counted (OpenGL 4.3, ES 3.2 with fragment shader storage) the
- * generic shader storage buffer binding and indexed binding 0; for two-pass
+ * generic shader storage buffer binding and indexed binding 0; for shells
+ * with hull rejection (meso_rt_shell_draw.no_hull_reject) image unit 0 and,
+ * when the prisms are re-sorted, the generic texture buffer binding; for
+ * two-pass
  * slices also the draw framebuffer binding, the viewport, blending and the
  * depth function. Under MESO_STATE_RESTORE all of it is queried first and
  * put back before the call returns; under MESO_STATE_HOST_OWNS none of it
@@ -602,7 +605,10 @@ typedef struct meso_rt_instance {
  * (the same per-object values, computed on the CPU in double precision
  * and read by the same shaders from a texture buffer; tests/gl/
  * test_rt_instances.c compares the images with separate draws, bit for
- * bit). Everything else, including the GL state changed and restored, is
+ * bit, but where two prisms of a smooth or curved shell hit at exactly the
+ * same depth: the instances share one prism order, sorted for the first
+ * (meso_rt_shell_draw.no_hull_reject), and the order picks which colour
+ * shows). Everything else, including the GL state changed and restored, is
  * meso_rt_draw's, plus the texture buffer binding (the instance data's
  * upload) and one more texture unit (5 for shells and cells, 2 for frusta,
  * 0 for meshes). Cells: when the near plane reaches into any instance's

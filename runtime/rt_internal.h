@@ -130,11 +130,12 @@ typedef struct mesoi_shell {
     GLuint color_tex;     /* 0: none (u_albedo) */
     float color_scale[3]; /* the CMAP scale, 1 */
     /* Hull rejection (rt_shell.c): the MESH's triangles as read (host
-     * copy); order_buf holds them sorted along sort_axis (object space),
-     * re-sorted when the view turns or the shell moves (order_stale). */
+     * copy); order_buf holds them sorted along the view axis's cell
+     * sort_cell (object space), re-sorted when the view turns into another
+     * cell or the shell moves (order_stale). */
     uint32_t* indices;
     GLuint order_buf, order_tex; /* the sorted copy (R32UI texture buffer); 0 without hull rejection */
-    float sort_axis[3];
+    int32_t sort_cell;
     int order_stale;
 } mesoi_shell;
 

@@ -640,12 +640,22 @@ static meso_result instance_frames(meso_rt* rt, const mesoi_shell* s, const meso
  * sorted by the mean of their six corners along the view axis in object
  * space (clip w's row of proj · view · model; orthographic: clip z's). A
  * planar depth grows along every ray, so the order depends on the axis
- * alone, not on where the eye is: it is re-sorted (on the CPU, into a copy
- * of the index buffer, order_buf) when the axis turns by more than
- * SORT_TURN radians, after meso_rt_shell_update, and on the first draw.
- * An instanced draw sorts for its first instance.
+ * alone, not on where the eye is. The axis is snapped to the centre of its
+ * cell on a cube of SORT_CELLS x SORT_CELLS cells a face (cells under 0.13
+ * rad across), so a draw's order follows from its own view alone, never
+ * from the draws before it; the prisms are re-sorted (on the CPU, into a
+ * copy of the index buffer, order_buf) when the cell changes, after
+ * meso_rt_shell_update, and on the first draw.
+ * An instanced draw sorts for its first instance. Tetra and segment only
+ * keep the mesh's order: their depths often lie on faces two neighbours
+ * share (tetra's hits on the faces between tetrahedra, segment only's hull
+ * exits), where both write exactly the same depth and the order drawn picks
+ * which one shows; sorted, that would follow the view, and an instanced
+ * draw (one order for all its instances) would no longer match separate
+ * draws bit for bit (tests/gl/test_rt_instances.c; measured: 16 and 1
+ * colour bytes). They reject less.
  */
-#define SORT_TURN 0.05
+#define SORT_CELLS 16
 
 /* Whether the draw's depth test lets the nearer fragment win. */
 static int nearer_wins(const mesoi_draw* ds)
@@ -693,12 +703,38 @@ static int by_key(const void* pa, const void* pb)
     return a->tri < b->tri ? -1 : a->tri > b->tri;
 }
 
-/* order_buf sorted near to far along `axis`, unless it is within
- * SORT_TURN of the last sort's. */
-static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* ds, const float axis[3])
+/* The cell of `a` (unit) on the cube of SORT_CELLS^2 cells a face, and
+ * its centre's direction (unit). */
+static int32_t axis_cell(const float a[3], float centre[3])
 {
-    const double dot = axis[0] * s->sort_axis[0] + axis[1] * s->sort_axis[1] + axis[2] * s->sort_axis[2];
-    if (!s->order_stale && dot >= cos(SORT_TURN))
+    int f = 0;
+    for (int i = 1; i < 3; ++i)
+        if (fabsf(a[i]) > fabsf(a[f]))
+            f = i;
+    const int i1 = f == 0 ? 1 : 0, i2 = f == 2 ? 1 : 2;
+    int cell[2];
+    double c[3], len = 0.0;
+    for (int k = 0; k < 2; ++k) {
+        const double t = a[k ? i2 : i1] / fabs(a[f]); /* -1..1 */
+        cell[k] = (int)floor((t + 1.0) * 0.5 * SORT_CELLS);
+        cell[k] = cell[k] < 0 ? 0 : cell[k] >= SORT_CELLS ? SORT_CELLS - 1 : cell[k];
+        c[k ? i2 : i1] = (cell[k] + 0.5) * 2.0 / SORT_CELLS - 1.0;
+    }
+    c[f] = a[f] < 0 ? -1.0 : 1.0;
+    for (int k = 0; k < 3; ++k)
+        len += c[k] * c[k];
+    for (int k = 0; k < 3; ++k)
+        centre[k] = (float)(c[k] / sqrt(len));
+    return ((f * 2 + (a[f] < 0)) * SORT_CELLS + cell[0]) * SORT_CELLS + cell[1];
+}
+
+/* order_buf sorted near to far along the centre of `view_axis`'s cell,
+ * unless it is sorted for that cell already. */
+static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* ds, const float view_axis[3])
+{
+    float axis[3];
+    const int32_t cell = axis_cell(view_axis, axis);
+    if (!s->order_stale && cell == s->sort_cell)
         return MESO_OK;
     const uint32_t n = s->triangle_count, nv = s->vertex_count;
     prism_key* keys = mesoi_rt_alloc(rt, sizeof(prism_key) * n);
@@ -733,7 +769,7 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
         gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)prev);
     mesoi_rt_free(rt, keys);
     mesoi_rt_free(rt, sorted);
-    memcpy(s->sort_axis, axis, sizeof(s->sort_axis));
+    s->sort_cell = cell;
     s->order_stale = 0;
     return MESO_OK;
 }
@@ -821,9 +857,11 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     if (reject) {
         if (ds.restore)
             mesoi_image_save(rt, &prev_image);
-        r = order_prisms(rt, o->shell, &ds, axis);
-        gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_INDEX);
-        gl->BindTexture(GL_TEXTURE_BUFFER, s->order_tex);
+        if (k->technique == MESO_SHELL_SMOOTH || k->technique == MESO_SHELL_CURVED) {
+            r = order_prisms(rt, o->shell, &ds, axis);
+            gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_INDEX);
+            gl->BindTexture(GL_TEXTURE_BUFFER, s->order_tex);
+        }
         hit_image_begin(rt, &ds, bind[SHELL_UNIT_HEIGHT]);
     }
     gl->Uniform1i(u[MESOI_U_hull_reject], reject);
