@@ -100,17 +100,32 @@ static void query_features(meso_rt* rt)
 {
     mesoi_gl* gl = &rt->gl;
     rt->norm16 = rt->float_linear = !rt->gles;
-    if (rt->gles) {
-        GLint n = 0;
-        gl->GetIntegerv(GL_NUM_EXTENSIONS, &n);
-        for (GLint i = 0; i < n; ++i) {
-            const char* e = (const char*)gl->GetStringi(GL_EXTENSIONS, (GLuint)i);
-            if (e && strcmp(e, "GL_EXT_texture_norm16") == 0)
-                rt->norm16 = 1;
-            if (e && strcmp(e, "GL_OES_texture_float_linear") == 0)
-                rt->float_linear = 1;
-        }
+    int images = 0, clear = !rt->gles && rt->gl_version >= 44;
+    GLint n = 0;
+    gl->GetIntegerv(GL_NUM_EXTENSIONS, &n);
+    for (GLint i = 0; i < n; ++i) {
+        const char* e = (const char*)gl->GetStringi(GL_EXTENSIONS, (GLuint)i);
+        if (!e)
+            continue;
+        if (rt->gles && strcmp(e, "GL_EXT_texture_norm16") == 0)
+            rt->norm16 = 1;
+        if (rt->gles && strcmp(e, "GL_OES_texture_float_linear") == 0)
+            rt->float_linear = 1;
+        if (strcmp(e, rt->gles ? "GL_EXT_clear_texture" : "GL_ARB_clear_texture") == 0)
+            clear = 1;
+        if (!rt->gles && strcmp(e, "GL_ARB_shader_image_load_store") == 0)
+            images = 1; /* the shells' #extension directive names it (rt_shell.c) */
     }
+    /* The shells' hit image (rt_shell.c): an R32UI image with atomics in
+     * fragment shaders (OpenGL 4.2 or the extension; ES 3.2), immutable
+     * storage and a clear per draw. */
+    GLint frag_images = 0;
+    if (rt->gles || images)
+        gl->GetIntegerv(GL_MAX_FRAGMENT_IMAGE_UNIFORMS, &frag_images);
+    if (rt->gles)
+        gl->ClearTexSubImage = gl->ClearTexSubImageEXT;
+    rt->hull_reject_ok = (rt->gles || (images && rt->gl_version >= 42)) && frag_images > 0 && clear &&
+                         gl->BindImageTexture && gl->TexStorage2D && gl->ClearTexSubImage && gl->MemoryBarrier;
     /* Fragment shader storage: OpenGL 4.3 guarantees 8 blocks, ES 3.1+ may have 0. */
     GLint blocks = 0;
     if (rt->gles || rt->gl_version >= 43)

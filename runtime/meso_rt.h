@@ -388,6 +388,9 @@ typedef struct meso_rt_draw_stats {
     uint64_t fragments; /* ray-casting fragment invocations */
     uint64_t steps;     /* texture samples along rays (march + refinement) */
     uint64_t hits;      /* fragments that found the surface */
+    uint64_t rejected;  /* shells: hull fragment invocations stopped before ray casting, their hull entry
+                           behind a hit the draw found already at their pixel (not in `fragments`; see
+                           meso_rt_shell_draw.no_hull_reject) */
 } meso_rt_draw_stats;
 
 /* The knobs of each object kind: meso_rt_draw reads only the struct of the
@@ -406,6 +409,11 @@ typedef struct meso_rt_shell_draw {
     float uv_scale;      /* multiplies the baked texture coordinates (tiling) [1] */
     int no_distance_map; /* 1: march at fixed_step instead of sphere tracing the distance map [0] */
     float fixed_step;    /* texture-space step without a distance map [1/256] */
+    int no_hull_reject;  /* 1: every hull fragment ray casts, as before issue 14 (for comparison); 0: where
+                            the context can (rt_shell.c: OpenGL 4.2 image atomics and a texture clear, or
+                            ES 3.2 with EXT_clear_texture) and the depth function lets the nearer fragment
+                            win, prisms are drawn roughly front to back by their entry faces and a fragment
+                            whose entry lies behind a hit the draw found at its pixel stops at once [0] */
     int slices;          /* MESO_SHELL_SLICES: slice polygons per prism (along the chosen family: levels
                             w = m / (slices - 1), or λ_i = m / slices), 2..1024 [16] */
     meso_slice_interp slice_interp; /* MESO_SHELL_SLICES [MESO_SLICE_TEXCOORD] */
@@ -558,7 +566,10 @@ typedef struct meso_rt_draw_desc {
  * counter-clockwise, clockwise under a mirroring model; meshes: the host's
  * culling, with the front face turned over under a mirroring model), where
  * stats are counted (OpenGL 4.3, ES 3.2 with fragment shader storage) the
- * generic shader storage buffer binding and indexed binding 0; for two-pass
+ * generic shader storage buffer binding and indexed binding 0; for shells
+ * with hull rejection (meso_rt_shell_draw.no_hull_reject) image unit 0 and,
+ * when the prisms are re-sorted, the generic texture buffer binding; for
+ * two-pass
  * slices also the draw framebuffer binding, the viewport, blending and the
  * depth function. Under MESO_STATE_RESTORE all of it is queried first and
  * put back before the call returns; under MESO_STATE_HOST_OWNS none of it
@@ -594,7 +605,10 @@ typedef struct meso_rt_instance {
  * (the same per-object values, computed on the CPU in double precision
  * and read by the same shaders from a texture buffer; tests/gl/
  * test_rt_instances.c compares the images with separate draws, bit for
- * bit). Everything else, including the GL state changed and restored, is
+ * bit, but where two prisms of a smooth or curved shell hit at exactly the
+ * same depth: the instances share one prism order, sorted for the first
+ * (meso_rt_shell_draw.no_hull_reject), and the order picks which colour
+ * shows). Everything else, including the GL state changed and restored, is
  * meso_rt_draw's, plus the texture buffer binding (the instance data's
  * upload) and one more texture unit (5 for shells and cells, 2 for frusta,
  * 0 for meshes). Cells: when the near plane reaches into any instance's

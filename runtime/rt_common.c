@@ -721,6 +721,21 @@ void mesoi_ssbo_restore(meso_rt* rt, const mesoi_ssbo* b)
     gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, (GLuint)b->generic); /* after: BindBufferBase sets it too */
 }
 
+void mesoi_image_save(meso_rt* rt, mesoi_image_unit* u)
+{
+    static const GLenum names[6] = {GL_IMAGE_BINDING_NAME,  GL_IMAGE_BINDING_LEVEL,  GL_IMAGE_BINDING_LAYERED,
+                                    GL_IMAGE_BINDING_LAYER, GL_IMAGE_BINDING_ACCESS, GL_IMAGE_BINDING_FORMAT};
+    GLint* out[6] = {&u->name, &u->level, &u->layered, &u->layer, &u->access, &u->format};
+    for (int i = 0; i < 6; ++i)
+        rt->gl.GetIntegeri_v(names[i], 0, out[i]);
+}
+
+void mesoi_image_restore(meso_rt* rt, const mesoi_image_unit* u)
+{
+    rt->gl.BindImageTexture(0, (GLuint)u->name, u->level, u->layered ? GL_TRUE : GL_FALSE, u->layer,
+                            (GLenum)u->access, (GLenum)u->format);
+}
+
 void mesoi_draw_use(meso_rt* rt, const mesoi_draw* s, const mesoi_program* p)
 {
     mesoi_gl* gl = &rt->gl;
@@ -778,7 +793,7 @@ void mesoi_draw_begin(meso_rt* rt, mesoi_draw* s, const mesoi_program* program, 
         gl->BindTexture(targets[u], textures[u]);
     }
     if (s->stats) {
-        const uint32_t zero[3] = {0, 0, 0};
+        const uint32_t zero[4] = {0, 0, 0, 0};
         if (!rt->stats_buffer) {
             gl->GenBuffers(1, &rt->stats_buffer);
             gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, rt->stats_buffer);
@@ -809,7 +824,7 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
 {
     mesoi_gl* gl = &rt->gl;
     if (s->stats) {
-        uint32_t counts[3] = {0, 0, 0};
+        uint32_t counts[4] = {0, 0, 0, 0};
         gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         if (rt->gles) { /* ES has no glGetBufferSubData: map the buffer */
             const void* mapped = gl->MapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, sizeof(counts), GL_MAP_READ_BIT);
@@ -823,6 +838,7 @@ meso_result mesoi_draw_end(meso_rt* rt, mesoi_draw* s, meso_rt_draw_stats* stats
         stats->fragments = counts[0];
         stats->steps = counts[1];
         stats->hits = counts[2];
+        stats->rejected = counts[3];
         if (s->restore)
             mesoi_ssbo_restore(rt, &s->prev_ssbo);
     } else if (stats) {

@@ -96,10 +96,16 @@
 
 /* Entry points used only when the context has them (the stats counters of
  * OpenGL 4.3 / ES 3.1; glGetBufferSubData, which OpenGL ES lacks: ES maps
- * the buffer instead); missing ones are left NULL and never fail creation. */
-#define MESO_GL_FUNCS_OPTIONAL(X)              \
-    X(PFNGLMEMORYBARRIERPROC, MemoryBarrier) \
-    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)
+ * the buffer instead; the shells' hit image, rt_shell.c: OpenGL 4.4 or
+ * ARB_clear_texture, ES with EXT_clear_texture under its EXT name); missing
+ * ones are left NULL and never fail creation. */
+#define MESO_GL_FUNCS_OPTIONAL(X)                         \
+    X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)            \
+    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)      \
+    X(PFNGLBINDIMAGETEXTUREPROC, BindImageTexture)      \
+    X(PFNGLTEXSTORAGE2DPROC, TexStorage2D)              \
+    X(PFNGLCLEARTEXSUBIMAGEPROC, ClearTexSubImage)      \
+    X(PFNGLCLEARTEXSUBIMAGEPROC, ClearTexSubImageEXT)
 
 typedef struct mesoi_gl {
 #define MESO_X_MEMBER(type, name) type name;

@@ -250,6 +250,7 @@ static const GLenum list_bindings[4] = {GL_TEXTURE_BINDING_BUFFER, GL_TEXTURE_BI
 typedef struct list_state {
     GLint program, vao, func, mask, active, cull_mode, front, tex_buffer;
     mesoi_ssbo ssbo;
+    mesoi_image_unit image;
     GLboolean test, cull, color_mask[4];
     GLint bind[MESOI_DRAW_MAX_UNITS][4];
 } list_state;
@@ -267,6 +268,8 @@ static void list_save(meso_rt* rt, list_state* s)
     gl->GetIntegerv(GL_TEXTURE_BUFFER_BINDING, &s->tex_buffer);
     if (rt->stats_ok)
         mesoi_ssbo_save(rt, &s->ssbo);
+    if (rt->hull_reject_ok)
+        mesoi_image_save(rt, &s->image);
     gl->GetBooleanv(GL_COLOR_WRITEMASK, s->color_mask); /* the depth pass masks colour */
     s->test = gl->IsEnabled(GL_DEPTH_TEST);
     s->cull = gl->IsEnabled(GL_CULL_FACE);
@@ -295,6 +298,8 @@ static void list_restore(meso_rt* rt, const list_state* s)
     gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)s->tex_buffer);
     if (rt->stats_ok)
         mesoi_ssbo_restore(rt, &s->ssbo);
+    if (rt->hull_reject_ok)
+        mesoi_image_restore(rt, &s->image);
     gl->ColorMask(s->color_mask[0], s->color_mask[1], s->color_mask[2], s->color_mask[3]);
     (s->test ? gl->Enable : gl->Disable)(GL_DEPTH_TEST);
     (s->cull ? gl->Enable : gl->Disable)(GL_CULL_FACE);

@@ -31,7 +31,7 @@ typedef struct mesoi_object {
     X(view) X(proj) X(model) X(light_dir)                              /* mesh */                          \
     X(uv_scale) X(tex_kind) X(has_dist) X(tex_size) X(err_scale) X(max_steps) X(bisect_steps)             \
     X(segment_steps) X(fixed_step) X(min_step) X(slices) X(slice_axis) X(prism_count) /* shell, slices */                \
-    X(has_color) X(color_scale)                                        /* shell colour */                  \
+    X(has_color) X(color_scale) X(hull_reject)                         /* shell colour, hull rejection */  \
     X(relief_size) X(relief_steps) X(color_size) X(ball_color)          /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
     X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) /* cells */                              \
@@ -64,6 +64,7 @@ struct meso_rt {
      * them the uploads convert (rt_common.c: upload formats). */
     int norm16, float_linear;
     int stats_ok; /* fragment shaders can count into a shader storage buffer (GL 4.3, or ES with fragment SSBOs) */
+    int hull_reject_ok; /* shells can reject hull fragments behind a hit through an image (rt_shell.c) */
     meso_rt_state_policy state_policy;
     int check_gl_errors;
     int mipmaps; /* meso_rt_desc.texture_filter is MESO_FILTER_MIPMAP: appearance textures get mip levels */
@@ -82,7 +83,9 @@ struct meso_rt {
     GLuint slice_tex[5];
     GLint slice_size[2];      /* its width and height: the viewport's */
     GLuint empty_vao;   /* shells and frusta draw from gl_VertexID alone */
-    GLuint stats_buffer; /* 3 counters (OpenGL 4.3 / ES 3.1 shader storage) */
+    GLuint stats_buffer; /* 4 counters (OpenGL 4.3 / ES 3.1 shader storage) */
+    GLuint hit_image;          /* the shells' nearest hit per pixel (rt_shell.c), made on first use */
+    GLint hit_size[2];         /* its width and height */
     GLuint inst_buf, inst_tex; /* per-instance data of instanced draws (rt_instances.c), made on first use */
     size_t inst_capacity;      /* bytes in inst_buf */
     GLint inst_max_texels;     /* GL_MAX_TEXTURE_BUFFER_SIZE, asked on the first instanced draw */
@@ -126,6 +129,14 @@ typedef struct mesoi_shell {
      * texture (depth 1 for 2D colour), looked up at (s, t', w) * color_scale. */
     GLuint color_tex;     /* 0: none (u_albedo) */
     float color_scale[3]; /* the CMAP scale, 1 */
+    /* Hull rejection (rt_shell.c): the MESH's triangles as read (host
+     * copy); order_buf holds them sorted along the view axis's cell
+     * sort_cell (object space), re-sorted when the view turns into another
+     * cell or the shell moves (order_stale). */
+    uint32_t* indices;
+    GLuint order_buf, order_tex; /* the sorted copy (R32UI texture buffer); 0 without hull rejection */
+    int32_t sort_cell;
+    int order_stale;
 } mesoi_shell;
 
 enum {
@@ -230,6 +241,13 @@ typedef struct mesoi_ssbo {
 } mesoi_ssbo;
 void mesoi_ssbo_save(meso_rt* rt, mesoi_ssbo* b);
 void mesoi_ssbo_restore(meso_rt* rt, const mesoi_ssbo* b);
+/* Image unit 0, which the shells' hit image takes over (rt_shell.c;
+ * mesoi_image_save / _restore). */
+typedef struct mesoi_image_unit {
+    GLint name, level, layered, layer, access, format;
+} mesoi_image_unit;
+void mesoi_image_save(meso_rt* rt, mesoi_image_unit* u);
+void mesoi_image_restore(meso_rt* rt, const mesoi_image_unit* u);
 typedef struct mesoi_draw {
     double pv[16];              /* proj · view */
     double light_world[3];      /* towards the light, world space (not normalised) */

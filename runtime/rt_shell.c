@@ -25,6 +25,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void shell_free(meso_rt* rt, mesoi_shell* s)
@@ -32,15 +33,16 @@ static void shell_free(meso_rt* rt, mesoi_shell* s)
     if (!s)
         return;
     mesoi_gl* gl = &rt->gl;
-    GLuint tex[5] = {s->vert_tex, s->index_tex, s->func_tex, s->dist_tex, s->color_tex};
-    GLuint buf[2] = {s->vert_buf, s->index_buf};
-    gl->DeleteTextures(5, tex);
-    gl->DeleteBuffers(2, buf);
+    GLuint tex[6] = {s->vert_tex, s->index_tex, s->func_tex, s->dist_tex, s->color_tex, s->order_tex};
+    GLuint buf[3] = {s->vert_buf, s->index_buf, s->order_buf};
+    gl->DeleteTextures(6, tex);
+    gl->DeleteBuffers(3, buf);
     mesoi_rt_free(rt, s->positions);
     mesoi_rt_free(rt, s->directors);
     mesoi_rt_free(rt, s->uvs);
     mesoi_rt_free(rt, s->fn_frames);
     mesoi_rt_free(rt, s->dist_frames);
+    mesoi_rt_free(rt, s->indices);
     mesoi_rt_free(rt, s);
 }
 
@@ -239,8 +241,12 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         else
             memset(s->uvs, 0, sizeof(float) * 2 * nv);
         texels = mesoi_rt_alloc(rt, sizeof(float) * 8 * nv);
-        if (!texels)
+        s->indices = mesoi_rt_alloc(rt, sizeof(uint32_t) * 3 * (size_t)s->triangle_count);
+        if (!texels || !s->indices)
             r = MESO_ERR_OUT_OF_MEMORY;
+        else
+            memcpy(s->indices, mv.indices, sizeof(uint32_t) * 3 * (size_t)s->triangle_count);
+        s->order_stale = 1;
     }
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
     if (r == MESO_OK) {
@@ -248,7 +254,10 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         s->vert_tex = mesoi_texture_buffer(rt, GL_RGBA32F, texels, sizeof(float) * 8 * nv, &s->vert_buf);
         s->index_tex = mesoi_texture_buffer(rt, GL_R32UI, mv.indices, sizeof(uint32_t) * 3 * (size_t)s->triangle_count,
                                       &s->index_buf);
-        if (!s->vert_tex || !s->index_tex)
+        if (rt->hull_reject_ok)
+            s->order_tex = mesoi_texture_buffer(rt, GL_R32UI, mv.indices,
+                                                sizeof(uint32_t) * 3 * (size_t)s->triangle_count, &s->order_buf);
+        if (!s->vert_tex || !s->index_tex || (rt->hull_reject_ok && !s->order_tex))
             r = MESO_ERR_GL;
     }
     mesoi_rt_free(rt, texels);
@@ -300,6 +309,7 @@ meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object h, const float* pos
     fill_vertex_texels(s, texels);
     const meso_result r = mesoi_buffer_update(rt, s->vert_buf, texels, sizeof(float) * 8 * nv, "meso_rt_shell_update");
     mesoi_rt_free(rt, texels);
+    s->order_stale = 1;
     return r;
 }
 
@@ -459,8 +469,14 @@ static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, i
     mesoi_program* p = &rt->shell_programs[pass][stats][t];
     if (p->id)
         return p;
-    char head[512];
-    snprintf(head, sizeof(head), "%s#define MESO_TECHNIQUE %d\n", mesoi_glsl_prelude(rt, stats), (int)t);
+    char head[640];
+    /* The image functions: core in OpenGL 4.2 and ES 3.1 (atomics ES 3.2),
+     * an extension to the 330 prelude. */
+    const char* reject = !rt->hull_reject_ok ? ""
+                         : rt->gles          ? "#define MESO_HULL_REJECT 1\n"
+                                             : "#extension GL_ARB_shader_image_load_store : require\n"
+                                               "#define MESO_HULL_REJECT 1\n";
+    snprintf(head, sizeof(head), "%s%s#define MESO_TECHNIQUE %d\n", mesoi_glsl_prelude(rt, stats), reject, (int)t);
     const char* vs[5] = {head, MESOI_GLSL_VERTEX_STAGE, mesoi_glsl_instance, mesoi_glsl_shell_common,
                          mesoi_glsl_shell_vert};
     const char* pre[4] = {mesoi_glsl_instance, mesoi_glsl_shell_common, mesoi_glsl_raycast_common,
@@ -494,8 +510,11 @@ void mesoi_shell_programs_destroy(meso_rt* rt)
         rt->gl.DeleteVertexArrays(1, &rt->empty_vao);
     if (rt->stats_buffer)
         rt->gl.DeleteBuffers(1, &rt->stats_buffer);
+    if (rt->hit_image)
+        rt->gl.DeleteTextures(1, &rt->hit_image);
     mesoi_slices_destroy(rt);
-    rt->empty_vao = rt->stats_buffer = 0;
+    rt->empty_vao = rt->stats_buffer = rt->hit_image = 0;
+    rt->hit_size[0] = rt->hit_size[1] = 0;
 }
 
 /* --- drawing ------------------------------------------------------------- */
@@ -581,6 +600,204 @@ static meso_result instance_frames(meso_rt* rt, const mesoi_shell* s, const meso
     return MESO_OK;
 }
 
+/* --- hull rejection (issue 14) ------------------------------------------ */
+/*
+ * Each layer of overlapping hulls along a pixel's ray used to ray cast,
+ * the back ones too (Table 1, tests/bench/results/table1.csv: 9.1 hull
+ * fragments and 96 steps per covered pixel for smooth shells before). What
+ * rejects a hidden fragment before its ray cast:
+ *  - not the depth test: the shaders write gl_FragDepth, and llvmpipe (Mesa
+ *    22.3, lp_state_fs.c) then tests depth after the shader whatever
+ *    layout(depth_greater) promises; early_fragment_tests would store the
+ *    hull's depth instead of the hit's. Measured (segment only, Table 1's
+ *    reference setup): with layout(depth_greater) and entry faces, a second
+ *    draw of the shell over the first's depth buffer ran all 922,700
+ *    fragments the first did. A GPU with conservative depth might reject in
+ *    hardware; nothing here relies on it.
+ *  - so the shader does: an R32UI image (rt->hit_image, image unit 0) holds
+ *    per pixel the nearest depth a hit of this draw wrote (imageAtomicMin,
+ *    raycast_common.glsl write_depth), cleared before the draw; the prisms
+ *    rasterise their entry faces (shell_vert.glsl), so a fragment's own
+ *    depth is where its ray enters, and no hit of that prism is nearer
+ *    (the march starts there). A fragment whose entry is behind the stored
+ *    hit by more than 64 ulps (a hit on a face two prisms share equals that
+ *    face's entry up to rounding; without the margin 1 pixel in 5000 of
+ *    tests/gl/test_rt_shell_reject.c changed) stops before anything else
+ *    (behind_hit) and is counted as rejected, not as ray casting.
+ * Why the image is unchanged: the fragment that stored d leaves the depth
+ * buffer at d or nearer (it passed, or something nearer was there), and the
+ * rejected fragment's hit is behind d, so it would have failed the test —
+ * when the test lets the nearer win: GL_LESS/GL_LEQUAL (GL_GREATER/
+ * GL_GEQUAL reversed-Z), with depth writes, which the draw turns on. The
+ * function is desc->depth_func, else the host's under MESO_STATE_RESTORE,
+ * else (MESO_STATE_HOST_OWNS, draw lists) taken to be the convention's
+ * (meso_depth_convention says which); any other function draws without
+ * rejection. Loads racing a store on a GPU only reject less.
+ * Prisms containing the eye, or reaching the near plane's eye side, have
+ * rays without an entry face: they draw their exit faces at the near
+ * plane's depth, never rejected (shell_vert.glsl).
+ * Order: rejection needs the near hits first, so the prisms are drawn
+ * sorted by the mean of their six corners along the view axis in object
+ * space (clip w's row of proj · view · model; orthographic: clip z's). A
+ * planar depth grows along every ray, so the order depends on the axis
+ * alone, not on where the eye is. The axis is snapped to the centre of its
+ * cell on a cube of SORT_CELLS x SORT_CELLS cells a face (cells under 0.13
+ * rad across), so a draw's order follows from its own view alone, never
+ * from the draws before it; the prisms are re-sorted (on the CPU, into a
+ * copy of the index buffer, order_buf) when the cell changes, after
+ * meso_rt_shell_update, and on the first draw.
+ * An instanced draw sorts for its first instance. Tetra and segment only
+ * keep the mesh's order: their depths often lie on faces two neighbours
+ * share (tetra's hits on the faces between tetrahedra, segment only's hull
+ * exits), where both write exactly the same depth and the order drawn picks
+ * which one shows; sorted, that would follow the view, and an instanced
+ * draw (one order for all its instances) would no longer match separate
+ * draws bit for bit (tests/gl/test_rt_instances.c; measured: 16 and 1
+ * colour bytes). They reject less.
+ */
+#define SORT_CELLS 16
+
+/* Whether the draw's depth test lets the nearer fragment win. */
+static int nearer_wins(const mesoi_draw* ds)
+{
+    const GLenum f = ds->depth_func ? ds->depth_func : ds->restore ? (GLenum)ds->prev_func : mesoi_near_func(ds);
+    return ds->reversed ? f == GL_GREATER || f == GL_GEQUAL : f == GL_LESS || f == GL_LEQUAL;
+}
+
+/* The direction depth grows along in object space for proj · view (pv)
+ * and `model` (all zero: identity), normalised; 0 if there is none. */
+static int depth_axis(const mesoi_draw* ds, const float* model, float axis[3])
+{
+    int identity = 1;
+    for (int i = 0; i < 16; ++i)
+        identity = identity && model[i] == 0.0f;
+    double a[2][3], len[2] = {0, 0};
+    for (int r = 0; r < 2; ++r) { /* r 0: clip w's row, 1: clip z's */
+        const int row = r == 0 ? 3 : 2;
+        for (int c = 0; c < 3; ++c) {
+            double v = 0;
+            for (int k = 0; k < 4; ++k)
+                v += ds->pv[4 * k + row] * (identity ? (k == c) : model[4 * c + k]);
+            a[r][c] = r == 1 && ds->reversed ? -v : v;
+            len[r] += v * v;
+        }
+    }
+    const int r = len[0] > 0.0 ? 0 : 1;
+    if (!(len[r] > 0.0))
+        return 0;
+    for (int c = 0; c < 3; ++c)
+        axis[c] = (float)(a[r][c] / sqrt(len[r]));
+    return 1;
+}
+
+typedef struct prism_key {
+    float key;
+    uint32_t tri;
+} prism_key;
+
+static int by_key(const void* pa, const void* pb)
+{
+    const prism_key *a = pa, *b = pb;
+    if (a->key != b->key)
+        return a->key < b->key ? -1 : 1;
+    return a->tri < b->tri ? -1 : a->tri > b->tri;
+}
+
+/* The cell of `a` (unit) on the cube of SORT_CELLS^2 cells a face, and
+ * its centre's direction (unit). */
+static int32_t axis_cell(const float a[3], float centre[3])
+{
+    int f = 0;
+    for (int i = 1; i < 3; ++i)
+        if (fabsf(a[i]) > fabsf(a[f]))
+            f = i;
+    const int i1 = f == 0 ? 1 : 0, i2 = f == 2 ? 1 : 2;
+    int cell[2];
+    double c[3], len = 0.0;
+    for (int k = 0; k < 2; ++k) {
+        const double t = a[k ? i2 : i1] / fabs(a[f]); /* -1..1 */
+        cell[k] = (int)floor((t + 1.0) * 0.5 * SORT_CELLS);
+        cell[k] = cell[k] < 0 ? 0 : cell[k] >= SORT_CELLS ? SORT_CELLS - 1 : cell[k];
+        c[k ? i2 : i1] = (cell[k] + 0.5) * 2.0 / SORT_CELLS - 1.0;
+    }
+    c[f] = a[f] < 0 ? -1.0 : 1.0;
+    for (int k = 0; k < 3; ++k)
+        len += c[k] * c[k];
+    for (int k = 0; k < 3; ++k)
+        centre[k] = (float)(c[k] / sqrt(len));
+    return ((f * 2 + (a[f] < 0)) * SORT_CELLS + cell[0]) * SORT_CELLS + cell[1];
+}
+
+/* order_buf sorted near to far along the centre of `view_axis`'s cell,
+ * unless it is sorted for that cell already. */
+static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* ds, const float view_axis[3])
+{
+    float axis[3];
+    const int32_t cell = axis_cell(view_axis, axis);
+    if (!s->order_stale && cell == s->sort_cell)
+        return MESO_OK;
+    const uint32_t n = s->triangle_count, nv = s->vertex_count;
+    prism_key* keys = mesoi_rt_alloc(rt, sizeof(prism_key) * n);
+    uint32_t* sorted = mesoi_rt_alloc(rt, sizeof(uint32_t) * 3 * (size_t)n);
+    if (!keys || !sorted) {
+        mesoi_rt_free(rt, keys);
+        mesoi_rt_free(rt, sorted);
+        return MESO_ERR_OUT_OF_MEMORY;
+    }
+    for (uint32_t t = 0; t < n; ++t) {
+        double k = 0.0;
+        for (int c = 0; c < 3; ++c) { /* bottom + top of each corner (fill_vertex_texels) */
+            const size_t v = s->indices[3 * (size_t)t + (size_t)c];
+            const float *p = s->positions + 3 * v, *d0 = s->directors + 3 * v;
+            const float* d1 = s->layers == 2 ? s->directors + 3 * ((size_t)nv + v) : NULL;
+            for (int j = 0; j < 3; ++j)
+                k += axis[j] * (2.0 * p[j] + d0[j] + (d1 ? d1[j] : 0.0));
+        }
+        keys[t].key = (float)k;
+        keys[t].tri = t;
+    }
+    qsort(keys, n, sizeof(prism_key), by_key);
+    for (uint32_t t = 0; t < n; ++t)
+        memcpy(sorted + 3 * (size_t)t, s->indices + 3 * (size_t)keys[t].tri, 3 * sizeof(uint32_t));
+    mesoi_gl* gl = &rt->gl;
+    GLint prev = 0;
+    if (ds->restore)
+        gl->GetIntegerv(GL_TEXTURE_BUFFER_BINDING, &prev);
+    gl->BindBuffer(GL_TEXTURE_BUFFER, s->order_buf);
+    gl->BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)(sizeof(uint32_t) * 3 * (size_t)n), sorted);
+    if (ds->restore)
+        gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)prev);
+    mesoi_rt_free(rt, keys);
+    mesoi_rt_free(rt, sorted);
+    s->sort_cell = cell;
+    s->order_stale = 0;
+    return MESO_OK;
+}
+
+/* The hit image at least the viewport's size (made with unit
+ * SHELL_UNIT_HEIGHT's 2D binding, which is put back to `height_tex`), its
+ * viewport part cleared to "no hit" and bound to image unit 0. */
+static void hit_image_begin(meso_rt* rt, const mesoi_draw* ds, GLuint height_tex)
+{
+    mesoi_gl* gl = &rt->gl;
+    const GLint w = ds->viewport[2], h = ds->viewport[3];
+    if (w > rt->hit_size[0] || h > rt->hit_size[1]) {
+        if (rt->hit_image)
+            gl->DeleteTextures(1, &rt->hit_image);
+        rt->hit_size[0] = w > rt->hit_size[0] ? w : rt->hit_size[0];
+        rt->hit_size[1] = h > rt->hit_size[1] ? h : rt->hit_size[1];
+        gl->GenTextures(1, &rt->hit_image);
+        gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_HEIGHT);
+        gl->BindTexture(GL_TEXTURE_2D, rt->hit_image);
+        gl->TexStorage2D(GL_TEXTURE_2D, 1, GL_R32UI, rt->hit_size[0], rt->hit_size[1]);
+        gl->BindTexture(GL_TEXTURE_2D, height_tex);
+    }
+    gl->MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT); /* the last draw's atomics land before the clear */
+    const GLuint none = 0xFFFFFFFFu;
+    gl->ClearTexSubImage(rt->hit_image, 0, 0, 0, 0, w, h, 1, GL_RED_INTEGER, GL_UNSIGNED_INT, &none);
+    gl->BindImageTexture(0, rt->hit_image, 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+}
+
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count)
 {
@@ -633,6 +850,21 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
                                                s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, s->color_tex, inst_tex};
     mesoi_draw_begin(rt, &ds, prog, 1, inst ? SHELL_UNIT_COUNT + 1 : SHELL_UNIT_COUNT, unit_target, bind);
     const GLint* u = prog->loc;
+    float axis[3];
+    const int reject = rt->hull_reject_ok && !k->no_hull_reject && ds.viewport[2] > 0 && ds.viewport[3] > 0 &&
+                       nearer_wins(&ds) && depth_axis(&ds, inst ? inst[0].model : ds.model, axis);
+    mesoi_image_unit prev_image;
+    if (reject) {
+        if (ds.restore)
+            mesoi_image_save(rt, &prev_image);
+        if (k->technique == MESO_SHELL_SMOOTH || k->technique == MESO_SHELL_CURVED) {
+            r = order_prisms(rt, o->shell, &ds, axis);
+            gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_INDEX);
+            gl->BindTexture(GL_TEXTURE_BUFFER, s->order_tex);
+        }
+        hit_image_begin(rt, &ds, bind[SHELL_UNIT_HEIGHT]);
+    }
+    gl->Uniform1i(u[MESOI_U_hull_reject], reject);
     gl->Uniform1f(u[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(u[MESOI_U_tex_kind], s->tex_kind);
     gl->Uniform1i(u[MESOI_U_has_color], s->color_tex != 0);
@@ -649,8 +881,12 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1f(u[MESOI_U_min_step], max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
     const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
     if (!inst) {
-        gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
-        return mesoi_draw_end(rt, &ds, d->stats, "shell");
+        if (r == MESO_OK)
+            gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
+        const meso_result e = mesoi_draw_end(rt, &ds, d->stats, "shell");
+        if (reject && ds.restore)
+            mesoi_image_restore(rt, &prev_image);
+        return r != MESO_OK ? r : e;
     }
     /* One instanced call per frame the instances show (one in all when
      * the object has no stored frames or they show one). */
@@ -671,5 +907,7 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     mesoi_rt_free(rt, order);
     mesoi_rt_free(rt, groups);
     const meso_result e = mesoi_draw_end(rt, &ds, d->stats, "shell");
+    if (reject && ds.restore)
+        mesoi_image_restore(rt, &prev_image);
     return r != MESO_OK ? r : e;
 }

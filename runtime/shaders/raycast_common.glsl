@@ -19,7 +19,46 @@ layout(std430, binding = 0) buffer MesoStats {
     uint s_fragments;
     uint s_steps;
     uint s_hits;
+    uint s_rejected;
 };
+#endif
+
+#ifdef MESO_HULL_REJECT
+// Hull rejection (shells, rt_shell.c): the nearest hit depth the draw has
+// found per pixel, as window depth bits (complemented under reversed-Z, so
+// nearer is smaller either way), cleared to the largest value before the
+// draw; image unit 0.
+#ifdef GL_ES
+layout(r32ui, binding = 0) uniform highp uimage2D u_hits;
+#else
+layout(r32ui) uniform uimage2D u_hits;
+#endif
+uniform int u_hull_reject;
+
+uint depth_key(float z)
+{
+    uint b = floatBitsToUint(z);
+    return u_depth_ndc.x > u_depth_ndc.z ? ~b : b;
+}
+
+ivec2 hit_texel()
+{
+    return ivec2(gl_FragCoord.xy - u_viewport.xy);
+}
+
+// The fragment's own depth (its hull entry) lies behind a hit already
+// found at its pixel: its hit, never nearer than its entry, would fail the
+// depth test (rt_shell.c says why, and for which functions). Behind by more
+// than 64 ulps: a hit on the face two prisms share is that face's entry
+// depth up to rounding (the interpolated depth and the shader's own ray
+// differ by a few ulps), and either prism's may be the nearer one.
+bool behind_hit()
+{
+    if (u_hull_reject == 0)
+        return false;
+    uint best = imageLoad(u_hits, hit_texel()).r;
+    return best < 0xFFFFFFFFu - 64u && depth_key(gl_FragCoord.z) > best + 64u;
+}
 #endif
 
 int g_steps = 0;
@@ -67,6 +106,12 @@ float window_depth(vec3 p)
 void write_depth(vec3 p)
 {
     gl_FragDepth = window_depth(p);
+#ifdef MESO_HULL_REJECT
+    if (u_hull_reject != 0) { // the depth the test sees: clamped to the depth range
+        float lo = min(gl_DepthRange.near, gl_DepthRange.far), hi = max(gl_DepthRange.near, gl_DepthRange.far);
+        imageAtomicMin(u_hits, hit_texel(), depth_key(clamp(gl_FragDepth, lo, hi)));
+    }
+#endif
 }
 
 // --- texture footprints (meso_rt.h meso_texture_filter) -----------------------
@@ -147,3 +192,14 @@ void finish(bool hit)
     if (!hit)
         discard;
 }
+
+#ifdef MESO_HULL_REJECT
+// Counts a fragment behind_hit stopped (not as a ray-casting one) and discards it.
+void reject()
+{
+#ifdef MESO_STATS
+    atomicAdd(s_rejected, 1u);
+#endif
+    discard;
+}
+#endif

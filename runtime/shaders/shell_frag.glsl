@@ -255,6 +255,12 @@ bool onto_ray(Prism P, vec3 q, vec3 ro, vec3 rd, out vec3 r)
 // --- tetrahedra ------------------------------------------------------------
 void main()
 {
+#ifdef MESO_HULL_REJECT
+    if (behind_hit()) {
+        reject();
+        return;
+    }
+#endif
     instance_begin();
     Prism P = fetch_prism(v_prism);
     ivec4 T = tet_corners(P, v_tet);
@@ -350,6 +356,12 @@ void main()
 // --- smooth, curved, segment only ------------------------------------------
 void main()
 {
+#ifdef MESO_HULL_REJECT
+    if (behind_hit()) {
+        reject();
+        return;
+    }
+#endif
     instance_begin();
     Prism P = fetch_prism(v_prism);
     vec3 ro, rd;

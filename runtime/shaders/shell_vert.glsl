@@ -12,9 +12,21 @@
 // 36 vertices per prism. Every triangle is wound to face away from its
 // solid's center, and the runtime culls front faces: one fragment per
 // solid per pixel, even with the camera inside the shell.
+//
+// With hull rejection (MESO_HULL_REJECT, u_hull_reject; rt_shell.c) the
+// solid's entry faces are drawn instead (wound towards its center), so a
+// fragment's own depth is that of the ray's entry, which no hit of the
+// solid is nearer than; a solid reaching the near plane's eye side has
+// rays that start inside it, with no entry face: it keeps its exit faces,
+// moved onto the near plane (the nearest depth there is), and the
+// fragment shader finds the entry itself as before.
 
 flat out int v_prism;
 flat out int v_tet;
+#ifdef MESO_HULL_REJECT
+uniform int u_hull_reject;
+uniform vec4 u_depth_ndc; // raycast_common.glsl
+#endif
 
 void main()
 {
@@ -46,8 +58,28 @@ void main()
     center = prism_centroid(P);
 #endif
     vec3 p0 = corner_pos(P, tri.x), p1 = corner_pos(P, tri.y), p2 = corner_pos(P, tri.z);
-    // Wind away from the center (counter-clockwise seen from outside).
-    if (dot(cross(p1 - p0, p2 - p0), center - p0) > 0.0) {
+    // Wind away from the center (counter-clockwise seen from outside);
+    // entry faces: towards it.
+    bool inward = false, near_side = false;
+#ifdef MESO_HULL_REJECT
+    if (u_hull_reject != 0) {
+        // The eye's side of the near plane: clip z below (reversed-Z: above)
+        // u_depth_ndc.x * w; the solid is the hull of its corners.
+        float sgn = u_depth_ndc.x > u_depth_ndc.z ? -1.0 : 1.0;
+        for (int c = 0; c < 6; ++c) {
+#if MESO_TECHNIQUE == 2
+            if (c >= 4)
+                break;
+            vec4 h = u_mvp * vec4(corner_pos(P, T[c]), 1.0);
+#else
+            vec4 h = u_mvp * vec4(corner_pos(P, c), 1.0);
+#endif
+            near_side = near_side || sgn * (h.z - u_depth_ndc.x * h.w) < 0.0;
+        }
+        inward = !near_side;
+    }
+#endif
+    if ((dot(cross(p1 - p0, p2 - p0), center - p0) > 0.0) != inward) {
         vec3 s = p1;
         p1 = p2;
         p2 = s;
@@ -55,4 +87,8 @@ void main()
     vec3 p = k == 0 ? p0 : (k == 1 ? p1 : p2);
     v_prism = prism;
     gl_Position = u_mvp * vec4(p, 1.0);
+#ifdef MESO_HULL_REJECT
+    if (near_side)
+        gl_Position.z = u_depth_ndc.x * gl_Position.w;
+#endif
 }

@@ -5,7 +5,11 @@
  *               and ray steps per covered pixel for segment-only, smooth,
  *               curved and tetra at 800x600, 640x480 and 1280x1024, half and
  *               double thickness (directors scaled through
- *               meso_rt_shell_update), 8x and 1/8 tiling (uv_scale);
+ *               meso_rt_shell_update), 8x and 1/8 tiling (uv_scale), and
+ *               the reference setup again without hull rejection
+ *               (no_hull_reject: every hull fragment ray casts, issue 14);
+ *               fragments_per_px counts the ray-casting ones,
+ *               rejected_per_px those stopped behind a hit found already;
  *  shell_render_error.csv  each technique against the exact reference
  *               (smooth and curved mappings) at 400x300;
  *  shell_render_sweep.csv  cost against error as the knobs move: error
@@ -38,7 +42,7 @@ static const meso_shell_technique tech_order[4] = {MESO_SHELL_SEGMENT_ONLY, MESO
                                                    MESO_SHELL_TETRA};
 
 typedef struct timing {
-    double ms, steps_per_px, frags_per_px;
+    double ms, steps_per_px, frags_per_px, rejected_per_px;
     long covered;
 } timing;
 
@@ -62,7 +66,8 @@ static timing time_draw(bench* b, meso_rt_object obj, meso_rt_draw_desc d, int r
         free(dep);
     timing t = {.ms = median, .covered = covered,
                 .steps_per_px = covered ? (double)st.steps / (double)covered : 0.0,
-                .frags_per_px = covered ? (double)st.fragments / (double)covered : 0.0};
+                .frags_per_px = covered ? (double)st.fragments / (double)covered : 0.0,
+                .rejected_per_px = covered ? (double)st.rejected / (double)covered : 0.0};
     return t;
 }
 
@@ -135,27 +140,30 @@ int main(int argc, char** argv)
     float* scaled = malloc(sizeof(float) * 3 * nv * layers);
     snprintf(csv, sizeof(csv), "%s/table1.csv", dir);
     FILE* t1 = fopen(csv, "w");
-    fprintf(t1, "test,technique,width,height,ms,steps_per_px,fragments_per_px,covered_px\n");
+    fprintf(t1, "test,technique,width,height,ms,steps_per_px,fragments_per_px,covered_px,rejected_per_px\n");
     struct row {
         const char* name;
         int w, h;
         double thick, tiling;
-    } rows[] = {{"reference setup", 800, 600, 1, 1},   {"screen 640x480", 640, 480, 1, 1},
-                {"screen 1280x1024", 1280, 1024, 1, 1}, {"half thickness", 800, 600, 0.5, 1},
-                {"double thickness", 800, 600, 2, 1}, {"8x tiling", 800, 600, 1, 8},
-                {"1/8 tiling", 800, 600, 1, 0.125}};
+        int no_reject;
+    } rows[] = {{"reference setup", 800, 600, 1, 1, 0},    {"without rejection", 800, 600, 1, 1, 1},
+                {"screen 640x480", 640, 480, 1, 1, 0},     {"screen 1280x1024", 1280, 1024, 1, 1, 0},
+                {"half thickness", 800, 600, 0.5, 1, 0},   {"double thickness", 800, 600, 2, 1, 0},
+                {"8x tiling", 800, 600, 1, 8, 0},          {"1/8 tiling", 800, 600, 1, 0.125, 0}};
     for (size_t r = 0; r < sizeof(rows) / sizeof(rows[0]); ++r) {
         bench_set_size(&b, rows[r].w, rows[r].h);
         for (size_t i = 0; i < 3 * (size_t)nv * layers; ++i)
             scaled[i] = (float)(dirs[i] * rows[r].thick);
         meso_rt_shell_update(b.rt, obj, NULL, scaled, nv);
         for (int t = 0; t < 4; ++t) {
-            meso_rt_draw_desc d = {.shell = {.technique = tech_order[t], .uv_scale = (float)rows[r].tiling}};
+            meso_rt_draw_desc d = {.shell = {.technique = tech_order[t], .uv_scale = (float)rows[r].tiling,
+                                             .no_hull_reject = rows[r].no_reject}};
             timing tm = time_draw(&b, obj, d, reps, NULL, NULL);
-            fprintf(t1, "%s,%s,%d,%d,%.2f,%.2f,%.2f,%ld\n", rows[r].name, tech_names[tech_order[t]], rows[r].w,
-                    rows[r].h, tm.ms, tm.steps_per_px, tm.frags_per_px, tm.covered);
-            fprintf(stderr, "table1 %-18s %-8s %8.1f ms %7.1f steps/px %5.2f fragments/px\n", rows[r].name,
-                    tech_names[tech_order[t]], tm.ms, tm.steps_per_px, tm.frags_per_px);
+            fprintf(t1, "%s,%s,%d,%d,%.2f,%.2f,%.2f,%ld,%.2f\n", rows[r].name, tech_names[tech_order[t]],
+                    rows[r].w, rows[r].h, tm.ms, tm.steps_per_px, tm.frags_per_px, tm.covered, tm.rejected_per_px);
+            fprintf(stderr, "table1 %-18s %-8s %8.1f ms %7.1f steps/px %5.2f fragments/px %5.2f rejected/px\n",
+                    rows[r].name, tech_names[tech_order[t]], tm.ms, tm.steps_per_px, tm.frags_per_px,
+                    tm.rejected_per_px);
             fflush(t1);
         }
     }
