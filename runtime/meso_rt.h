@@ -321,7 +321,10 @@ MESO_API meso_result meso_rt_stream_run(meso_rt_request* req);
 /* Gives taken requests back, run or not (a request not run is taken again). */
 MESO_API void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n);
 /* Uploads decoded requests until `max_bytes` chunk bytes are uploaded (0:
- * all). Returns the chunk bytes uploaded. */
+ * all). Returns the chunk bytes uploaded. A level with no room under
+ * meso_rt_desc.memory_budget stays decoded (host memory) and is tried again
+ * on later calls while draws still want it; it is dropped once they want a
+ * coarser level or stop drawing the object. */
 MESO_API uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes);
 /* Requests waiting to be taken, taken, and decoded waiting for upload. */
 typedef struct meso_rt_stream_state {

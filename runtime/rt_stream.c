@@ -272,7 +272,18 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
             const uint32_t l = q->level;
             /* The coarsest level always stays (meso_rt_desc.memory_budget):
              * it is uploaded whatever the budget, as a synchronous load does. */
-            if (!lv->slot[l].id && (l + 1 == lv->count || mesoi_levels_make_room(rt, lv, l))) {
+            const int room = lv->slot[l].id || l + 1 == lv->count || mesoi_levels_make_room(rt, lv, l);
+            /* No room under the budget: kept decoded, and tried again on
+             * the next call, while the last frame's or this frame's draws
+             * still want this level (or a finer one); dropped once they
+             * want a coarser one or none (frame_end then has raised the
+             * pixel-error factor, or the object is out of view). Dropping
+             * it at once made every frame read and decode it again. */
+            if (!room && lv->want_frame >= rt->frame && lv->want_now <= l) {
+                q = next;
+                continue;
+            }
+            if (room && !lv->slot[l].id) {
                 rt->prefetch = q;
                 const meso_result r = mesoi_levels_upload(rt, lv, l);
                 rt->prefetch = NULL;
@@ -281,8 +292,8 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
                     rt->stream_uploads++;
                 }
             }
-            /* Uploaded, failed (remembered in lv->failed), or no room under
-             * the budget: a later draw that still wants it asks again. */
+            /* Uploaded, failed (remembered in lv->failed), or no longer
+             * wanted: a later draw that wants it asks again. */
             req_destroy(rt, q);
         }
         q = next;

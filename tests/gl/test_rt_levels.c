@@ -448,6 +448,16 @@ static void requests_decode_off_thread(const uint8_t* data, size_t size, const m
     draw_at(rt, o, 2.0, -1.0f, top);
     assert(meso_rt_levels_state_get(rt, o, &st) == MESO_OK && st.last_drawn == LEVELS - 1);
     assert(memcmp(top, want[LEVELS - 1], sizeof top) == 0);
+    /* Level 0 was read and decoded once, and waits decoded while it is
+     * wanted (not read again every frame); wanted no more, it is dropped. */
+    assert(st.bytes_read == li[LEVELS - 1].bytes + li[0].bytes);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.decoded == 1 && ss.waiting == 0);
+    meso_rt_frame_end(rt);
+    draw_at(rt, o, 200.0, 1.0f, top); /* far: the coarsest is wanted */
+    meso_rt_stream_upload(rt, 0);
+    meso_rt_stream_state_get(rt, &ss);
+    assert(ss.decoded == 0 && ss.waiting == 0);
     meso_rt_release_object(rt, o);
     meso_file_close(f);
     meso_rt_destroy(rt);
