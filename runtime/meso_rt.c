@@ -117,7 +117,7 @@ static void query_features(meso_rt* rt)
             images = 1; /* the shells' #extension directive names it (rt_shell.c) */
     }
     /* The shells' hit image (rt_shell.c): an R32UI image with atomics in
-     * fragment shaders (OpenGL 4.2 or the extension; ES 3.2), immutable
+     * fragment shaders (OpenGL 4.2 and the extension named; ES 3.2), immutable
      * storage and a clear per draw. */
     GLint frag_images = 0;
     if (rt->gles || images)

@@ -416,7 +416,12 @@ typedef struct meso_rt_shell_draw {
                             the context can (rt_shell.c: OpenGL 4.2 image atomics and a texture clear, or
                             ES 3.2 with EXT_clear_texture) and the depth function lets the nearer fragment
                             win, prisms are drawn roughly front to back by their entry faces and a fragment
-                            whose entry lies behind a hit the draw found at its pixel stops at once [0] */
+                            whose entry lies behind a hit the draw found at its pixel stops at once.
+                            The depth function is desc.depth_func, else the host's under
+                            MESO_STATE_RESTORE, else GL_LESS (GL_GREATER reversed) — also for the items of
+                            meso_rt_draw_list, which draw as HOST_OWNS: a list under another depth function
+                            sets depth_func or this. The hit stored per pixel is per pixel, not per sample:
+                            with MSAA or stencil z-fail operations, set this [0] */
     int slices;          /* MESO_SHELL_SLICES: slice polygons per prism (along the chosen family: levels
                             w = m / (slices - 1), or λ_i = m / slices), 2..1024 [16] */
     meso_slice_interp slice_interp; /* MESO_SHELL_SLICES [MESO_SLICE_TEXCOORD] */

@@ -230,6 +230,7 @@ meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_
             sum.fragments += one.fragments;
             sum.steps += one.steps;
             sum.hits += one.hits;
+            sum.rejected += one.rejected;
         }
     }
     if (d->stats)

@@ -198,6 +198,8 @@ int main(int argc, char** argv)
     if (meso_file_levels(f, rec.id, li, MAX_LEVELS, &nl, NULL) != MESO_OK)
         die("levels");
     nl = nl < MAX_LEVELS ? nl : MAX_LEVELS;
+    if (nl == 0)
+        die("the baked file has no levels");
     row("levels", nl);
     row("coarsest_prefix_bytes", (double)li[nl - 1].prefix_bytes);
 

@@ -18,7 +18,7 @@
  *    curved) fewer than half the fragments ray cast; fewer steps for all;
  *  - nothing is rejected under a depth function that does not let the
  *    nearer fragment win (GL_ALWAYS), and the image is unchanged there too.
- * With MESO_TEST_NO_HULL_REJECT set (meson runs it with the image extension
+ * With MESO_TEST_NO_HULL_REJECT set (meson runs it with GL_ARB_clear_texture
  * hidden), the fallback: nothing rejected, the counts equal.
  * Accuracy against the exact reference, with rejection (the default), is
  * tests/gl/test_rt_shell.c's. */
