@@ -3,6 +3,8 @@
  */
 #include "standin_levels.h"
 
+#include "surface_distance.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,8 +28,15 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
         return MESO_OK;
     if (levels > MESOI_STANDIN_MAX_LEVELS)
         levels = MESOI_STANDIN_MAX_LEVELS;
+    /* The samples of the simplifications' errors: half the mean edge (as
+     * mesobake mesh) or a quarter of e0, the larger. Every stand-in's
+     * error is e0 + its own, so a sampling radius up to e0 / (4 sqrt 3)
+     * loosens it by at most 14 % of e0, and on a shell (e0 = its thickness
+     * times the highest texel, often ten mean edges) it takes the chain's
+     * measurement from the bulk of the bake to a small part of it. */
+    const double spacing = fmax(0.5 * meso_mesh_mean_edge(base), 0.25 * e0);
     const meso_mesh_levels_options lo = {.max_levels = levels ? levels - 1 : MESOI_STANDIN_MAX_LEVELS - 1,
-                                         .threads = threads};
+                                         .threads = threads, .spacing = spacing};
     meso_result r = meso_mesh_levels_build(base, &lo, &out->chain, &out->chain_count, err);
     for (uint32_t k = 0; r == MESO_OK && k < out->chain_count; ++k)
         r = meso_bake_mesh_chunk(&out->chain[k].mesh, NULL, &out->chunk[k], err);
