@@ -237,62 +237,92 @@ static meso_result directors(shell_bake* s, meso_error* err)
         const int sign = (a->kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
         const double f0 = 0.2 + 0.6 * layer / layers, f1 = 0.2 + 0.6 * (layer + 1) / layers;
         mesoi_run_stage(&s->run, "directors", f0, f1 - 0.05, NULL);
-        meso_hybrid_stats hs = {0};
         float* dl = s->d + 3 * (size_t)nv * (size_t)layer;
-        const uint8_t* redo = s->prior.redo; /* --update: only these; the rest are the old bake's */
-        if (redo)
-            memcpy(dl, s->prior.d + 3 * (size_t)nv * (size_t)layer, sizeof(float) * 3 * (size_t)nv);
-        t = meso_seconds();
-        /* One checker for hybrid rounds, repair and regrow: each starts
-         * from the verdicts the one before left, not from a full check. */
-        meso_shell_checker* ck = NULL;
-        r = meso_shell_checker_create(m, sign, s->run.common.threads, &ck, err);
-        if (r == MESO_OK && redo)
-            r = meso_shell_checker_prime(ck, dl, redo, err);
-        if (r == MESO_OK)
-            r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors,
-                                             s->run.common.threads, redo, dl, s->lp_side, &hs, &ts, ck, err);
+        /* --update: the rounds again over a grown region while they leave
+         * bad faces with a kept corner; after the last growth pass, over
+         * every vertex as a full bake (shell_update.c, "Growth"). */
+        for (int pass = 0;; ++pass) {
+            const int everything = pass > MESOI_SHELL_UPDATE_GROWTH_PASSES;
+            meso_hybrid_stats hs = {0};
+            const uint8_t* redo = everything ? NULL : s->prior.redo; /* --update: only these; the rest OLD's */
+            if (redo)
+                memcpy(dl, s->prior.d + 3 * (size_t)nv * (size_t)layer, sizeof(float) * 3 * (size_t)nv);
+            else if (everything)
+                memset(dl, 0, sizeof(float) * 3 * (size_t)nv); /* as a full bake starts */
+            t = meso_seconds();
+            /* One checker for hybrid rounds, repair and regrow: each starts
+             * from the verdicts the one before left, not from a full check. */
+            meso_shell_checker* ck = NULL;
+            r = meso_shell_checker_create(m, sign, s->run.common.threads, &ck, err);
+            if (r == MESO_OK && redo)
+                r = meso_shell_checker_prime(ck, dl, redo, err);
+            if (r == MESO_OK)
+                r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors,
+                                                 s->run.common.threads, redo, dl, s->lp_side, &hs, &ts, ck, err);
+            s->rep->hybrid_rounds += hs.rounds;
+            s->rep->seconds_directors += meso_seconds() - t;
+            s->rep->seconds_directors_checks += hs.seconds_checks;
+            if (r == MESO_OK)
+                mesoi_run_stage(&s->run, "directors", f1 - 0.05, f1,
+                                "directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations (%.0f "
+                                "ms)",
+                                sign > 0 ? "outer" : "inner", meso_bake_directors_name(a->directors), hs.vertices_lp,
+                                hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations,
+                                mesoi_run_ms(&s->run));
+            uint32_t shortened = 0, grown = 0;
+            if (r == MESO_OK && !a->no_repair) {
+                uint32_t rounds = 0, left = 0;
+                float* before = malloc(sizeof(float) * 3 * (size_t)nv); /* for regrow: the lengths repair took */
+                if (!before)
+                    r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
+                else
+                    memcpy(before, dl, sizeof(float) * 3 * (size_t)nv);
+                t = meso_seconds();
+                if (r == MESO_OK)
+                    r = meso_shell_repair_in(m, dl, sign, 30, s->run.common.threads, redo, &shortened, &rounds,
+                                             &left, ck, err);
+                if (r == MESO_OK)
+                    mesoi_run_stage(&s->run, "repair", f1, f1,
+                                    "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
+                                    shortened, rounds, left, mesoi_run_ms(&s->run));
+                /* Not for envelopes: each layer is checked against the base
+                 * only, and lengthening one can make top and bottom meet
+                 * (spot's envelope did, tests/gl/test_rt_shell_baked.c). */
+                if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
+                    r = meso_shell_regrow_in(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, s->run.common.threads,
+                                             redo, &grown, ck, err);
+                    if (r == MESO_OK)
+                        mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
+                                        grown, mesoi_run_ms(&s->run));
+                }
+                s->rep->seconds_repair += meso_seconds() - t; /* repair and regrow */
+                free(before);
+            }
+            uint32_t added = 0;
+            if (r == MESO_OK && redo) {
+                t = meso_seconds();
+                r = mesoi_shell_update_grow(m, ck, dl, &s->prior, &added, err);
+                if (r == MESO_OK && added && pass == MESOI_SHELL_UPDATE_GROWTH_PASSES) {
+                    memset(s->prior.redo, 1, nv);
+                    s->prior.redo_count = nv;
+                }
+                s->rep->seconds_repair += meso_seconds() - t;
+                if (r == MESO_OK && added)
+                    mesoi_run_stage(&s->run, "update", f1, f1,
+                                    "update: bad faces with kept corners left, %s (%u of %u vertices recomputed)",
+                                    pass == MESOI_SHELL_UPDATE_GROWTH_PASSES ? "every vertex recomputed"
+                                                                             : "region grown",
+                                    s->prior.redo_count, nv);
+            }
+            meso_shell_checker_destroy(ck);
+            if (r != MESO_OK || !added) {
+                s->rep->vertices_shortened += shortened;
+                s->rep->vertices_regrown += grown;
+                break;
+            }
+        }
         for (uint32_t v = 0; r == MESO_OK && v < nv; ++v)
             s->lp_mask[v] |= s->lp_side[v];
-        s->rep->hybrid_rounds += hs.rounds;
-        s->rep->seconds_directors += meso_seconds() - t;
-        s->rep->seconds_directors_checks += hs.seconds_checks;
-        if (r == MESO_OK)
-            mesoi_run_stage(&s->run, "directors", f1 - 0.05, f1,
-                            "directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations (%.0f ms)",
-                            sign > 0 ? "outer" : "inner", meso_bake_directors_name(a->directors), hs.vertices_lp,
-                            hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations, mesoi_run_ms(&s->run));
-        if (r == MESO_OK && !a->no_repair) {
-            uint32_t shortened = 0, rounds = 0, left = 0, grown = 0;
-            float* before = malloc(sizeof(float) * 3 * (size_t)nv); /* for regrow: the lengths repair took */
-            if (!before)
-                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
-            else
-                memcpy(before, dl, sizeof(float) * 3 * (size_t)nv);
-            t = meso_seconds();
-            if (r == MESO_OK)
-                r = meso_shell_repair_in(m, dl, sign, 30, s->run.common.threads, redo, &shortened, &rounds, &left,
-                                         ck, err);
-            if (r == MESO_OK)
-                mesoi_run_stage(&s->run, "repair", f1, f1,
-                                "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",
-                                shortened, rounds, left, mesoi_run_ms(&s->run));
-            /* Not for envelopes: each layer is checked against the base
-             * only, and lengthening one can make top and bottom meet (spot's
-             * envelope did, tests/gl/test_rt_shell_baked.c). */
-            if (r == MESO_OK && shortened && !left && a->kind != MESO_SHELL_ENVELOPE) {
-                r = meso_shell_regrow_in(m, dl, before, sign, MESO_SHELL_REGROW_ROUNDS, s->run.common.threads, redo,
-                                         &grown, ck, err);
-                if (r == MESO_OK)
-                    mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
-                                    grown, mesoi_run_ms(&s->run));
-            }
-            s->rep->seconds_repair += meso_seconds() - t; /* repair and regrow */
-            free(before);
-            s->rep->vertices_shortened += shortened;
-            s->rep->vertices_regrown += grown;
-        }
-        meso_shell_checker_destroy(ck);
     }
     uint32_t lp_count = 0;
     for (uint32_t v = 0; s->lp_mask && v < nv; ++v)
@@ -717,6 +747,8 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
                         s.tx.seam_vertices, s.m.vertex_count + s.tx.seam_vertices);
     if (r == MESO_OK)
         r = directors(&s, err);
+    if (a->update)
+        rep->vertices_recomputed = s.prior.redo_count; /* with the region's growth (shell_update.c) */
     t = meso_seconds();
     if (r == MESO_OK)
         r = validate(&s, err);

@@ -484,7 +484,9 @@ typedef struct meso_bake_shell_report {
     double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,
         seconds_directors_checks, seconds_repair, seconds_validate, seconds_allowed, seconds_assemble;
     /* With options.update: the vertices the edit moved, and those whose
-     * directors were recomputed (within update_radius of a moved face). */
+     * directors were recomputed (within update_radius of a moved face, and
+     * the region's growth where the rounds left bad faces with kept
+     * corners, shell_update.c). */
     uint32_t vertices_moved, vertices_recomputed;
     double update_radius;
 } meso_bake_shell_report;

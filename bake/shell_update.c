@@ -58,6 +58,28 @@
  *    does with CGAL; an OLD whose report lacks zero intersection counts is
  *    refused, E3119).
  *
+ *  - Growth (issue 15): repair and regrow may change only recomputed
+ *    directors. When the rounds end with a bad face (an inverted or
+ *    undecided prism, or an offset triangle meeting another or the base)
+ *    that has a kept corner, the fix may need that corner's director, which
+ *    the update may not touch (spot at 2 %, a 10 % edit: one prism left
+ *    inverted after repair's 30 rounds, its other corners OLD's). Then the
+ *    region grows by those faces' corners and their 1-ring (every corner of
+ *    every face around them), and the side's rounds run again from the
+ *    start over the grown region, at most MESOI_SHELL_UPDATE_GROWTH_PASSES
+ *    times; if bad faces with kept corners are still left, every vertex is
+ *    recomputed, exactly as a full bake does (the rounds without a region),
+ *    so the update is valid whenever the full bake is. The 1-ring rather
+ *    than everything within R of the bad faces: R = 3h + L covers most of a
+ *    small mesh at 5 % (spot), so one growth by R would be about a full
+ *    bake; the 1-ring is the least that lets repair shorten every director
+ *    of the bad faces and of the faces sharing a corner with them (which
+ *    the shortening can fold in turn), and a further pass grows again when
+ *    that is not enough. Growing keeps both arguments above: the region
+ *    only gains vertices, so it still holds everything within R of the
+ *    edit, and kept directors only become fewer. vertices_recomputed
+ *    counts the grown region.
+ *
  * Region search: a uniform grid of the vertices (cells at least R), each
  * changed face's box grown by R looked up in it: O(vertices + changed faces
  * x the vertices near them).
@@ -392,6 +414,43 @@ static uint32_t faces_touching(const meso_mesh* m, const uint8_t* at, uint8_t* c
         n += changed[f];
     }
     return n;
+}
+
+meso_result mesoi_shell_update_grow(const meso_mesh* m, meso_shell_checker* ck, const float* d, mesoi_shell_prior* p,
+                                    uint32_t* added, meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    *added = 0;
+    uint8_t* bad = malloc(nt ? nt : 1);
+    uint8_t* seed = calloc(nv ? nv : 1, 1);
+    meso_result r = bad && seed ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "update: out of memory");
+    uint32_t count = 0;
+    if (r == MESO_OK)
+        r = meso_shell_checker_bad_faces(ck, d, bad, &count, err);
+    /* The corners of the bad faces with a kept corner... */
+    uint32_t seeds = 0;
+    for (uint32_t f = 0; r == MESO_OK && count && f < nt; ++f) {
+        const uint32_t* ix = m->indices + 3 * (size_t)f;
+        if (bad[f] && (!p->redo[ix[0]] || !p->redo[ix[1]] || !p->redo[ix[2]]))
+            for (int c = 0; c < 3; ++c)
+                seeds += !seed[ix[c]], seed[ix[c]] = 1;
+    }
+    /* ...and every corner of the faces around them. */
+    for (uint32_t f = 0; seeds && f < nt; ++f) {
+        const uint32_t* ix = m->indices + 3 * (size_t)f;
+        if (seed[ix[0]] == 1 || seed[ix[1]] == 1 || seed[ix[2]] == 1)
+            for (int c = 0; c < 3; ++c)
+                if (!seed[ix[c]])
+                    seed[ix[c]] = 2;
+    }
+    for (uint32_t v = 0; seeds && v < nv; ++v)
+        if (seed[v] && !p->redo[v]) {
+            p->redo[v] = 1;
+            ++*added;
+        }
+    p->redo_count += *added;
+    free(bad), free(seed);
+    return r;
 }
 
 meso_result mesoi_shell_update_base_check(const meso_mesh* m, const mesoi_shell_prior* p, const char* path,

@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "bake_internal.h"
+#include "shell_checker.h"
 #include "shell_validate.h"
 
 /* What an update keeps from OLD and what it recomputes. */
@@ -36,6 +37,17 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
                                    const meso_mesh* m, const uint32_t* out_source, const uint32_t* out_indices,
                                    uint32_t nv_out, mesoi_shell_prior* out, meso_error* err);
 void mesoi_shell_prior_free(mesoi_shell_prior* p);
+
+/* Growth passes of an update's region before it falls back to recomputing
+ * every vertex (shell_update.c, "Growth"). */
+enum { MESOI_SHELL_UPDATE_GROWTH_PASSES = 3 };
+
+/* After an update's rounds on one side (directors d, ck the checker they
+ * used): the faces still bad that have a kept corner (p->redo 0) add their
+ * corners and those corners' 1-ring to p->redo (and p->redo_count);
+ * *added: how many vertices that added (0: nothing to grow). */
+meso_result mesoi_shell_update_grow(const meso_mesh* m, meso_shell_checker* ck, const float* d, mesoi_shell_prior* p,
+                                    uint32_t* added, meso_error* err);
 
 /* The base's self-intersection test of an update (E3114 when it fails, as
  * a full bake's): only the triangle pairs with a moved corner (OLD's base,

@@ -19,7 +19,10 @@
  *    that makes the shell fold and intersect (normal directors, no
  *    repair), where both also equal a full re-bake's; an edit that makes
  *    the base intersect itself is refused by the update as by a full bake
- *    (E3114, its test limited to the moved faces).
+ *    (E3114, its test limited to the moved faces);
+ *  - an update whose rounds leave a bad face with a kept corner (spot at 2 %,
+ *    a 10 % edit: invalid before issue 15's growth, the full re-bake valid)
+ *    grows its region and ends valid.
  * Exterior and interior shells. */
 #include "test_util.h"
 
@@ -69,6 +72,13 @@ static void baked_free(baked* b)
 {
     free(b->sdir);
     memset(b, 0, sizeof(*b));
+}
+
+/* No inverted prism and no intersection. */
+static int clean(const baked* b)
+{
+    return b->r == MESO_OK && b->rep.inverted_prisms == 0 && b->rep.offset_self_intersections == 0 &&
+           b->rep.offset_base_intersections == 0;
 }
 
 /* Bake (writing the file to `path` when given) and read back its SDIR. */
@@ -210,10 +220,8 @@ static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_direct
     o.directors = directors;
     o.thickness_rel = rel;
     baked old = bake(&o, old_path);
-    assert(old.r == MESO_OK);
+    assert(clean(&old));
     const double h = old.rep.thickness;
-    assert(old.rep.inverted_prisms == 0 && old.rep.offset_self_intersections == 0 &&
-           old.rep.offset_base_intersections == 0);
 
     /* Without a thickness in mesh units the update keeps OLD's, whatever
      * the relative one (an edit may move the diagonal it refers to). */
@@ -315,6 +323,33 @@ static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_direct
     meso_mesh_free(&m);
 }
 
+/* OLD: m baked with options o (o->mesh set to m) to dir/name (its path in
+ * path), valid; o->thickness set to its thickness. */
+static baked bake_old(meso_bake_shell_options* o, const meso_mesh* m, const char* dir, const char* name, char* path,
+                      size_t size)
+{
+    snprintf(path, size, "%s/%s", dir, name);
+    o->mesh = m;
+    baked old = bake(o, path);
+    assert(clean(&old));
+    o->thickness = old.rep.thickness;
+    return old;
+}
+
+/* The update of OLD (old_path) and the full re-bake, both of edited mesh e
+ * with options o, both succeeding. */
+static void update_and_full(meso_bake_shell_options* o, const meso_mesh* e, const char* old_path, baked* upd,
+                            baked* full)
+{
+    o->mesh = e;
+    o->update = old_path;
+    *upd = bake(o, NULL);
+    assert(upd->r == MESO_OK);
+    o->update = NULL;
+    *full = bake(o, NULL);
+    assert(full->r == MESO_OK);
+}
+
 /* Edits the update must judge as the whole shell's validation does: a dent
  * that makes normal offsets fold and meet (no repair: the defects stay, and
  * are written), and a push through the torus's tube that makes the base
@@ -324,27 +359,17 @@ static void check_defects(const char* dir)
     meso_mesh m = load("torus.obj");
     const uint32_t nv = m.vertex_count;
     char old_path[4200];
-    snprintf(old_path, sizeof(old_path), "%s/old_normal.meso", dir);
     meso_bake_shell_options o = meso_bake_shell_defaults();
-    o.mesh = &m;
     o.directors = MESO_DIRECTORS_NORMAL;
     o.no_repair = 1;
     o.thickness_rel = 0.03;
-    baked old = bake(&o, old_path);
-    assert(old.r == MESO_OK && old.rep.inverted_prisms == 0 && old.rep.offset_self_intersections == 0 &&
-           old.rep.offset_base_intersections == 0);
+    baked old = bake_old(&o, &m, dir, "old_normal.meso", old_path, sizeof(old_path));
     const double h = old.rep.thickness;
-    o.thickness = h;
     float* pos = NULL;
     meso_mesh e = edited_copy(&m, &pos);
     mesh_bump(pos, nv, nv / 3, nv / DENT_N, DENT_A * h);
-    o.mesh = &e;
-    o.update = old_path;
-    baked upd = bake(&o, NULL);
-    assert(upd.r == MESO_OK);
-    o.update = NULL;
-    baked full = bake(&o, NULL);
-    assert(full.r == MESO_OK);
+    baked upd, full;
+    update_and_full(&o, &e, old_path, &upd, &full);
     same_verdict(&e, &upd, MESO_SHELL_EXTERIOR);
     same_verdict(&e, &full, MESO_SHELL_EXTERIOR);
     assert(upd.rep.inverted_prisms > 0 && upd.rep.offset_self_intersections > 0);
@@ -365,6 +390,45 @@ static void check_defects(const char* dir)
     meso_mesh_free(&m);
 }
 
+/* An update whose rounds leave a bad face with a kept corner (issue 15: spot
+ * at 2 %, a bump over 10 % of the vertices, as bench_shell_update edits;
+ * repair left one prism inverted, its other corners OLD's) grows its region
+ * until it is valid, as the full re-bake is. */
+static void check_growth(const char* dir)
+{
+    meso_mesh m = load("spot_uv.obj");
+    const uint32_t nv = m.vertex_count;
+    char old_path[4200];
+    meso_bake_shell_options o = meso_bake_shell_defaults();
+    o.thickness_rel = 0.02;
+    baked old = bake_old(&o, &m, dir, "old_spot.meso", old_path, sizeof(old_path));
+    const double h = old.rep.thickness;
+    float* pos = NULL;
+    meso_mesh e = edited_copy(&m, &pos);
+    mesh_bump(pos, nv, nv / 3, nv / 10, 0.3 * h);
+    baked upd, full;
+    update_and_full(&o, &e, old_path, &upd, &full);
+    uint32_t moved = 0;
+    uint8_t* inside = malloc(nv);
+    const uint32_t region = brute_region(&m, &e, 3.0 * h + longest_edge(&e), &moved, inside);
+    printf("spot_uv 0.02, 10 %% edit: %u moved, region %u, %u recomputed of %u; update: inverted %u (undecided %u), "
+           "self %llu, cross %llu; full: %u (%u), %llu, %llu\n",
+           upd.rep.vertices_moved, region, upd.rep.vertices_recomputed, nv, upd.rep.inverted_prisms,
+           upd.rep.undecided_prisms, (unsigned long long)upd.rep.offset_self_intersections,
+           (unsigned long long)upd.rep.offset_base_intersections, full.rep.inverted_prisms,
+           full.rep.undecided_prisms, (unsigned long long)full.rep.offset_self_intersections,
+           (unsigned long long)full.rep.offset_base_intersections);
+    same_verdict(&e, &upd, MESO_SHELL_EXTERIOR);
+    assert(clean(&full) && full.rep.undecided_prisms == 0);
+    assert(clean(&upd) && upd.rep.undecided_prisms == 0);
+    /* The region grew (the case needs it), and kept every vertex of the
+     * radius. */
+    assert(upd.rep.vertices_recomputed > region && upd.rep.vertices_recomputed <= nv);
+    free(inside), free(pos);
+    baked_free(&old), baked_free(&upd), baked_free(&full);
+    meso_mesh_free(&m);
+}
+
 int main(void)
 {
     char dir[4096];
@@ -374,6 +438,7 @@ int main(void)
     check_kind("torus.obj", MESO_SHELL_INTERIOR, MESO_DIRECTORS_LP, 0.02, dir);
     check_kind("blub_fish_low_resolution.obj", MESO_SHELL_EXTERIOR, MESO_DIRECTORS_HYBRID, 0.03, dir);
     check_defects(dir);
+    check_growth(dir);
 
     /* OLD that is not one shell: a mesh bake (E3116). */
     char path[4200];
