@@ -189,7 +189,7 @@ meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_
     /* Per-instance levels: each instance draws the level it would draw
      * alone, one instanced call per level, finest first (so the nearest
      * instances fill the depth buffer before the far ones are shaded). */
-    uint8_t* level = count > 1 ? mesoi_rt_alloc(rt, count) : NULL;
+    uint8_t* level = count > 1 && o->levels ? mesoi_rt_alloc(rt, count) : NULL; /* plain objects: no allocation per draw */
     uint32_t groups = level ? mesoi_levels_per_instance(rt, h, d, instances, count, level) : 0;
     int mirrored0 = 0, mirrored = 0;
     for (uint32_t i = 0; groups > 1 && i < count; ++i) /* refused as one call, not group by group */
