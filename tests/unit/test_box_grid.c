@@ -20,8 +20,11 @@ static double uniform(void)
     return (double)(rng >> 11) / 9007199254740992.0;
 }
 
-/* A random box: mostly about one cell, 2 % huge, 5 % points on the lattice
- * of cell corners (to hit touching boundaries exactly). */
+/* A random box: mostly about one cell, 2 % huge (up to 12 cells: the
+ * grid's level 1), 1 % long sticks along x (up to 100 cells: level 2)
+ * and 0.5 % longer ones (up to 10,000 cells: most past the coarsest level, the
+ * list every query scans), 5 % points on the lattice of cell corners (to
+ * hit touching boundaries exactly). */
 static void random_box(double lo[3], double hi[3])
 {
     const double r = uniform();
@@ -29,7 +32,8 @@ static void random_box(double lo[3], double hi[3])
         if (r < 0.05) {
             lo[k] = hi[k] = (double)(int)(uniform() * 20.0) * 0.5;
         } else {
-            const double size = r < 0.07 ? 6.0 * uniform() : 0.6 * uniform();
+            const double stick = k == 0 ? (r < 0.065 ? 5000.0 : r < 0.08 ? 50.0 : 0.0) : 0.0;
+            const double size = stick > 0 ? stick * uniform() : r < 0.1 ? 6.0 * uniform() : 0.6 * uniform();
             lo[k] = -1.0 + 12.0 * uniform();
             hi[k] = lo[k] + size;
         }
