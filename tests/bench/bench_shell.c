@@ -25,14 +25,18 @@
  *
  * size: spot subdivided 1:4 (edge midpoints, shared; no smoothing, so the
  *   surface keeps spot's shape and concavities) levels 0..MAX_LEVEL
- *   (1.6k .. 1.7M triangles); exterior shell at 5 % of the diagonal, modes
- *   hybrid and lp (all vertices), each in a fresh child process (exec of
- *   this binary) so that peak RSS (getrusage ru_maxrss) is that run's own.
- *   Stages as in bake_shell.c: topology, base self-intersection check (CGAL),
- *   normals, field (boundary strip + Barnes–Hut tree), directors (hybrid:
- *   validate-and-grow rounds incl. their exact checks), repair, validation.
- *   seconds_total = their sum (no file I/O, no mesh read). lp is skipped at a
- *   level when the previous level's lp run times 4.5 exceeds LP_BUDGET s.
+ *   (1.6k .. 1.7M triangles); exterior shell at 5 % of the diagonal, each run
+ *   in a fresh child process (exec of this binary) so that peak RSS
+ *   (getrusage ru_maxrss) is that run's own. Modes hybrid and lp: the whole
+ *   bake, meso_bake_shell with the mesh in memory (what `mesobake shell`
+ *   does but read and write the files: the mesh's checks, directors, repair,
+ *   validation, allowed thickness, stand-in levels, the file's bytes);
+ *   stage seconds from its report (seconds_field includes the normals;
+ *   seconds_normals is 0). vdb: OpenVDB's narrow-band level set of the same
+ *   mesh, 512 voxels across, 3 voxels each side, a reference for what one
+ *   volumetric pass over the surface costs. seconds_total = the run's wall
+ *   time. lp is skipped at a level when the previous level's lp run times
+ *   4.5 exceeds LP_BUDGET s.
  * accuracy: all-Lp exterior directors at 10 %, raw traces (no smoothing, no
  *   repair) of every vertex (every 4th on meshes above 3000 vertices);
  *   reference = exact summation (θ = 0) at 0.5°; sweep θ × angle tolerance.
@@ -343,10 +347,9 @@ static const char size_header[] =
     "triangles,vertices,mode,seconds_topology,seconds_check,seconds_normals,seconds_field,seconds_directors,"
     "seconds_repair,seconds_validate,seconds_total,field_evaluations,peak_rss_mb,vertices_lp,hybrid_rounds,"
     "inverted_prisms,offset_self_intersections,offset_base_intersections,thickness_ratio_min,"
-    "thickness_ratio_mean,smooth\n";
+    "thickness_ratio_mean,smooth,seconds_load,seconds_allowed,seconds_assemble\n";
 
-/* Child: one (level, mode) run, appends a row to csv. */
-static int size_one(const char* csv, int level, meso_shell_directors mode)
+static meso_mesh size_mesh(int level)
 {
     meso_mesh m;
     load(test_data("spot_low_resolution.obj"), &m);
@@ -356,36 +359,63 @@ static int size_one(const char* csv, int level, meso_shell_directors mode)
         meso_mesh_free(&m);
         m = s;
     }
+    return m;
+}
+
+/* Child: one (level, mode) run, appends a row to csv. hybrid and lp: the
+ * whole bake as `mesobake shell -i MESH --directors MODE` runs it
+ * (meso_bake_shell with the mesh in memory: the mesh's checks, directors,
+ * repair, validation, allowed thickness, the stand-in levels and the
+ * file's bytes; no file read or written). vdb: OpenVDB's narrow-band level
+ * set of the same mesh, 512 voxels across its longest side, 3 voxels each
+ * side (meso_vdb_level_set), as a reference for the cost of a volumetric
+ * pass over the same surface. */
+static int size_one(const char* csv, int level, int mode) /* mode: -1 vdb, else directors */
+{
+    meso_mesh m = size_mesh(level);
     double lo[3], hi[3];
-    const double h = 0.05 * meso_mesh_bounds(&m, lo, hi);
+    meso_bake_shell_options o = {.common = {.threads = THREADS}, .mesh = &m, .thickness_rel = 0.05,
+                                 .theta = THETA, .smooth = smooth_rounds()};
+    meso_bake_shell_report rep;
+    memset(&rep, 0, sizeof(rep));
+    meso_error err = {0};
+    const char* name = "vdb";
     const double t0 = meso_seconds();
-    shell_ctx c;
-    ctx_init(&c, &m, h, 1, 1);
-    const uint32_t nv = c.m.vertex_count;
-    float* d = malloc(sizeof(float) * 3 * (size_t)nv);
-    if (!d)
-        die("out of memory", NULL);
-    side_result s;
-    memset(&s, 0, sizeof(s));
-    side_directors(&c, 1, mode, d, &s);
-    side_repair(&c, 1, d, &s);
-    side_validate(&c, 1, d, &s);
+    if (mode < 0) {
+#if MESO_HAVE_OPENVDB
+        meso_mesh_bounds(&m, lo, hi);
+        const double ext = fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]);
+        meso_vdb_grid* g = NULL;
+        check(meso_vdb_level_set(&m, ext / 512.0, 3.0f, &g, &err), "level set", &err);
+        meso_vdb_destroy(g);
+#else
+        die("bench_shell size: built without OpenVDB", NULL);
+#endif
+    } else {
+        o.directors = (meso_shell_directors)mode;
+        name = meso_bake_directors_name(o.directors);
+        meso_bake_output* out = NULL;
+        check(meso_bake_shell(&o, &out, &rep, &err), "bake", &err);
+        meso_bake_output_free(out);
+    }
     const double total = meso_seconds() - t0;
     FILE* f = fopen(csv, "a");
     if (!f)
         die(csv, NULL);
-    fprintf(f, "%u,%u,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%llu,%.1f,%u,%u,%u,%llu,%llu,%.4f,%.4f,%d\n",
-            c.m.triangle_count, nv, meso_bake_directors_name(mode), c.t_topo, c.t_check, c.t_normals, c.t_field, s.t_dir,
-            s.t_repair, s.t_validate, total, (unsigned long long)s.ts.evaluations, peak_rss_mb(), s.hs.vertices_lp,
-            s.hs.rounds, s.rep.inverted_prisms, (unsigned long long)s.rep.offset_self_intersections,
-            (unsigned long long)s.rep.offset_base_intersections, s.rep.thickness_ratio_min,
-            s.rep.thickness_ratio_mean, smooth_rounds());
+    fprintf(f,
+            "%u,%u,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%llu,%.1f,%u,%u,%u,%llu,%llu,%.4f,%.4f,%d,%.4f,%.4f,"
+            "%.4f\n",
+            m.triangle_count, m.vertex_count, name, rep.seconds_topology, rep.seconds_check, 0.0, rep.seconds_field,
+            rep.seconds_directors, rep.seconds_repair, rep.seconds_validate, total,
+            (unsigned long long)rep.field_evaluations, peak_rss_mb(), rep.vertices_lp, rep.hybrid_rounds,
+            rep.inverted_prisms, (unsigned long long)rep.offset_self_intersections,
+            (unsigned long long)rep.offset_base_intersections, rep.thickness_ratio_min, rep.thickness_ratio_mean,
+            smooth_rounds(), rep.seconds_load, rep.seconds_allowed, rep.seconds_assemble);
     fclose(f);
-    fprintf(stderr, "  %u triangles %s: %.2f s (field %.2f, directors %.2f, repair %.2f, validate %.2f), %.0f MB\n",
-            c.m.triangle_count, meso_bake_directors_name(mode), total, c.t_field, s.t_dir, s.t_repair, s.t_validate,
-            peak_rss_mb());
-    free(d);
-    ctx_free(&c);
+    fprintf(stderr, "  %u triangles %s: %.2f s (directors %.2f, repair %.2f, validate %.2f, assemble %.2f), %.0f MB\n",
+            m.triangle_count, name, total, rep.seconds_directors, rep.seconds_repair, rep.seconds_validate,
+            rep.seconds_assemble, peak_rss_mb());
+    meso_mesh_free(&m);
     return 0;
 }
 
@@ -415,7 +445,7 @@ static void bench_size(const char* dir, int max_level)
     double lp_last = 0;
     int lp_on = 1;
     for (int level = 0; level <= max_level; ++level)
-        for (int mode = MESO_DIRECTORS_HYBRID; mode <= MESO_DIRECTORS_LP; ++mode) {
+        for (int mode = MESO_HAVE_OPENVDB ? -1 : 0; mode <= MESO_DIRECTORS_LP; ++mode) { /* -1: vdb, then hybrid, lp */
             if (mode == MESO_DIRECTORS_LP && lp_on && lp_last * 4.5 > LP_BUDGET) {
                 fprintf(stderr, "  lp skipped from level %d on: %.0f s at the previous level predicts > %.0f s\n",
                         level, lp_last, LP_BUDGET);
@@ -806,7 +836,7 @@ static int usage(void)
 int main(int argc, char** argv)
 {
     if (argc >= 5 && !strcmp(argv[1], "size-one"))
-        return size_one(argv[2], atoi(argv[3]), (meso_shell_directors)atoi(argv[4]));
+        return size_one(argv[2], atoi(argv[3]), atoi(argv[4]));
     if (argc < 3)
         return usage();
     const char* cmd = argv[1];

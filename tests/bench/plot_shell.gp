@@ -2,7 +2,8 @@
 #   gnuplot -e 'dir="tests/bench/results"' tests/bench/plot_shell.gp
 # Writes into dir:
 #   shell_size.png       bake time (and peak RSS) vs triangles, log-log, per mode,
-#                        with the issue #4 goals (2 s @ 100k, 30 s @ 1M, 2 GB)
+#                        with the stage split, OpenVDB's level set as a reference
+#                        and the goals (2 s @ 100k, 30 s @ 1M, 2 GB)
 #   shell_accuracy.png   max director error vs time for the θ × angle-tolerance sweep,
 #                        one line per tolerance (points: θ), one panel per mesh
 #   shell_thickness.png  inverted prisms + offset intersections vs thickness,
@@ -24,7 +25,7 @@ set key noenhanced
 # (a) ------------------------------------------------------------------------
 if (cairo) { set terminal pngcairo size 1400,600 enhanced font "sans,11" } else { set terminal png size 1400,600 }
 set output dir."/shell_size.png"
-set multiplot layout 1,2 title "mesobake shell (library stages) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, CLI defaults (θ 0.5, no smoothing, repair)"
+set multiplot layout 1,2 title "mesobake shell (the whole bake, mesh in memory) on spot subdivided 1:4 — exterior, 5 % of the diagonal, 2 threads, CLI defaults (θ 0.5, no smoothing, repair, stand-in levels)"
 set logscale xy
 set xrange [1000:3e6]
 set format x "10^{%L}"
@@ -35,13 +36,15 @@ set label 1 "goal 2 s @ 100k" at 1.1e5, 2 left offset 1,0
 set label 2 "goal 30 s @ 1M" at 1.1e6, 30 left offset 1,0
 H = rows(size_csv, '$3 == "hybrid"')
 L = rows(size_csv, '$3 == "lp"')
+V = rows(size_csv, '$3 == "vdb"')
 set key bottom right
 plot H using 1:11 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid: total", \
      H using 1:8 with linespoints dt 2 pt 6 lc rgb "#1f77b4" title "hybrid: directors (incl. checks of each round)", \
-     H using 1:($10 + $9) with linespoints dt 3 pt 4 lc rgb "#1f77b4" title "hybrid: repair + validation", \
-     H using 1:($7 + $6 + $5 + $4) with linespoints dt 4 pt 8 lc rgb "#1f77b4" title "hybrid: topology + base check + normals + field", \
+     H using 1:($10 + $9) with linespoints dt 3 pt 4 lc rgb "#1f77b4" title "hybrid: repair + regrow + validation", \
+     H using 1:($22 + $7 + $5 + $4) with linespoints dt 4 pt 8 lc rgb "#1f77b4" title "hybrid: mesh checks + topology + base check + normals + field", \
+     H using 1:($23 + $24) with linespoints dt 5 pt 12 lc rgb "#1f77b4" title "hybrid: allowed thickness + stand-in levels + bytes", \
      L using 1:11 with linespoints lw 2 pt 5 lc rgb "#d62728" title "lp (all vertices): total", \
-     L using 1:8 with linespoints dt 2 pt 4 lc rgb "#d62728" title "lp: directors", \
+     V using 1:11 with linespoints lw 2 dt 2 pt 9 lc rgb "#2ca02c" title "OpenVDB narrow-band level set, 512 across (reference)", \
      '+' using (1e5):(2) every ::0::0 with points pt 3 ps 3 lw 2 lc rgb "black" notitle, \
      '+' using (1e6):(30) every ::0::0 with points pt 3 ps 3 lw 2 lc rgb "black" notitle
 unset label 1
@@ -51,6 +54,7 @@ set key top left
 # lp wide underneath: both modes hold the same arrays, so the lines coincide
 plot L using 1:13 with linespoints lw 5 pt 5 ps 1.4 lc rgb "#d62728" title "lp", \
      H using 1:13 with linespoints lw 2 pt 7 lc rgb "#1f77b4" title "hybrid", \
+     V using 1:13 with linespoints lw 2 dt 2 pt 9 lc rgb "#2ca02c" title "OpenVDB level set, 512 across", \
      2048 with lines dt 2 lc rgb "black" title "goal: 2 GB"
 unset multiplot
 
