@@ -121,6 +121,8 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
         cJSON_AddNumberToObject(u, "vertices_moved", s->vertices_moved);
         cJSON_AddNumberToObject(u, "vertices_recomputed", s->vertices_recomputed);
         cJSON_AddNumberToObject(u, "radius", s->update_radius);
+        cJSON_AddNumberToObject(u, "moved_max", s->update_moved_max);
+        cJSON_AddNumberToObject(u, "levels_kept", s->update_levels_kept);
     }
 }
 
@@ -575,6 +577,50 @@ static int shell_base(const shell_bake* s, meso_mesh* base, float** pos, float**
     return !tx->source || (*pos && *normals);
 }
 
+/* Stand-ins of an update. OLD's chain simplified OLD's base mesh; the
+ * edited base mesh has the same triangles with no vertex moved farther than
+ * moved_max, and a point on a triangle moves by a convex combination of its
+ * corners' moves, so the two base meshes are within moved_max of each
+ * other both ways: each kept level is within its own bound against OLD's
+ * base plus moved_max of the new one (the triangle inequality), and its
+ * error is stored as e0 + that. The chain is kept when nothing moved
+ * farther than e0, the error every stand-in has anyway (so no kept level's
+ * error exceeds twice what it would be with e0 as its own bound), and the
+ * update asks for the levels OLD has (auto, or the same count); otherwise
+ * it is built anew as a full bake builds it. Simplifying and measuring the
+ * chain again was 0.42 s of a 0.6 s armadillo update. */
+static int chain_kept(const shell_bake* s)
+{
+    const mesoi_shell_prior* p = &s->prior;
+    return s->a.update && p->chain_count && p->moved_max <= standin_error(s) &&
+           (s->a.levels == 0 || (uint32_t)s->a.levels == p->chain_count + 2);
+}
+
+static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_error* err)
+{
+    mesoi_shell_prior* p = &s->prior;
+    memset(out, 0, sizeof *out);
+    out->chain = calloc(p->chain_count, sizeof *out->chain);
+    if (!out->chain)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "update: out of memory");
+    out->e0 = standin_error(s);
+    out->chain_count = p->chain_count;
+    out->count = 1 + p->chain_count;
+    for (uint32_t k = 0; k < p->chain_count; ++k) {
+        meso_mesh_level* c = &out->chain[k];
+        c->error = c->measured = p->chain_own[k] + p->moved_max;
+        c->mesh.triangle_count = p->chain_triangles[k];
+        for (int i = 0; i < 3; ++i) {
+            c->bbox_min[i] = p->chain_bbox[k][i];
+            c->bbox_max[i] = p->chain_bbox[k][3 + i];
+        }
+        out->chunk[k] = p->chain_chunk[k]; /* the bytes move to `out` */
+        p->chain_chunk[k].data = NULL;
+    }
+    p->chain_count = 0;
+    return MESO_OK;
+}
+
 static int standin_run(void* arg)
 {
     standin_job* j = arg;
@@ -588,7 +634,7 @@ static void standin_start(shell_bake* s)
 {
     standin_job* j = &s->chain;
     if (s->a.levels == 1 || meso_bake_thread_count(s->run.common.threads) < 2 || !MESO_HAVE_MESHOPTIMIZER ||
-        !shell_base(s, &j->base, &j->pos, &j->normals))
+        chain_kept(s) || !shell_base(s, &j->base, &j->pos, &j->normals))
         return;
     j->e0 = standin_error(s);
     j->levels = s->a.levels;
@@ -670,6 +716,8 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             r = mesoi_add_input_provenance(inputs, a->update, err);
         }
         rep = cJSON_CreateObject();
+        if (a->levels != 1 && chain_kept(s))
+            s->rep->update_levels_kept = s->prior.chain_count;
         report_json(rep, s->rep);
         mesoi_report_fixes(rep, &s->rep->fixes);
         if (a->texture)
@@ -731,7 +779,9 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         if (r == MESO_OK && a->levels != 1) {
             standin_job* j = &s->chain;
             standin_job_join(j);
-            if (j->state == 2 && j->r != MESO_OK) {
+            if (chain_kept(s)) {
+                r = chain_take(s, &standins, err);
+            } else if (j->state == 2 && j->r != MESO_OK) {
                 *err = j->err;
                 r = j->r;
             } else if (j->state == 2) {
@@ -807,6 +857,7 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         s.rep->vertices_moved = s.prior.moved;
         s.rep->vertices_recomputed = s.prior.redo_count;
         s.rep->update_radius = s.prior.radius;
+        s.rep->update_moved_max = s.prior.moved_max;
         s.rep->seconds_load += meso_seconds() - t; /* OLD's read, and the region */
         t = meso_seconds();
         if (r == MESO_OK)

@@ -424,7 +424,11 @@ typedef struct meso_bake_shell_options {
      * given, the thickness) must be the old bake's; without `thickness` the
      * old bake's thickness is kept (an edit may move the diagonal that
      * thickness_rel refers to). The report's vertices_lp / vertices_normal
-     * then count the recomputed vertices only. NULL: a full bake. */
+     * then count the recomputed vertices only. OLD's stand-in levels 2..
+     * (`levels`) are kept, each error raised by the farthest any vertex
+     * moved, when that is no more than level 1's error and the update asks
+     * for OLD's levels; otherwise they are built anew (report:
+     * update_levels_kept). NULL: a full bake. */
     const char* update;
     /* Colour function (FORMAT.md §7.2 "Shell colour"; needs `texture`); NULL: none. SPEC:
      * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a
@@ -489,6 +493,11 @@ typedef struct meso_bake_shell_report {
      * corners, shell_update.c). */
     uint32_t vertices_moved, vertices_recomputed;
     double update_radius;
+    /* With options.update: how far the farthest vertex moved, and the
+     * stand-in levels (2..) kept from OLD instead of simplified and
+     * measured again (0: built anew; see meso_bake_shell_options.levels). */
+    double update_moved_max;
+    uint32_t update_levels_kept;
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

@@ -98,6 +98,8 @@
 
 void mesoi_shell_prior_free(mesoi_shell_prior* p)
 {
+    for (uint32_t k = 0; k < p->chain_count; ++k)
+        free(p->chain_chunk[k].data);
     free(p->d);
     free(p->redo);
     free(p->moved_at);
@@ -282,6 +284,49 @@ static meso_result read_whole(meso_file* f, int32_t idx, void** data, size_t* si
     return meso_file_read_chunk(f, (uint32_t)idx, *data, *size, err);
 }
 
+/* OLD's stand-in chain: levels 2.. of object `id` when its level 1 is the
+ * base mesh and each of them a raw MESH (what mesobake shell writes). Each
+ * one's own bound against OLD's base mesh, from the stored errors: level L
+ * stores f32_up(e0 + c_L) and level 1 f32_up(e0), so c_L <= err_L - err_1 +
+ * ulp(err_1). A file that has no such chain gives chain_count 0. */
+static meso_result read_chain(meso_file* f, uint32_t id, mesoi_shell_prior* out, meso_error* err)
+{
+    meso_level_info lv[MESO_BAKE_SHELL_MAX_LEVELS + 1];
+    uint32_t count = 0;
+    meso_result r = meso_file_levels(f, id, lv, MESO_BAKE_SHELL_MAX_LEVELS + 1, &count, err);
+    if (r != MESO_OK || count < 3 || count > MESO_BAKE_SHELL_MAX_LEVELS || lv[1].rec.form != MESO_LEVEL_MESH)
+        return r;
+    const double e1 = lv[1].rec.error, ulp1 = (double)nextafterf(lv[1].rec.error, INFINITY) - e1;
+    for (uint32_t L = 2; r == MESO_OK && L < count; ++L) {
+        const int32_t ci = meso_file_find(f, MESO_CHUNK_MESH, id, (uint16_t)L);
+        const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
+        if (!c || c->encoding != MESO_ENCODING_RAW || lv[L].rec.form != MESO_LEVEL_MESH)
+            break; /* not a chain this bake wrote: build a new one */
+        meso_mesh_chunk* mc = &out->chain_chunk[L - 2];
+        size_t size = 0;
+        if ((r = read_whole(f, ci, &mc->data, &size, err)) != MESO_OK)
+            break;
+        mc->size = size;
+        mc->decoded_size = c->decoded_size;
+        mc->encoding = c->encoding;
+        ++out->chain_count;
+        meso_mesh_view view;
+        if ((r = meso_mesh_parse(mc->data, mc->size, &view, err)) != MESO_OK)
+            break;
+        out->chain_triangles[L - 2] = view.layout.index_count / 3;
+        out->chain_own[L - 2] = (double)lv[L].rec.error - e1 + ulp1;
+        memcpy(out->chain_bbox[L - 2], lv[L].rec.bbox_min, 3 * sizeof(float));
+        memcpy(out->chain_bbox[L - 2] + 3, lv[L].rec.bbox_max, 3 * sizeof(float));
+    }
+    if (r != MESO_OK || out->chain_count != count - 2) { /* all of it or none */
+        for (uint32_t k = 0; k < out->chain_count; ++k)
+            free(out->chain_chunk[k].data);
+        memset(out->chain_chunk, 0, sizeof(out->chain_chunk));
+        out->chain_count = 0;
+    }
+    return r;
+}
+
 meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_options* a, double* h_io,
                                    const meso_mesh* m, const uint32_t* out_source, const uint32_t* out_indices,
                                    uint32_t nv_out, mesoi_shell_prior* out, meso_error* err)
@@ -386,6 +431,12 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
         for (uint32_t v = 0; v < nv; ++v) {
             moved[v] = memcmp(old_pos + 3 * (size_t)v, m->positions + 3 * (size_t)v, 3 * sizeof(float)) != 0;
             out->moved += moved[v];
+            double q = 0;
+            for (int k = 0; moved[v] && k < 3; ++k) {
+                const double e = (double)m->positions[3 * (size_t)v + k] - old_pos[3 * (size_t)v + k];
+                q += e * e;
+            }
+            out->moved_max = fmax(out->moved_max, nextafter(sqrt(q), INFINITY));
         }
         out->radius = 3.0 * h + longest_edge(m);
         if (out->moved)
@@ -393,6 +444,8 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
         for (uint32_t v = 0; v < nv; ++v)
             out->redo_count += out->redo[v];
     }
+    if (r == MESO_OK)
+        r = read_chain(f, id, out, err);
     free(old_pos);
     free(mesh_data);
     free(sdir_data);

@@ -10,6 +10,7 @@
 #include <stdint.h>
 
 #include "bake_internal.h"
+#include "mesh_chunk.h"
 #include "shell_checker.h"
 #include "shell_validate.h"
 
@@ -22,6 +23,15 @@ typedef struct mesoi_shell_prior {
     uint32_t moved;        /* vertices whose position differs from OLD's */
     uint32_t redo_count;   /* vertices recomputed */
     double radius;         /* the influence radius the region was grown by (mesh units) */
+    double moved_max;      /* the farthest any vertex moved (mesh units, rounded up) */
+    /* OLD's stand-in chain (its levels 2.., the simplified base meshes:
+     * standin_levels.h), which an update may keep (bake_shell.c,
+     * "Stand-ins of an update"); chain_count 0 when OLD has none. */
+    uint32_t chain_count;
+    meso_mesh_chunk chain_chunk[MESO_BAKE_SHELL_MAX_LEVELS]; /* the MESH chunks as stored */
+    double chain_own[MESO_BAKE_SHELL_MAX_LEVELS];  /* each one's bound against OLD's base mesh */
+    float chain_bbox[MESO_BAKE_SHELL_MAX_LEVELS][6];
+    uint32_t chain_triangles[MESO_BAKE_SHELL_MAX_LEVELS];
 } mesoi_shell_prior;
 
 /* Read OLD (`path`: one shell object, validated in full, written without

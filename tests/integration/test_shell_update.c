@@ -22,7 +22,9 @@
  *    (E3114, its test limited to the moved faces);
  *  - an update whose rounds leave a bad face with a kept corner (spot at 2 %,
  *    a 10 % edit: invalid before issue 15's growth, the full re-bake valid)
- *    grows its region and ends valid.
+ *    grows its region and ends valid;
+ *  - an update keeps OLD's stand-in levels when no vertex moved farther than
+ *    e0, and their stored errors hold for the edited mesh (check_kept_levels).
  * Exterior and interior shells. */
 #include "test_util.h"
 
@@ -33,6 +35,7 @@
 #include "meso_bake.h"
 #include "meso_file.h"
 #include "shell_validate.h"
+#include "surface_distance.h"
 
 #ifndef DENT_N
 #define DENT_N 100
@@ -429,6 +432,130 @@ static void check_growth(const char* dir)
     meso_mesh_free(&m);
 }
 
+/* The levels of the shell in `bytes`: records (levels) and, for each stand-in
+ * level 2.., its MESH chunk's stored bytes (malloc'd, in chunk[L]). */
+static uint32_t file_levels(const void* bytes, size_t size, meso_level_info* lv, void** chunk, size_t* chunk_size)
+{
+    meso_file* f = NULL;
+    meso_error err = {0};
+    assert(meso_file_open_memory(bytes, size, NULL, &f, &err) == MESO_OK);
+    uint32_t count = 0;
+    assert(meso_file_levels(f, 1, lv, MESO_BAKE_SHELL_MAX_LEVELS, &count, &err) == MESO_OK);
+    for (uint32_t L = 2; L < count; ++L) {
+        const int32_t ci = meso_file_find(f, MESO_CHUNK_MESH, 1, (uint16_t)L);
+        assert(ci >= 0);
+        const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
+        assert(c->lod == L && c->encoding == MESO_ENCODING_RAW);
+        chunk_size[L] = (size_t)c->stored_size;
+        chunk[L] = malloc(chunk_size[L]);
+        assert(meso_file_read_chunk(f, (uint32_t)ci, chunk[L], chunk_size[L], &err) == MESO_OK);
+    }
+    meso_file_close(f);
+    return count;
+}
+
+static void* output_bytes(const meso_bake_shell_options* o, meso_bake_shell_report* rep, size_t* size)
+{
+    meso_bake_output* out = NULL;
+    meso_error err = {0};
+    assert(meso_bake_shell(o, &out, rep, &err) == MESO_OK);
+    *size = 0;
+    meso_bake_output_copy(out, NULL, 0, size);
+    assert(*size > 0);
+    void* bytes = malloc(*size);
+    assert(meso_bake_output_copy(out, bytes, *size, size) == MESO_OK);
+    meso_bake_output_free(out);
+    return bytes;
+}
+
+/* An update keeps OLD's stand-in chain (levels 2..) when no vertex moved
+ * farther than e0 (bake_shell.c, "Stand-ins of an update"): the same MESH
+ * bytes, each error raised by how far the farthest vertex moved, and that
+ * error still holds for the edited mesh: the two-sided distance between
+ * each kept level and the edited base mesh, sampled densely (every sample
+ * a true distance, so their largest is a lower bound of the true one), is
+ * within its stored error minus e0. An edit that moves a vertex farther
+ * builds the chain anew. */
+static void check_kept_levels(const char* dir)
+{
+    meso_mesh m = load("torus.obj");
+    const uint32_t nv = m.vertex_count;
+    char old_path[4200];
+    meso_bake_shell_options o = meso_bake_shell_defaults();
+    o.mesh = &m;
+    o.thickness_rel = 0.03;
+    baked old = bake_old(&o, &m, dir, "levels_old.meso", old_path, sizeof(old_path));
+    const double h = o.thickness;
+    FILE* fp = fopen(old_path, "rb");
+    assert(fp && fseek(fp, 0, SEEK_END) == 0);
+    const size_t old_size = (size_t)ftell(fp);
+    void* old_bytes = malloc(old_size);
+    assert(old_bytes && fseek(fp, 0, SEEK_SET) == 0 && fread(old_bytes, 1, old_size, fp) == old_size);
+    fclose(fp);
+    meso_level_info olv[MESO_BAKE_SHELL_MAX_LEVELS];
+    void* ochunk[MESO_BAKE_SHELL_MAX_LEVELS] = {0};
+    size_t osize[MESO_BAKE_SHELL_MAX_LEVELS] = {0};
+    const uint32_t ocount = file_levels(old_bytes, old_size, olv, ochunk, osize);
+    assert(ocount >= 4); /* level 0, the base mesh, two simplified meshes or more */
+
+    for (int big = 0; big < 2; ++big) {
+        /* A bump of 0.6 h (within e0 = h: kept) or 1.3 h (not). */
+        float* pos = NULL;
+        meso_mesh e = edited_copy(&m, &pos);
+        mesh_bump(pos, nv, nv / 3, nv / 50, big ? 1.3 * h : 0.6 * h);
+        double moved = 0;
+        for (uint32_t v = 0; v < nv; ++v) {
+            double q = 0;
+            for (int k = 0; k < 3; ++k)
+                q += ((double)pos[3 * v + k] - m.positions[3 * v + k]) * ((double)pos[3 * v + k] - m.positions[3 * v + k]);
+            moved = fmax(moved, sqrt(q));
+        }
+        meso_bake_shell_options u = o;
+        u.mesh = &e;
+        u.update = old_path;
+        meso_bake_shell_report rep;
+        size_t size = 0;
+        void* bytes = output_bytes(&u, &rep, &size);
+        assert(rep.update_moved_max >= moved && rep.update_moved_max <= moved * (1 + 1e-12));
+        meso_level_info lv[MESO_BAKE_SHELL_MAX_LEVELS];
+        void* chunk[MESO_BAKE_SHELL_MAX_LEVELS] = {0};
+        size_t csize[MESO_BAKE_SHELL_MAX_LEVELS] = {0};
+        const uint32_t count = file_levels(bytes, size, lv, chunk, csize);
+        printf("levels of an update, bump %.2f h (farthest move %.4g, e0 %.4g): %u of %u kept\n", big ? 1.3 : 0.6,
+               moved, (double)lv[1].rec.error, rep.update_levels_kept, ocount - 2);
+        assert(rep.update_levels_kept == (big ? 0 : ocount - 2));
+        const double e1 = lv[1].rec.error, ulp1 = (double)nextafterf(lv[1].rec.error, INFINITY) - e1;
+        for (uint32_t L = 2; L < count; ++L) {
+            meso_mesh_view view;
+            meso_error err = {0};
+            assert(meso_mesh_parse(chunk[L], csize[L], &view, &err) == MESO_OK);
+            const meso_mesh sm = {.vertex_count = view.layout.vertex_count,
+                                  .triangle_count = view.layout.index_count / 3,
+                                  .positions = (float*)view.positions,
+                                  .indices = (uint32_t*)view.indices};
+            double bound = 0, radius = 0;
+            assert(meso_surface_distance(&sm, &e, 0.05 * h, 2, &bound, &radius, &err) == MESO_OK);
+            const double sampled = bound - radius, own = (double)lv[L].rec.error - e1 + ulp1;
+            if (!big) {
+                assert(csize[L] == osize[L] && memcmp(chunk[L], ochunk[L], csize[L]) == 0);
+                /* each kept level's own bound, raised by the farthest move */
+                assert(own >= (double)olv[L].rec.error - olv[1].rec.error + moved);
+            }
+            printf("  level %u: sampled distance to the edited mesh %.4g <= stored error - e0 %.4g\n", L, sampled,
+                   own);
+            assert(sampled <= own);
+            free(chunk[L]);
+        }
+        free(bytes);
+        free(pos);
+    }
+    for (uint32_t L = 2; L < ocount; ++L)
+        free(ochunk[L]);
+    free(old_bytes);
+    baked_free(&old);
+    meso_mesh_free(&m);
+}
+
 int main(void)
 {
     char dir[4096];
@@ -439,6 +566,7 @@ int main(void)
     check_kind("blub_fish_low_resolution.obj", MESO_SHELL_EXTERIOR, MESO_DIRECTORS_HYBRID, 0.03, dir);
     check_defects(dir);
     check_growth(dir);
+    check_kept_levels(dir);
 
     /* OLD that is not one shell: a mesh bake (E3116). */
     char path[4200];
