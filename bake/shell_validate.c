@@ -206,9 +206,26 @@ meso_result meso_shell_thickness_ratio(const meso_mesh* base, const float* direc
     return MESO_OK;
 }
 
+static meso_result validate(const meso_mesh* base, const float* directors, const float* requested_thickness,
+                            double thickness, int sign, int base_checked, uint8_t* inverted_per_prism,
+                            meso_shell_report* out, meso_error* err);
+
 meso_result meso_shell_validate(const meso_mesh* base, const float* directors, const float* requested_thickness,
                                 double thickness, int sign, uint8_t* inverted_per_prism, meso_shell_report* out,
                                 meso_error* err)
+{
+    return validate(base, directors, requested_thickness, thickness, sign, 0, inverted_per_prism, out, err);
+}
+
+meso_result mesoi_shell_validate_checked_base(const meso_mesh* base, const float* directors, double thickness,
+                                              int sign, meso_shell_report* out, meso_error* err)
+{
+    return validate(base, directors, NULL, thickness, sign, 1, NULL, out, err);
+}
+
+static meso_result validate(const meso_mesh* base, const float* directors, const float* requested_thickness,
+                            double thickness, int sign, int base_checked, uint8_t* inverted_per_prism,
+                            meso_shell_report* out, meso_error* err)
 {
     if (!out)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "shell: NULL report");
@@ -238,7 +255,9 @@ meso_result meso_shell_validate(const meso_mesh* base, const float* directors, c
     /* The three counts are independent: one thread each (OpenMP sections,
      * all cores; each count is sequential and exact, so the result does not
      * depend on the thread count). The first failure in this order is
-     * returned. */
+     * returned. base_checked: the caller has counted the base's own (the
+     * shell bake refuses a base that intersects itself before any work):
+     * two sections, which two cores run at once. */
     meso_cgal_intersection_count c[3];
     meso_result rs[3];
     meso_error es[3];
@@ -251,7 +270,7 @@ meso_result meso_shell_validate(const meso_mesh* base, const float* directors, c
 #ifdef _OPENMP
 #pragma omp section
 #endif
-        rs[0] = meso_cgal_self_intersections(xyz, nv, base->indices, nt, &c[0], &es[0]);
+        rs[0] = base_checked ? MESO_OK : meso_cgal_self_intersections(xyz, nv, base->indices, nt, &c[0], &es[0]);
 #ifdef _OPENMP
 #pragma omp section
 #endif
@@ -264,9 +283,11 @@ meso_result meso_shell_validate(const meso_mesh* base, const float* directors, c
     for (int k = 0; k < 3 && r == MESO_OK; ++k)
         if ((r = rs[k]) != MESO_OK && err)
             *err = es[k];
-    if (r == MESO_OK) {
+    if (r == MESO_OK && !base_checked) {
         out->base_self_intersections = c[0].pairs;
         out->degenerate_base_triangles = c[0].degenerate_a;
+    }
+    if (r == MESO_OK) {
         out->offset_self_intersections = c[1].pairs;
         out->degenerate_offset_triangles = c[1].degenerate_a;
         out->offset_base_intersections = c[2].pairs;
@@ -274,6 +295,7 @@ meso_result meso_shell_validate(const meso_mesh* base, const float* directors, c
     free(xyz);
     return r;
 #else
+    (void)base_checked;
     return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0,
                           "shell: built without CGAL, the intersection counts are not available");
 #endif

@@ -146,6 +146,12 @@ meso_result meso_shell_validate(const meso_mesh* base, const float* directors, c
                                 double thickness, int sign, uint8_t* inverted_per_prism, meso_shell_report* out,
                                 meso_error* err);
 
+/* meso_shell_validate for a base the caller has already found free of
+ * self-intersections (bake_shell.c's require_shellable): the same counts
+ * but base_self_intersections, left UINT64_MAX (not counted here). */
+meso_result mesoi_shell_validate_checked_base(const meso_mesh* base, const float* directors, double thickness,
+                                              int sign, meso_shell_report* out, meso_error* err);
+
 #ifdef __cplusplus
 }
 #endif
