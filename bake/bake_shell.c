@@ -123,6 +123,7 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
         cJSON_AddNumberToObject(u, "radius", s->update_radius);
         cJSON_AddNumberToObject(u, "moved_max", s->update_moved_max);
         cJSON_AddNumberToObject(u, "levels_kept", s->update_levels_kept);
+        cJSON_AddNumberToObject(u, "chain_moved", s->update_chain_moved);
     }
 }
 
@@ -173,10 +174,9 @@ static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint
     return out;
 }
 
-/* One shell bake's buffers, freed together by shell_free. */
 /* The stand-in chain (the simplified base meshes of levels 2..) depends on
  * the base mesh and e0 only, and the exact validation that follows the
- * directors runs on one core: with more than one thread the chain is built
+ * directors runs its three counts on two cores at most, unevenly: with more than one thread the chain is built
  * on a thread of its own from the moment the directors are final, and
  * joined in assemble(), with the same bytes. Starting it with the normals
  * (sampling its errors for the requested thickness, as e0 is not known
@@ -186,7 +186,7 @@ static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint
 typedef struct standin_job {
     meso_mesh base;         /* the base mesh as its MESH chunk has it (shell_base) */
     float *pos, *normals;   /* base's own arrays when seam vertices are added */
-    double e0;              /* the e0 bound the chain is sampled for */
+    double e0;              /* level 1's error (standin_error) */
     int levels, threads;
     mesoi_standin_levels out;
     meso_error err;
@@ -197,6 +197,7 @@ typedef struct standin_job {
 #endif
 } standin_job;
 
+/* One shell bake's buffers, freed together by shell_free. */
 typedef struct shell_bake {
     meso_bake_shell_options a; /* the options, defaults filled in */
     mesoi_bake_run run;
@@ -410,8 +411,11 @@ static meso_result validate(shell_bake* s, meso_error* err)
         r = s->prior.redo ? mesoi_shell_update_validate(&s->m, s->d, s->h, sign, &s->prior, s->run.common.threads,
                                                         &val, &done, err)
                           : MESO_OK;
+        /* A full bake has counted the base's self-intersections (none) in
+         * require_shellable: validation need not count them again. */
         if (r == MESO_OK && !done)
-            r = meso_shell_validate(&s->m, s->d, NULL, s->h, sign, NULL, &val, err);
+            r = a->update ? meso_shell_validate(&s->m, s->d, NULL, s->h, sign, NULL, &val, err)
+                          : mesoi_shell_validate_checked_base(&s->m, s->d, s->h, sign, &val, err);
     }
     meso_bake_shell_report* rep = s->rep;
     rep->prisms = val.prisms;
@@ -583,17 +587,18 @@ static int shell_base(const shell_bake* s, meso_mesh* base, float** pos, float**
  * corners' moves, so the two base meshes are within moved_max of each
  * other both ways: each kept level is within its own bound against OLD's
  * base plus moved_max of the new one (the triangle inequality), and its
- * error is stored as e0 + that. The chain is kept when nothing moved
- * farther than e0, the error every stand-in has anyway (so no kept level's
- * error exceeds twice what it would be with e0 as its own bound), and the
- * update asks for the levels OLD has (auto, or the same count); otherwise
- * it is built anew as a full bake builds it. Simplifying and measuring the
- * chain again was 0.42 s of a 0.6 s armadillo update. */
+ * error is stored as e0 + that. The chain is kept while its base mesh has
+ * moved no farther than e0 in all since it was simplified (over a series
+ * of updates: the report's update.chain_moved), e0 being the error every
+ * stand-in has anyway, and when the update asks for the levels OLD was
+ * baked with (META.parameters.levels); otherwise it is built anew, as a
+ * full bake builds it. Simplifying and measuring the chain again was 0.42
+ * s of a 0.6 s armadillo update. */
 static int chain_kept(const shell_bake* s)
 {
     const mesoi_shell_prior* p = &s->prior;
-    return s->a.update && p->chain_count && p->moved_max <= standin_error(s) &&
-           (s->a.levels == 0 || (uint32_t)s->a.levels == p->chain_count + 2);
+    return s->a.update && p->chain_count && p->chain_levels == s->a.levels &&
+           p->chain_moved + p->moved_max <= standin_error(s);
 }
 
 static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_error* err)
@@ -704,6 +709,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         cJSON_AddNumberToObject(params, "theta", a->theta);
         cJSON_AddNumberToObject(params, "angle_tol_deg", a->angle_tol_deg);
         cJSON_AddNumberToObject(params, "smooth", (double)a->smooth);
+        cJSON_AddNumberToObject(params, "levels", (double)a->levels);
         cJSON_AddBoolToObject(params, "repair", !a->no_repair);
         if (a->texture)
             mesoi_shell_texture_json(params, a, tx, 0);
@@ -716,8 +722,10 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             r = mesoi_add_input_provenance(inputs, a->update, err);
         }
         rep = cJSON_CreateObject();
-        if (a->levels != 1 && chain_kept(s))
+        if (a->levels != 1 && chain_kept(s)) {
             s->rep->update_levels_kept = s->prior.chain_count;
+            s->rep->update_chain_moved = s->prior.chain_moved + s->prior.moved_max;
+        }
         report_json(rep, s->rep);
         mesoi_report_fixes(rep, &s->rep->fixes);
         if (a->texture)

@@ -331,3 +331,12 @@ int meso_box_grid_query(meso_box_grid* g, const double lo[3], const double hi[3]
     }
     return 1;
 }
+
+size_t meso_box_grid_linked(const meso_box_grid* g)
+{
+    size_t n = 0;
+    for (size_t s = 0; s < g->slots; ++s)
+        for (uint32_t e = g->keys[s] != UINT64_MAX ? g->head[s] : 0; e; e = g->pool[e - 1].next)
+            ++n;
+    return n;
+}

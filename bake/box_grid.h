@@ -30,4 +30,8 @@ int meso_box_grid_set(meso_box_grid* g, uint32_t i, const double* lo, const doub
 int meso_box_grid_query(meso_box_grid* g, const double lo[3], const double hi[3], uint32_t** out, size_t* n,
                         size_t* cap);
 
+/* Tests only: the entries linked in all cells (each present item's, once
+ * per cell its box covers at its level; nothing else). */
+size_t meso_box_grid_linked(const meso_box_grid* g);
+
 #endif /* MESO_BOX_GRID_H */

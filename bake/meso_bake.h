@@ -426,9 +426,9 @@ typedef struct meso_bake_shell_options {
      * thickness_rel refers to). The report's vertices_lp / vertices_normal
      * then count the recomputed vertices only. OLD's stand-in levels 2..
      * (`levels`) are kept, each error raised by the farthest any vertex
-     * moved, when that is no more than level 1's error and the update asks
-     * for OLD's levels; otherwise they are built anew (report:
-     * update_levels_kept). NULL: a full bake. */
+     * moved, while their base mesh has moved no farther than level 1's
+     * error over this and earlier updates and `levels` is OLD's; otherwise
+     * they are built anew (report: update_levels_kept). NULL: a full bake. */
     const char* update;
     /* Colour function (FORMAT.md §7.2 "Shell colour"; needs `texture`); NULL: none. SPEC:
      * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a
@@ -498,6 +498,8 @@ typedef struct meso_bake_shell_report {
      * measured again (0: built anew; see meso_bake_shell_options.levels). */
     double update_moved_max;
     uint32_t update_levels_kept;
+    double update_chain_moved; /* kept levels: how far their base mesh has moved in all, over this and
+                                  earlier updates, since they were simplified */
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

@@ -86,6 +86,7 @@
  */
 #include "shell_update.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -304,8 +305,11 @@ static meso_result read_chain(meso_file* f, uint32_t id, mesoi_shell_prior* out,
             break; /* not a chain this bake wrote: build a new one */
         meso_mesh_chunk* mc = &out->chain_chunk[L - 2];
         size_t size = 0;
-        if ((r = read_whole(f, ci, &mc->data, &size, err)) != MESO_OK)
+        if ((r = read_whole(f, ci, &mc->data, &size, err)) != MESO_OK) {
+            free(mc->data);
+            mc->data = NULL;
             break;
+        }
         mc->size = size;
         mc->decoded_size = c->decoded_size;
         mc->encoding = c->encoding;
@@ -436,7 +440,8 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
                 const double e = (double)m->positions[3 * (size_t)v + k] - old_pos[3 * (size_t)v + k];
                 q += e * e;
             }
-            out->moved_max = fmax(out->moved_max, nextafter(sqrt(q), INFINITY));
+            if (moved[v]) /* rounded up past the few roundings of the sum and root */
+                out->moved_max = fmax(out->moved_max, sqrt(q) * (1.0 + 8.0 * DBL_EPSILON));
         }
         out->radius = 3.0 * h + longest_edge(m);
         if (out->moved)
@@ -444,8 +449,15 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
         for (uint32_t v = 0; v < nv; ++v)
             out->redo_count += out->redo[v];
     }
-    if (r == MESO_OK)
+    if (r == MESO_OK) {
+        const cJSON* params = cJSON_GetObjectItemCaseSensitive(meta, "parameters");
+        const double lv = param_number(params, "levels");
+        out->chain_levels = isfinite(lv) ? (int)lv : -1;
+        const cJSON* u = cJSON_GetObjectItemCaseSensitive(rep, "update");
+        const cJSON* cm = cJSON_GetObjectItemCaseSensitive(u, "chain_moved");
+        out->chain_moved = cJSON_IsNumber(cm) && cm->valuedouble > 0 ? cm->valuedouble : 0.0;
         r = read_chain(f, id, out, err);
+    }
     free(old_pos);
     free(mesh_data);
     free(sdir_data);

@@ -28,6 +28,9 @@ typedef struct mesoi_shell_prior {
      * standin_levels.h), which an update may keep (bake_shell.c,
      * "Stand-ins of an update"); chain_count 0 when OLD has none. */
     uint32_t chain_count;
+    int chain_levels;      /* OLD's `levels` option (META.parameters.levels), -1 when not recorded */
+    double chain_moved;    /* how far OLD's chain's base mesh had moved since it was simplified
+                              (OLD's report: update.chain_moved, 0 when absent) */
     meso_mesh_chunk chain_chunk[MESO_BAKE_SHELL_MAX_LEVELS]; /* the MESH chunks as stored */
     double chain_own[MESO_BAKE_SHELL_MAX_LEVELS];  /* each one's bound against OLD's base mesh */
     float chain_bbox[MESO_BAKE_SHELL_MAX_LEVELS][6];

@@ -36,11 +36,7 @@ typedef struct mesoi_standin_levels {
 /* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base
  * mesh and its simplified chain), N >= 2 = at most N levels in all, level
  * 0 included (2: the base mesh only). Built without meshoptimizer, the base
- * mesh is the only stand-in. e0 also sets how densely the chain's errors
- * are sampled (standin_levels.c); a caller that knows only an upper bound
- * of e0 when it builds the chain passes the bound and sets out->e0 to the
- * final e0 before appending (bake_shell.c: the chain is built while the
- * directors are traced). */
+ * mesh is the only stand-in. */
 meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int levels, int threads,
                                        mesoi_standin_levels* out, meso_error* err);
 

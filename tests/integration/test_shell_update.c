@@ -475,7 +475,9 @@ static void* output_bytes(const meso_bake_shell_options* o, meso_bake_shell_repo
  * each kept level and the edited base mesh, sampled densely (every sample
  * a true distance, so their largest is a lower bound of the true one), is
  * within its stored error minus e0. An edit that moves a vertex farther
- * builds the chain anew. */
+ * builds the chain anew, and so does one that, added to the earlier
+ * updates' moves since the chain was simplified, moves it farther. The
+ * bytes are the same with 1 and 2 threads. */
 static void check_kept_levels(const char* dir)
 {
     meso_mesh m = load("torus.obj");
@@ -498,11 +500,30 @@ static void check_kept_levels(const char* dir)
     const uint32_t ocount = file_levels(old_bytes, old_size, olv, ochunk, osize);
     assert(ocount >= 4); /* level 0, the base mesh, two simplified meshes or more */
 
-    for (int big = 0; big < 2; ++big) {
-        /* A bump of 0.6 h (within e0 = h: kept) or 1.3 h (not). */
+    /* The bytes do not depend on the thread count (the chain is built on a
+     * thread of its own with two). */
+    meso_bake_shell_options one = o;
+    one.common.threads = 1;
+    meso_bake_shell_report rep1;
+    size_t size1 = 0;
+    void* bytes1 = output_bytes(&one, &rep1, &size1);
+    one.common.threads = 2;
+    size_t size2 = 0;
+    void* bytes2 = output_bytes(&one, &rep1, &size2);
+    assert(size1 == size2 && memcmp(bytes1, bytes2, size1) == 0);
+    free(bytes1), free(bytes2);
+
+    char upd_path[4200];
+    snprintf(upd_path, sizeof(upd_path), "%s/levels_upd.meso", dir);
+    for (int big = 0; big < 3; ++big) {
+        /* A bump of 0.6 h (within e0 = h: kept), of 1.3 h (not), and a
+         * second 0.6 h bump on top of the first update's (1.2 h in all since
+         * the chain was simplified: not kept). */
         float* pos = NULL;
         meso_mesh e = edited_copy(&m, &pos);
-        mesh_bump(pos, nv, nv / 3, nv / 50, big ? 1.3 * h : 0.6 * h);
+        mesh_bump(pos, nv, nv / 3, nv / 50, big == 1 ? 1.3 * h : 0.6 * h);
+        if (big == 2)
+            mesh_bump(pos, nv, nv / 3, nv / 50, 0.6 * h);
         double moved = 0;
         for (uint32_t v = 0; v < nv; ++v) {
             double q = 0;
@@ -512,17 +533,36 @@ static void check_kept_levels(const char* dir)
         }
         meso_bake_shell_options u = o;
         u.mesh = &e;
-        u.update = old_path;
+        u.update = big == 2 ? upd_path : old_path;
         meso_bake_shell_report rep;
         size_t size = 0;
         void* bytes = output_bytes(&u, &rep, &size);
+        if (big == 0) { /* the next round's OLD */
+            FILE* w = fopen(upd_path, "wb");
+            assert(w && fwrite(bytes, 1, size, w) == size && fclose(w) == 0);
+        }
+        if (big == 2) { /* moved against the first update's mesh */
+            float* first = malloc(sizeof(float) * 3 * nv);
+            memcpy(first, m.positions, sizeof(float) * 3 * nv);
+            mesh_bump(first, nv, nv / 3, nv / 50, 0.6 * h);
+            moved = 0;
+            for (uint32_t v = 0; v < nv; ++v) {
+                double q = 0;
+                for (int k = 0; k < 3; ++k)
+                    q += ((double)pos[3 * v + k] - first[3 * v + k]) * ((double)pos[3 * v + k] - first[3 * v + k]);
+                moved = fmax(moved, sqrt(q));
+            }
+            free(first);
+        }
         assert(rep.update_moved_max >= moved && rep.update_moved_max <= moved * (1 + 1e-12));
+        assert(big || rep.update_chain_moved == rep.update_moved_max);
         meso_level_info lv[MESO_BAKE_SHELL_MAX_LEVELS];
         void* chunk[MESO_BAKE_SHELL_MAX_LEVELS] = {0};
         size_t csize[MESO_BAKE_SHELL_MAX_LEVELS] = {0};
         const uint32_t count = file_levels(bytes, size, lv, chunk, csize);
-        printf("levels of an update, bump %.2f h (farthest move %.4g, e0 %.4g): %u of %u kept\n", big ? 1.3 : 0.6,
-               moved, (double)lv[1].rec.error, rep.update_levels_kept, ocount - 2);
+        printf("levels of an update, %s (farthest move %.4g, e0 %.4g): %u of %u kept\n",
+               big == 0 ? "bump 0.6 h" : big == 1 ? "bump 1.3 h" : "a second 0.6 h bump on the first update", moved,
+               (double)lv[1].rec.error, rep.update_levels_kept, ocount - 2);
         assert(rep.update_levels_kept == (big ? 0 : ocount - 2));
         const double e1 = lv[1].rec.error, ulp1 = (double)nextafterf(lv[1].rec.error, INFINITY) - e1;
         for (uint32_t L = 2; L < count; ++L) {
@@ -536,7 +576,7 @@ static void check_kept_levels(const char* dir)
             double bound = 0, radius = 0;
             assert(meso_surface_distance(&sm, &e, 0.05 * h, 2, &bound, &radius, &err) == MESO_OK);
             const double sampled = bound - radius, own = (double)lv[L].rec.error - e1 + ulp1;
-            if (!big) {
+            if (big == 0) {
                 assert(csize[L] == osize[L] && memcmp(chunk[L], ochunk[L], csize[L]) == 0);
                 /* each kept level's own bound, raised by the farthest move */
                 assert(own >= (double)olv[L].rec.error - olv[1].rec.error + moved);

@@ -2,7 +2,9 @@
  * force: random boxes of mixed sizes (a few spanning many cells, some
  * touching exactly, some degenerate to points), moved, removed and queried
  * over many rounds, past several pool rebuilds; every query's answer is
- * exactly the set of present items whose boxes meet the query box (closed).
+ * exactly the set of present items whose boxes meet the query box (closed),
+ * and after each round the grid links exactly the entries a fresh grid of
+ * the same boxes links (moved boxes' old entries are unlinked).
  */
 #include "test_util.h"
 
@@ -95,6 +97,15 @@ int main(void)
             ++checked;
             hits += (long)n;
         }
+        /* Moving a box unlinks its old entries: the grid links exactly the
+         * entries of a fresh grid holding the same boxes. */
+        meso_box_grid* fresh = meso_box_grid_create(N, 0.5);
+        assert(fresh);
+        for (uint32_t i = 0; i < N; ++i)
+            if (present[i])
+                assert(meso_box_grid_set(fresh, i, box + 6 * i, box + 6 * i + 3));
+        assert(meso_box_grid_linked(g) == meso_box_grid_linked(fresh));
+        meso_box_grid_destroy(fresh);
     }
     printf("box_grid: %ld queries, %ld items reported, all equal to brute force\n", checked, hits);
     assert(hits > checked); /* the queries did meet boxes */
