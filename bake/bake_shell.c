@@ -176,9 +176,9 @@ static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint
 
 /* The stand-in chain (the simplified base meshes of levels 2..) depends on
  * the base mesh and e0 only, and the exact validation that follows the
- * directors runs its three counts on two cores at most, unevenly: with more than one thread the chain is built
- * on a thread of its own from the moment the directors are final, and
- * joined in assemble(), with the same bytes. Starting it with the normals
+ * directors keeps two cores busy only part of the time: with more than one
+ * thread the chain is built on a thread of its own from the moment the
+ * directors are final, and joined in assemble(), with the same bytes. Starting it with the normals
  * (sampling its errors for the requested thickness, as e0 is not known
  * before the directors are) was no faster on 106k triangles (3.29 against
  * 3.45 s, medians of 3, on a noisy machine) and changed the bytes of
@@ -214,7 +214,7 @@ typedef struct shell_bake {
     meso_field_surface fs;
     meso_lp_field* field;
     mesoi_shell_prior prior; /* --update: the old bake's directors and the region to redo */
-    standin_job chain;       /* levels 2..: built while the directors are traced */
+    standin_job chain;       /* levels 2..: built beside validation */
 } shell_bake;
 
 static void standin_job_join(standin_job* j)
@@ -506,21 +506,8 @@ static meso_result color_prepare(shell_bake* s, int from_mesh, meso_error* err)
     return r;
 }
 
-/* The file: base mesh with the normals the directors started from (and the
- * texture coordinates of the texture function), SDIR, STHK, the texture
- * function and its distance map. Everything per vertex is written for the
- * output vertices: the mesh's, plus the copies split off at uv seams. */
-/* The error of the base mesh drawn in the shell's place (FORMAT.md §7.10,
- * level 1, form MESO_LEVEL_MESH): a point the shell draws is
- * Phi(u, v, w) = sum l_k bottom_k + w sum l_k (top_k - bottom_k) (§7.2),
- * at most max_k max(|bottom_k - p_k|, |top_k - p_k|) from the base point
- * sum l_k p_k (a convex combination of the corner offsets); an exterior
- * shell's bottom is the base, so a height field that never rises above
- * hmax puts it within hmax max_k |d_k|. The other way, the surface a ray
- * meets above a base point lies in the same column, so the same bound
- * holds: two-sided, as §7.10 asks. hmax is the largest stored texel of
- * every frame (1 for volumes and shells without a texture: their surface
- * may reach w = 1). Rounded up to f32. */
+/* The largest texel a height field stores, of every frame, as a fraction
+ * of the shell's thickness (1 for volumes and shells without a texture). */
 static double texel_max(const shell_bake* s)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -540,6 +527,17 @@ static double texel_max(const shell_bake* s)
     return hmax;
 }
 
+/* The error of the base mesh drawn in the shell's place (FORMAT.md §7.10,
+ * level 1, form MESO_LEVEL_MESH): a point the shell draws is
+ * Phi(u, v, w) = sum l_k bottom_k + w sum l_k (top_k - bottom_k) (§7.2),
+ * at most max_k max(|bottom_k - p_k|, |top_k - p_k|) from the base point
+ * sum l_k p_k (a convex combination of the corner offsets); an exterior
+ * shell's bottom is the base, so a height field that never rises above
+ * hmax puts it within hmax max_k |d_k|. The other way, the surface a ray
+ * meets above a base point lies in the same column, so the same bound
+ * holds: two-sided, as §7.10 asks. hmax is the largest stored texel of
+ * every frame (1 for volumes and shells without a texture: their surface
+ * may reach w = 1). Rounded up to f32. */
 static float standin_error(const shell_bake* s)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -633,8 +631,9 @@ static int standin_run(void* arg)
     return 0;
 }
 
-/* Starts the chain on its own thread (standin_job), once the normals are
- * known; with one thread, or no thread to be had, assemble() builds it. */
+/* Starts the chain on its own thread (standin_job), once the directors are
+ * final; with one thread, or no thread to be had, assemble() builds it (and
+ * an update that keeps OLD's chain builds none). */
 static void standin_start(shell_bake* s)
 {
     standin_job* j = &s->chain;
@@ -650,6 +649,10 @@ static void standin_start(shell_bake* s)
 #endif
 }
 
+/* The file: base mesh with the normals the directors started from (and the
+ * texture coordinates of the texture function), SDIR, STHK, the texture
+ * function and its distance map. Everything per vertex is written for the
+ * output vertices: the mesh's, plus the copies split off at uv seams. */
 static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* err)
 {
     const meso_bake_shell_options* a = &s->a;
