@@ -215,6 +215,8 @@ typedef struct shell_bake {
     meso_lp_field* field;
     mesoi_shell_prior prior; /* --update: the old bake's directors and the region to redo */
     standin_job chain;       /* levels 2..: built beside validation */
+    float e0;                /* level 1's error (standin_error), once the directors are final */
+    int keep_chain;          /* an update keeps OLD's chain (chain_kept) */
 } shell_bake;
 
 static void standin_job_join(standin_job* j)
@@ -595,8 +597,8 @@ static int shell_base(const shell_bake* s, meso_mesh* base, float** pos, float**
 static int chain_kept(const shell_bake* s)
 {
     const mesoi_shell_prior* p = &s->prior;
-    return s->a.update && p->chain_count && p->chain_levels == s->a.levels &&
-           p->chain_moved + p->moved_max <= standin_error(s);
+    return s->a.update && s->a.levels != 1 && p->chain_count && p->chain_levels == s->a.levels &&
+           p->chain_moved + p->moved_max <= s->e0;
 }
 
 static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_error* err)
@@ -606,7 +608,7 @@ static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_err
     out->chain = calloc(p->chain_count, sizeof *out->chain);
     if (!out->chain)
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "update: out of memory");
-    out->e0 = standin_error(s);
+    out->e0 = s->e0;
     out->chain_count = p->chain_count;
     out->count = 1 + p->chain_count;
     for (uint32_t k = 0; k < p->chain_count; ++k) {
@@ -631,16 +633,18 @@ static int standin_run(void* arg)
     return 0;
 }
 
-/* Starts the chain on its own thread (standin_job), once the directors are
- * final; with one thread, or no thread to be had, assemble() builds it (and
- * an update that keeps OLD's chain builds none). */
+/* Once the directors are final: e0, whether an update keeps OLD's chain,
+ * and otherwise the chain started on its own thread (standin_job); with one
+ * thread, or no thread to be had, assemble() builds it. */
 static void standin_start(shell_bake* s)
 {
     standin_job* j = &s->chain;
+    s->e0 = standin_error(s);
+    s->keep_chain = chain_kept(s);
     if (s->a.levels == 1 || meso_bake_thread_count(s->run.common.threads) < 2 || !MESO_HAVE_MESHOPTIMIZER ||
-        chain_kept(s) || !shell_base(s, &j->base, &j->pos, &j->normals))
+        s->keep_chain || !shell_base(s, &j->base, &j->pos, &j->normals))
         return;
-    j->e0 = standin_error(s);
+    j->e0 = s->e0;
     j->levels = s->a.levels;
     j->threads = s->run.common.threads;
 #ifndef __STDC_NO_THREADS__
@@ -725,7 +729,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             r = mesoi_add_input_provenance(inputs, a->update, err);
         }
         rep = cJSON_CreateObject();
-        if (a->levels != 1 && chain_kept(s)) {
+        if (s->keep_chain) {
             s->rep->update_levels_kept = s->prior.chain_count;
             s->rep->update_chain_moved = s->prior.chain_moved + s->prior.moved_max;
         }
@@ -790,7 +794,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
         if (r == MESO_OK && a->levels != 1) {
             standin_job* j = &s->chain;
             standin_job_join(j);
-            if (chain_kept(s)) {
+            if (s->keep_chain) {
                 r = chain_take(s, &standins, err);
             } else if (j->state == 2 && j->r != MESO_OK) {
                 *err = j->err;
@@ -799,7 +803,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                 standins = j->out; /* taken: freed below */
                 memset(&j->out, 0, sizeof j->out);
             } else {
-                r = mesoi_standin_levels_build(&base, standin_error(s), a->levels, s->run.common.threads,
+                r = mesoi_standin_levels_build(&base, s->e0, a->levels, s->run.common.threads,
                                                &standins, err);
             }
             if (r == MESO_OK)

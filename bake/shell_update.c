@@ -435,13 +435,14 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
         for (uint32_t v = 0; v < nv; ++v) {
             moved[v] = memcmp(old_pos + 3 * (size_t)v, m->positions + 3 * (size_t)v, 3 * sizeof(float)) != 0;
             out->moved += moved[v];
-            double q = 0;
-            for (int k = 0; moved[v] && k < 3; ++k) {
-                const double e = (double)m->positions[3 * (size_t)v + k] - old_pos[3 * (size_t)v + k];
-                q += e * e;
-            }
-            if (moved[v]) /* rounded up past the few roundings of the sum and root */
+            if (moved[v]) { /* rounded up past the few roundings of the sum and root */
+                double q = 0;
+                for (int k = 0; k < 3; ++k) {
+                    const double e = (double)m->positions[3 * (size_t)v + k] - old_pos[3 * (size_t)v + k];
+                    q += e * e;
+                }
                 out->moved_max = fmax(out->moved_max, sqrt(q) * (1.0 + 8.0 * DBL_EPSILON));
+            }
         }
         out->radius = 3.0 * h + longest_edge(m);
         if (out->moved)

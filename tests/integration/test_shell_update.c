@@ -432,6 +432,19 @@ static void check_growth(const char* dir)
     meso_mesh_free(&m);
 }
 
+/* The largest distance between the same vertex in a and in b (3 nv floats each). */
+static double farthest_move(const float* a, const float* b, uint32_t nv)
+{
+    double far = 0;
+    for (size_t i = 0; i < 3 * (size_t)nv; i += 3) {
+        double q = 0;
+        for (int k = 0; k < 3; ++k)
+            q += ((double)a[i + k] - b[i + k]) * ((double)a[i + k] - b[i + k]);
+        far = fmax(far, sqrt(q));
+    }
+    return far;
+}
+
 /* The levels of the shell in `bytes`: records (levels) and, for each stand-in
  * level 2.., its MESH chunk's stored bytes (malloc'd, in chunk[L]). */
 static uint32_t file_levels(const void* bytes, size_t size, meso_level_info* lv, void** chunk, size_t* chunk_size)
@@ -524,13 +537,7 @@ static void check_kept_levels(const char* dir)
         mesh_bump(pos, nv, nv / 3, nv / 50, big == 1 ? 1.3 * h : 0.6 * h);
         if (big == 2)
             mesh_bump(pos, nv, nv / 3, nv / 50, 0.6 * h);
-        double moved = 0;
-        for (uint32_t v = 0; v < nv; ++v) {
-            double q = 0;
-            for (int k = 0; k < 3; ++k)
-                q += ((double)pos[3 * v + k] - m.positions[3 * v + k]) * ((double)pos[3 * v + k] - m.positions[3 * v + k]);
-            moved = fmax(moved, sqrt(q));
-        }
+        double moved = farthest_move(m.positions, pos, nv);
         meso_bake_shell_options u = o;
         u.mesh = &e;
         u.update = big == 2 ? upd_path : old_path;
@@ -545,13 +552,7 @@ static void check_kept_levels(const char* dir)
             float* first = malloc(sizeof(float) * 3 * nv);
             memcpy(first, m.positions, sizeof(float) * 3 * nv);
             mesh_bump(first, nv, nv / 3, nv / 50, 0.6 * h);
-            moved = 0;
-            for (uint32_t v = 0; v < nv; ++v) {
-                double q = 0;
-                for (int k = 0; k < 3; ++k)
-                    q += ((double)pos[3 * v + k] - first[3 * v + k]) * ((double)pos[3 * v + k] - first[3 * v + k]);
-                moved = fmax(moved, sqrt(q));
-            }
+            moved = farthest_move(first, pos, nv);
             free(first);
         }
         assert(rep.update_moved_max >= moved && rep.update_moved_max <= moved * (1 + 1e-12));
