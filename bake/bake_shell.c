@@ -28,6 +28,7 @@
 #include "mesh_chunk.h"
 #include "meso_clock.h"
 #include "shell_allowed.h"
+#include "shell_bend.h"
 #include "shell_hybrid.h"
 #include "shell_regrow.h"
 #include "shell_update.h"
@@ -110,6 +111,7 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
     cJSON_AddNumberToObject(rep, "vertices_below_half_allowed", s->vertices_below_half_allowed);
     cJSON_AddNumberToObject(rep, "vertices_allowed_below_requested", s->vertices_allowed_below_requested);
     cJSON_AddNumberToObject(rep, "vertices_regrown", s->vertices_regrown);
+    cJSON_AddNumberToObject(rep, "vertices_bent", s->vertices_bent);
     cJSON_AddNumberToObject(rep, "vertices_lp", s->vertices_lp);
     cJSON_AddNumberToObject(rep, "vertices_normal", s->vertices_normal);
     cJSON_AddNumberToObject(rep, "hybrid_rounds", s->hybrid_rounds);
@@ -210,6 +212,8 @@ typedef struct shell_bake {
     double lo[3], hi[3], h;
     float* normals;
     float* d;         /* directors: layers x 3 nv (envelope: top, then bottom) */
+    double* allowed;  /* shell_allowed.h per layer (layers x nv), once computed */
+    uint8_t* allowed_done; /* per layer */
     uint8_t *lp_mask, *lp_side;
     meso_field_surface fs;
     meso_lp_field* field;
@@ -244,11 +248,33 @@ static void shell_free(shell_bake* s)
     meso_field_surface_free(&s->fs);
     free(s->normals);
     free(s->d);
+    free(s->allowed);
+    free(s->allowed_done);
     free(s->lp_mask);
     free(s->lp_side);
     free(s->topo.boundary);
     mesoi_shell_prior_free(&s->prior);
     meso_mesh_free(&s->m);
+}
+
+/* The thickness the geometry allows for one side (shell_allowed.h), into
+ * s->allowed's layer, computed once. */
+static meso_result allowed_side(shell_bake* s, int layer, int sign, double h_side, meso_error* err)
+{
+    const uint32_t nv = s->m.vertex_count;
+    const int layers = s->a.kind == MESO_SHELL_ENVELOPE ? 2 : 1;
+    if (!s->allowed) {
+        s->allowed = malloc(sizeof(double) * (nv ? nv : 1) * (size_t)layers);
+        s->allowed_done = calloc((size_t)layers, 1);
+        if (!s->allowed || !s->allowed_done)
+            return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "allowed thickness: out of memory");
+    }
+    if (s->allowed_done[layer])
+        return MESO_OK;
+    meso_result r = meso_shell_allowed(&s->m, s->normals, sign, h_side, s->run.common.threads,
+                                       s->allowed + (size_t)nv * (size_t)layer, err);
+    s->allowed_done[layer] = r == MESO_OK;
+    return r;
 }
 
 /* Directors for each side (the Lp field, hybrid or normal), repaired unless
@@ -343,6 +369,26 @@ static meso_result directors(shell_bake* s, meso_error* err)
                     if (r == MESO_OK)
                         mesoi_run_stage(&s->run, "regrow", f1, f1, "regrow: %u directors lengthened again (%.0f ms)",
                                         grown, mesoi_run_ms(&s->run));
+                    /* What regrow could not give back along the field's
+                     * direction: bent towards the normal (shell_bend.h),
+                     * only the directors repair left shorter. */
+                    uint8_t* short_ = r == MESO_OK ? calloc(nv ? nv : 1, 1) : NULL;
+                    if (r == MESO_OK && !short_)
+                        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "bend: out of memory");
+                    if (r == MESO_OK)
+                        r = allowed_side(s, layer, sign, h_side, err);
+                    uint32_t bent = 0;
+                    if (r == MESO_OK) {
+                        for (uint32_t v = 0; v < nv; ++v)
+                            short_[v] = memcmp(dl + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof(float)) != 0;
+                        r = meso_shell_bend(m, dl, s->normals, s->allowed + (size_t)nv * (size_t)layer, sign,
+                                            s->run.common.threads, short_, ck, &bent, err);
+                    }
+                    if (r == MESO_OK)
+                        mesoi_run_stage(&s->run, "bend", f1, f1, "bend: %u directors turned towards the normal (%.0f ms)",
+                                        bent, mesoi_run_ms(&s->run));
+                    s->rep->vertices_bent += bent;
+                    free(short_);
                 }
                 s->rep->seconds_repair += meso_seconds() - t; /* repair and regrow */
                 free(before);
@@ -446,17 +492,16 @@ static meso_result allowed(shell_bake* s, meso_error* err)
     const uint32_t nv = s->m.vertex_count;
     const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
     const double h_side = layers == 2 ? 0.5 * s->h : s->h;
-    double* al = malloc(sizeof(double) * (nv ? nv : 1));
-    meso_result r = al ? MESO_OK : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "allowed thickness: out of memory");
+    meso_result r = MESO_OK;
     meso_shell_allowed_summary sum;
     memset(&sum, 0, sizeof(sum));
     for (int layer = 0; layer < layers && r == MESO_OK; ++layer) {
         const int sign = (a->kind == MESO_SHELL_INTERIOR || layer == 1) ? -1 : 1;
-        r = meso_shell_allowed(&s->m, s->normals, sign, h_side, s->run.common.threads, al, err);
+        r = allowed_side(s, layer, sign, h_side, err);
         if (r == MESO_OK)
-            meso_shell_allowed_add(&s->m, s->d + 3 * (size_t)nv * (size_t)layer, al, h_side, &sum, NULL);
+            meso_shell_allowed_add(&s->m, s->d + 3 * (size_t)nv * (size_t)layer,
+                                   s->allowed + (size_t)nv * (size_t)layer, h_side, &sum, NULL);
     }
-    free(al);
     meso_bake_shell_report* rep = s->rep;
     rep->allowed_ratio_min = sum.counted ? sum.ratio_min : 0.0;
     rep->allowed_ratio_mean = sum.counted ? sum.ratio_sum / sum.counted : 0.0;

@@ -464,6 +464,8 @@ typedef struct meso_bake_shell_report {
     uint32_t vertices_allowed_below_requested; /* allowed_v < requested: the geometry sets the bound */
     uint32_t vertices_regrown;                 /* directors repair shortened and regrow lengthened again
                                                   (bake/shell_regrow.h) */
+    uint32_t vertices_bent;                    /* of those still short: directors turned towards the normal
+                                                  to keep more thickness (shell_bend.h) */
     uint32_t vertices_lp, vertices_normal, hybrid_rounds, vertices_shortened;
     uint64_t field_evaluations;
     uint32_t artificial_faces;

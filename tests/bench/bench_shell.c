@@ -85,6 +85,7 @@
 #include "lp_distance.h"
 #include "mesh_check.h"
 #include "shell_allowed.h"
+#include "shell_bend.h"
 #include "shell_hybrid.h"
 #include "shell_regrow.h"
 #include "shell_validate.h"
@@ -293,7 +294,7 @@ typedef struct side_result {
     double t_dir, t_repair, t_validate;
     meso_hybrid_stats hs;
     meso_trace_stats ts;
-    uint32_t shortened, repair_rounds, bad_left, regrown;
+    uint32_t shortened, repair_rounds, bad_left, regrown, bent;
     meso_shell_report rep;
     meso_shell_checker* ck; /* hybrid rounds -> repair -> regrow, as bake_shell.c; side_validate frees it */
 } side_result;
@@ -323,10 +324,23 @@ static void side_repair(const shell_ctx* c, int sign, float* d, side_result* out
     check(meso_shell_repair_in(&c->m, d, sign, REPAIR_ROUNDS, THREADS, NULL, &out->shortened, &out->repair_rounds,
                                &out->bad_left, out->ck, &err),
           "repair", &err);
-    if (out->shortened && !out->bad_left)
+    if (out->shortened && !out->bad_left) {
         check(meso_shell_regrow_in(&c->m, d, before, sign, MESO_SHELL_REGROW_ROUNDS, THREADS, NULL, &out->regrown,
                                    out->ck, &err),
               "regrow", &err);
+        /* Then bend, as bake_shell.c: the directors repair left shorter. */
+        const uint32_t nv = c->m.vertex_count;
+        double* al = malloc(sizeof(double) * nv);
+        uint8_t* short_ = malloc(nv);
+        if (!al || !short_)
+            die("out of memory", NULL);
+        check(meso_shell_allowed(&c->m, c->normals, sign, c->h, THREADS, al, &err), "allowed", &err);
+        for (uint32_t v = 0; v < nv; ++v)
+            short_[v] = memcmp(d + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof(float)) != 0;
+        check(meso_shell_bend(&c->m, d, c->normals, al, sign, THREADS, short_, out->ck, &out->bent, &err), "bend",
+              &err);
+        free(al), free(short_);
+    }
     free(before);
     out->t_repair = meso_seconds() - t;
 }
@@ -751,7 +765,7 @@ static void bench_kept(const char* dir)
     fputs("mesh,triangles,side,thickness_rel,vertices,vertices_allowed_below_requested,allowed_ratio_min,"
           "allowed_ratio_mean,vertices_below_half_allowed,thickness_ratio_min,thickness_ratio_mean,inverted_prisms,"
           "offset_self_intersections,offset_base_intersections,vertices_shortened,vertices_regrown,"
-          "seconds_directors_repair,seconds_allowed,smooth,valid\n",
+          "seconds_directors_repair,seconds_allowed,smooth,valid,vertices_bent\n",
           f);
     fputs("mesh,side,x,vertices_below,fraction_below\n", fd);
     char* names[256];
@@ -795,13 +809,13 @@ static void bench_kept(const char* dir)
             const char* sname = side ? "interior" : "exterior";
             const int valid = s.rep.inverted_prisms == 0 && s.rep.offset_self_intersections == 0 &&
                               s.rep.offset_base_intersections == 0;
-            fprintf(f, "%s,%u,%s,%.2f,%u,%u,%.4f,%.4f,%u,%.4f,%.4f,%u,%llu,%llu,%u,%u,%.3f,%.4f,%d,%d\n", name,
+            fprintf(f, "%s,%u,%s,%.2f,%u,%u,%.4f,%.4f,%u,%.4f,%.4f,%u,%llu,%llu,%u,%u,%.3f,%.4f,%d,%d,%u\n", name,
                     c.m.triangle_count, sname, rel, sum.counted, sum.limited, sum.ratio_min,
                     sum.counted ? sum.ratio_sum / sum.counted : 0.0, sum.below_half, s.rep.thickness_ratio_min,
                     s.rep.thickness_ratio_mean, s.rep.inverted_prisms,
                     (unsigned long long)s.rep.offset_self_intersections,
                     (unsigned long long)s.rep.offset_base_intersections, s.shortened, s.regrown,
-                    s.t_dir + s.t_repair, t_allowed, smooth_rounds(), valid);
+                    s.t_dir + s.t_repair, t_allowed, smooth_rounds(), valid, s.bent);
             fflush(f);
             /* (vertices used by no triangle have ratio 1: never below x <= 1) */
             for (int b = 0; b <= KEPT_BINS; ++b) {

@@ -144,7 +144,7 @@ if (system("test -s '".dist_csv."' && echo 1") eq "1") {
     kept_colors = "#1f77b4 #ff7f0e #2ca02c #d62728 #9467bd #8c564b #e377c2 #7f7f7f #bcbd22 #17becf #000000 #aec7e8 #ffbb78 #98df8a #ff9896 #c5b0d5"
     if (cairo) { set terminal pngcairo size 1500,560 enhanced font "sans,10" } else { set terminal png size 1500,560 }
     set output dir."/shell_kept.png"
-    set multiplot layout 1,3 title "Thickness kept against what the geometry allows (min(h, half the gap along the normal)): hybrid + repair + regrow, CLI defaults\n(wingnut: the CLI refuses it, its surface intersects itself; the bench bakes it anyway and its shells are not valid)"
+    set multiplot layout 1,3 title "Thickness kept against what the geometry allows (min(h, half the gap along the normal)): hybrid + repair + regrow + bend, CLI defaults\n(wingnut: the CLI refuses it, its surface intersects itself; the bench bakes it anyway and its shells are not valid)"
     unset logscale
     unset xrange
     unset yrange

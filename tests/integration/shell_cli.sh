@@ -22,7 +22,7 @@ check "-j 1 and -j 2 give byte-identical files" cmp -s "$tmp/j1.meso" "$tmp/j2.m
 check "the file validates fully" "$inspect" validate --full "$tmp/j1.meso" >/dev/null
 for key in prisms inverted_prisms offset_self_intersections thickness_ratio_min thickness_ratio_mean \
            allowed_ratio_min allowed_ratio_mean vertices_below_half_allowed vertices_allowed_below_requested \
-           vertices_regrown \
+           vertices_regrown vertices_bent \
            vertices_lp vertices_normal seconds_total; do
   check "report has \"$key\"" grep -q "\"$key\":" "$tmp/r.json"
 done
@@ -94,6 +94,13 @@ check "spot exterior 0.1: the geometry limits some vertices" awk -v l="$(num ver
 # shells stay valid with it).
 check "spot exterior 0.1: regrow lengthens some shortened directors" awk -v g="$(num vertices_regrown)" \
   -v s="$(num vertices_shortened)" 'BEGIN { exit !(g > 0 && g <= s) }'
+# Bend (bake/shell_bend.h) turns directors regrow could not lengthen
+# towards the normal (tests/unit/test_shell_bend.c checks what it may do);
+# only directors repair shortened bend, and on blub at 10 % exterior some do.
+"$bake" shell -i "$data/blub_fish_low_resolution.obj" -o "$tmp/goal.meso" --thickness-rel 0.1 \
+  --report "$tmp/goal.json" >/dev/null 2>&1
+check "blub exterior 0.1: bend turns some shortened directors" awk -v b="$(num vertices_bent)" \
+  -v s="$(num vertices_shortened)" 'BEGIN { exit !(b > 0 && b <= s) }'
 
 refuse() { # DESCRIPTION EXPECTED_EXIT INPUT
   rm -f "$tmp/out.meso"

@@ -396,14 +396,16 @@ static void check_defects(const char* dir)
 /* An update whose rounds leave a bad face with a kept corner (issue 15: spot
  * at 2 %, a bump over 10 % of the vertices, as bench_shell_update edits;
  * repair left one prism inverted, its other corners OLD's) grows its region
- * until it is valid, as the full re-bake is. */
+ * until it is valid, as the full re-bake is. Since bend (bake/shell_bend.h)
+ * OLD's shell differs and that edit no longer needs growth; at 3 % it does
+ * (found by sweeping thickness 3-12 %, 8 bump centres, 3 heights). */
 static void check_growth(const char* dir)
 {
     meso_mesh m = load("spot_uv.obj");
     const uint32_t nv = m.vertex_count;
     char old_path[4200];
     meso_bake_shell_options o = meso_bake_shell_defaults();
-    o.thickness_rel = 0.02;
+    o.thickness_rel = 0.03;
     baked old = bake_old(&o, &m, dir, "old_spot.meso", old_path, sizeof(old_path));
     const double h = old.rep.thickness;
     float* pos = NULL;
@@ -414,7 +416,7 @@ static void check_growth(const char* dir)
     uint32_t moved = 0;
     uint8_t* inside = malloc(nv);
     const uint32_t region = brute_region(&m, &e, 3.0 * h + longest_edge(&e), &moved, inside);
-    printf("spot_uv 0.02, 10 %% edit: %u moved, region %u, %u recomputed of %u; update: inverted %u (undecided %u), "
+    printf("spot_uv 0.03, 10 %% edit: %u moved, region %u, %u recomputed of %u; update: inverted %u (undecided %u), "
            "self %llu, cross %llu; full: %u (%u), %llu, %llu\n",
            upd.rep.vertices_moved, region, upd.rep.vertices_recomputed, nv, upd.rep.inverted_prisms,
            upd.rep.undecided_prisms, (unsigned long long)upd.rep.offset_self_intersections,
