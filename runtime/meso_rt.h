@@ -82,9 +82,10 @@ typedef enum meso_rt_state_policy {
 
 /* How the textures that give a shell its appearance are filtered
  * (meso_rt_desc.texture_filter): height fields and volumes where they shade
- * (normals, the occlusion term) and colour maps. The intersection search
- * always reads the finest level (the distance maps bound that level only).
- * Relief frusta and cells shade from level 0 either way (not yet filtered). */
+ * (normals, the occlusion term) and colour maps, of shells and of relief
+ * frusta. The intersection search always reads the finest level (the
+ * distance maps bound that level only; the frusta march samples level 0).
+ * Cells shade from level 0 either way (not yet filtered). */
 typedef enum meso_texture_filter {
     MESO_FILTER_MIPMAP = 0, /* a full mip chain built at upload; shading samples the level of the pixel's
                                footprint on the surface (trilinear), and the forward pass's built-in

@@ -464,8 +464,9 @@ static double srgb_to_linear(double x)
     return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
 }
 
-/* COLR (U8 x 4, W x H x 1, sRGB) as an SRGB8_ALPHA8 2D texture, nearest
- * (the shader fetches texels), and its mean linear colour. */
+/* COLR (U8 x 4, W x H x 1, sRGB) as an SRGB8_ALPHA8 2D texture with its mip
+ * levels (the shader fetches texels of the footprint's levels), and its mean
+ * linear colour. */
 static meso_result upload_color(meso_rt* rt, meso_file* f, uint32_t id, int32_t ci, mesoi_frusta* s)
 {
     const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)ci);
@@ -495,26 +496,12 @@ static meso_result upload_color(meso_rt* rt, meso_file* f, uint32_t id, int32_t 
             sum[k] += lut[px[4 * i + (size_t)k]];
     for (int k = 0; k < 3; ++k)
         s->ball_color[k] = (float)(sum[k] / (double)n);
-    GLint prev_tex = 0;
-    gl->GetIntegerv(GL_TEXTURE_BINDING_2D, &prev_tex);
-    mesoi_unpack unpack;
-    mesoi_unpack_default(rt, &unpack);
-    gl->GenTextures(1, &s->color_tex);
-    gl->BindTexture(GL_TEXTURE_2D, s->color_tex);
-    gl->TexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, (GLsizei)c->dims[0], (GLsizei)c->dims[1], 0, GL_RGBA,
-                   GL_UNSIGNED_BYTE, data);
-    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-    GLint width = 0; /* no level 0: GL refused it (the error queue stays the host's) */
-    gl->GetTexLevelParameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_WIDTH, &width);
-    gl->BindTexture(GL_TEXTURE_2D, (GLuint)prev_tex);
-    mesoi_unpack_restore(rt, &unpack);
+    r = mesoi_upload_srgba8(rt, c->dims, 0, data, &s->color_tex); /* with its mip levels (shading's footprint) */
     mesoi_rt_free(rt, data);
-    if (width != (GLint)c->dims[0]) {
+    if (r != MESO_OK) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "frusta %u: a %ux%u colour map could not be created", id,
                   c->dims[0], c->dims[1]);
-        return MESO_ERR_GL;
+        return r;
     }
     s->color_w = (int)c->dims[0];
     s->color_h = (int)c->dims[1];
@@ -564,7 +551,7 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
     }
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
     if (r == MESO_OK && ri >= 0)
-        r = mesoi_upload_texture(rt, f, ri, 0, 0, &s->relief_tex); /* level 0 is fetched (texelFetch): its mips go unused */
+        r = mesoi_upload_texture(rt, f, ri, 0, 0, &s->relief_tex); /* the march fetches level 0, shading its footprint's */
     if (r == MESO_OK && coli >= 0)
         r = upload_color(rt, f, id, coli, s);
     if (r == MESO_OK) {

@@ -45,7 +45,10 @@
 // relief uses - bilinear in linear colour between texel centres, wrapping,
 // by hand like the heights (the SRGB8_ALPHA8 texture decodes each texel);
 // balls take the map's mean linear colour (u_ball_color). Without a map:
-// u_albedo everywhere.
+// u_albedo everywhere. With mip levels (MESO_FILTER_MIPMAP) the shading
+// normal's gradient and the colour read the levels of the pixel's footprint
+// on the maps (map_levels below), by hand as well: trilinear between two
+// levels' bilinear fetches; the march reads level 0.
 //
 // Shading: the reference's - albedo * (0.25 + 0.75 w) * (0.15 + 0.85
 // max(0, n.l)), n the shading normal turned to face the ray, w the relief
@@ -263,35 +266,88 @@ vec2 relief_st(Frustum F, ConePoint P)
     return vec2(P.u * F.u_scale, F.v_off + P.v * F.v_scale);
 }
 
-// Bilinear height at (s, t), texel centres at (i + 1/2) / W, wrapping, and
-// the derivatives of the interpolant (dh/ds, dh/dt).
-float relief_height(vec2 st, out vec2 grad)
+// The texels of level L of a map of `size` (OpenGL 4.6 eq. 8.20: halved,
+// rounded down, at least 1). Not textureSize(sampler, L): llvmpipe answered
+// it with another level's size in one of two draws of the same texture
+// (tests/gl/test_rt_conventions.c, the mirrored frusta).
+ivec2 level_size(ivec2 size, int L)
 {
-    vec2 size = vec2(u_relief_size);
+    return max(size >> L, ivec2(1));
+}
+
+// Bilinear height at (s, t) on mip level L (0: the map), texel centres at
+// (i + 1/2) / W_L, wrapping, and the derivatives of the interpolant
+// (dh/ds, dh/dt).
+float relief_bilinear(vec2 st, int L, out vec2 grad)
+{
+    ivec2 isz = level_size(u_relief_size, L);
+    vec2 size = vec2(isz);
     vec2 x = st * size - 0.5;
     vec2 i0 = floor(x), f = x - i0;
     ivec2 a = ivec2(mod(i0, size)), b = ivec2(mod(i0 + 1.0, size));
-    a = min(a, u_relief_size - 1); // mod may round up to size itself
-    b = min(b, u_relief_size - 1);
-    float h00 = texelFetch(u_relief, ivec2(a.x, a.y), 0).r, h10 = texelFetch(u_relief, ivec2(b.x, a.y), 0).r;
-    float h01 = texelFetch(u_relief, ivec2(a.x, b.y), 0).r, h11 = texelFetch(u_relief, ivec2(b.x, b.y), 0).r;
+    a = min(a, isz - 1); // mod may round up to size itself
+    b = min(b, isz - 1);
+    float h00 = texelFetch(u_relief, ivec2(a.x, a.y), L).r, h10 = texelFetch(u_relief, ivec2(b.x, a.y), L).r;
+    float h01 = texelFetch(u_relief, ivec2(a.x, b.y), L).r, h11 = texelFetch(u_relief, ivec2(b.x, b.y), L).r;
     grad = vec2(mix(h10 - h00, h11 - h01, f.y) * size.x, mix(h01 - h00, h11 - h10, f.x) * size.y);
     return mix(mix(h00, h10, f.x), mix(h01, h11, f.x), f.y);
 }
 
-// The albedo at relief coordinates st: the colour map bilinear (texel
-// centres at (i + 1/2) / W, wrapping), or u_albedo without one.
-vec3 color_at(vec2 st)
+// The search's height: level 0.
+float relief_height(vec2 st, out vec2 grad)
+{
+    return relief_bilinear(st, 0, grad);
+}
+
+// The two mip levels around `lod` (clamped to the last, 1 x 1, level of a
+// map of `size` texels) and the weight of the coarser.
+ivec3 lod_pair(float lod, ivec2 size, out float f)
+{
+    int last = int(floor(log2(float(max(max(size.x, size.y), 1)))));
+    float l = clamp(lod, 0.0, float(last));
+    int L0 = int(floor(l));
+    f = l - float(L0);
+    return ivec3(L0, min(L0 + 1, last), 0);
+}
+
+// Height and gradient for shading: trilinear between the levels around lod.
+float relief_height_lod(vec2 st, float lod, out vec2 grad)
+{
+    if (lod <= 0.0)
+        return relief_bilinear(st, 0, grad);
+    float f;
+    ivec3 L = lod_pair(lod, u_relief_size, f);
+    vec2 g0, g1;
+    float h0 = relief_bilinear(st, L.x, g0), h1 = relief_bilinear(st, L.y, g1);
+    grad = mix(g0, g1, f);
+    return mix(h0, h1, f);
+}
+
+// The colour map bilinear on level L (texel centres at (i + 1/2) / W_L,
+// wrapping).
+vec3 color_bilinear(vec2 st, int L)
+{
+    ivec2 isz = level_size(u_color_size, L);
+    vec2 size = vec2(isz);
+    vec2 x = st * size - 0.5;
+    vec2 i0 = floor(x), f = x - i0;
+    ivec2 a = min(ivec2(mod(i0, size)), isz - 1), b = min(ivec2(mod(i0 + 1.0, size)), isz - 1);
+    vec3 c00 = texelFetch(u_color, ivec2(a.x, a.y), L).rgb, c10 = texelFetch(u_color, ivec2(b.x, a.y), L).rgb;
+    vec3 c01 = texelFetch(u_color, ivec2(a.x, b.y), L).rgb, c11 = texelFetch(u_color, ivec2(b.x, b.y), L).rgb;
+    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+}
+
+// The albedo at relief coordinates st, trilinear between the levels around
+// lod (0: the map, bilinear), or u_albedo without a map.
+vec3 color_at(vec2 st, float lod)
 {
     if (u_color_size.x <= 0)
         return u_albedo;
-    vec2 size = vec2(u_color_size);
-    vec2 x = st * size - 0.5;
-    vec2 i0 = floor(x), f = x - i0;
-    ivec2 a = min(ivec2(mod(i0, size)), u_color_size - 1), b = min(ivec2(mod(i0 + 1.0, size)), u_color_size - 1);
-    vec3 c00 = texelFetch(u_color, ivec2(a.x, a.y), 0).rgb, c10 = texelFetch(u_color, ivec2(b.x, a.y), 0).rgb;
-    vec3 c01 = texelFetch(u_color, ivec2(a.x, b.y), 0).rgb, c11 = texelFetch(u_color, ivec2(b.x, b.y), 0).rgb;
-    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
+    if (lod <= 0.0)
+        return color_bilinear(st, 0);
+    float f;
+    ivec3 L = lod_pair(lod, u_color_size, f);
+    return mix(color_bilinear(st, L.x), color_bilinear(st, L.y), f);
 }
 
 bool solid_at(Frustum F, vec3 op)
@@ -331,10 +387,48 @@ bool march(Frustum F, vec3 o, vec3 d, float sa, float sb, bool from, bool end_fl
 }
 
 // Relief shading normal (FORMAT.md sec. 7.2): eq. 8 tilted by D grad h.
-vec3 relief_normal(Frustum F, ConePoint P)
+// --- filtered for the pixel's footprint (raycast_common.glsl tex_footprint) --
+//
+// The march reads level 0 (relief_height); what shades the hit - the relief
+// normal's gradient and the colour - reads the level of the pixel's
+// footprint on the maps: the rays half a pixel either side (in x, in y) meet
+// the plane through the hit of normal nrm (the cone's eq. 8 normal or the
+// cap's: the surface the maps lie on, not the relief's facet, as for
+// shells), and the relief coordinates of those points, differenced, are
+// the derivatives of (s, t) per pixel (s wraps around the axis: a
+// difference is taken modulo one turn, so a footprint wider than half a
+// turn reads as narrower - the frustum is then a few pixels across).
+
+vec2 st_at(Frustum F, vec3 op)
+{
+    return relief_st(F, cone_point(F, op));
+}
+
+vec2 st_differential(Frustum F, vec3 op, vec3 nrm, vec2 axis)
+{
+    float far = 1e6 * (F.h + F.r0 + F.D + 1.0);
+    vec3 p = F.c0 + op;
+    vec2 d = st_at(F, op + plane_offset(nrm, p, gl_FragCoord.xy + 0.5 * axis, far)) -
+             st_at(F, op + plane_offset(nrm, p, gl_FragCoord.xy - 0.5 * axis, -far));
+    d.x -= F.u_scale * round(d.x / F.u_scale);
+    return d;
+}
+
+// The levels of the relief map (.x) and the colour map (.y) at the hit op
+// (relative to c0) on the surface of normal nrm; 0 without mip levels.
+vec2 map_levels(Frustum F, vec3 op, vec3 nrm)
+{
+    if (u_mips == 0)
+        return vec2(0.0);
+    vec2 dx = st_differential(F, op, nrm, vec2(1.0, 0.0)), dy = st_differential(F, op, nrm, vec2(0.0, 1.0));
+    mat2x3 fp = mat2x3(vec3(dx, 0.0), vec3(dy, 0.0));
+    return vec2(tex_level(fp, vec3(vec2(u_relief_size), 1.0)), tex_level(fp, vec3(vec2(u_color_size), 1.0)));
+}
+
+vec3 relief_normal(Frustum F, ConePoint P, float lod)
 {
     vec2 g;
-    relief_height(relief_st(F, P), g);
+    relief_height_lod(relief_st(F, P), lod, g);
     vec3 N = eq8_normal(F, P);
     vec3 tu = cross(F.a, P.wd);
     vec3 gen = F.a + F.k * P.wd;
@@ -455,17 +549,13 @@ void frustum_main(int prim, vec3 ro, vec3 rd)
     vec3 op = o + s_hit * rd;
 #if MESO_PASS != MESO_PASS_DEPTH
     ConePoint P = cone_point(F, op);
-    vec3 n;
-    if (kind == K_PLANE0)
-        n = F.n0;
-    else if (kind == K_PLANE1)
-        n = F.n1;
-    else if (F.D > 0.0)
-        n = relief_normal(F, P);
-    else
-        n = eq8_normal(F, P);
+    vec3 base_n = kind == K_PLANE0 ? F.n0 : kind == K_PLANE1 ? F.n1 : eq8_normal(F, P);
+    vec2 lod = map_levels(F, op, base_n);
+    vec3 n = base_n;
+    if (kind != K_PLANE0 && kind != K_PLANE1 && F.D > 0.0)
+        n = relief_normal(F, P, lod.x);
     float w = F.D > 0.0 ? P.w : 1.0;
-    vec3 albedo = color_at(relief_st(F, P));
+    vec3 albedo = color_at(relief_st(F, P), lod.y);
     emit_obj(shade(albedo, n, w, rd), albedo, occlusion(w), facing(n, rd), F.c0 + op, rd);
 #endif
     write_depth(F.c0 + op);

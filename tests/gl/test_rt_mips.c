@@ -5,8 +5,10 @@
  * bounds' sphere fills the view at zoom 1; here it is 0.3 of that):
  *
  *  - shell: spot_uv.obj, --texture bricks:256 --tiling 8,8 (2048 height
- *    texels across the cow, which covers about 80 pixels of 256).
- * (Relief frusta are not filtered yet: their shader fetches level 0.)
+ *    texels across the cow, which covers about 80 pixels of 256);
+ *  - frusta: saguaro.skel, --relief bricks:256 --relief-repeat 8 and the
+ *    bundled bricks colour map (the relief normals and the colour read the
+ *    footprint's levels; the march reads level 0). Measured 0.46.
  *
  * Each is drawn at 256 x 256 by a context with mip levels (the default,
  * MESO_FILTER_MIPMAP) and by one without (MESO_FILTER_LEVEL0: one level,
@@ -300,6 +302,13 @@ int main(int argc, char** argv)
     meso_file* shell = bake(&c, "shell", args);
     measure(&c, "shell", shell);
     meso_file_close(shell);
+
+    snprintf(args, sizeof(args),
+             "frusta -i '%s/saguaro.skel' --relief bricks:256 --relief-repeat 8 --relief-color '%s/color/bricks_color.png'",
+             MESO_TEST_DATA, MESO_TEST_DATA);
+    meso_file* frusta = bake(&c, "frusta", args);
+    measure(&c, "frusta", frusta);
+    meso_file_close(frusta);
 
 
     for (int m = 0; m < 2; ++m)
