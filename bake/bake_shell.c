@@ -271,9 +271,11 @@ static meso_result allowed_side(shell_bake* s, int layer, int sign, double h_sid
     }
     if (s->allowed_done[layer])
         return MESO_OK;
+    const double t = meso_seconds();
     meso_result r = meso_shell_allowed(&s->m, s->normals, sign, h_side, s->run.common.threads,
                                        s->allowed + (size_t)nv * (size_t)layer, err);
     s->allowed_done[layer] = r == MESO_OK;
+    s->rep->seconds_allowed += meso_seconds() - t;
     return r;
 }
 
@@ -344,7 +346,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
                                 sign > 0 ? "outer" : "inner", meso_bake_directors_name(a->directors), hs.vertices_lp,
                                 hs.vertices_normal, hs.rounds, (unsigned long long)ts.evaluations,
                                 mesoi_run_ms(&s->run));
-            uint32_t shortened = 0, grown = 0;
+            uint32_t shortened = 0, grown = 0, bent = 0;
             if (r == MESO_OK && !a->no_repair) {
                 uint32_t rounds = 0, left = 0;
                 float* before = malloc(sizeof(float) * 3 * (size_t)nv); /* for regrow: the lengths repair took */
@@ -353,6 +355,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
                 else
                     memcpy(before, dl, sizeof(float) * 3 * (size_t)nv);
                 t = meso_seconds();
+                /* repair, regrow and bend; bend's allowed thickness is seconds_allowed's */
+                const double allowed_before = s->rep->seconds_allowed;
                 if (r == MESO_OK)
                     r = meso_shell_repair_in(m, dl, sign, 30, s->run.common.threads, redo, &shortened, &rounds,
                                              &left, ck, err);
@@ -377,7 +381,6 @@ static meso_result directors(shell_bake* s, meso_error* err)
                         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "bend: out of memory");
                     if (r == MESO_OK)
                         r = allowed_side(s, layer, sign, h_side, err);
-                    uint32_t bent = 0;
                     if (r == MESO_OK) {
                         for (uint32_t v = 0; v < nv; ++v)
                             short_[v] = memcmp(dl + 3 * (size_t)v, before + 3 * (size_t)v, 3 * sizeof(float)) != 0;
@@ -387,10 +390,9 @@ static meso_result directors(shell_bake* s, meso_error* err)
                     if (r == MESO_OK)
                         mesoi_run_stage(&s->run, "bend", f1, f1, "bend: %u directors turned towards the normal (%.0f ms)",
                                         bent, mesoi_run_ms(&s->run));
-                    s->rep->vertices_bent += bent;
                     free(short_);
                 }
-                s->rep->seconds_repair += meso_seconds() - t; /* repair and regrow */
+                s->rep->seconds_repair += meso_seconds() - t - (s->rep->seconds_allowed - allowed_before);
                 free(before);
             }
             uint32_t added = 0;
@@ -413,6 +415,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
             if (r != MESO_OK || !added) {
                 s->rep->vertices_shortened += shortened;
                 s->rep->vertices_regrown += grown;
+                s->rep->vertices_bent += bent;
                 break;
             }
         }
@@ -962,10 +965,8 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     if (r == MESO_OK)
         r = validate(&s, err);
     rep->seconds_validate = meso_seconds() - t;
-    t = meso_seconds();
     if (r == MESO_OK)
-        r = allowed(&s, err);
-    rep->seconds_allowed = meso_seconds() - t;
+        r = allowed(&s, err); /* seconds_allowed: allowed_side's */
     t = meso_seconds();
     if (r == MESO_OK)
         r = assemble(&s, out, err);
