@@ -388,7 +388,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
                                             s->run.common.threads, short_, ck, &bent, err);
                     }
                     if (r == MESO_OK)
-                        mesoi_run_stage(&s->run, "bend", f1, f1, "bend: %u directors turned towards the normal (%.0f ms)",
+                        mesoi_run_stage(&s->run, "bend", f1, f1, "bend: %u directors lengthened or turned (%.0f ms)",
                                         bent, mesoi_run_ms(&s->run));
                     free(short_);
                 }

@@ -464,8 +464,9 @@ typedef struct meso_bake_shell_report {
     uint32_t vertices_allowed_below_requested; /* allowed_v < requested: the geometry sets the bound */
     uint32_t vertices_regrown;                 /* directors repair shortened and regrow lengthened again
                                                   (bake/shell_regrow.h) */
-    uint32_t vertices_bent;                    /* of those still short: directors turned towards the normal
-                                                  to keep more thickness (shell_bend.h) */
+    uint32_t vertices_bent;                    /* of those still short: directors lengthened or turned (towards
+                                                  the normal or their ring) to keep more thickness
+                                                  (shell_bend.h) */
     uint32_t vertices_lp, vertices_normal, hybrid_rounds, vertices_shortened;
     uint64_t field_evaluations;
     uint32_t artificial_faces;
@@ -484,7 +485,7 @@ typedef struct meso_bake_shell_report {
      * (uvs, seams),
      * field (normals, boundary strip, Barnes-Hut tree), directors (tracing
      * and the hybrid rounds, of which directors_checks in the rounds' exact
-     * checks), repair (and regrow), validate (the final exact validation),
+     * checks), repair (regrow, bend), validate (the final exact validation),
      * allowed (the allowed thickness, shell_allowed.h), assemble (encoding
      * the output). All layers of an envelope summed. */
     double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,

@@ -187,6 +187,9 @@ static void pass_start(bend* b, const uint8_t* redo)
                 for (int i = 0; u != v && lu > 0 && i < 3; ++i)
                     rv[i] += du[i] / lu; /* each neighbour twice in a closed fan: the same mean */
             }
+        const double rl = sqrt(rv[0] * rv[0] + rv[1] * rv[1] + rv[2] * rv[2]);
+        for (int i = 0; i < 3; ++i)
+            rv[i] = rl > 0 ? rv[i] / rl : 0.0; /* unit, so r + s·n is half-way (0: no ring, skipped) */
     }
 }
 

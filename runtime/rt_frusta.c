@@ -496,13 +496,10 @@ static meso_result upload_color(meso_rt* rt, meso_file* f, uint32_t id, int32_t 
             sum[k] += lut[px[4 * i + (size_t)k]];
     for (int k = 0; k < 3; ++k)
         s->ball_color[k] = (float)(sum[k] / (double)n);
-    r = mesoi_upload_srgba8(rt, c->dims, 0, data, &s->color_tex); /* with its mip levels (shading's footprint) */
+    r = mesoi_upload_srgba8(rt, c->dims, 0, data, &s->color_tex); /* with its mip levels (shading's footprint); logs */
     mesoi_rt_free(rt, data);
-    if (r != MESO_OK) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "frusta %u: a %ux%u colour map could not be created", id,
-                  c->dims[0], c->dims[1]);
+    if (r != MESO_OK)
         return r;
-    }
     s->color_w = (int)c->dims[0];
     s->color_h = (int)c->dims[1];
     return MESO_OK;

@@ -303,7 +303,9 @@ float relief_height(vec2 st, out vec2 grad)
 // map of `size` texels) and the weight of the coarser.
 ivec3 lod_pair(float lod, ivec2 size, out float f)
 {
-    int last = int(floor(log2(float(max(max(size.x, size.y), 1)))));
+    int last = 0; // floor(log2(the longer side)), exactly (findMSB is GLSL 4.00 / ES 3.10)
+    for (int n = max(size.x, size.y); n > 1; n >>= 1)
+        ++last;
     float l = clamp(lod, 0.0, float(last));
     int L0 = int(floor(l));
     f = l - float(L0);
@@ -410,7 +412,8 @@ vec2 st_differential(Frustum F, vec3 op, vec3 nrm, vec2 axis)
     vec3 p = F.c0 + op;
     vec2 d = st_at(F, op + plane_offset(nrm, p, gl_FragCoord.xy + 0.5 * axis, far)) -
              st_at(F, op + plane_offset(nrm, p, gl_FragCoord.xy - 0.5 * axis, -far));
-    d.x -= F.u_scale * round(d.x / F.u_scale);
+    if (F.u_scale > 0.0)
+        d.x -= F.u_scale * round(d.x / F.u_scale);
     return d;
 }
 
@@ -418,7 +421,7 @@ vec2 st_differential(Frustum F, vec3 op, vec3 nrm, vec2 axis)
 // (relative to c0) on the surface of normal nrm; 0 without mip levels.
 vec2 map_levels(Frustum F, vec3 op, vec3 nrm)
 {
-    if (u_mips == 0)
+    if (u_mips == 0 || (F.D <= 0.0 && u_color_size.x <= 0)) // nothing to filter
         return vec2(0.0);
     vec2 dx = st_differential(F, op, nrm, vec2(1.0, 0.0)), dy = st_differential(F, op, nrm, vec2(0.0, 1.0));
     mat2x3 fp = mat2x3(vec3(dx, 0.0), vec3(dy, 0.0));

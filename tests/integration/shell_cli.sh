@@ -97,8 +97,9 @@ check "spot exterior 0.1: regrow lengthens some shortened directors" awk -v g="$
 # Bend (bake/shell_bend.h) turns directors regrow could not lengthen
 # towards the normal (tests/unit/test_shell_bend.c checks what it may do);
 # only directors repair shortened bend, and on blub at 10 % exterior some do.
-"$bake" shell -i "$data/blub_fish_low_resolution.obj" -o "$tmp/goal.meso" --thickness-rel 0.1 \
-  --report "$tmp/goal.json" >/dev/null 2>&1
+rm -f "$tmp/goal.json"
+check "blub exterior 0.1 bakes" "$bake" shell -i "$data/blub_fish_low_resolution.obj" -o "$tmp/goal.meso" \
+  --thickness-rel 0.1 --report "$tmp/goal.json"
 check "blub exterior 0.1: bend turns some shortened directors" awk -v b="$(num vertices_bent)" \
   -v s="$(num vertices_shortened)" 'BEGIN { exit !(b > 0 && b <= s) }'
 

@@ -20,7 +20,7 @@
  *    repair), where both also equal a full re-bake's; an edit that makes
  *    the base intersect itself is refused by the update as by a full bake
  *    (E3114, its test limited to the moved faces);
- *  - an update whose rounds leave a bad face with a kept corner (spot at 2 %,
+ *  - an update whose rounds leave a bad face with a kept corner (spot at 3 %,
  *    a 10 % edit: invalid before issue 15's growth, the full re-bake valid)
  *    grows its region and ends valid;
  *  - an update keeps OLD's stand-in levels when no vertex moved farther than
