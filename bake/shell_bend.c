@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shell_directors.h"
 #include "shell_validate.h"
 
 #define BEND_ANGLES 7  /* t, t turned to s·n by α = 1/4, .., 1, the ring's mean r, r + s·n */
@@ -205,27 +206,14 @@ meso_result meso_shell_bend(const meso_mesh* m, float* d, const float* normals, 
     b.cand = malloc(sizeof(float) * 3 * n1);
     b.dir = malloc(sizeof(double) * 3 * n1);
     b.ring = malloc(sizeof(double) * 3 * n1);
-    b.vf_first = calloc(n1 + 1, sizeof(uint32_t));
-    b.vf = malloc(sizeof(uint32_t) * (3 * (size_t)nt + 1));
     b.next = malloc(n1);
     b.moved = calloc(n1, 1);
     b.changed = calloc(n1, 1);
     b.bad = calloc(nt ? nt : 1, 1);
     b.taken = calloc(nt ? nt : 1, 1);
-    uint32_t* fill = malloc(sizeof(uint32_t) * n1);
-    meso_result r = b.cand && b.dir && b.ring && b.vf_first && b.vf && b.next && b.moved && b.changed && b.bad &&
-                            b.taken && fill
-                        ? MESO_OK
+    meso_result r = b.cand && b.dir && b.ring && b.next && b.moved && b.changed && b.bad && b.taken
+                        ? meso_vertex_faces(m, &b.vf_first, &b.vf, "bend", err)
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "bend: out of memory");
-    if (r == MESO_OK) { /* the faces around each vertex (CSR) */
-        for (size_t i = 0; i < 3 * (size_t)nt; ++i)
-            ++b.vf_first[m->indices[i] + 1];
-        for (uint32_t v = 0; v < nv; ++v)
-            b.vf_first[v + 1] += b.vf_first[v];
-        memcpy(fill, b.vf_first, sizeof(uint32_t) * nv);
-        for (size_t i = 0; i < 3 * (size_t)nt; ++i)
-            b.vf[fill[m->indices[i]]++] = (uint32_t)(i / 3);
-    }
     b.chk = shared;
     if (r == MESO_OK && !b.chk)
         r = meso_shell_checker_create(m, sign, threads, &b.chk, err);
@@ -246,6 +234,6 @@ meso_result meso_shell_bend(const meso_mesh* m, float* d, const float* normals, 
     if (!shared)
         meso_shell_checker_destroy(b.chk);
     free(b.cand), free(b.dir), free(b.ring), free(b.vf_first), free(b.vf), free(b.next), free(b.moved);
-    free(b.changed), free(b.bad), free(b.taken), free(fill);
+    free(b.changed), free(b.bad), free(b.taken);
     return r;
 }

@@ -116,6 +116,31 @@ done:
     return MESO_OK;
 }
 
+meso_result meso_vertex_faces(const meso_mesh* m, uint32_t** first, uint32_t** faces, const char* what,
+                              meso_error* err)
+{
+    const uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    uint32_t* fi = calloc((size_t)nv + 1, sizeof(uint32_t));
+    uint32_t* fa = malloc(sizeof(uint32_t) * (3 * (size_t)nt + 1));
+    uint32_t* fill = malloc(sizeof(uint32_t) * ((size_t)nv + 1));
+    *first = *faces = NULL;
+    if (!fi || !fa || !fill) {
+        free(fi), free(fa), free(fill);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "%s: out of memory", what);
+    }
+    for (size_t i = 0; i < 3 * (size_t)nt; ++i)
+        ++fi[m->indices[i] + 1];
+    for (uint32_t v = 0; v < nv; ++v)
+        fi[v + 1] += fi[v];
+    memcpy(fill, fi, sizeof(uint32_t) * nv);
+    for (size_t i = 0; i < 3 * (size_t)nt; ++i)
+        fa[fill[m->indices[i]]++] = (uint32_t)(i / 3);
+    free(fill);
+    *first = fi;
+    *faces = fa;
+    return MESO_OK;
+}
+
 meso_result meso_vertex_normals(const meso_mesh* m, float* normals, meso_error* err)
 {
     double* acc = calloc((size_t)m->vertex_count * 3 + 1, sizeof(double));

@@ -73,4 +73,11 @@ meso_result meso_shell_trace_all(const meso_lp_field* field, const meso_mesh* m,
  * uneven triangulations); vertices without faces get (0, 0, 1). */
 meso_result meso_vertex_normals(const meso_mesh* m, float* normals, meso_error* err);
 
+/* The faces around each vertex (CSR, in face order: deterministic): those
+ * of v are faces[first[v] .. first[v + 1]). *first (vertex_count + 1) and
+ * *faces (3 triangle_count) are malloc'd, the caller's to free; both NULL
+ * when out of memory (MESO_ERR_OUT_OF_MEMORY, message naming `what`). */
+meso_result meso_vertex_faces(const meso_mesh* m, uint32_t** first, uint32_t** faces, const char* what,
+                              meso_error* err);
+
 #endif

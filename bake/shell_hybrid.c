@@ -287,28 +287,15 @@ meso_result meso_shell_repair_in(const meso_mesh* m, float* d, int sign, uint32_
     uint8_t* bad = calloc(nt ? nt : 1, 1);
     uint8_t* touched = calloc(nv ? nv : 1, 1);
     uint8_t* now = calloc(nv ? nv : 1, 1);
-    uint32_t* first = calloc((size_t)nv + 1, sizeof(uint32_t));
-    uint32_t* faces = malloc(sizeof(uint32_t) * 3 * (size_t)(nt ? nt : 1));
-    if (!bad || !touched || !now || !first || !faces) {
-        free(bad), free(touched), free(now), free(first), free(faces);
+    uint32_t *first = NULL, *faces = NULL;
+    if (!bad || !touched || !now) {
+        free(bad), free(touched), free(now);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
     }
-    /* Vertex -> faces (CSR), in face order: deterministic. */
-    for (size_t i = 0; i < 3 * (size_t)nt; ++i)
-        first[m->indices[i] + 1]++;
-    for (uint32_t v = 0; v < nv; ++v)
-        first[v + 1] += first[v];
-    uint32_t* fill = calloc(nv ? nv : 1, sizeof(uint32_t));
-    if (!fill) {
-        free(bad), free(touched), free(now), free(first), free(faces);
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "repair: out of memory");
+    if (meso_vertex_faces(m, &first, &faces, "repair", err) != MESO_OK) {
+        free(bad), free(touched), free(now);
+        return MESO_ERR_OUT_OF_MEMORY;
     }
-    for (uint32_t f = 0; f < nt; ++f)
-        for (int k = 0; k < 3; ++k) {
-            const uint32_t v = m->indices[3 * (size_t)f + k];
-            faces[first[v] + fill[v]++] = f;
-        }
-    free(fill);
     uint32_t nbad = 0, round = 0;
     meso_shell_checker* ck = shared;
     meso_result r = ck ? MESO_OK : meso_shell_checker_create(m, sign, threads, &ck, err);

@@ -88,23 +88,9 @@ meso_result meso_shell_regrow_in(const meso_mesh* m, float* d, const float* targ
     uint8_t* moved = calloc(nv ? nv : 1, 1);
     uint8_t* contested = calloc(nv ? nv : 1, 1);
     uint8_t* taken = calloc(nt ? nt : 1, 1);
-    /* The faces around each vertex (CSR). */
-    uint32_t* vf_first = calloc((size_t)nv + 1, sizeof(uint32_t));
-    uint32_t* vf = malloc(sizeof(uint32_t) * (3 * (size_t)nt + 1));
-    for (size_t i = 0; vf_first && vf && i < 3 * (size_t)nt; ++i)
-        ++vf_first[m->indices[i] + 1];
-    for (uint32_t v = 0; vf_first && vf && v < nv; ++v)
-        vf_first[v + 1] += vf_first[v];
-    uint32_t* fill = vf_first && vf ? malloc(sizeof(uint32_t) * (nv ? nv : 1)) : NULL;
-    const int adjacency = fill != NULL;
-    if (fill) {
-        memcpy(fill, vf_first, sizeof(uint32_t) * nv);
-        for (size_t i = 0; i < 3 * (size_t)nt; ++i)
-            vf[fill[m->indices[i]]++] = (uint32_t)(i / 3);
-    }
-    free(fill);
-    meso_result r = cand && orig && hi && bad && moved && contested && taken && adjacency
-                        ? MESO_OK
+    uint32_t *vf_first = NULL, *vf = NULL; /* the faces around each vertex */
+    meso_result r = cand && orig && hi && bad && moved && contested && taken
+                        ? meso_vertex_faces(m, &vf_first, &vf, "regrow", err)
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "regrow: out of memory");
     /* Each pass moves a few directors: the incremental checker re-tests only
      * the faces around them, with the verdicts of a full check. */
