@@ -310,6 +310,8 @@ static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_option
     uint8_t* keep = NULL;
     meso_mesh_level* out = calloc((size_t)max_levels, sizeof(*out));
     uint32_t made = 0;
+    meso_surface_ref ref; /* level 0, measured against every level */
+    int have_ref = 0;
     const size_t ni = 3 * (size_t)m->triangle_count;
     meso_result r = out ? weld(m, o->split_seams, &wpos, &wcount, &windex, &wm) : MESO_ERR_OUT_OF_MEMORY;
     if (r == MESO_OK) {
@@ -343,7 +345,10 @@ static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_option
             goto done;
         }
         ++made;
-        r = meso_surface_distance(&L->mesh, m, spacing, o->threads, &L->measured, &L->sample_radius, err);
+        if (!have_ref && (r = meso_surface_ref_build(m, &ref, err)) != MESO_OK)
+            goto done;
+        have_ref = 1;
+        r = meso_surface_distance_to_ref(&L->mesh, &ref, spacing, o->threads, &L->measured, &L->sample_radius, err);
         if (r != MESO_OK)
             goto done;
         running = L->measured > running ? L->measured : running;
@@ -353,6 +358,8 @@ static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_option
         cur_n = got;
     }
 done:
+    if (have_ref)
+        meso_surface_ref_free(&ref);
     free(wpos);
     free(windex);
     free(wm.start);

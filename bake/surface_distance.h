@@ -24,12 +24,33 @@
 #define MESO_SURFACE_DISTANCE_H
 
 #include "meso_bake.h"
+#include "triangle_grid.h"
 
 /* The bound above between the surfaces of `a` and `b` (both with at least
  * one triangle), samples at `spacing` (> 0). *radius (may be NULL) gets
  * the sampling radius included in *bound. */
 meso_result meso_surface_distance(const meso_mesh* a, const meso_mesh* b, double spacing, int threads, double* bound,
                                   double* radius, meso_error* err);
+
+/* A reference mesh measured against many others (the levels of a chain
+ * against level 0): its samples' coordinates and its grid, built once over
+ * its own bounds. A mesh measured against it that reaches outside those
+ * bounds is measured as meso_surface_distance does (both grids anew). */
+typedef struct meso_surface_ref {
+    const meso_mesh* mesh; /* borrowed */
+    double* xyz;
+    double lo[3], hi[3];
+    mesoi_tri_grid grid;
+    int built;
+} meso_surface_ref;
+
+meso_result meso_surface_ref_build(const meso_mesh* m, meso_surface_ref* ref, meso_error* err);
+
+/* meso_surface_distance(a, ref->mesh, ...), the same bound. */
+meso_result meso_surface_distance_to_ref(const meso_mesh* a, const meso_surface_ref* ref, double spacing,
+                                         int threads, double* bound, double* radius, meso_error* err);
+
+void meso_surface_ref_free(meso_surface_ref* ref);
 
 /* The mean edge length of `m` (every triangle's three edges; 0 without
  * triangles): the spacing mesh_levels.c derives from level 0. */

@@ -443,8 +443,30 @@ static void skipped_samples_change_nothing(void)
                    c ? "rotated" : "coarse", threads, want, bound);
             assert(fabs(radius - brute_radius) <= 1e-12);
             assert(fabs(bound - want) <= 1e-9);
+            /* Against a reference built once (mesh_levels.c's chain): the
+             * same numbers. */
+            meso_surface_ref ref;
+            double ref_bound = 0, ref_radius = 0;
+            assert(meso_surface_ref_build(&fine, &ref, &err) == MESO_OK);
+            assert(meso_surface_distance_to_ref(other[c], &ref, spacing, threads, &ref_bound, &ref_radius, &err) ==
+                   MESO_OK);
+            assert(ref_bound == bound && ref_radius == radius);
+            meso_surface_ref_free(&ref);
         }
     }
+    /* A mesh reaching outside the reference's box is measured with both
+     * grids built anew over both boxes (the reference's grid does not hold
+     * its samples): the same number as meso_surface_distance. */
+    for (uint32_t i = 0; i < 3 * coarse.vertex_count; ++i)
+        coarse.positions[i] *= 1.25f;
+    meso_surface_ref ref;
+    meso_error err = {0};
+    double bound = 0, ref_bound = 0, radius = 0, ref_radius = 0;
+    assert(meso_surface_ref_build(&fine, &ref, &err) == MESO_OK);
+    assert(meso_surface_distance(&coarse, &fine, spacing, 2, &bound, &radius, &err) == MESO_OK);
+    assert(meso_surface_distance_to_ref(&coarse, &ref, spacing, 2, &ref_bound, &ref_radius, &err) == MESO_OK);
+    assert(ref_bound == bound && ref_radius == radius && bound > 0.2);
+    meso_surface_ref_free(&ref);
     meso_mesh_free(&fine);
     meso_mesh_free(&coarse);
     meso_mesh_free(&turned);
