@@ -481,13 +481,16 @@ typedef struct meso_bake_shell_report {
      * .meso file, which stays the same bake after bake): load (read, check
      * and fix the mesh; the texture function; with update, OLD and the
      * region), topology (edges, boundary), check (the base's
-     * self-intersection test; with update, of the moved faces), texture
+     * self-intersection test, with more than one thread on its own thread
+     * beside field and directors, so not part of their sum; with update,
+     * of the moved faces), texture
      * (uvs, seams),
      * field (normals, boundary strip, Barnes-Hut tree), directors (tracing
      * and the hybrid rounds, of which directors_checks in the rounds' exact
      * checks), repair (regrow, bend), validate (the final exact validation),
      * allowed (the allowed thickness, shell_allowed.h), assemble (encoding
-     * the output). All layers of an envelope summed. */
+     * the output, and waiting for the stand-in levels begun on their own
+     * thread after the directors). All layers of an envelope summed. */
     double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,
         seconds_directors_checks, seconds_repair, seconds_validate, seconds_allowed, seconds_assemble;
     /* With options.update: the vertices the edit moved, and those whose

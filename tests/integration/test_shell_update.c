@@ -388,6 +388,10 @@ static void check_defects(const char* dir)
     printf("  through the tube: update %d (E%d), full %d (E%d)\n", upd.r, upd.err.code, full.r, full.err.code);
     assert(full.r != MESO_OK && full.err.code == 3114);
     assert(upd.r != MESO_OK && upd.err.code == 3114);
+    baked_free(&full);
+    o.common.threads = 1; /* the check inline, not on a thread of its own (bake_shell.c, input_check) */
+    full = bake(&o, NULL);
+    assert(full.r != MESO_OK && full.err.code == 3114);
     baked_free(&old);
     free(pos);
     meso_mesh_free(&m);
