@@ -243,18 +243,25 @@ static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint
 }
 
 /* The stand-in chain (the simplified base meshes of levels 2..) depends on
- * the base mesh and e0 only, and the exact validation that follows the
- * directors keeps two cores busy only part of the time: with more than one
- * thread the chain is built on a thread of its own from the moment the
- * directors are final, and joined in assemble(), with the same bytes. Starting it with the normals
- * (sampling its errors for the requested thickness, as e0 is not known
- * before the directors are) was no faster on 106k triangles (3.29 against
- * 3.45 s, medians of 3, on a noisy machine) and changed the bytes of
- * interior shells, whose every director repair may shorten. */
+ * the base mesh only: e0, which every level adds to its own error, is not
+ * known before the directors are final, so the chain samples its own
+ * errors at a quarter of the thickness the directors may reach (e0_sampling:
+ * the highest texel times the side's thickness; e0 itself is that or less,
+ * less where repair shortened every longest director) and e0 is added when
+ * the levels are stored. With more than one thread the chain is built on a
+ * thread of its own from the moment the first side's directors are traced
+ * (standin_begin): repair, regrow and bend that follow keep one core busy
+ * most of the time. Joined in assemble(); built there with one thread: the
+ * same bytes. At 106k triangles the wait in assemble went from 0.32 to
+ * ~0.05 s. Started after the directors instead (until this change, with the
+ * chain sampled at e0) it overlapped only validation; started with the
+ * normals, before tracing, it was no faster (3.29 against 3.45 s, medians of
+ * 3): tracing keeps both cores busy. An update starts it after the
+ * directors, as before: whether OLD's chain is kept needs e0. */
 typedef struct standin_job {
     meso_mesh base;         /* the base mesh as its MESH chunk has it (shell_base) */
     float *pos, *normals;   /* base's own arrays when seam vertices are added */
-    double e0;              /* level 1's error (standin_error) */
+    double e0_sampling;     /* sets the chain's sample spacing (above) */
     int levels, threads;
     mesoi_standin_levels out;
     meso_error err;
@@ -351,6 +358,8 @@ static meso_result allowed_side(shell_bake* s, int layer, int sign, double h_sid
 /* Directors for each side (the Lp field, hybrid or normal), repaired unless
  * asked not to. Exterior: layer 0 along +n. Interior: layer 0 along -n.
  * Envelope: layer 0 (top) along +n, layer 1 (bottom) along -n. */
+static void standin_begin(shell_bake* s);
+
 static meso_result directors(shell_bake* s, meso_error* err)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -407,6 +416,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
                                                  s->run.common.threads, redo, dl, s->lp_side, &hs, &ts, ck, err);
             if (r == MESO_OK) /* the input's verdict before anything repairs over it */
                 r = input_check_join(&s->check, s->rep, err);
+            if (r == MESO_OK && !a->update)
+                standin_begin(s); /* beside repair, which keeps one core busy (standin_job) */
             s->rep->hybrid_rounds += hs.rounds;
             s->rep->seconds_directors += meso_seconds() - t;
             s->rep->seconds_directors_checks += hs.seconds_checks;
@@ -745,31 +756,46 @@ static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_err
     return MESO_OK;
 }
 
+/* What the chain's samples are spaced for (the comment above standin_job). */
+static double standin_e0_sampling(const shell_bake* s)
+{
+    return texel_max(s) * (s->a.kind == MESO_SHELL_ENVELOPE ? 0.5 * s->h : s->h);
+}
+
 static int standin_run(void* arg)
 {
     standin_job* j = arg;
-    j->r = mesoi_standin_levels_build(&j->base, j->e0, j->levels, j->threads, &j->out, &j->err);
+    j->r = mesoi_standin_levels_build(&j->base, j->e0_sampling, j->levels, j->threads, &j->out, &j->err);
     return 0;
 }
 
-/* Once the directors are final: e0, whether an update keeps OLD's chain,
- * and otherwise the chain started on its own thread (standin_job); with one
- * thread, or no thread to be had, assemble() builds it. */
-static void standin_start(shell_bake* s)
+/* The chain started on its own thread, if there are threads for it and it
+ * is wanted: once the normals are known (shell_base), for a full bake
+ * from the first side's traced directors (directors()), for an update
+ * after them (standin_start). */
+static void standin_begin(shell_bake* s)
 {
     standin_job* j = &s->chain;
-    s->e0 = standin_error(s);
-    s->keep_chain = chain_kept(s);
-    if (s->a.levels == 1 || meso_bake_thread_count(s->run.common.threads) < 2 || !MESO_HAVE_MESHOPTIMIZER ||
-        s->keep_chain || !shell_base(s, &j->base, &j->pos, &j->normals))
+    if (j->state || s->a.levels == 1 || meso_bake_thread_count(s->run.common.threads) < 2 ||
+        !MESO_HAVE_MESHOPTIMIZER || s->keep_chain || !shell_base(s, &j->base, &j->pos, &j->normals))
         return;
-    j->e0 = s->e0;
+    j->e0_sampling = standin_e0_sampling(s);
     j->levels = s->a.levels;
     j->threads = s->run.common.threads;
 #ifndef __STDC_NO_THREADS__
     if (thrd_create(&j->thread, standin_run, j) == thrd_success)
         j->state = 1;
 #endif
+}
+
+/* Once the directors are final: e0, whether an update keeps OLD's chain,
+ * and otherwise the chain started if it is not yet; with one thread, or no
+ * thread to be had, assemble() builds it. */
+static void standin_start(shell_bake* s)
+{
+    s->e0 = standin_error(s);
+    s->keep_chain = chain_kept(s);
+    standin_begin(s);
 }
 
 /* The file: base mesh with the normals the directors started from (and the
@@ -922,9 +948,10 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                 standins = j->out; /* taken: freed below */
                 memset(&j->out, 0, sizeof j->out);
             } else {
-                r = mesoi_standin_levels_build(&base, s->e0, a->levels, s->run.common.threads,
+                r = mesoi_standin_levels_build(&base, standin_e0_sampling(s), a->levels, s->run.common.threads,
                                                &standins, err);
             }
+            standins.e0 = s->e0; /* sampled for e0_sampling, stored with e0 */
             if (r == MESO_OK)
                 n += mesoi_standin_levels_append(&standins, &base, &chunks[0], rec.bbox_min, rec.bbox_max,
                                                  chunks + n, rep);
