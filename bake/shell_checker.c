@@ -47,6 +47,7 @@ struct meso_shell_checker {
     /* Broad phase of the incremental calls (built at the first one): the
      * offset and base triangles' boxes. */
     meso_box_grid *gtop, *gbase;
+    double cell;     /* the grids' cell edge, once chosen */
     uint32_t* found; /* one query's items */
     size_t found_n, found_cap;
 };
@@ -131,37 +132,61 @@ static void tri_box(const double* xyz, const uint32_t* ix, double lo[3], double 
     }
 }
 
-/* Both grids, current for the offset positions in c->top (the changed faces
- * re-set; everything on the first call). Cells: the mean largest extent of
- * the offset triangles' boxes. */
+/* A grid of the triangles' boxes over positions xyz; NULL when out of
+ * memory. */
+static meso_box_grid* grid_of(const meso_mesh* m, const double* xyz, double cell)
+{
+    const uint32_t nt = m->triangle_count;
+    meso_box_grid* g = meso_box_grid_create(nt, cell);
+    for (uint32_t f = 0; g && f < nt; ++f) {
+        double lo[3], hi[3];
+        tri_box(xyz, m->indices + 3 * (size_t)f, lo, hi);
+        if (!meso_box_grid_set(g, f, lo, hi)) {
+            meso_box_grid_destroy(g);
+            g = NULL;
+        }
+    }
+    return g;
+}
+
+/* Both grids, current for the offset positions in c->top: the changed
+ * faces re-set, or the offset grid built anew after a full search (which
+ * leaves it stale; the base grid never is: the base does not move). Cells:
+ * the mean largest extent of the offset triangles' boxes when the offset
+ * grid is first built. Two grids to build are built on two threads. */
 static int grids_update(meso_shell_checker* c)
 {
     const meso_mesh* m = c->m;
     const uint32_t nt = m->triangle_count;
     double lo[3], hi[3];
     if (!c->gtop) {
-        double sum = 0;
-        for (uint32_t f = 0; f < nt; ++f) {
-            tri_box(c->top, m->indices + 3 * (size_t)f, lo, hi);
-            double e = 0;
-            for (int k = 0; k < 3; ++k)
-                e = hi[k] - lo[k] > e ? hi[k] - lo[k] : e;
-            sum += e;
+        if (!(c->cell > 0)) {
+            double sum = 0;
+            for (uint32_t f = 0; f < nt; ++f) {
+                tri_box(c->top, m->indices + 3 * (size_t)f, lo, hi);
+                double e = 0;
+                for (int k = 0; k < 3; ++k)
+                    e = hi[k] - lo[k] > e ? hi[k] - lo[k] : e;
+                sum += e;
+            }
+            c->cell = nt && sum > 0 ? sum / nt : 1.0;
         }
-        const double cell = nt && sum > 0 ? sum / nt : 1.0;
-        c->gtop = meso_box_grid_create(nt, cell);
-        c->gbase = meso_box_grid_create(nt, cell);
-        if (!c->gtop || !c->gbase)
-            return 0;
-        for (uint32_t f = 0; f < nt; ++f) {
-            tri_box(c->base, m->indices + 3 * (size_t)f, lo, hi);
-            if (!meso_box_grid_set(c->gbase, f, lo, hi))
-                return 0;
-            tri_box(c->top, m->indices + 3 * (size_t)f, lo, hi);
-            if (!meso_box_grid_set(c->gtop, f, lo, hi))
-                return 0;
+        const int both = !c->gbase;
+#ifdef _OPENMP
+#pragma omp parallel sections num_threads(both && c->threads > 1 ? 2 : 1)
+#endif
+        {
+#ifdef _OPENMP
+#pragma omp section
+#endif
+            c->gtop = grid_of(m, c->top, c->cell);
+#ifdef _OPENMP
+#pragma omp section
+#endif
+            if (both)
+                c->gbase = grid_of(m, c->base, c->cell);
         }
-        return 1;
+        return c->gtop && c->gbase;
     }
     for (uint32_t f = 0; f < nt; ++f)
         if (c->fchanged[f]) {
@@ -339,10 +364,9 @@ meso_result meso_shell_checker_bad_faces(meso_shell_checker* c, const float* d, 
         meso_cgal_pairs self, cross;
         if (full) {
             r = meso_cgal_shell_pairs(c->top, c->base, nv, m->indices, nt, NULL, c->threads, &self, &cross, err);
-            /* the grids (if any) are stale everywhere: rebuilt at the next incremental call */
+            /* the offset grid (if any) is stale everywhere: rebuilt at the next incremental call */
             meso_box_grid_destroy(c->gtop);
-            meso_box_grid_destroy(c->gbase);
-            c->gtop = c->gbase = NULL;
+            c->gtop = NULL;
         } else {
             r = changed_pairs(c, &self, &cross, err);
         }
