@@ -129,10 +129,6 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
     }
 }
 
-/* Refuse what no shell can be built on, before any work: the topology
- * (mesh_check.h) and, with CGAL, a surface that intersects itself (an
- * update tests only the pairs its edit touched, once OLD is read:
- * mesoi_shell_update_base_check; `whole` 0). */
 /* The input's self-intersection check (CGAL, one thread: its Parallel_tag
  * was slower, shell_bend.h) needs nothing the directors make and they need
  * nothing from it but its verdict. With more than one thread it runs on a
@@ -206,8 +202,10 @@ static meso_result input_check_join(input_check* c, meso_bake_shell_report* rep,
     return c->r;
 }
 
-/* The topology's verdict, and the input check started (whole: not for an
- * update, whose base mesh is checked near the edit only). */
+/* Refuse what no shell can be built on: the topology (mesh_check.h), at
+ * once, and with CGAL a surface that intersects itself, by the input check
+ * started here (an update tests only the pairs its edit touched, once OLD
+ * is read: mesoi_shell_update_base_check; `whole` 0). */
 static meso_result require_shellable(const meso_mesh* m, const char* path, double diag, int whole, int threads,
                                      meso_mesh_topology* topo, input_check* check, meso_bake_shell_report* rep,
                                      meso_error* err)
@@ -253,7 +251,7 @@ static float* gather3(const float* in, uint32_t nv, const uint32_t* source, uint
  * (standin_begin): repair, regrow and bend that follow keep one core busy
  * most of the time. Joined in assemble(); built there with one thread: the
  * same bytes. At 106k triangles the wait in assemble went from 0.32 to
- * ~0.05 s. Started after the directors instead (until this change, with the
+ * 0.01 s. Started after the directors instead (until this change, with the
  * chain sampled at e0) it overlapped only validation; started with the
  * normals, before tracing, it was no faster (3.29 against 3.45 s, medians of
  * 3): tracing keeps both cores busy. An update starts it after the
@@ -414,13 +412,13 @@ static meso_result directors(shell_bake* s, meso_error* err)
             if (r == MESO_OK)
                 r = meso_shell_side_directors_in(s->field, m, s->normals, sign, &topt, a->directors,
                                                  s->run.common.threads, redo, dl, s->lp_side, &hs, &ts, ck, err);
+            s->rep->hybrid_rounds += hs.rounds;
+            s->rep->seconds_directors += meso_seconds() - t;
+            s->rep->seconds_directors_checks += hs.seconds_checks;
             if (r == MESO_OK) /* the input's verdict before anything repairs over it */
                 r = input_check_join(&s->check, s->rep, err);
             if (r == MESO_OK && !a->update)
                 standin_begin(s); /* beside repair, which keeps one core busy (standin_job) */
-            s->rep->hybrid_rounds += hs.rounds;
-            s->rep->seconds_directors += meso_seconds() - t;
-            s->rep->seconds_directors_checks += hs.seconds_checks;
             if (r == MESO_OK)
                 mesoi_run_stage(&s->run, "directors", f1 - 0.05, f1,
                                 "directors (%s side, %s): %u Lp, %u normal, %u rounds, %llu field evaluations (%.0f "
