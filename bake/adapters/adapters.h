@@ -84,7 +84,7 @@ meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, const double
  * shell_checker.c need. Pairs are returned as malloc'd arrays of (a, b)
  * index pairs (self: a < b; cross: a on top, b on the base), sorted, so the
  * result does not depend on `threads` (1..; the work is split over that
- * many threads). Zero-area triangles are skipped. Free with free(). */
+ * many threads, over two when every triangle is searched). Zero-area triangles are skipped. Free with free(). */
 typedef struct meso_cgal_pairs {
     uint32_t* pairs; /* 2 * count indices */
     size_t count;

@@ -457,7 +457,8 @@ extern "C" meso_result meso_cgal_cross_intersections_mark(const double* xyz_a, c
 // >>shell pairs ----------------------------------------------------------
 // meso_cgal_shell_pairs: the changed triangles' boxes against all boxes, the
 // changed set split over threads (each with its own copy of the box pointers,
-// which box_intersection_d reorders), the pairs sorted at the end.
+// which box_intersection_d reorders), the pairs sorted at the end; every
+// triangle (changed NULL) on at most two threads (split_offset_boxes).
 namespace {
 typedef std::vector<std::pair<uint32_t, uint32_t>> Pair_list;
 
@@ -494,10 +495,10 @@ void shell_pairs_part(const Soup& top, const Soup& base, const std::vector<Box>&
                                                    std::ptrdiff_t(2000));
 }
 
-// Every intersecting pair of offset triangles (f < g), by one self sweep.
-void full_self_pairs(const Soup& top, const std::vector<Box>& top_boxes, Pair_list& self)
+// The intersecting pairs (f < g) among the offset boxes p (one self
+// sweep), or, with q, between p and q (one bipartite sweep).
+void offset_pairs(const Soup& top, std::vector<const Box*>& p, std::vector<const Box*>* q, Pair_list& self)
 {
-    std::vector<const Box*> p = box_pointers(top_boxes);
     auto cb = [&](const Box* x, const Box* y) {
         uint32_t f = (uint32_t)x->info(), g = (uint32_t)y->info();
         if (g < f)
@@ -505,7 +506,38 @@ void full_self_pairs(const Soup& top, const std::vector<Box>& top_boxes, Pair_li
         if (pair_intersects(top, f, top, g, false))
             self.push_back(std::make_pair(f, g));
     };
-    CGAL::box_self_intersection_d<CGAL::Sequential_tag>(p.begin(), p.end(), cb, std::ptrdiff_t(2000));
+    if (q)
+        CGAL::box_intersection_d<CGAL::Sequential_tag>(p.begin(), p.end(), q->begin(), q->end(), cb,
+                                                       std::ptrdiff_t(2000));
+    else
+        CGAL::box_self_intersection_d<CGAL::Sequential_tag>(p.begin(), p.end(), cb, std::ptrdiff_t(2000));
+}
+
+// The offset boxes in two halves for two threads, with no pair searched
+// twice: A the boxes whose lowest x is below s (the median of the lowest
+// x's), B the rest. A pair across the halves has a.max_x >= b.min_x >= s,
+// so only A's boxes that reach s (`reach`) can meet B's: self(A), self(B)
+// and (reach, B) find every pair once.
+void split_offset_boxes(const std::vector<Box>& boxes, std::vector<const Box*>& a, std::vector<const Box*>& b,
+                        std::vector<const Box*>& reach)
+{
+    std::vector<double> lows;
+    lows.reserve(boxes.size());
+    for (const Box& x : boxes)
+        lows.push_back(x.min_coord(0));
+    if (lows.empty())
+        return;
+    std::nth_element(lows.begin(), lows.begin() + (std::ptrdiff_t)(lows.size() / 2), lows.end());
+    const double split = lows[lows.size() / 2];
+    for (const Box& x : boxes) {
+        if (x.min_coord(0) < split) {
+            a.push_back(&x);
+            if (x.max_coord(0) >= split)
+                reach.push_back(&x);
+        } else {
+            b.push_back(&x);
+        }
+    }
 }
 
 // Every intersecting (offset triangle, base triangle) pair.
@@ -638,18 +670,30 @@ extern "C" meso_result meso_cgal_shell_pairs(const double* top, const double* ba
         const size_t n = changed_boxes.size();
         size_t parts = (size_t)std::max(1, std::min(threads, 64));
         std::vector<Pair_list> selfs(parts), crosses(parts);
-        if (!changed) {
-            // Everything: one self sweep of the offset boxes beside one
-            // offset/base sweep. Splitting the changed boxes into parts, as
-            // below, made each part sort every box again: at 423k
-            // triangles the whole search took 1.32 s on two threads.
-            run_parts(parts > 1 ? 2 : 1, [&](size_t k) {
-                if (k == 0 || parts == 1)
-                    full_self_pairs(t, top_boxes, selfs[0]);
-                if (k == 1 || parts == 1)
-                    full_cross_pairs(t, b, top_boxes, base_boxes, crosses[0]);
+        if (!changed && parts == 1) {
+            std::vector<const Box*> p = box_pointers(top_boxes);
+            offset_pairs(t, p, nullptr, selfs[0]);
+            full_cross_pairs(t, b, top_boxes, base_boxes, crosses[0]);
+        } else if (!changed) {
+            // Everything, on two threads: the offset boxes' pairs in two
+            // halves that share no pair (split_offset_boxes), the
+            // offset/base sweep beside the smaller half. Splitting as the
+            // changed boxes are below made each part sort every box again
+            // (at 423k the whole search took 1.32 s); one self sweep
+            // beside the offset/base sweep left one core idle most of it.
+            std::vector<const Box*> ha, hb, reach;
+            split_offset_boxes(top_boxes, ha, hb, reach);
+            std::vector<const Box*> hb0 = hb; // the sweeps reorder their sequences: one copy per thread
+            run_parts(2, [&](size_t k) {
+                if (k == 0) {
+                    offset_pairs(t, ha, nullptr, selfs[0]);
+                    offset_pairs(t, reach, &hb0, selfs[0]);
+                } else {
+                    offset_pairs(t, hb, nullptr, selfs[1]);
+                    full_cross_pairs(t, b, top_boxes, base_boxes, crosses[1]);
+                }
             });
-            parts = 1;
+            parts = 2;
         } else {
             run_parts(parts, [&](size_t k) {
                 shell_pairs_part(t, b, changed_boxes, n * k / parts, n * (k + 1) / parts, top_boxes, base_boxes,
