@@ -133,10 +133,12 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
  * was slower, shell_bend.h) needs nothing the directors make and they need
  * nothing from it but its verdict. With more than one thread it runs on a
  * thread of its own from the moment the topology is known, beside the
- * field's construction (also one thread), and is joined before repair
- * (input_check_join): at 106k triangles the 0.25 s check and the 0.17 s
- * field took 0.42 s one after the other. A self-intersecting input fails
- * with the same error as before, after the directors' tracing. */
+ * texture coordinates, the field's construction (one thread) and the first
+ * side's tracing, and is joined before repair (input_check_join): at 106k
+ * triangles the 0.25 s check and the 0.17 s field took 0.42 s one after
+ * the other. A self-intersecting input fails with the same error as with
+ * one thread (E3114, also when something after it failed first:
+ * meso_bake_shell), after the tracing. */
 typedef struct input_check {
     const meso_mesh* m;
     const char* path;
@@ -204,7 +206,7 @@ static meso_result input_check_join(input_check* c, meso_bake_shell_report* rep,
 
 /* Refuse what no shell can be built on: the topology (mesh_check.h), at
  * once, and with CGAL a surface that intersects itself, by the input check
- * started here (an update tests only the pairs its edit touched, once OLD
+ * run or started here (an update tests only the pairs its edit touched, once OLD
  * is read: mesoi_shell_update_base_check; `whole` 0). */
 static meso_result require_shellable(const meso_mesh* m, const char* path, double diag, int whole, int threads,
                                      meso_mesh_topology* topo, input_check* check, meso_bake_shell_report* rep,
@@ -264,7 +266,7 @@ typedef struct standin_job {
     mesoi_standin_levels out;
     meso_error err;
     meso_result r;
-    int state;              /* 0: not started; 1: running on its thread; 2: built */
+    int state;              /* 0: not started; 1: running on its thread; 2: built; 3: not to be started (assemble builds it) */
 #ifndef __STDC_NO_THREADS__
     thrd_t thread;
 #endif
@@ -289,7 +291,7 @@ typedef struct shell_bake {
     meso_field_surface fs;
     meso_lp_field* field;
     mesoi_shell_prior prior; /* --update: the old bake's directors and the region to redo */
-    standin_job chain;       /* levels 2..: built beside validation */
+    standin_job chain;       /* levels 2..: built beside repair and validation (standin_job) */
     float e0;                /* level 1's error (standin_error), once the directors are final */
     int keep_chain;          /* an update keeps OLD's chain (chain_kept) */
     input_check check;       /* the input's self-intersection check (require_shellable) */
@@ -775,7 +777,10 @@ static void standin_begin(shell_bake* s)
 {
     standin_job* j = &s->chain;
     if (j->state || s->a.levels == 1 || meso_bake_thread_count(s->run.common.threads) < 2 ||
-        !MESO_HAVE_MESHOPTIMIZER || s->keep_chain || !shell_base(s, &j->base, &j->pos, &j->normals))
+        !MESO_HAVE_MESHOPTIMIZER || s->keep_chain)
+        return;
+    j->state = 3; /* tried: once (shell_base's arrays stay in j until shell_free) */
+    if (!shell_base(s, &j->base, &j->pos, &j->normals))
         return;
     j->e0_sampling = standin_e0_sampling(s);
     j->levels = s->a.levels;
@@ -1067,6 +1072,15 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     if (r == MESO_OK)
         r = assemble(&s, out, err);
     rep->seconds_assemble = meso_seconds() - t;
+    if (r != MESO_OK && s.check.state == 1) { /* failed before the verdict was read: as one thread, the input's error first */
+        meso_error ce;
+        const meso_result cr = input_check_join(&s.check, rep, &ce);
+        if (cr != MESO_OK) {
+            r = cr;
+            if (err)
+                *err = ce;
+        }
+    }
     shell_free(&s);
     if (r == MESO_OK)
         mesoi_run_done(&s.run);

@@ -490,7 +490,7 @@ typedef struct meso_bake_shell_report {
      * checks), repair (regrow, bend), validate (the final exact validation),
      * allowed (the allowed thickness, shell_allowed.h), assemble (encoding
      * the output, and waiting for the stand-in levels begun on their own
-     * thread after the directors). All layers of an envelope summed. */
+     * thread once the first side's directors are traced). All layers of an envelope summed. */
     double seconds_load, seconds_topology, seconds_check, seconds_texture, seconds_field, seconds_directors,
         seconds_directors_checks, seconds_repair, seconds_validate, seconds_allowed, seconds_assemble;
     /* With options.update: the vertices the edit moved, and those whose

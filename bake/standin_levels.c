@@ -33,7 +33,11 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
      * error is e0 + its own, so a sampling radius up to e0 / (4 sqrt 3)
      * loosens it by at most 14 % of e0, and on a shell (e0 = its thickness
      * times the highest texel, often ten mean edges) it takes the chain's
-     * measurement from the bulk of the bake to a small part of it. */
+     * measurement from the bulk of the bake to a small part of it. The
+     * shell bake passes the e0 its directors may reach (bake_shell.c,
+     * standin_e0_sampling) and stores the e0 they reached, which is less
+     * where repair shortened every longest director: there the radius may
+     * be a larger share of the stored e0 (a looser bound, still a bound). */
     const double spacing = fmax(0.5 * meso_mesh_mean_edge(base), 0.25 * e0);
     const meso_mesh_levels_options lo = {.max_levels = levels ? levels - 1 : MESOI_STANDIN_MAX_LEVELS - 1,
                                          .threads = threads, .spacing = spacing};

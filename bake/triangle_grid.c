@@ -116,7 +116,8 @@ meso_result mesoi_tri_grid_build(const double* xyz, const uint32_t* tri, uint32_
      * cell and a query tested ~600, which made measuring its levels' errors
      * take minutes (mesh_levels.c); 2^22 cells took 1.4x the CPU of 2^24
      * on 980k triangles. The price: up to 64 MiB of starts per grid, and
-     * surface_distance.c holds two (the --max-memory estimates do not count
+     * surface_distance.c holds two, or three while a chain measures its
+     * levels against level 0's (the --max-memory estimates do not count
      * them yet). And at most 32 cells per triangle: sqrt(triangles) a side
      * is ~triangles^1.5 cells, and on 106k triangles the grid was 160 per
      * triangle, most of them empty, and building the chain's grids (page
