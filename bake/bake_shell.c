@@ -312,8 +312,6 @@ static void standin_job_join(standin_job* j)
 static void shell_free(shell_bake* s)
 {
     standin_job_join(&s->chain);
-    if (s->check.state == 1) /* a bake that failed before the verdict was needed */
-        input_check_join(&s->check, s->rep, NULL);
     mesoi_standin_levels_free(&s->chain.out);
     free(s->chain.pos);
     free(s->chain.normals);
@@ -1072,10 +1070,10 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
     if (r == MESO_OK)
         r = assemble(&s, out, err);
     rep->seconds_assemble = meso_seconds() - t;
-    if (r != MESO_OK && s.check.state == 1) { /* failed before the verdict was read: as one thread, the input's error first */
+    if (s.check.state == 1) { /* failed before the verdict was read: the input's error first, as with one thread */
         meso_error ce;
         const meso_result cr = input_check_join(&s.check, rep, &ce);
-        if (cr != MESO_OK) {
+        if (cr != MESO_OK && r != MESO_OK) {
             r = cr;
             if (err)
                 *err = ce;

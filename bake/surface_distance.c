@@ -182,6 +182,28 @@ static meso_result oom(meso_error* err)
     return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "measuring a level's error: out of memory");
 }
 
+/* The reference over [lo, hi] (which holds m and every mesh measured
+ * against it). */
+static meso_result ref_build_over(const meso_mesh* m, const double lo[3], const double hi[3], meso_surface_ref* ref,
+                                  meso_error* err)
+{
+    memset(ref, 0, sizeof *ref);
+    if (!m || !m->triangle_count)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "surface distance: empty reference mesh");
+    ref->mesh = m;
+    memcpy(ref->lo, lo, sizeof ref->lo);
+    memcpy(ref->hi, hi, sizeof ref->hi);
+    ref->xyz = to_double(m);
+    meso_result r = ref->xyz ? MESO_OK : oom(err);
+    if (r == MESO_OK && (r = mesoi_tri_grid_build(ref->xyz, m->indices, m->triangle_count, ref->lo, ref->hi,
+                                                  &ref->grid, err)) == MESO_OK)
+        ref->built = 1;
+    if (r != MESO_OK)
+        meso_surface_ref_free(ref);
+    return r;
+}
+
+/* Both meshes' grids over both boxes: b as a reference over the union. */
 meso_result meso_surface_distance(const meso_mesh* a, const meso_mesh* b, double spacing, int threads, double* bound,
                                   double* radius, meso_error* err)
 {
@@ -195,39 +217,20 @@ meso_result meso_surface_distance(const meso_mesh* a, const meso_mesh* b, double
         lo[k] = lo2[k] < lo[k] ? lo2[k] : lo[k];
         hi[k] = hi2[k] > hi[k] ? hi2[k] : hi[k];
     }
-    double* axyz = to_double(a);
-    double* bxyz = to_double(b);
-    uint8_t* used = calloc(a->vertex_count > b->vertex_count ? a->vertex_count : b->vertex_count, 1);
-    mesoi_tri_grid ga, gb;
-    r = axyz && bxyz && used ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
-    if (r == MESO_OK && (r = mesoi_tri_grid_build(axyz, a->indices, a->triangle_count, lo, hi, &ga, err)) == MESO_OK) {
-        if ((r = mesoi_tri_grid_build(bxyz, b->indices, b->triangle_count, lo, hi, &gb, err)) == MESO_OK) {
-            r = both_ways(a, axyz, &ga, b, bxyz, &gb, spacing, threads, used, bound, radius);
-            mesoi_tri_grid_free(&gb);
-        }
-        mesoi_tri_grid_free(&ga);
-    }
-    free(axyz);
-    free(bxyz);
-    free(used);
-    return r == MESO_ERR_OUT_OF_MEMORY ? oom(err) : r;
+    meso_surface_ref ref;
+    if ((r = ref_build_over(b, lo, hi, &ref, err)) != MESO_OK)
+        return r;
+    r = meso_surface_distance_to_ref(a, &ref, spacing, threads, bound, radius, err);
+    meso_surface_ref_free(&ref);
+    return r;
 }
 
 meso_result meso_surface_ref_build(const meso_mesh* m, meso_surface_ref* ref, meso_error* err)
 {
-    memset(ref, 0, sizeof *ref);
-    if (!m || !m->triangle_count)
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "surface distance: empty reference mesh");
-    ref->mesh = m;
-    meso_mesh_bounds(m, ref->lo, ref->hi);
-    ref->xyz = to_double(m);
-    meso_result r = ref->xyz ? MESO_OK : oom(err);
-    if (r == MESO_OK && (r = mesoi_tri_grid_build(ref->xyz, m->indices, m->triangle_count, ref->lo, ref->hi,
-                                                  &ref->grid, err)) == MESO_OK)
-        ref->built = 1;
-    if (r != MESO_OK)
-        meso_surface_ref_free(ref);
-    return r;
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    if (m)
+        meso_mesh_bounds(m, lo, hi);
+    return ref_build_over(m, lo, hi, ref, err);
 }
 
 meso_result meso_surface_distance_to_ref(const meso_mesh* a, const meso_surface_ref* ref, double spacing,

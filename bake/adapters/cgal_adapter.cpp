@@ -670,30 +670,27 @@ extern "C" meso_result meso_cgal_shell_pairs(const double* top, const double* ba
         const size_t n = changed_boxes.size();
         size_t parts = (size_t)std::max(1, std::min(threads, 64));
         std::vector<Pair_list> selfs(parts), crosses(parts);
-        if (!changed && parts == 1) {
-            std::vector<const Box*> p = box_pointers(top_boxes);
-            offset_pairs(t, p, nullptr, selfs[0]);
-            full_cross_pairs(t, b, top_boxes, base_boxes, crosses[0]);
-        } else if (!changed) {
-            // Everything, on two threads: the offset boxes' pairs in two
-            // halves that share no pair (split_offset_boxes), the
-            // offset/base sweep beside the smaller half. Splitting as the
+        if (!changed) {
+            // Everything, on at most two threads: the offset boxes' pairs
+            // in two halves that share no pair (split_offset_boxes), the
+            // offset/base sweep beside the second half. Splitting as the
             // changed boxes are below made each part sort every box again
             // (at 423k the whole search took 1.32 s); one self sweep
             // beside the offset/base sweep left one core idle most of it.
             std::vector<const Box*> ha, hb, reach;
             split_offset_boxes(top_boxes, ha, hb, reach);
             std::vector<const Box*> hb0 = hb; // the sweeps reorder their sequences: one copy per thread
-            run_parts(2, [&](size_t k) {
+            parts = parts > 1 ? 2 : 1;
+            run_parts(parts, [&](size_t k) {
                 if (k == 0) {
                     offset_pairs(t, ha, nullptr, selfs[0]);
                     offset_pairs(t, reach, &hb0, selfs[0]);
-                } else {
-                    offset_pairs(t, hb, nullptr, selfs[1]);
-                    full_cross_pairs(t, b, top_boxes, base_boxes, crosses[1]);
+                }
+                if (k == parts - 1) {
+                    offset_pairs(t, hb, nullptr, selfs[k]);
+                    full_cross_pairs(t, b, top_boxes, base_boxes, crosses[k]);
                 }
             });
-            parts = 2;
         } else {
             run_parts(parts, [&](size_t k) {
                 shell_pairs_part(t, b, changed_boxes, n * k / parts, n * (k + 1) / parts, top_boxes, base_boxes,
