@@ -7,11 +7,15 @@
  * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h),
  * and with `--colour from-mesh[:G]` the mesh's base colour as a TX3D colour
  * grid (mesh_colour_grid.h; COLR then holds the default hash colours).
- * Levels of detail (FORMAT.md §7.10, `--levels`): level 1 is the base mesh
- * drawn as a plain mesh, its error measured against the voxel faces the
- * object draws (cells_standin.h); coarser levels are the base mesh's
- * simplifications (mesh_levels.h), each with error = the base's + the
- * simplification's (the triangle inequality of Hausdorff distances).
+ * Levels of detail (FORMAT.md §7.10, `--levels`): levels 1..N are native,
+ * the tile map halved each level (cells_levels.h), each with its error
+ * measured against level 0 and kept while it is below the stand-in's;
+ * then the base mesh drawn as a plain mesh, its error measured against the
+ * voxel faces the object draws (cells_standin.h); coarser levels are the
+ * base mesh's simplifications (mesh_levels.h), each with error = the
+ * base's + the simplification's (the triangle inequality of Hausdorff
+ * distances). `--levels K` keeps at most K in all: level 0, the base mesh
+ * (K >= 2), then native levels, then simplified ones.
  * Error messages name the options as mesobake spells them (--tile-map ...).
  */
 #include "bake_internal.h"
@@ -25,6 +29,7 @@
 #include <cjson/cJSON.h>
 
 #include "cells_chunks.h"
+#include "cells_levels.h"
 #include "cells_standin.h"
 #include "mesh_colour_grid.h"
 #include "memory_budget.h"
@@ -268,9 +273,51 @@ typedef struct colour_grid {
     uint8_t* rgba; /* NULL: none */
 } colour_grid;
 
+/* Native levels, at most MESO_CELLS_MAX_NATIVE, and none whose tile map
+ * would be under MESO_CELLS_MIN_LEVEL_RES voxels per edge. */
+enum { MESO_CELLS_MAX_NATIVE = 4, MESO_CELLS_MIN_LEVEL_RES = 4 };
+_Static_assert(1 + MESO_CELLS_MAX_NATIVE + 1 <= MESOI_STANDIN_MAX_LEVELS, "room for the base mesh stand-in");
+
+/* The native levels below level 0 (tile map tm, chunks cc), while each
+ * one's error stays below the stand-in's e0; returns how many. Stored
+ * errors must not decrease: a level measured closer than the one above it
+ * is given that one's error (still a bound). */
+static meso_result make_native(mesoi_bake_run* run, uint32_t want, const meso_voxel_grid* g,
+                               const meso_split_cells* sc, const meso_membership* mb, const meso_tile_map* tm,
+                               const meso_cells_chunks* cc, double e0, meso_cells_level* lv, uint32_t* count,
+                               meso_error* err)
+{
+    *count = 0;
+    for (uint32_t k = 0; k < want; ++k) {
+        const meso_voxel_grid* fg = k ? &lv[k - 1].g : g;
+        if (fg->tile_res % 2 || fg->tile_res / 2 < MESO_CELLS_MIN_LEVEL_RES)
+            break;
+        const double t = meso_seconds();
+        meso_result r = meso_cells_level_build(g, sc, mb, fg, k ? &lv[k - 1].tm : tm, k ? &lv[k - 1].sc : sc,
+                                               k ? &lv[k - 1].mb : mb, k ? &lv[k - 1].cc : cc, run->common.threads,
+                                               &lv[k], err);
+        if (r != MESO_OK)
+            return r;
+        if (k && lv[k].error.bound < lv[k - 1].error.bound)
+            lv[k].error.bound = lv[k - 1].error.bound;
+        mesoi_run_stage(run, "levels", 0.95, 0.95,
+                        "native level %u: %u^3 voxels a tile, %u split cells, within %g of level 0 (stand-in: %g) "
+                        "(%.0f ms)",
+                        k + 1, lv[k].g.tile_res, lv[k].sc.split_count, lv[k].error.bound, e0,
+                        1e3 * (meso_seconds() - t));
+        if (!(lv[k].error.bound < e0)) { /* the base mesh is as close: no use */
+            meso_cells_level_free(&lv[k]);
+            break;
+        }
+        *count = k + 1;
+    }
+    return MESO_OK;
+}
+
 static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_options* a, const meso_mesh* m,
                                const meso_voxel_grid* g, const meso_split_cells* sc, const meso_membership* mb,
-                               mesoi_standin_levels* out, meso_bake_cells_report* s, meso_error* err)
+                               const meso_tile_map* tm, const meso_cells_chunks* cc, mesoi_standin_levels* out,
+                               meso_cells_level* native, meso_bake_cells_report* s, meso_error* err)
 {
     memset(out, 0, sizeof *out);
     if (a->levels == 1)
@@ -296,9 +343,20 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
     if (a->levels == 0)
         mesoi_run_warning(run, 0, "built without meshoptimizer: the base mesh is the only stand-in");
 #endif
-    r = mesoi_standin_levels_build(m, se.bound, a->levels, run->common.threads, out, err);
+    const uint32_t want = a->levels == 0 ? MESO_CELLS_MAX_NATIVE
+                          : a->levels >= 3 ? (uint32_t)a->levels - 2 < MESO_CELLS_MAX_NATIVE ? (uint32_t)a->levels - 2
+                                                                                             : MESO_CELLS_MAX_NATIVE
+                                           : 0;
+    uint32_t nn = 0;
+    r = make_native(run, want, g, sc, mb, tm, cc, se.bound, native, &nn, err);
+    if (r == MESO_OK) /* the rest for the stand-ins: at most MAX levels in all (auto), or --levels */
+        r = mesoi_standin_levels_build(m, se.bound, (a->levels ? a->levels : (int)MESOI_STANDIN_MAX_LEVELS) - (int)nn,
+                                       run->common.threads, out, err);
     if (r != MESO_OK)
         return r;
+    out->native = nn;
+    for (uint32_t k = 0; k < nn; ++k)
+        out->native_error[k] = native[k].error.bound;
     mesoi_run_stage(run, "levels", 0.97, 0.97,
                     "stand-in: base mesh within %g of the %llu voxel faces drawn (sampled %g, radius %g); %u "
                     "simplified levels (%.0f ms)",
@@ -309,8 +367,8 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
 
 static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m, const meso_voxel_grid* g,
                             uint32_t R, const meso_split_cells* sc, const meso_cells_chunks* cc,
-                            const colour_grid* cg, mesoi_standin_levels* lv, meso_bake_cells_report* s,
-                            meso_bake_output** out, meso_error* err)
+                            const colour_grid* cg, mesoi_standin_levels* lv, const meso_cells_level* native,
+                            meso_bake_cells_report* s, meso_bake_output** out, meso_error* err)
 {
     meso_mesh_chunk mesh_chunk = {0};
     meso_result r = meso_bake_mesh_chunk(m, NULL, &mesh_chunk, err);
@@ -336,7 +394,7 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     report_json(rep, s);
 
     const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED, S = sc->split_count;
-    mesoi_chunk chunks[8 + MESOI_STANDIN_MAX_LEVELS + 1];
+    mesoi_chunk chunks[8 + 6 * MESO_CELLS_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS + 1];
     chunks[0] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
                                        .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
                               .data = mesh_chunk.data, .size = mesh_chunk.size};
@@ -349,21 +407,42 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     chunks[5] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, R, R, R, cc->nrmm, cc->nrmm_size);
     chunks[6] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, R, R, R, cc->colr, cc->colr_size);
     int count = 7;
-    if (cg->rgba) /* the mesh's base colour (FORMAT.md 7.2 kind 3): replaces COLR's as the albedo */
-        chunks[count++] = typed_chunk(MESO_CHUNK_TX3D, 0, MESO_DTYPE_U8, 4, cg->dims[0], cg->dims[1], cg->dims[2],
-                                      cg->rgba, 4 * (size_t)cg->dims[0] * cg->dims[1] * cg->dims[2]);
+    /* Native levels (cells_levels.h): their own cells chunks at lod 1..N;
+     * their MESH resolves to the base mesh stand-in's at lod N + 1. */
+    for (uint32_t k = 0; k < lv->native; ++k) {
+        const meso_cells_chunks* nc = &native[k].cc;
+        const uint32_t NR = native[k].g.tile_res, NS = native[k].sc.split_count;
+        chunks[count] = typed_chunk(MESO_CHUNK_CELL, REQ, MESO_DTYPE_BYTES, 1, 1, 1, 1, nc->cell, sizeof nc->cell);
+        chunks[count + 1] = typed_chunk(MESO_CHUNK_TILE, REQ, nc->tile_dtype, 1, NR, NR, NR, nc->tile, nc->tile_size);
+        chunks[count + 2] = typed_chunk(MESO_CHUNK_SPLT, REQ, MESO_DTYPE_U32, MESO_SPLT_COMPONENTS, NS, 1, 1, nc->splt,
+                                        nc->splt_size);
+        chunks[count + 3] = typed_chunk(MESO_CHUNK_MEMB, REQ, MESO_DTYPE_U32, 1, (uint32_t)(nc->memb_size / 4), 1, 1,
+                                        nc->memb, nc->memb_size);
+        chunks[count + 4] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, NR, NR, NR, nc->nrmm, nc->nrmm_size);
+        chunks[count + 5] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, NR, NR, NR, nc->colr, nc->colr_size);
+        for (int c = 0; c < 6; ++c)
+            chunks[count + c].desc.lod = (uint16_t)(k + 1);
+        count += 6;
+    }
+    if (cg->rgba) { /* the mesh's base colour (FORMAT.md 7.2 kind 3): replaces COLR's as the albedo */
+        chunks[count] = typed_chunk(MESO_CHUNK_TX3D, 0, MESO_DTYPE_U8, 4, cg->dims[0], cg->dims[1], cg->dims[2],
+                                    cg->rgba, 4 * (size_t)cg->dims[0] * cg->dims[1] * cg->dims[2]);
+        chunks[count++].desc.lod = (uint16_t)lv->native; /* one copy, which every native level resolves to */
+    }
     /* The stand-ins (FORMAT.md §7.10 form MESH): the base mesh's bytes again
-     * at lod 1, the simplified meshes at lod 2.., and the LODS records. */
+     * at lod N + 1, the simplified meshes at lod N + 2.., and the LODS
+     * records. */
     s->level_count = 1;
     s->level_triangles[0] = m->triangle_count;
     if (lv->count) {
         count += (int)mesoi_standin_levels_append(lv, m, &chunks[0], rec.bbox_min, rec.bbox_max, chunks + count, rep);
-        for (uint32_t L = 1; L <= lv->count; ++L) {
+        for (uint32_t L = 1; L <= lv->native + lv->count; ++L) {
             s->level_error[L] = lv->error[L];
             s->level_triangles[L] = lv->triangles[L];
         }
         cJSON_AddNumberToObject(rep, "surface_faces", (double)s->surface_faces);
-        s->level_count = lv->count + 1;
+        s->level_count = 1 + lv->native + lv->count;
+        s->native_levels = lv->native;
     }
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);
@@ -501,10 +580,14 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
         s->colour_map_bytes = cc.colr_size;
     }
     mesoi_standin_levels lv = {0};
+    meso_cells_level native[MESO_CELLS_MAX_NATIVE];
+    memset(native, 0, sizeof native);
     if (r == MESO_OK)
-        r = make_levels(&run, a, &m, &g, &sc, &mb, &lv, s, err);
+        r = make_levels(&run, a, &m, &g, &sc, &mb, &tm, &cc, &lv, native, s, err);
     if (r == MESO_OK)
-        r = assemble(a, &m, &g, R, &sc, &cc, &cg, &lv, s, out, err);
+        r = assemble(a, &m, &g, R, &sc, &cc, &cg, &lv, native, s, out, err);
+    for (int k = 0; k < MESO_CELLS_MAX_NATIVE; ++k)
+        meso_cells_level_free(&native[k]);
     mesoi_standin_levels_free(&lv);
     meso_cells_chunks_free(&cc);
     free(cg.rgba);

@@ -312,6 +312,65 @@ static meso_result distances(const soup* s, const meso_mesh* m, double spacing, 
     return r;
 }
 
+/* The faces of the solid of `sc` tagged INSIDE by `mb` over `g`, in voxel
+ * order. Returns 0 when out of memory; *too_many when there are more than
+ * MESO_CELLS_STANDIN_MAX_FACES (the soup is then empty). */
+static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, const meso_membership* mb, soup* out,
+                         int* too_many)
+{
+    soup s = {0};
+    const int64_t R = g->tile_res;
+    int ok = 1;
+    *too_many = 0;
+    /* Pass 0 counts (and stops past the limit), pass 1 lists. */
+    for (int pass = 0; pass < 2 && ok; ++pass) {
+        if (pass == 1) {
+            s.cap = s.faces ? s.faces : 1;
+            s.faces = 0;
+            s.count_only = 0;
+            s.xyz = malloc(sizeof(float) * 12 * s.cap);
+            s.tri = malloc(sizeof(uint32_t) * 6 * s.cap);
+            ok = s.xyz && s.tri;
+        } else {
+            s.count_only = 1;
+        }
+        for (uint32_t tz = 0; ok && tz < g->tiles[2]; ++tz)
+            for (uint32_t ty = 0; ok && ty < g->tiles[1]; ++ty)
+                for (uint32_t tx = 0; ok && tx < g->tiles[0]; ++tx) {
+                    if (meso_membership_tile(mb, tx, ty, tz) == MESO_TILE_OUTSIDE)
+                        continue;
+                    for (int64_t z = 0; ok && z < R; ++z)
+                        for (int64_t y = 0; ok && y < R; ++y)
+                            for (int64_t x = 0; ok && x < R; ++x) {
+                                const int64_t i = tx * R + x, j = ty * R + y, k = tz * R + z;
+                                if (!solid(g, sc, mb, i, j, k))
+                                    continue;
+                                for (int dir = 0; ok && dir < 6; ++dir) {
+                                    const int64_t step = (dir & 1) ? 1 : -1;
+                                    const int a = dir / 2;
+                                    if (!solid(g, sc, mb, i + (a == 0) * step, j + (a == 1) * step, k + (a == 2) * step)) {
+                                        if (s.faces == MESO_CELLS_STANDIN_MAX_FACES) {
+                                            *too_many = 1;
+                                            ok = 0;
+                                        } else {
+                                            ok = add_face(&s, g, i, j, k, dir);
+                                        }
+                                    }
+                                }
+                            }
+                }
+    }
+    if (*too_many) {
+        free(s.xyz);
+        free(s.tri);
+        s.xyz = NULL;
+        s.tri = NULL;
+        ok = 1;
+    }
+    *out = s;
+    return ok;
+}
+
 meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid* g, const meso_split_cells* sc,
                                        const meso_membership* mb, int threads, meso_cells_standin_error* out,
                                        meso_error* err)
@@ -319,47 +378,10 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
     memset(out, 0, sizeof(*out));
     if (!m || !m->triangle_count || !g || !sc || !mb || sc->res != g->tile_res)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells stand-in: no mesh, or split cells and grid disagree");
-    soup s = {0};
+    soup s;
+    int too_many = 0;
+    const int ok = collect_faces(g, sc, mb, &s, &too_many);
     const int64_t R = g->tile_res;
-    int ok = 1, too_many = 0;
-    /* Pass 0 counts (and stops past the limit), pass 1 lists. */
-    for (int pass = 0; pass < 2 && ok; ++pass) {
-    if (pass == 1) {
-        s.cap = s.faces ? s.faces : 1;
-        s.faces = 0;
-        s.count_only = 0;
-        s.xyz = malloc(sizeof(float) * 12 * s.cap);
-        s.tri = malloc(sizeof(uint32_t) * 6 * s.cap);
-        ok = s.xyz && s.tri;
-    } else {
-        s.count_only = 1;
-    }
-    for (uint32_t tz = 0; ok && tz < g->tiles[2]; ++tz)
-        for (uint32_t ty = 0; ok && ty < g->tiles[1]; ++ty)
-            for (uint32_t tx = 0; ok && tx < g->tiles[0]; ++tx) {
-                if (meso_membership_tile(mb, tx, ty, tz) == MESO_TILE_OUTSIDE)
-                    continue;
-                for (int64_t z = 0; ok && z < R; ++z)
-                    for (int64_t y = 0; ok && y < R; ++y)
-                        for (int64_t x = 0; ok && x < R; ++x) {
-                            const int64_t i = tx * R + x, j = ty * R + y, k = tz * R + z;
-                            if (!solid(g, sc, mb, i, j, k))
-                                continue;
-                            for (int dir = 0; ok && dir < 6; ++dir) {
-                                const int64_t step = (dir & 1) ? 1 : -1;
-                                const int a = dir / 2;
-                                if (!solid(g, sc, mb, i + (a == 0) * step, j + (a == 1) * step, k + (a == 2) * step)) {
-                                    if (s.faces == MESO_CELLS_STANDIN_MAX_FACES) {
-                                        too_many = 1;
-                                        ok = 0;
-                                    } else {
-                                        ok = add_face(&s, g, i, j, k, dir);
-                                    }
-                                }
-                            }
-                        }
-            }
-    }
     if (too_many) { /* not measured: no bound */
         free(s.xyz);
         free(s.tri);
@@ -393,6 +415,54 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
             out->bound = both + 0.5 * sqrt(3.0) * h + 8.0 * FLT_EPSILON * big;
         }
     }
+    free(s.xyz);
+    free(s.tri);
+    return r;
+}
+
+/* >>native levels. A coarser level L of the same object (cells_levels.h)
+ * against level 0: level L's voxel faces, as a triangle soup, take the
+ * stand-in's place above, which bounds the two-sided distance between the
+ * two unclipped solids' surfaces F0 and FL (H) plus h0 sqrt(3) / 2. What
+ * libmeso draws is each solid clipped to the base mesh (the top of this
+ * file): a point of FL outside the mesh is within hL sqrt(3) / 2 of
+ * level L's clipped surface (the crossing argument above); a point of the
+ * mesh inside solid 0 is within h0 sqrt(3) / 2 of F0, because every SOLID
+ * voxel's centre is inside the mesh (membership.h), so where the mesh is
+ * flat at the scale of a voxel the voxels half a diagonal outside it are
+ * not SOLID. So, symmetric in 0 and L,
+ *
+ *     bound = H + (h0 + hL) sqrt(3) / 2,
+ *
+ * decided here as the error of a native level (a mesh with folds thinner
+ * than a voxel can exceed it; the stand-in bound above assumes as much of
+ * the clipped solid). tests/integration/test_cells_levels.c checks it
+ * against the exact reference, both ways. */
+meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
+                                     const meso_voxel_grid* gl, const meso_split_cells* scl,
+                                     const meso_membership* mbl, int threads, meso_cells_standin_error* out,
+                                     meso_error* err)
+{
+    memset(out, 0, sizeof(*out));
+    if (!gl || !scl || !mbl || scl->res != gl->tile_res)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells level: split cells and grid disagree");
+    soup s;
+    int too_many = 0;
+    if (!collect_faces(gl, scl, mbl, &s, &too_many))
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "cells level: out of memory for its voxel faces");
+    if (too_many || s.faces == 0) { /* nothing drawn, or too much to measure: no bound */
+        out->faces = s.faces;
+        out->too_many = too_many;
+        out->bound = INFINITY;
+        free(s.xyz);
+        free(s.tri);
+        return MESO_OK;
+    }
+    const meso_mesh faces = {.vertex_count = (uint32_t)(4 * s.faces), .triangle_count = (uint32_t)(2 * s.faces),
+                             .positions = s.xyz, .indices = s.tri};
+    const meso_result r = meso_cells_standin_measure(&faces, g0, sc0, mb0, threads, out, err);
+    if (r == MESO_OK)
+        out->bound += 0.5 * sqrt(3.0) * gl->voxel_size;
     free(s.xyz);
     free(s.tri);
     return r;

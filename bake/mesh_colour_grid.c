@@ -9,18 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "srgb.h"
 #include "triangle_grid.h"
-
-static double srgb_to_linear(double x)
-{
-    return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
-}
-
-static double linear_to_srgb(double l)
-{
-    l = l < 0 ? 0 : l > 1 ? 1 : l;
-    return l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1 / 2.4) - 0.055;
-}
 
 void meso_mesh_colour_grid_dims(const double ext[3], uint32_t g, uint32_t dims[3])
 {
@@ -59,7 +49,7 @@ static void base_colour(const meso_mesh_material* mt, const double uv[2], double
     const size_t W = mt->width;
     const uint8_t* t = mt->rgba;
     for (int k = 0; k < 4; ++k) {
-#define TEXEL(x, y) (k < 3 ? srgb_to_linear(t[4 * ((size_t)(y) * W + (size_t)(x)) + k] / 255.0) \
+#define TEXEL(x, y) (k < 3 ? meso_srgb_to_linear(t[4 * ((size_t)(y) * W + (size_t)(x)) + k] / 255.0) \
                            : t[4 * ((size_t)(y) * W + (size_t)(x)) + k] / 255.0)
         const double c = (1 - f[1]) * ((1 - f[0]) * TEXEL(i0[0], i0[1]) + f[0] * TEXEL(i1[0], i0[1])) +
                          f[1] * ((1 - f[0]) * TEXEL(i0[0], i1[1]) + f[0] * TEXEL(i1[0], i1[1]));
@@ -120,7 +110,7 @@ meso_result meso_mesh_colour_grid_build(const meso_mesh* m, const meso_mesh_mate
                 base_colour(mt, uv, col);
                 uint8_t* o = rgba + 4 * (((size_t)z * dims[1] + y) * dims[0] + x);
                 for (int k = 0; k < 3; ++k)
-                    o[k] = (uint8_t)lround(255 * linear_to_srgb(col[k]));
+                    o[k] = (uint8_t)lround(255 * meso_linear_to_srgb(col[k]));
                 o[3] = (uint8_t)lround(255 * fmin(fmax(col[3], 0.0), 1.0));
             }
     mesoi_tri_grid_free(&g);

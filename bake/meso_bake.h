@@ -560,8 +560,9 @@ typedef struct meso_bake_cells_report {
     uint64_t memory_estimate;             /* bytes, checked against max_memory */
     uint32_t level_count;                 /* levels written, level 0 included (1: no LODS chunk) */
     double level_error[MESO_BAKE_CELLS_MAX_LEVELS];   /* object units, stored rounded up to f32 */
-    uint32_t level_triangles[MESO_BAKE_CELLS_MAX_LEVELS]; /* stand-ins (levels >= 1); level 0: the base mesh */
+    uint32_t level_triangles[MESO_BAKE_CELLS_MAX_LEVELS]; /* the mesh each level rasterises (native levels: the base mesh) */
     uint64_t surface_faces;               /* voxel faces of the drawn surface the stand-in error was measured on */
+    uint32_t native_levels;               /* levels 1..native_levels are native (tile map halved each), then stand-ins */
 } meso_bake_cells_report;
 
 /* All zero (NULL specs mean the defaults above). */

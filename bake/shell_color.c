@@ -29,6 +29,7 @@
 #include "memory_budget.h"
 #include "meso_file.h"
 #include "png_io.h"
+#include "srgb.h"
 
 int mesoi_shell_color_is_from_mesh(const char* spec)
 {
@@ -164,16 +165,9 @@ meso_result mesoi_shell_color_load(const char* spec, uint64_t max_bytes, mesoi_s
 
 /* >>from-mesh -------------------------------------------------------------- */
 
-static double srgb_to_linear(double x)
-{
-    return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
-}
-
 static uint8_t linear_to_srgb8(double x)
 {
-    x = x < 0 ? 0 : x > 1 ? 1 : x;
-    const double s = x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
-    return (uint8_t)lrint(s * 255.0);
+    return (uint8_t)lrint(meso_linear_to_srgb(x) * 255.0);
 }
 
 static int same_material(const meso_mesh_material* a, const meso_mesh_material* b)
@@ -236,7 +230,7 @@ meso_result mesoi_shell_color_from_mesh(const char* input, const meso_mesh* m, c
                 continue;
             }
             for (int c = 0; c < 3; ++c)
-                dst[c] = linear_to_srgb8(srgb_to_linear(src[c] / 255.0) * f[c]);
+                dst[c] = linear_to_srgb8(meso_srgb_to_linear(src[c] / 255.0) * f[c]);
             const double a = src[3] / 255.0 * f[3];
             dst[3] = (uint8_t)lrint((a < 0 ? 0 : a > 1 ? 1 : a) * 255.0);
         }

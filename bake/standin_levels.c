@@ -56,17 +56,21 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
                                    const float l0_min[3], const float l0_max[3], mesoi_chunk* chunks, cJSON* rep)
 {
     size_t n = 0;
+    const uint32_t N = lv->native, total = 1 + N + lv->count;
     cJSON* jl = cJSON_AddArrayToObject(rep, "levels");
-    for (uint32_t L = 0; L <= lv->count; ++L) {
+    for (uint32_t L = 0; L < total; ++L) {
+        const int native = L <= N;
+        const uint32_t S = L - N; /* stand-in number: 1 the base mesh, 2.. the chain */
         meso_level_record lr = {.object = base_chunk->desc.object, .lod = (uint16_t)L,
-                                .form = L ? MESO_LEVEL_MESH : MESO_LEVEL_NATIVE};
-        const meso_mesh* lm = L <= 1 ? base : &lv->chain[L - 2].mesh;
+                                .form = native ? MESO_LEVEL_NATIVE : MESO_LEVEL_MESH};
+        const meso_mesh* lm = native || S == 1 ? base : &lv->chain[S - 2].mesh;
         size_t bytes = base_chunk->size;
         double e = 0;
-        if (L == 0) {
+        if (native) {
             memcpy(lr.bbox_min, l0_min, sizeof lr.bbox_min);
             memcpy(lr.bbox_max, l0_max, sizeof lr.bbox_max);
-        } else if (L == 1) {
+            e = L ? lv->native_error[L - 1] : 0;
+        } else if (S == 1) {
             double lo[3], hi[3];
             meso_mesh_bounds(base, lo, hi);
             for (int k = 0; k < 3; ++k) {
@@ -75,10 +79,10 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
             }
             e = lv->e0;
             chunks[n] = *base_chunk;
-            chunks[n++].desc.lod = 1;
+            chunks[n++].desc.lod = (uint16_t)L;
         } else {
-            const meso_mesh_level* c = &lv->chain[L - 2];
-            const meso_mesh_chunk* mc = &lv->chunk[L - 2];
+            const meso_mesh_level* c = &lv->chain[S - 2];
+            const meso_mesh_chunk* mc = &lv->chunk[S - 2];
             for (int k = 0; k < 3; ++k) {
                 lr.bbox_min[k] = (float)c->bbox_min[k];
                 lr.bbox_max[k] = (float)c->bbox_max[k];
@@ -96,15 +100,15 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
         lv->triangles[L] = lm->triangle_count;
         cJSON* o = cJSON_CreateObject();
         cJSON_AddNumberToObject(o, "lod", L);
-        cJSON_AddStringToObject(o, "form", L ? "mesh" : "native");
+        cJSON_AddStringToObject(o, "form", native ? "native" : "mesh");
         cJSON_AddNumberToObject(o, "error", (double)lr.error);
         cJSON_AddNumberToObject(o, "triangles", lm->triangle_count);
         cJSON_AddNumberToObject(o, "mesh_bytes", (double)bytes);
         cJSON_AddItemToArray(jl, o);
     }
     chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES, .components = 1,
-                                         .dims = {lv->count + 1, 1, 1}},
-                                .data = lv->lods, .size = (size_t)MESO_LODS_RECORD_SIZE * (lv->count + 1)};
+                                         .dims = {total, 1, 1}},
+                                .data = lv->lods, .size = (size_t)MESO_LODS_RECORD_SIZE * total};
     return n;
 }
 

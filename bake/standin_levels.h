@@ -24,13 +24,19 @@
 
 typedef struct mesoi_standin_levels {
     uint32_t count;          /* stand-in levels, the base mesh's included (0: none, no LODS) */
+    /* Native coarser levels the caller made (cells_levels.h), lod 1..native,
+     * between level 0 and the stand-ins, which then start at lod native + 1
+     * (their MESH is what the native levels resolve theirs to). Set before
+     * mesoi_standin_levels_append; 1 + native + count <= MESOI_STANDIN_MAX_LEVELS. */
+    uint32_t native;
+    double native_error[MESOI_STANDIN_MAX_LEVELS];
     double e0;               /* the base mesh's error */
     meso_mesh_level* chain;  /* the simplified meshes, chain_count = count - 1 of them */
     uint32_t chain_count;
     meso_mesh_chunk chunk[MESOI_STANDIN_MAX_LEVELS]; /* the simplified meshes' MESH chunks */
     uint8_t lods[MESOI_STANDIN_MAX_LEVELS * MESO_LODS_RECORD_SIZE];
-    float error[MESOI_STANDIN_MAX_LEVELS];      /* per level (0 for level 0), as stored */
-    uint32_t triangles[MESOI_STANDIN_MAX_LEVELS];
+    float error[MESOI_STANDIN_MAX_LEVELS];      /* per level by lod (0 for level 0), as stored */
+    uint32_t triangles[MESOI_STANDIN_MAX_LEVELS]; /* per level by lod; native levels: the base mesh's */
 } mesoi_standin_levels;
 
 /* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base
@@ -41,9 +47,10 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
                                        mesoi_standin_levels* out, meso_error* err);
 
 /* Appends to `chunks` the stand-ins' chunks: `base_chunk` (the object's
- * base MESH, level 0's) again at lod 1, the simplified meshes at lod 2..,
- * and the LODS chunk of every level (level 0's bounds l0_min/l0_max), and
- * adds the report's "levels" array to `rep`. Returns the chunks appended
+ * base MESH, level 0's) again at lod N + 1, the simplified meshes at lod
+ * N + 2.. (N = lv->native), and the LODS chunk of every level (level 0's
+ * and the native levels' bounds l0_min/l0_max), and adds the report's
+ * "levels" array to `rep`. Returns the chunks appended
  * (at most MESOI_STANDIN_MAX_LEVELS + 1). `lv` keeps the chunks' bytes. */
 size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* base, const mesoi_chunk* base_chunk,
                                    const float l0_min[3], const float l0_max[3], mesoi_chunk* chunks, cJSON* rep);

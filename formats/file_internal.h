@@ -139,11 +139,11 @@ int mesoi_known_type(uint32_t type);
  * (the writer has no limit): parse_toc in file_read.c applies it. */
 meso_result mesoi_check_entry(const meso_chunk_info* c, uint32_t reserved, uint16_t minor, int32_t chunk,
                               uint64_t entry_off, meso_error* err);
-/* meso_file_check_cells that hands the TILE and MEMB payloads it read and
- * checked to the caller (allocated with f->alloc; free with
+/* meso_file_check_cells_level that hands the TILE and MEMB payloads it
+ * read and checked to the caller (allocated with f->alloc; free with
  * mesoi_file_free) when it succeeds, so a loader reads them once. Either
  * pointer may be NULL: that payload is freed as usual. */
-meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t** tile, uint8_t** memb,
+meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint16_t lod, uint8_t** tile, uint8_t** memb,
                                         meso_error* err);
 /* Type-specific element/encoding rules (full tier, and the writer). */
 /* a * b without wrapping; returns 0 on overflow. */

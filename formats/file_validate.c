@@ -914,14 +914,16 @@ meso_result meso_file_validate(meso_file* f, meso_check level, meso_issue_fn fn,
     }
     if (!s.stop)
         check_zero(f, end, f->file_size, f->chunk_count ? (int32_t)f->chunk_count - 1 : -1, buf, buf_size, &s);
-    /* Cells objects: their chunks against their CELL record. Only the
+    /* Cells objects: their chunks against their CELL record, at every lod
+     * that has one (a native coarser level's own chunks). Only the
      * cross-chunk issues (4803..4806) are new here: CRC, type-rule and
      * content issues of the chunks read were reported above. */
     for (uint32_t i = 0; i < f->chunk_count && !s.stop; i++) {
         meso_error e;
         const meso_chunk_info* c = &f->chunks[i];
-        if (c->type == MESO_CHUNK_CELL && c->lod == 0 && meso_file_find(f, MESO_CHUNK_CELL, c->object, 0) == (int32_t)i &&
-            mesoi_check_type_rules(c, (int32_t)i, &e) == MESO_OK && meso_file_check_cells(f, c->object, &e) != MESO_OK &&
+        if (c->type == MESO_CHUNK_CELL && meso_file_find(f, MESO_CHUNK_CELL, c->object, c->lod) == (int32_t)i &&
+            mesoi_check_type_rules(c, (int32_t)i, &e) == MESO_OK &&
+            meso_file_check_cells_level(f, c->object, c->lod, &e) != MESO_OK &&
             e.code >= MESO_ISSUE_CELL_CHUNKS && e.code <= MESO_ISSUE_CELL_MEMB)
             report(&s, &e);
     }

@@ -1,8 +1,10 @@
 /*
  * file_validate_cells.c — a cells object's chunks against its CELL record
- * (FORMAT.md §7.8, issues 4803..4806): meso_file_check_cells, which the full
- * tier runs for every CELL chunk and libmeso's and the reference's cells
- * loaders run before they trust sizes and ids. The CELL record alone is
+ * (FORMAT.md §7.8, issues 4803..4806): meso_file_check_cells_level, which
+ * the full tier runs for every CELL chunk (at its lod) and libmeso's and the
+ * reference's cells loaders run before they trust sizes and ids. A level's
+ * chunks are the ones meso_file_find_level resolves (FORMAT.md §7.10): a
+ * native coarser level has its own CELL, TILE, ... at its lod. The CELL record alone is
  * file_validate.c's (check_cell, 4801..4802).
  */
 #include "file_internal.h"
@@ -12,20 +14,21 @@
 typedef struct cells_read {
     meso_file* f;
     uint32_t object;
+    uint16_t lod;
     meso_error* err;
 } cells_read;
 
-/* Find `type` of the object at lod 0 and check its element type and dims
+/* Find `type` of the object at the level checked and check its element type and dims
  * against CELL (issue 4803); on success *index is the chunk. */
 static meso_result cells_find(const cells_read* c, uint32_t type, unsigned dtypes, uint16_t comps, uint64_t d0,
                               uint64_t d1, uint64_t d2, int32_t* index)
 {
     char cc[5];
     mesoi_fourcc_str(type, cc);
-    int32_t i = meso_file_find(c->f, type, c->object, 0);
+    int32_t i = meso_file_find_level(c->f, type, c->object, c->lod);
     if (i < 0)
         return mesoi_file_error(c->err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_CHUNKS, UINT64_MAX, -1,
-                                "cells object %u: no %s chunk (lod 0)", c->object, cc);
+                                "cells object %u: no %s chunk (level %u)", c->object, cc, c->lod);
     const meso_chunk_info* k = &c->f->chunks[i];
     if (!mesoi_is_dtype(k, dtypes) || k->components != comps || k->dims[0] != d0 || k->dims[1] != d1 || k->dims[2] != d2)
         return mesoi_file_error(c->err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_CHUNKS, UINT64_MAX, i,
@@ -99,22 +102,27 @@ static const char* check_memb(const uint8_t* d, uint64_t tiles, uint64_t mixed, 
 
 meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err)
 {
-    return mesoi_file_check_cells_keep(f, object, NULL, NULL, err);
+    return mesoi_file_check_cells_keep(f, object, 0, NULL, NULL, err);
 }
 
-meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint8_t** tile_out, uint8_t** memb_out,
-                                        meso_error* err)
+meso_result meso_file_check_cells_level(meso_file* f, uint32_t object, uint16_t lod, meso_error* err)
+{
+    return mesoi_file_check_cells_keep(f, object, lod, NULL, NULL, err);
+}
+
+meso_result mesoi_file_check_cells_keep(meso_file* f, uint32_t object, uint16_t lod, uint8_t** tile_out,
+                                        uint8_t** memb_out, meso_error* err)
 {
     if (f == NULL)
         return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
                                 "meso_file_check_cells: NULL file");
-    cells_read c = {f, object, err};
+    cells_read c = {f, object, lod, err};
     uint8_t cell[MESO_CELL_RECORD_SIZE];
     uint8_t *tile = NULL, *splt = NULL, *memb = NULL;
-    int32_t ci = meso_file_find(f, MESO_CHUNK_CELL, object, 0), ti, si, mi, ni, oi;
+    int32_t ci = meso_file_find_level(f, MESO_CHUNK_CELL, object, lod), ti, si, mi, ni, oi;
     if (ci < 0)
         return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_CHUNKS, UINT64_MAX, -1,
-                                "cells object %u: no CELL chunk", object);
+                                "cells object %u: no CELL chunk (level %u)", object, lod);
     if (f->chunks[ci].decoded_size != MESO_CELL_RECORD_SIZE)
         return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_CELL_SIZE, UINT64_MAX, ci,
                                 "chunk %d (CELL): size %llu, must be one 64-byte record", (int)ci,

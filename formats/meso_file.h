@@ -296,6 +296,11 @@ MESO_API meso_result meso_file_validate(meso_file* f, meso_check level, meso_iss
  * TILE, SPLT and MEMB with meso_file_read_chunk (so their CRCs and contents
  * are checked too). MESO_CHECK_FULL runs it for every CELL chunk. */
 MESO_API meso_result meso_file_check_cells(meso_file* f, uint32_t object, meso_error* err);
+/* The same for the chunks level `lod` draws (FORMAT.md §7.10: per type the
+ * object's chunk with the smallest lod >= `lod`); lod 0 is
+ * meso_file_check_cells. A native coarser level of a cells object has its
+ * own CELL record and chunks. */
+MESO_API meso_result meso_file_check_cells_level(meso_file* f, uint32_t object, uint16_t lod, meso_error* err);
 
 /* Check object `object` (an OBJT record) against what its kind is made of
  * (FORMAT.md §7.2, issues 6001..6301): the chunks the kind requires, the

@@ -85,7 +85,9 @@ typedef enum meso_rt_state_policy {
  * (normals, the occlusion term) and colour maps, of shells and of relief
  * frusta. The intersection search always reads the finest level (the
  * distance maps bound that level only; the frusta march samples level 0).
- * Cells shade from level 0 either way (not yet filtered). */
+ * Cells objects are not mip-mapped: each of their levels of detail
+ * (meso_rt_load_object_levels) shades from its own maps, which the bake
+ * prefilters for the coarser native levels (bake/cells_levels.h). */
 typedef enum meso_texture_filter {
     MESO_FILTER_MIPMAP = 0, /* a full mip chain built at upload; shading samples the level of the pixel's
                                footprint on the surface (trilinear), and the forward pass's built-in

@@ -182,7 +182,7 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     uint8_t *tile = NULL, *memb = NULL;
     meso_error err;
     meso_result r = mesoi_stream_take_cells(rt, &tile, &memb) ? MESO_OK /* checked off the GL thread */
-                                                                 : mesoi_file_check_cells_keep(f, id, &tile, &memb, &err);
+                                                                 : mesoi_file_check_cells_keep(f, id, rt->load_lod, &tile, &memb, &err);
     if (r != MESO_OK) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
         return r;

@@ -223,7 +223,7 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
         q->bytes += c->stored_size;
     }
     if (r == MESO_OK && q->kind == MESO_OBJECT_CELLS) {
-        r = mesoi_file_check_cells_keep(f, q->object, &q->tile, &q->memb, &err);
+        r = mesoi_file_check_cells_keep(f, q->object, q->lod, &q->tile, &q->memb, &err);
         q->cells_checked = r == MESO_OK;
     }
     if (r != MESO_OK) {

@@ -118,12 +118,13 @@ meso_result meso_ref_cells_set_tags(meso_ref_cells* c, const uint8_t* tags)
 
 /* >>files ------------------------------------------------------------------ */
 
-/* The object's chunk of `type`, read whole (meso_file_check_cells has
- * checked that it exists with the element and dims CELL implies). */
-static meso_result read_chunk(meso_file* f, uint32_t id, uint32_t type, void** out, meso_error* err)
+/* The chunk of `type` level `lod` draws (FORMAT.md §7.10), read whole
+ * (meso_file_check_cells_level has checked that it exists with the element
+ * and dims CELL implies). */
+static meso_result read_chunk(meso_file* f, uint32_t id, uint16_t lod, uint32_t type, void** out, meso_error* err)
 {
     size_t size = 0;
-    return mesoi_ref_read_whole(f, mesoi_ref_find_chunk(f, type, id), out, &size, err);
+    return mesoi_ref_read_whole(f, meso_file_find_level(f, type, id, lod), out, &size, err);
 }
 
 /* FORMAT.md 7.2 "Normals": octahedral U16 x 2 to a unit vector. */
@@ -144,9 +145,9 @@ static double srgb_to_linear(double x);
 
 /* The optional TX3D colour grid (U8 x 4; meso_file_check_object's 6301
  * holds it to that, refused here too). */
-static meso_result load_grid(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err)
+static meso_result load_grid(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_cells* out, meso_error* err)
 {
-    const int32_t gi = mesoi_ref_find_chunk(f, MESO_CHUNK_TX3D, object_id);
+    const int32_t gi = meso_file_find_level(f, MESO_CHUNK_TX3D, object_id, lod);
     if (gi < 0)
         return MESO_OK;
     const meso_chunk_info* k = meso_file_chunk(f, (uint32_t)gi);
@@ -172,6 +173,12 @@ static meso_result load_grid(meso_file* f, uint32_t object_id, meso_ref_cells* o
 
 meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err)
 {
+    return meso_ref_cells_load_level(f, object_id, 0, out, err);
+}
+
+meso_result meso_ref_cells_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_cells* out,
+                                      meso_error* err)
+{
     if (!f || !out)
         return mesoi_ref_fail(err, MESO_ERR_INVALID_ARG, "cells", object_id, "NULL file or output");
     memset(out, 0, sizeof(*out));
@@ -181,10 +188,10 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
         return r;
     /* Every chunk against CELL (FORMAT.md 7.8: 4801-4806), as mesoinspect
      * validate --full checks it: what follows may trust sizes and ids. */
-    if ((r = meso_file_check_cells(f, object_id, err)) != MESO_OK)
+    if ((r = meso_file_check_cells_level(f, object_id, lod, err)) != MESO_OK)
         return r;
     void *cell = NULL, *tile = NULL, *memb = NULL, *nrmm = NULL, *colr = NULL;
-    if ((r = read_chunk(f, object_id, MESO_CHUNK_CELL, &cell, err)) != MESO_OK)
+    if ((r = read_chunk(f, object_id, lod, MESO_CHUNK_CELL, &cell, err)) != MESO_OK)
         goto done;
     const uint8_t* cr = cell;
     for (int a = 0; a < 3; ++a) {
@@ -196,14 +203,14 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
     out->cell_count = ld32(cr + MESO_CELL_OFF_CELL_COUNT);
     out->voxel = ldf32(cr + MESO_CELL_OFF_VOXEL_SIZE);
     const uint32_t R = out->res;
-    if ((r = read_chunk(f, object_id, MESO_CHUNK_TILE, &tile, err)) != MESO_OK ||
-        (r = read_chunk(f, object_id, MESO_CHUNK_MEMB, &memb, err)) != MESO_OK ||
-        (r = read_chunk(f, object_id, MESO_CHUNK_NRMM, &nrmm, err)) != MESO_OK ||
-        (r = read_chunk(f, object_id, MESO_CHUNK_COLR, &colr, err)) != MESO_OK)
+    if ((r = read_chunk(f, object_id, lod, MESO_CHUNK_TILE, &tile, err)) != MESO_OK ||
+        (r = read_chunk(f, object_id, lod, MESO_CHUNK_MEMB, &memb, err)) != MESO_OK ||
+        (r = read_chunk(f, object_id, lod, MESO_CHUNK_NRMM, &nrmm, err)) != MESO_OK ||
+        (r = read_chunk(f, object_id, lod, MESO_CHUNK_COLR, &colr, err)) != MESO_OK)
         goto done;
     const size_t n = (size_t)R * R * R;
-    const uint64_t L = meso_file_chunk(f, (uint32_t)mesoi_ref_find_chunk(f, MESO_CHUNK_MEMB, object_id))->dims[0];
-    const int tile_u32 = meso_file_chunk(f, (uint32_t)mesoi_ref_find_chunk(f, MESO_CHUNK_TILE, object_id))->dtype ==
+    const uint64_t L = meso_file_chunk(f, (uint32_t)meso_file_find_level(f, MESO_CHUNK_MEMB, object_id, lod))->dims[0];
+    const int tile_u32 = meso_file_chunk(f, (uint32_t)meso_file_find_level(f, MESO_CHUNK_TILE, object_id, lod))->dtype ==
                          MESO_DTYPE_U32;
     out->tile = malloc(sizeof(*out->tile) * n);
     out->memb = malloc(sizeof(*out->memb) * (size_t)L);
@@ -225,7 +232,7 @@ meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells
     for (uint64_t k = 0; k < L; ++k)
         out->memb[k] = ld32((const uint8_t*)memb + 4 * k);
     memcpy(out->colour, colr, 4 * n);
-    if ((r = load_grid(f, object_id, out, err)) != MESO_OK)
+    if ((r = load_grid(f, object_id, lod, out, err)) != MESO_OK)
         goto done;
 done:
     free(cell);

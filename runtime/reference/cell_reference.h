@@ -156,6 +156,10 @@ void meso_ref_cells_albedo(const meso_ref_cells* c, const int64_t v[3], const do
  * meso_file_check_cells (whose MESO_ERR_CORRUPT and message, naming the
  * chunk, a bad file gets; never a crash). */
 meso_result meso_ref_cells_load(meso_file* f, uint32_t object_id, meso_ref_cells* out, meso_error* err);
+/* The same for level `lod` of a levelled file (FORMAT.md §7.10: per chunk
+ * type the smallest lod >= `lod`; a native coarser level's own chunks). */
+meso_result meso_ref_cells_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_cells* out,
+                                      meso_error* err);
 void meso_ref_cells_free(meso_ref_cells* c);
 
 /* Tile t's class (0 OUTSIDE, 1 INSIDE, 2 MIXED) and the tag of split cell

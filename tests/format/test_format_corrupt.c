@@ -697,6 +697,7 @@ typedef struct cells_bytes {
     uint32_t memb[3];
     uint32_t tile_dims[3], memb_words;
     int skip_colr;
+    uint16_t lod; /* > 0: these chunks at this lod, beside a sound copy at lod 0 (a native coarser level) */
 } cells_bytes;
 
 static void cells_sample(cells_bytes* c)
@@ -729,14 +730,11 @@ static int first_issue(void* user, const meso_error* issue)
     return 0;
 }
 
-/* Write the object, open it, return meso_file_check_cells' result; the full
- * validator must report the same code. */
-static meso_result cells_check(const cells_bytes* c, meso_error* e)
+/* Add the object's six cells chunks at `lod`. */
+static void cells_add(meso_writer* w, const cells_bytes* c, uint16_t lod, meso_error* e)
 {
     static uint16_t nrmm[16];
     static uint8_t colr[32];
-    meso_writer* w = NULL;
-    assert(meso_writer_create(NULL, &w) == MESO_OK);
     const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED;
     meso_chunk_desc d[6] = {
         {.type = MESO_CHUNK_CELL, .flags = REQ, .object = 1},
@@ -750,8 +748,25 @@ static meso_result cells_check(const cells_bytes* c, meso_error* e)
     const void* data[6] = {c->cell, c->tile, c->splt, c->memb, nrmm, colr};
     const size_t size[6] = {sizeof c->cell, 2u * c->tile_dims[0] * c->tile_dims[1] * c->tile_dims[2], sizeof c->splt,
                             4u * c->memb_words, sizeof nrmm, sizeof colr};
-    for (int i = 0; i < 6 - c->skip_colr; i++)
+    for (int i = 0; i < 6 - c->skip_colr; i++) {
+        d[i].lod = lod;
         assert(meso_writer_add(w, &d[i], data[i], size[i], e) == MESO_OK);
+    }
+}
+
+/* Write the object, open it, return meso_file_check_cells_level's result
+ * at c->lod (lod 0: meso_file_check_cells); the full validator must report
+ * the same code, and a sound lod 0 beside a broken level must pass. */
+static meso_result cells_check(const cells_bytes* c, meso_error* e)
+{
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    cells_add(w, c, c->lod, e);
+    if (c->lod) {
+        cells_bytes good;
+        cells_sample(&good);
+        cells_add(w, &good, 0, e);
+    }
     size_t n = 0;
     assert(meso_writer_finish(w, NULL, 0, &n) == MESO_OK);
     uint8_t* mem = (uint8_t*)malloc(n);
@@ -760,7 +775,11 @@ static meso_result cells_check(const cells_bytes* c, meso_error* e)
     meso_file* f = NULL;
     assert(meso_file_open_memory(mem, n, NULL, &f, e) == MESO_OK);
     memset(e, 0, sizeof *e);
-    meso_result r = meso_file_check_cells(f, 1, e);
+    meso_result r = c->lod ? meso_file_check_cells_level(f, 1, c->lod, e) : meso_file_check_cells(f, 1, e);
+    if (c->lod) {
+        meso_error e0;
+        assert(meso_file_check_cells(f, 1, &e0) == MESO_OK);
+    }
     meso_error first;
     memset(&first, 0, sizeof first);
     meso_result full = meso_file_validate(f, MESO_CHECK_FULL, first_issue, &first);
@@ -821,6 +840,13 @@ static void bad_cells_objects_are_rejected(void)
     CELLS_CASE(c.memb[0] = 1u | (1u << 2), MESO_ISSUE_CELL_MEMB);                /* no MIXED tile, CELL says 1 */
     CELLS_CASE(c.memb[2] = 3u, MESO_ISSUE_CELL_MEMB);                            /* tag 3 */
     CELLS_CASE(c.memb[2] |= 1u << 4, MESO_ISSUE_CELL_MEMB);                      /* bits past split cell 2 */
+    /* a native coarser level's own chunks (FORMAT.md 7.10), checked at its lod */
+    CELLS_CASE((c.lod = 1, c.tile[5] = 3), MESO_ISSUE_CELL_TILE);
+    CELLS_CASE((c.lod = 2, c.memb[1] = 1), MESO_ISSUE_CELL_MEMB);
+    CELLS_CASE((c.lod = 1, c.skip_colr = 1), MESO_ISSUE_CELL_CHUNKS); /* resolves to... nothing at lod >= 1 */
+    cells_sample(&c);
+    c.lod = 1;
+    assert(cells_check(&c, &e) == MESO_OK);
 #undef CELLS_CASE
 }
 

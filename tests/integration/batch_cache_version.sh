@@ -30,7 +30,7 @@ bakes() {
   "$bake" shell -i sphere.obj -o shell.meso &&
   "$bake" shell -i spot_uv.obj -o shell_bricks.meso --texture bricks:64 --tiling 4 &&
   "$bake" shell -i sphere.obj -o shell_weave.meso --texture weave:32 --kind interior --directors lp &&
-  "$bake" cells -i torus.obj -o cells.meso --tiles 4 --tile-res 16 &&
+  "$bake" cells -i sphere.obj -o cells.meso --tiles 4 --tile-res 16 &&
   "$bake" frusta -i saguaro.skel -o frusta_relief.meso --relief bricks:64 &&
   "$bake" frusta -i neurom_simple.swc -o frusta_swc.meso &&
   "$bake" frusta -i torus.obj -o frusta_mesh.meso

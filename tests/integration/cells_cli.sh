@@ -16,7 +16,9 @@ check() { # DESCRIPTION COMMAND...
   d=$1; shift
   if "$@"; then echo "ok   $d"; else echo "FAIL $d"; fail=1; fi
 }
-row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t'; }
+# The chunk of type $2 with the lowest lod (chunks are laid out lod
+# descending): level 0's, or the one copy a TX3D has.
+row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t' | tail -n 1; }
 key() { grep -q "\"$2\":" "$1"; }
 num() { sed -n "s/.*\"$2\":[[:space:]]*\([-0-9.e+]*\).*/\1/p" "$1"; }
 

@@ -1,7 +1,14 @@
-/* A cells object's mesh stand-ins (FORMAT.md §7.10 form MESH; issue 14):
- * level 1 the base mesh, coarser levels its simplifications, each with the
- * error mesobake states. Checked against the exact CPU reference, both
- * ways, from several views:
+/* A cells object's levels (FORMAT.md §7.10; issue 14), each with the error
+ * mesobake states.
+ *
+ * Native coarser levels (the tile map halved, bake/cells_levels.h):
+ * every point the reference hits on level L lies within the stated error
+ * of level 0's drawn faces, and every point it hits on level 0 within the
+ * stated error of level L's (brute force over the faces), from the same
+ * views as below; and the bound is not loose.
+ *
+ * Mesh stand-ins (form MESH): the base mesh, then its simplifications.
+ * Checked against the exact CPU reference, both ways, from several views:
  *  - every surface point the reference ray caster hits (the voxel faces the
  *    object draws, carved by the empty cells) lies within the stated error
  *    of the level's mesh (brute force over its triangles);
@@ -149,7 +156,7 @@ int main(int argc, char** argv)
     assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
     meso_level_info li[16];
     uint32_t n = 0;
-    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= 3); /* base mesh + simplified ones */
+    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= 4); /* native, base mesh, simplified */
     meso_ref_cells rc;
     assert(meso_ref_cells_load(f, 1, &rc, NULL) == MESO_OK);
     faces fs;
@@ -168,10 +175,53 @@ int main(int argc, char** argv)
         meso_camera_perspective_d(views[e].proj, 40.0 * M_PI / 180.0, 1.0, 0.1, 20.0);
         assert(meso_ref_cells_render(&rc, &views[e], NULL, &imgs[e]) == MESO_OK);
     }
-    for (uint32_t L = 1; L < n; ++L) {
+    uint32_t natives = 0;
+    for (uint32_t L = 1; L < n && li[L].rec.form == MESO_LEVEL_NATIVE; ++L) {
+        ++natives;
+        const double err = li[L].rec.error;
+        assert(err > 0 && err >= li[L - 1].rec.error);
+        meso_ref_cells rl;
+        assert(meso_ref_cells_load_level(f, 1, (uint16_t)L, &rl, NULL) == MESO_OK);
+        assert(rl.res * (1u << L) == rc.res && fabs(rl.voxel - rc.voxel * (1 << L)) <= 1e-6 * rl.voxel);
+        faces fl;
+        list_faces(&rl, &fl);
+        double worst_l = 0, worst_0 = 0; /* level L's hits -> level 0's faces, and back */
+        size_t hits_l = 0, hits_0 = 0;
+        for (int e = 0; e < VIEWS; ++e) {
+            meso_ref_image il;
+            assert(meso_ref_cells_render(&rl, &views[e], NULL, &il) == MESO_OK);
+            for (size_t p = 0; p < (size_t)S * S; ++p) {
+                if (il.coverage[p]) {
+                    const double q[3] = {il.hit[3 * p], il.hit[3 * p + 1], il.hit[3 * p + 2]};
+                    worst_l = fmax(worst_l, face_distance(&fs, rc.voxel, q));
+                    ++hits_l;
+                }
+                if (imgs[e].coverage[p]) {
+                    const double q[3] = {imgs[e].hit[3 * p], imgs[e].hit[3 * p + 1], imgs[e].hit[3 * p + 2]};
+                    worst_0 = fmax(worst_0, face_distance(&fl, rl.voxel, q));
+                    ++hits_0;
+                }
+            }
+            meso_ref_image_free(&il);
+        }
+        printf("  native level %u: %u voxels a tile, stated error %.6g (%.2f voxels of level 0); farthest of %zu "
+               "level-%u hits %.6g (%.0f %%), of %zu level-0 hits %.6g (%.0f %%)\n",
+               L, rl.res, err, err / rc.voxel, hits_l, L, worst_l, 100.0 * worst_l / err, hits_0, worst_0,
+               100.0 * worst_0 / err);
+        fflush(stdout);
+        assert(hits_l > 1000 && hits_0 > 1000);
+        assert(worst_l <= err * (1 + 1e-5) + 1e-7 && worst_0 <= err * (1 + 1e-5) + 1e-7);
+        if (L == 1) /* not a loose guess (the bound adds (h0 + hL) sqrt(3) / 2 for clipping) */
+            assert(fmax(worst_l, worst_0) >= 0.2 * err);
+        free(fl.lo);
+        free(fl.axis);
+        meso_ref_cells_free(&rl);
+    }
+    assert(natives >= 1);
+    for (uint32_t L = natives + 1; L < n; ++L) {
         assert(li[L].rec.form == MESO_LEVEL_MESH && li[L].rec.error > 0);
         assert(li[L].rec.error >= li[L - 1].rec.error);
-        if (L != 1 && L != n - 1) /* the levels between follow the same rule: time */
+        if (L != natives + 1 && L != n - 1) /* the levels between follow the same rule: time */
             continue;
         const double err = li[L].rec.error;
         mesh m;
@@ -211,7 +261,7 @@ int main(int argc, char** argv)
         assert(native_hits > 1000 && standin_hits > 1000);
         assert(worst_native <= err * (1 + 1e-5) + 1e-7); /* the stated error holds both ways */
         assert(worst_standin <= err * (1 + 1e-5) + 1e-7);
-        if (L == 1) /* and is not a loose guess */
+        if (L == natives + 1) /* and is not a loose guess */
             assert(fmax(worst_native, worst_standin) >= 0.4 * err);
         free(m.bytes);
     }
@@ -222,14 +272,20 @@ int main(int argc, char** argv)
     meso_ref_cells_free(&rc);
     meso_file_close(f);
 
-    /* --levels 1: the file of earlier bakes, one level; --levels 2: the base mesh only. */
-    for (int want = 1; want <= 2; ++want) {
+    /* --levels 1: the file of earlier bakes, one level; --levels 2: the base
+     * mesh only; --levels 3: one native level and the base mesh. */
+    for (int want = 1; want <= 3; ++want) {
         snprintf(cmd, sizeof cmd, "'%s' cells -i '%s' --tiles 4 --tile-res 8 -j 2 --levels %d -o '%s' >/dev/null",
                  argv[1], test_data("sphere.obj"), want, path);
         assert(system(cmd) == 0);
         assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
         assert(meso_file_levels(f, 1, NULL, 0, &n, NULL) == MESO_OK && n == (uint32_t)want);
         assert((meso_file_find(f, MESO_CHUNK_LODS, UINT32_MAX, UINT16_MAX) < 0) == (want == 1));
+        if (want == 3) {
+            assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK);
+            assert(li[1].rec.form == MESO_LEVEL_NATIVE && li[2].rec.form == MESO_LEVEL_MESH);
+            assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+        }
         meso_file_close(f);
     }
     test_temp_dir_remove(dir);

@@ -5,7 +5,7 @@
  * kind 3, §7.8). Stages: tile map (tile_map.h) → split cells
  * (split_cells.h) → exact sparse voxelization and membership
  * (voxelize.h, membership.h) → normal and colour maps (cells_chunks.h)
- * → levels of detail (cells_standin.h, mesh_levels.h).
+ * → levels of detail (cells_levels.h, cells_standin.h, mesh_levels.h).
  * The bake is meso_bake_cells (bake/bake_cells.c); this file parses the
  * options.
  */
@@ -48,13 +48,17 @@ static const char* const usage_cells =
     "                          the exact path replaced OpenVDB, which misclassifies near the surface)\n"
     "                          winding: generalized winding number (open or defective meshes)\n"
     "Levels of detail:\n"
-    "      --levels auto|N     auto (default): also store the base mesh as level 1, drawn as a\n"
-    "                          plain mesh in the object's place, with its error: a measured bound\n"
-    "                          of the distance between it and the cells' voxel faces drawn, both\n"
-    "                          ways (empty cells carve below the mesh); then the base mesh's\n"
-    "                          simplified levels (meshoptimizer, as mesobake mesh --levels auto),\n"
-    "                          each with the base's error plus its own (LODS). N (1..9): at most\n"
-    "                          N levels; 1 = level 0 only (no LODS chunk), 2 = the base mesh only\n"
+    "      --levels auto|N     auto (default): native coarser levels first, the tile map halved\n"
+    "                          each level (down to 4 voxels a tile edge; each cell keeps its tag,\n"
+    "                          colours averaged), each with its error measured against level 0's\n"
+    "                          voxel faces, kept while below the base mesh's; then the base mesh,\n"
+    "                          drawn as a plain mesh in the object's place, with its error: a\n"
+    "                          measured bound of the distance between it and the cells' voxel\n"
+    "                          faces drawn, both ways (empty cells carve below the mesh); then the\n"
+    "                          base mesh's simplified levels (meshoptimizer, as mesobake mesh\n"
+    "                          --levels auto), each with the base's error plus its own (LODS).\n"
+    "                          N (1..9): at most N levels; 1 = level 0 only (no LODS chunk),\n"
+    "                          2 = the base mesh only, then native levels, then simplified ones\n"
     "Other:\n"
     "  -j, --threads N         threads (default: all cores); the output does not depend on it\n"
     "      --report FILE       the bake report as JSON: tiles, split_cells, cells_inside,\n"
