@@ -320,7 +320,8 @@ static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, c
 {
     soup s = {0};
     const int64_t R = g->tile_res;
-    int ok = 1;
+    uint8_t* inside = calloc((size_t)sc->split_count + 1, 1); /* [0]: empty space, never inside */
+    int ok = inside != NULL;
     *too_many = 0;
     /* Pass 0 counts (and stops past the limit), pass 1 lists. */
     for (int pass = 0; pass < 2 && ok; ++pass) {
@@ -339,16 +340,22 @@ static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, c
                 for (uint32_t tx = 0; ok && tx < g->tiles[0]; ++tx) {
                     if (meso_membership_tile(mb, tx, ty, tz) == MESO_TILE_OUTSIDE)
                         continue;
+                    for (uint32_t sp = 1; sp <= sc->split_count; ++sp) /* this tile's tags, once */
+                        inside[sp] = meso_membership_get(mb, tx, ty, tz, sp) == MESO_MEMB_INSIDE;
                     for (int64_t z = 0; ok && z < R; ++z)
                         for (int64_t y = 0; ok && y < R; ++y)
                             for (int64_t x = 0; ok && x < R; ++x) {
                                 const int64_t i = tx * R + x, j = ty * R + y, k = tz * R + z;
-                                if (!solid(g, sc, mb, i, j, k))
+                                if (!inside[sc->voxel_split[x + R * (y + R * z)]])
                                     continue;
                                 for (int dir = 0; ok && dir < 6; ++dir) {
                                     const int64_t step = (dir & 1) ? 1 : -1;
                                     const int a = dir / 2;
-                                    if (!solid(g, sc, mb, i + (a == 0) * step, j + (a == 1) * step, k + (a == 2) * step)) {
+                                    const int64_t p[3] = {x + (a == 0) * step, y + (a == 1) * step, z + (a == 2) * step};
+                                    const int here = p[0] >= 0 && p[1] >= 0 && p[2] >= 0 && p[0] < R && p[1] < R && p[2] < R;
+                                    if (here ? !inside[sc->voxel_split[p[0] + R * (p[1] + R * p[2])]]
+                                             : !solid(g, sc, mb, i + (a == 0) * step, j + (a == 1) * step,
+                                                      k + (a == 2) * step)) {
                                         if (s.faces == MESO_CELLS_STANDIN_MAX_FACES) {
                                             *too_many = 1;
                                             ok = 0;
@@ -360,6 +367,7 @@ static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, c
                             }
                 }
     }
+    free(inside);
     if (*too_many) {
         free(s.xyz);
         free(s.tri);
