@@ -536,15 +536,17 @@ typedef struct meso_bake_cells_options {
     const char* tile_map;  /* voronoi[:SEEDS[:RNG]] | spheres[:N[:RADIUS]] | FILE.raw:R; NULL = "voronoi" */
     const char* colour;    /* hash[:SEED] | FILE.raw:R | from-mesh[:G]; NULL = "hash" */
     const char* voxelizer; /* auto | parity | vdb | winding; NULL = "auto" */
-    int levels;            /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto: level 1 the
+    int levels;            /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto: native
+                              coarser levels, the tile map halved each (bake/cells_levels.h), then the
                               base mesh drawn as a plain mesh in the object's place, with its measured error
                               (bake/cells_standin.c), then the base mesh's simplified levels (meshoptimizer,
                               as meso_bake_mesh's auto), each stand-in's error the base's plus its own;
-                              1 = level 0 only (no LODS chunk, the file of earlier bakes); N = at most N
-                              (1..MESO_BAKE_CELLS_MAX_LEVELS) */
+                              1 = level 0 only (no LODS chunk, the file of earlier bakes); 2 = the base mesh
+                              only; N = at most N (1..MESO_BAKE_CELLS_MAX_LEVELS): the base mesh, then native
+                              levels, then simplified ones */
 } meso_bake_cells_options;
 
-#define MESO_BAKE_CELLS_MAX_LEVELS 9 /* level 0, the base mesh, 7 simplified meshes */
+#define MESO_BAKE_CELLS_MAX_LEVELS 9 /* in all: level 0, native levels, the base mesh, simplified meshes */
 
 typedef struct meso_bake_cells_report {
     meso_bake_mesh_fixes fixes;
