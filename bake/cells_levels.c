@@ -157,8 +157,10 @@ meso_result meso_cells_level_build(const meso_voxel_grid* g0, const meso_split_c
     meso_result r = meso_tile_map_halve(finer_tm, &out->tm, err);
     if (r == MESO_OK)
         r = meso_split_cells_compute(&out->tm, threads, &out->sc, err);
-    if (r == MESO_OK && out->sc.split_count == 0)
-        r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells level: the halved tile map has no cells");
+    if (r == MESO_OK && out->sc.split_count == 0) { /* halving erased every cell: no such level */
+        out->error.bound = INFINITY;
+        return MESO_OK;
+    }
     if (r == MESO_OK)
         r = inherit_voxels(finer_tm, finer_sc, finer_mb, &out->g, &out->tm, &vox, err);
     if (r == MESO_OK)

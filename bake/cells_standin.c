@@ -430,22 +430,31 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
 
 /* >>native levels. A coarser level L of the same object (cells_levels.h)
  * against level 0: level L's voxel faces, as a triangle soup, take the
- * stand-in's place above, which bounds the two-sided distance between the
- * two unclipped solids' surfaces F0 and FL (H) plus h0 sqrt(3) / 2. What
- * libmeso draws is each solid clipped to the base mesh (the top of this
- * file): a point of FL outside the mesh is within hL sqrt(3) / 2 of
- * level L's clipped surface (the crossing argument above); a point of the
- * mesh inside solid 0 is within h0 sqrt(3) / 2 of F0, because every SOLID
- * voxel's centre is inside the mesh (membership.h), so where the mesh is
- * flat at the scale of a voxel the voxels half a diagonal outside it are
- * not SOLID. So, symmetric in 0 and L,
+ * stand-in's place above, which bounds the two-sided distance H between
+ * the two unclipped solids' surfaces F0 and FL and adds h0 sqrt(3) / 2.
+ * What libmeso draws is each solid clipped to the base mesh (the top of
+ * this file), C0 and CL:
+ *  - a point of F0 outside the mesh is within h0 sqrt(3) / 2 of C0 (the
+ *    crossing argument above: every SOLID level-0 voxel's centre is inside
+ *    the mesh, membership.h);
+ *  - level L's tags are inherited, so a SOLID level-L voxel only contains
+ *    a SOLID level-0 voxel, whose centre is inside the mesh and at most
+ *    sqrt(3) (hL - h0 / 2) from any point of the coarse voxel: a point of
+ *    FL outside the mesh is within that of CL (the same crossing, towards
+ *    that centre);
+ *  - a point of the mesh inside a solid is near its faces where the mesh
+ *    is flat at the scale of a voxel: moving out along the normal, a voxel
+ *    all of whose points are outside holds no centre inside, so it is not
+ *    SOLID: within h0 sqrt(3) / 2 of F0 (its own centre decides), within
+ *    hL sqrt(3) of FL (any of its level-0 centres does).
+ * Chaining them each way (C0 -> F0 -> FL -> CL and CL -> FL -> F0 -> C0),
  *
- *     bound = H + (h0 + hL) sqrt(3) / 2,
+ *     bound = H + sqrt(3) (hL + h0 / 2),
  *
  * decided here as the error of a native level (a mesh with folds thinner
  * than a voxel can exceed it; the stand-in bound above assumes as much of
- * the clipped solid). tests/integration/test_cells_levels.c checks it
- * against the exact reference, both ways. */
+ * the clipped solid). tests/integration/test_cells_standin.c checks it
+ * against the exact reference's (unclipped) hits, both ways. */
 meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
                                      const meso_voxel_grid* gl, const meso_split_cells* scl,
                                      const meso_membership* mbl, int threads, meso_cells_standin_error* out,
@@ -456,8 +465,11 @@ meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells level: split cells and grid disagree");
     soup s;
     int too_many = 0;
-    if (!collect_faces(gl, scl, mbl, &s, &too_many))
+    if (!collect_faces(gl, scl, mbl, &s, &too_many)) {
+        free(s.xyz);
+        free(s.tri);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "cells level: out of memory for its voxel faces");
+    }
     if (too_many || s.faces == 0) { /* nothing drawn, or too much to measure: no bound */
         out->faces = s.faces;
         out->too_many = too_many;
@@ -469,8 +481,8 @@ meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split
     const meso_mesh faces = {.vertex_count = (uint32_t)(4 * s.faces), .triangle_count = (uint32_t)(2 * s.faces),
                              .positions = s.xyz, .indices = s.tri};
     const meso_result r = meso_cells_standin_measure(&faces, g0, sc0, mb0, threads, out, err);
-    if (r == MESO_OK)
-        out->bound += 0.5 * sqrt(3.0) * gl->voxel_size;
+    if (r == MESO_OK) /* the standin measure added h0 sqrt(3) / 2 */
+        out->bound += sqrt(3.0) * gl->voxel_size;
     free(s.xyz);
     free(s.tri);
     return r;

@@ -39,7 +39,7 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
 /* The error of a native coarser level (grid gl, split cells scl, tags mbl;
  * cells_levels.h) against level 0 (g0, sc0, mb0): the same bound, with
  * level L's voxel faces in the stand-in's place, plus the clipping term
- * cells_standin.c derives. Nothing INSIDE at either level, or more than
+ * sqrt(3) hL that cells_standin.c derives. Nothing INSIDE at either level, or more than
  * MESO_CELLS_STANDIN_MAX_FACES faces at either, gives bound = +inf. */
 meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
                                      const meso_voxel_grid* gl, const meso_split_cells* scl,

@@ -24,7 +24,9 @@
  *    count as OUTSIDE: the grid is the voxelized region, and
  *    meso_voxel_grid_fit pads it so that nothing of the mesh is beyond.
  *    So a cell is INSIDE only if all of it, in every tile it reaches, is
- *    inside: what the renderer draws is inside the base mesh.
+ *    inside: every voxel centre the renderer draws is inside the base mesh
+ *    (a native coarser level's cells inherit their tags instead:
+ *    cells_levels.h).
  *  - WRAPPING cells (split_cells.h `wraps`: the cell touches its own copy in
  *    another tile, so in object space it is one unbounded object). Decision:
  *    they are merged like the others, per copy as split_cells' offsets define

@@ -227,9 +227,9 @@ typedef struct meso_rt_object {
  * through its texture function, FORMAT.md §7.2), MESO_OBJECT_FRUSTA
  * (relief-mapped conical frusta and balls, ray cast analytically; FRUS, FSEG
  * and SKEL are required, BALL and RELF optional) and MESO_OBJECT_CELLS
- * (tiled voxel cells ray traced from the base mesh; its chunks are checked
- * with meso_file_check_cells first, a bad file is refused with the check's
- * message logged). Other kinds give
+ * (tiled voxel cells ray traced from the base mesh; the chunks of the level
+ * loaded are checked with meso_file_check_cells_level first, a bad file is
+ * refused with the check's message logged). Other kinds give
  * MESO_ERR_UNSUPPORTED. Encoded chunks (Draco) need a decoder in the
  * meso_open_desc the file was opened with. On failure nothing is uploaded
  * and out->id is 0. `file` may be closed after this returns. */

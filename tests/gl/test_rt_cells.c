@@ -39,6 +39,7 @@
 #include "gl_log.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
+#include "prefix_io.h"
 #include "shell_scene.h"
 
 enum { W = 160, H = 120 };
@@ -397,20 +398,6 @@ static void test_levels(ctx* c)
  * the finest level gets level k; a native level draws as the reference
  * draws that level from the whole file (check_close), a stand-in covers
  * pixels. */
-typedef struct prefix_io {
-    const uint8_t* data;
-    uint64_t limit;
-} prefix_io;
-
-static int prefix_read(void* user, uint64_t off, void* dst, size_t n)
-{
-    const prefix_io* p = user;
-    if (off > p->limit || n > p->limit - off)
-        return -1;
-    memcpy(dst, p->data + off, n);
-    return 0;
-}
-
 static void test_prefixes(ctx* c)
 {
     static const char* names[2] = {"voronoi", "from_mesh"};

@@ -40,6 +40,7 @@
 #include "meso_bake.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
+#include "prefix_io.h"
 
 enum { W = 160, H = 120, LEVELS = 4 };
 static const float lift[LEVELS] = {0.0f, 0.004f, 0.016f, 0.064f};
@@ -105,21 +106,6 @@ static uint8_t* levelled_file(size_t* size)
     meso_writer_destroy(w);
     *size = need;
     return buf;
-}
-
-/* A reader that has received only the first `limit` bytes. */
-typedef struct prefix_io {
-    const uint8_t* data;
-    uint64_t limit;
-} prefix_io;
-
-static int prefix_read(void* user, uint64_t off, void* dst, size_t n)
-{
-    const prefix_io* p = user;
-    if (off > p->limit || n > p->limit - off)
-        return -1;
-    memcpy(dst, p->data + off, n);
-    return 0;
 }
 
 /* A stream still arriving: bytes past `arrived` answer MESO_IO_PENDING;

@@ -54,6 +54,12 @@ check "-j 1 = -j 2 byte for byte" cmp -s "$tmp/j1.meso" "$tmp/spot_low_resolutio
 check "spheres + --cell-size: validates" sh -c "'$inspect' validate --full '$tmp/sph.meso' >/dev/null"
 check "--cell-size 0.5 on the unit sphere: 5 tiles per axis" test "$(num "$tmp/sph.json" tiles)" = 125
 check "-v: one line per stage" test "$(grep -c '^mesobake: ' "$tmp/sph.err")" -ge 4
+# one small sphere a tile (1.6 voxels of 32): halving erases it by 8 voxels
+# a tile; the native levels stop there instead of failing the bake
+check "a tile map that halving erases: bakes, one native level, validates" sh -c "'$bake' cells -i '$data/sphere.obj' \
+  -o '$tmp/tiny.meso' --tile-map spheres:1:0.05 --tiles 4 >/dev/null 2>&1 &&
+  '$inspect' validate --full '$tmp/tiny.meso' >/dev/null &&
+  test \"\$('$inspect' info '$tmp/tiny.meso' | awk '\$3 == \"native\"' | wc -l)\" = 2"
 # a raw 8^3 map: two slabs (indices 1, 2) along z, and an RGBA file
 awk 'BEGIN { for (z = 0; z < 8; z++) for (i = 0; i < 64; i++) printf "%c%c", (z < 4 ? 1 : 2), 0 }' >"$tmp/slabs.raw"
 awk 'BEGIN { for (i = 0; i < 512; i++) printf "%c%c%c%c", 200, 100, 50, 255 }' >"$tmp/rgba.raw"
