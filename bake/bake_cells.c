@@ -226,6 +226,22 @@ static mesoi_chunk typed_chunk(uint32_t type, uint32_t flags, uint16_t dtype, ui
                         .data = data, .size = size};
 }
 
+/* CELL, TILE, SPLT, MEMB, NRMM and COLR of one level (FORMAT.md §7.2 kind
+ * 3): level 0 at lod 0, a native level at its own lod. */
+static void level_chunks(const meso_cells_chunks* cc, uint32_t R, uint32_t S, uint16_t lod, mesoi_chunk out[6])
+{
+    const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED;
+    out[0] = typed_chunk(MESO_CHUNK_CELL, REQ, MESO_DTYPE_BYTES, 1, 1, 1, 1, cc->cell, sizeof cc->cell);
+    out[1] = typed_chunk(MESO_CHUNK_TILE, REQ, cc->tile_dtype, 1, R, R, R, cc->tile, cc->tile_size);
+    out[2] = typed_chunk(MESO_CHUNK_SPLT, REQ, MESO_DTYPE_U32, MESO_SPLT_COMPONENTS, S, 1, 1, cc->splt, cc->splt_size);
+    out[3] = typed_chunk(MESO_CHUNK_MEMB, REQ, MESO_DTYPE_U32, 1, (uint32_t)(cc->memb_size / 4), 1, 1, cc->memb,
+                         cc->memb_size);
+    out[4] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, R, R, R, cc->nrmm, cc->nrmm_size);
+    out[5] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, R, R, R, cc->colr, cc->colr_size);
+    for (int c = 0; c < 6; ++c)
+        out[c].desc.lod = lod;
+}
+
 static void report_json(cJSON* rep, const meso_bake_cells_report* s)
 {
     mesoi_report_fixes(rep, &s->fixes);
@@ -393,35 +409,18 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
 
-    const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED, S = sc->split_count;
+    const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED;
     mesoi_chunk chunks[8 + 6 * MESO_CELLS_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS + 1];
     chunks[0] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
                                        .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
                               .data = mesh_chunk.data, .size = mesh_chunk.size};
-    chunks[1] = typed_chunk(MESO_CHUNK_CELL, REQ, MESO_DTYPE_BYTES, 1, 1, 1, 1, cc->cell, sizeof cc->cell);
-    chunks[2] = typed_chunk(MESO_CHUNK_TILE, REQ, cc->tile_dtype, 1, R, R, R, cc->tile, cc->tile_size);
-    chunks[3] = typed_chunk(MESO_CHUNK_SPLT, REQ, MESO_DTYPE_U32, MESO_SPLT_COMPONENTS, S, 1, 1, cc->splt,
-                            cc->splt_size);
-    chunks[4] = typed_chunk(MESO_CHUNK_MEMB, REQ, MESO_DTYPE_U32, 1, (uint32_t)(cc->memb_size / 4), 1, 1, cc->memb,
-                            cc->memb_size);
-    chunks[5] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, R, R, R, cc->nrmm, cc->nrmm_size);
-    chunks[6] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, R, R, R, cc->colr, cc->colr_size);
+    level_chunks(cc, R, sc->split_count, 0, chunks + 1);
     int count = 7;
     /* Native levels (cells_levels.h): their own cells chunks at lod 1..N;
      * their MESH resolves to the base mesh stand-in's at lod N + 1. */
     for (uint32_t k = 0; k < lv->native; ++k) {
-        const meso_cells_chunks* nc = &native[k].cc;
-        const uint32_t NR = native[k].g.tile_res, NS = native[k].sc.split_count;
-        chunks[count] = typed_chunk(MESO_CHUNK_CELL, REQ, MESO_DTYPE_BYTES, 1, 1, 1, 1, nc->cell, sizeof nc->cell);
-        chunks[count + 1] = typed_chunk(MESO_CHUNK_TILE, REQ, nc->tile_dtype, 1, NR, NR, NR, nc->tile, nc->tile_size);
-        chunks[count + 2] = typed_chunk(MESO_CHUNK_SPLT, REQ, MESO_DTYPE_U32, MESO_SPLT_COMPONENTS, NS, 1, 1, nc->splt,
-                                        nc->splt_size);
-        chunks[count + 3] = typed_chunk(MESO_CHUNK_MEMB, REQ, MESO_DTYPE_U32, 1, (uint32_t)(nc->memb_size / 4), 1, 1,
-                                        nc->memb, nc->memb_size);
-        chunks[count + 4] = typed_chunk(MESO_CHUNK_NRMM, 0, MESO_DTYPE_U16, 2, NR, NR, NR, nc->nrmm, nc->nrmm_size);
-        chunks[count + 5] = typed_chunk(MESO_CHUNK_COLR, 0, MESO_DTYPE_U8, 4, NR, NR, NR, nc->colr, nc->colr_size);
-        for (int c = 0; c < 6; ++c)
-            chunks[count + c].desc.lod = (uint16_t)(k + 1);
+        level_chunks(&native[k].cc, native[k].g.tile_res, native[k].sc.split_count, (uint16_t)(k + 1),
+                     chunks + count);
         count += 6;
     }
     if (cg->rgba) { /* the mesh's base colour (FORMAT.md 7.2 kind 3): replaces COLR's as the albedo */
