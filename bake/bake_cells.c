@@ -294,14 +294,15 @@ typedef struct colour_grid {
 enum { MESO_CELLS_MAX_NATIVE = 4, MESO_CELLS_MIN_LEVEL_RES = 4 };
 _Static_assert(1 + MESO_CELLS_MAX_NATIVE + 1 <= MESOI_STANDIN_MAX_LEVELS, "room for the base mesh stand-in");
 
-/* The native levels below level 0 (tile map tm, chunks cc), while each
- * one's error stays below the stand-in's e0; returns how many. Stored
+/* The native levels below level 0 (grid g, split cells sc, tags mb, tile
+ * map tm, chunks cc, drawn surface f0), while each one's error stays below
+ * the stand-in's e0; returns how many. Stored
  * errors must not decrease: a level measured closer than the one above it
  * is given that one's error (still a bound). */
 static meso_result make_native(mesoi_bake_run* run, uint32_t want, const meso_voxel_grid* g,
                                const meso_split_cells* sc, const meso_membership* mb, const meso_tile_map* tm,
-                               const meso_cells_chunks* cc, double e0, meso_cells_level* lv, uint32_t* count,
-                               meso_error* err)
+                               const meso_cells_chunks* cc, meso_cells_surface* f0, double e0, meso_cells_level* lv,
+                               uint32_t* count, meso_error* err)
 {
     *count = 0;
     for (uint32_t k = 0; k < want; ++k) {
@@ -309,7 +310,7 @@ static meso_result make_native(mesoi_bake_run* run, uint32_t want, const meso_vo
         if (fg->tile_res % 2 || fg->tile_res / 2 < MESO_CELLS_MIN_LEVEL_RES)
             break;
         const double t = meso_seconds();
-        meso_result r = meso_cells_level_build(g, sc, mb, fg, k ? &lv[k - 1].tm : tm, k ? &lv[k - 1].sc : sc,
+        meso_result r = meso_cells_level_build(f0, fg, k ? &lv[k - 1].tm : tm, k ? &lv[k - 1].sc : sc,
                                                k ? &lv[k - 1].mb : mb, k ? &lv[k - 1].cc : cc, run->common.threads,
                                                &lv[k], err);
         if (r != MESO_OK)
@@ -340,31 +341,36 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
         return MESO_OK;
     const double t = meso_seconds();
     meso_cells_standin_error se;
-    meso_result r = meso_cells_standin_measure(m, g, sc, mb, run->common.threads, &se, err);
-    if (r != MESO_OK)
+    meso_cells_surface* f0 = NULL; /* level 0's faces: every level is measured against them */
+    meso_result r = meso_cells_surface_build(m, g, sc, mb, &f0, err);
+    if (r == MESO_OK)
+        r = meso_cells_standin_measure(m, f0, run->common.threads, &se, err);
+    if (r != MESO_OK) {
+        meso_cells_surface_free(f0);
         return r;
-    s->surface_faces = se.faces;
-    if (se.too_many) {
-        mesoi_run_warning(run, 0,
-                          "the cells draw more than %u voxel faces: the stand-in's error is not measured, so no "
-                          "levels (--levels 1 asks for none)",
-                          MESO_CELLS_STANDIN_MAX_FACES);
-        return MESO_OK;
     }
-    if (!isfinite(se.bound) || !(se.bound < 1e30)) {
-        mesoi_run_warning(run, 0, "no cell is inside the mesh: nothing drawn, so no stand-in level");
+    s->surface_faces = se.faces;
+    if (se.too_many || !isfinite(se.bound) || !(se.bound < 1e30)) {
+        if (se.too_many)
+            mesoi_run_warning(run, 0,
+                              "the cells draw more than %u voxel faces: the stand-in's error is not measured, so no "
+                              "levels (--levels 1 asks for none)",
+                              MESO_CELLS_STANDIN_MAX_FACES);
+        else
+            mesoi_run_warning(run, 0, "no cell is inside the mesh: nothing drawn, so no stand-in level");
+        meso_cells_surface_free(f0);
         return MESO_OK;
     }
 #if !MESO_HAVE_MESHOPTIMIZER
     if (a->levels == 0)
         mesoi_run_warning(run, 0, "built without meshoptimizer: the base mesh is the only stand-in");
 #endif
-    const uint32_t want = a->levels == 0 ? MESO_CELLS_MAX_NATIVE
-                          : a->levels >= 3 ? (uint32_t)a->levels - 2 < MESO_CELLS_MAX_NATIVE ? (uint32_t)a->levels - 2
-                                                                                             : MESO_CELLS_MAX_NATIVE
-                                           : 0;
+    uint32_t want = a->levels == 0 ? MESO_CELLS_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
+    if (want > MESO_CELLS_MAX_NATIVE)
+        want = MESO_CELLS_MAX_NATIVE;
     uint32_t nn = 0;
-    r = make_native(run, want, g, sc, mb, tm, cc, se.bound, native, &nn, err);
+    r = make_native(run, want, g, sc, mb, tm, cc, f0, se.bound, native, &nn, err);
+    meso_cells_surface_free(f0);
     if (r == MESO_OK) /* the rest for the stand-ins: at most MAX levels in all (auto), or --levels */
         r = mesoi_standin_levels_build(m, se.bound, (a->levels ? a->levels : (int)MESOI_STANDIN_MAX_LEVELS) - (int)nn,
                                        run->common.threads, out, err);

@@ -9,6 +9,13 @@
 
 #include "srgb.h"
 
+/* Fine voxel c (0..7: x, y, z bits) of coarse voxel (x, y, z), in a fine
+ * map of R^3. */
+static inline size_t child(uint32_t R, uint32_t x, uint32_t y, uint32_t z, int c)
+{
+    return (2 * x + (uint32_t)(c & 1)) + (size_t)R * ((2 * y + (uint32_t)(c >> 1 & 1)) + (size_t)R * (2 * z + (uint32_t)(c >> 2)));
+}
+
 meso_result meso_tile_map_halve(const meso_tile_map* fine, meso_tile_map* out, meso_error* err)
 {
     memset(out, 0, sizeof *out);
@@ -26,7 +33,7 @@ meso_result meso_tile_map_halve(const meso_tile_map* fine, meso_tile_map* out, m
             for (uint32_t x = 0; x < H; ++x) {
                 uint16_t v[8];
                 for (int c = 0; c < 8; ++c)
-                    v[c] = fine->cells[(2 * x + (c & 1)) + (size_t)R * ((2 * y + (c >> 1 & 1)) + (size_t)R * (2 * z + (c >> 2)))];
+                    v[c] = fine->cells[child(R, x, y, z, c)];
                 uint16_t best = 0;
                 int best_n = 0;
                 for (int c = 0; c < 8; ++c) {
@@ -59,7 +66,7 @@ void meso_cells_colours_halve(const meso_tile_map* fine, const uint8_t* fine_rgb
                 double sum[4] = {0, 0, 0, 0};
                 int n = 0;
                 for (int c = 0; c < 8; ++c) {
-                    const size_t f = (2 * x + (c & 1)) + (size_t)R * ((2 * y + (c >> 1 & 1)) + (size_t)R * (2 * z + (c >> 2)));
+                    const size_t f = child(R, x, y, z, c);
                     if (fine->cells[f] != idx)
                         continue;
                     for (int k = 0; k < 3; ++k)
@@ -106,7 +113,7 @@ static meso_result inherit_voxels(const meso_tile_map* ftm, const meso_split_cel
                     const uint16_t idx = ctm->cells[v];
                     int in = 0;
                     for (int c = 0; idx && c < 8 && !in; ++c) {
-                        const size_t f = (2 * x + (c & 1)) + (size_t)R * ((2 * y + (c >> 1 & 1)) + (size_t)R * (2 * z + (c >> 2)));
+                        const size_t f = child(R, x, y, z, c);
                         in = ftm->cells[f] == idx && tag[fsc->voxel_split[f]];
                     }
                     if (in) {
@@ -143,8 +150,7 @@ static meso_result inherit_voxels(const meso_tile_map* ftm, const meso_split_cel
     return MESO_OK;
 }
 
-meso_result meso_cells_level_build(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
-                                   const meso_voxel_grid* finer_g, const meso_tile_map* finer_tm,
+meso_result meso_cells_level_build(meso_cells_surface* f0, const meso_voxel_grid* finer_g, const meso_tile_map* finer_tm,
                                    const meso_split_cells* finer_sc, const meso_membership* finer_mb,
                                    const meso_cells_chunks* finer_cc, int threads, meso_cells_level* out,
                                    meso_error* err)
@@ -172,7 +178,7 @@ meso_result meso_cells_level_build(const meso_voxel_grid* g0, const meso_split_c
     if (r == MESO_OK)
         meso_cells_colours_halve(finer_tm, finer_cc->colr, &out->tm, out->cc.colr);
     if (r == MESO_OK)
-        r = meso_cells_level_measure(g0, sc0, mb0, &out->g, &out->sc, &out->mb, threads, &out->error, err);
+        r = meso_cells_level_measure(f0, &out->g, &out->sc, &out->mb, threads, &out->error, err);
     if (r != MESO_OK)
         meso_cells_level_free(out);
     return r;

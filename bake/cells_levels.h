@@ -57,12 +57,11 @@ void meso_cells_colours_halve(const meso_tile_map* fine, const uint8_t* fine_rgb
                               uint8_t* out);
 
 /* The level below the finer one (finer_*: level 0 or a level made here)
- * of the object whose level 0 is (g0, sc0, mb0). threads <= 0: all cores;
+ * of the object whose level 0 draws surface f0 (cells_standin.h). threads <= 0: all cores;
  * the bytes do not depend on it. A halved map without cells (ties go to
  * empty space: small spheres vanish) gives MESO_OK with error.bound =
  * +inf, which the caller takes as "no such level". */
-meso_result meso_cells_level_build(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
-                                   const meso_voxel_grid* finer_g, const meso_tile_map* finer_tm,
+meso_result meso_cells_level_build(meso_cells_surface* f0, const meso_voxel_grid* finer_g, const meso_tile_map* finer_tm,
                                    const meso_split_cells* finer_sc, const meso_membership* finer_mb,
                                    const meso_cells_chunks* finer_cc, int threads, meso_cells_level* out,
                                    meso_error* err);

@@ -270,32 +270,42 @@ static double* to_double(const float* f, size_t n)
 }
 
 /* d_A and d_B (see the top) and the stand-in's sampling radius. */
-static meso_result distances(const soup* s, const meso_mesh* m, double spacing, int threads, double* d_a,
+/* Level 0's drawn surface, collected and gridded once for every
+ * measurement of a bake (the stand-in's and each native level's): its
+ * faces, their f64 copy and the grid over them, on a box that holds the
+ * tile grid and the base mesh (and so every stand-in and level queried). */
+struct meso_cells_surface {
+    soup s;
+    double* fxyz;
+    mesoi_tri_grid grid;
+    int gridded, too_many;
+    double lo[3], hi[3];
+    double h;   /* level 0's voxel */
+    double big; /* the largest coordinate of the tile grid's box */
+};
+
+/* d_A and d_B (see the top) and the stand-in's sampling radius. */
+static meso_result distances(meso_cells_surface* f, const meso_mesh* m, double spacing, int threads, double* d_a,
                              double* d_b, double* radius, meso_error* err)
 {
     double lo[3], hi[3];
     meso_mesh_bounds(m, lo, hi);
-    for (uint64_t i = 0; i < 4 * s->faces; ++i)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = fmin(lo[k], s->xyz[3 * i + (uint64_t)k]);
-            hi[k] = fmax(hi[k], s->xyz[3 * i + (uint64_t)k]);
-        }
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = fmin(lo[k], f->lo[k]);
+        hi[k] = fmax(hi[k], f->hi[k]);
+    }
     double* mxyz = to_double(m->positions, 3 * (size_t)m->vertex_count);
-    double* fxyz = to_double(s->xyz, 12 * (size_t)s->faces);
-    mesoi_tri_grid gm, gf;
-    meso_result r = mxyz && fxyz ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    mesoi_tri_grid gm;
+    meso_result r = mxyz ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
     int failed = 0;
     if (r == MESO_OK && (r = mesoi_tri_grid_build(mxyz, m->indices, m->triangle_count, lo, hi, &gm, err)) == MESO_OK) {
-        const sampler fa = {.blocks = (s->faces + FACE_BLOCK - 1) / FACE_BLOCK, .count = face_count,
-                            .point = face_centre, .u = s};
+        const sampler fa = {.blocks = (f->s.faces + FACE_BLOCK - 1) / FACE_BLOCK, .count = face_count,
+                            .point = face_centre, .u = &f->s};
         *d_a = sampled_max(&fa, &gm, threads, &failed);
         mesoi_tri_grid_free(&gm);
-        if ((r = mesoi_tri_grid_build(fxyz, s->tri, (uint32_t)(2 * s->faces), lo, hi, &gf, err)) == MESO_OK) {
-            const tri_samples ts = {m, spacing};
-            const sampler mb = {.blocks = m->triangle_count, .count = tri_count, .point = tri_point, .u = &ts};
-            *d_b = sampled_max(&mb, &gf, threads, &failed);
-            mesoi_tri_grid_free(&gf);
-        }
+        const tri_samples ts = {m, spacing};
+        const sampler mb = {.blocks = m->triangle_count, .count = tri_count, .point = tri_point, .u = &ts};
+        *d_b = sampled_max(&mb, &f->grid, threads, &failed);
     }
     *radius = 0;
     for (uint64_t t = 0; t < m->triangle_count; ++t) {
@@ -304,7 +314,6 @@ static meso_result distances(const soup* s, const meso_mesh* m, double spacing, 
         *radius = fmax(*radius, l / n / sqrt(3.0));
     }
     free(mxyz);
-    free(fxyz);
     if (r == MESO_OK && failed)
         r = MESO_ERR_OUT_OF_MEMORY;
     if (r == MESO_ERR_OUT_OF_MEMORY)
@@ -379,53 +388,86 @@ static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, c
     return ok;
 }
 
-meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid* g, const meso_split_cells* sc,
-                                       const meso_membership* mb, int threads, meso_cells_standin_error* out,
-                                       meso_error* err)
+meso_result meso_cells_surface_build(const meso_mesh* base, const meso_voxel_grid* g, const meso_split_cells* sc,
+                                     const meso_membership* mb, meso_cells_surface** out, meso_error* err)
+{
+    *out = NULL;
+    if (!base || !base->triangle_count || !g || !sc || !mb || sc->res != g->tile_res)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells stand-in: no mesh, or split cells and grid disagree");
+    meso_cells_surface* f = calloc(1, sizeof *f);
+    if (!f)
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "cells stand-in: out of memory");
+    f->h = g->voxel_size;
+    meso_mesh_bounds(base, f->lo, f->hi);
+    for (int k = 0; k < 3; ++k) {
+        const double a = g->origin[k], b = g->origin[k] + (double)g->tiles[k] * g->tile_res * g->voxel_size;
+        f->lo[k] = fmin(f->lo[k], a);
+        f->hi[k] = fmax(f->hi[k], b);
+        f->big = fmax(f->big, fmax(fabs(a), fabs(b)));
+    }
+    meso_result r = MESO_OK;
+    if (!collect_faces(g, sc, mb, &f->s, &f->too_many))
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0,
+                           "cells stand-in: out of memory for the surface's voxel faces (%llu so far)",
+                           (unsigned long long)f->s.faces);
+    if (r == MESO_OK && !f->too_many && f->s.faces) {
+        f->fxyz = to_double(f->s.xyz, 12 * (size_t)f->s.faces);
+        r = f->fxyz ? mesoi_tri_grid_build(f->fxyz, f->s.tri, (uint32_t)(2 * f->s.faces), f->lo, f->hi, &f->grid, err)
+                    : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "cells stand-in: out of memory");
+        f->gridded = r == MESO_OK;
+    }
+    if (r != MESO_OK) {
+        meso_cells_surface_free(f);
+        return r;
+    }
+    *out = f;
+    return MESO_OK;
+}
+
+uint64_t meso_cells_surface_faces(const meso_cells_surface* f, int* too_many)
+{
+    *too_many = f->too_many;
+    return f->s.faces;
+}
+
+void meso_cells_surface_free(meso_cells_surface* f)
+{
+    if (!f)
+        return;
+    if (f->gridded)
+        mesoi_tri_grid_free(&f->grid);
+    free(f->fxyz);
+    free(f->s.xyz);
+    free(f->s.tri);
+    free(f);
+}
+
+meso_result meso_cells_standin_measure(const meso_mesh* m, meso_cells_surface* f, int threads,
+                                       meso_cells_standin_error* out, meso_error* err)
 {
     memset(out, 0, sizeof(*out));
-    if (!m || !m->triangle_count || !g || !sc || !mb || sc->res != g->tile_res)
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells stand-in: no mesh, or split cells and grid disagree");
-    soup s;
-    int too_many = 0;
-    const int ok = collect_faces(g, sc, mb, &s, &too_many);
-    const int64_t R = g->tile_res;
-    if (too_many) { /* not measured: no bound */
-        free(s.xyz);
-        free(s.tri);
-        out->faces = s.faces;
+    if (!m || !m->triangle_count || !f)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "cells stand-in: no mesh or no surface");
+    out->faces = f->s.faces;
+    out->too_many = f->too_many;
+    if (f->too_many || f->s.faces == 0) { /* not measured, or nothing drawn: no bound */
         out->bound = INFINITY;
-        out->too_many = 1;
         return MESO_OK;
     }
-    meso_result r = ok ? MESO_OK
-                       : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0,
-                                        "cells stand-in: out of memory for the surface's voxel faces (%llu so far)",
-                                        (unsigned long long)s.faces);
-    out->faces = s.faces;
-    const double h = g->voxel_size;
-    if (r == MESO_OK && s.faces == 0) {
-        out->bound = INFINITY;
-    } else if (r == MESO_OK) {
-        double d_a = 0, d_b = 0, rad = 0;
-        r = distances(&s, m, 1.001 * sqrt(2.0) * h, threads, &d_a, &d_b, &rad, err);
-        const double both = fmax(d_a + sqrt(0.5) * h, d_b + rad);
-        rad = fmax(rad, sqrt(0.5) * h);
-        if (r == MESO_OK) {
-            double big = 0;
-            for (int k = 0; k < 3; ++k)
-                big = fmax(big, fmax(fabs(g->origin[k]), fabs(g->origin[k] + (double)g->tiles[k] * R * h)));
-            for (uint32_t v = 0; v < m->vertex_count; ++v)
-                for (int k = 0; k < 3; ++k)
-                    big = fmax(big, fabs((double)m->positions[3 * (size_t)v + (size_t)k]));
-            out->sampled = fmax(d_a, d_b);
-            out->radius = rad;
-            out->bound = both + 0.5 * sqrt(3.0) * h + 8.0 * FLT_EPSILON * big;
-        }
-    }
-    free(s.xyz);
-    free(s.tri);
-    return r;
+    const double h = f->h;
+    double d_a = 0, d_b = 0, rad = 0;
+    const meso_result r = distances(f, m, 1.001 * sqrt(2.0) * h, threads, &d_a, &d_b, &rad, err);
+    if (r != MESO_OK)
+        return r;
+    const double both = fmax(d_a + sqrt(0.5) * h, d_b + rad);
+    double big = f->big;
+    for (uint32_t v = 0; v < m->vertex_count; ++v)
+        for (int k = 0; k < 3; ++k)
+            big = fmax(big, fabs((double)m->positions[3 * (size_t)v + (size_t)k]));
+    out->sampled = fmax(d_a, d_b);
+    out->radius = fmax(rad, sqrt(0.5) * h);
+    out->bound = both + 0.5 * sqrt(3.0) * h + 8.0 * FLT_EPSILON * big;
+    return MESO_OK;
 }
 
 /* >>native levels. A coarser level L of the same object (cells_levels.h)
@@ -455,8 +497,7 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid
  * than a voxel can exceed it; the stand-in bound above assumes as much of
  * the clipped solid). tests/integration/test_cells_standin.c checks it
  * against the exact reference's (unclipped) hits, both ways. */
-meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
-                                     const meso_voxel_grid* gl, const meso_split_cells* scl,
+meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_grid* gl, const meso_split_cells* scl,
                                      const meso_membership* mbl, int threads, meso_cells_standin_error* out,
                                      meso_error* err)
 {
@@ -480,7 +521,7 @@ meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split
     }
     const meso_mesh faces = {.vertex_count = (uint32_t)(4 * s.faces), .triangle_count = (uint32_t)(2 * s.faces),
                              .positions = s.xyz, .indices = s.tri};
-    const meso_result r = meso_cells_standin_measure(&faces, g0, sc0, mb0, threads, out, err);
+    const meso_result r = meso_cells_standin_measure(&faces, f0, threads, out, err);
     if (r == MESO_OK) /* the standin measure added h0 sqrt(3) / 2 */
         out->bound += sqrt(3.0) * gl->voxel_size;
     free(s.xyz);

@@ -26,23 +26,33 @@ typedef struct meso_cells_standin_error {
     int too_many;      /* 1: more than MESO_CELLS_STANDIN_MAX_FACES faces; bound = +inf, not measured */
 } meso_cells_standin_error;
 
-/* The bound for stand-in mesh `m` (at least one triangle) against the
- * solid of the split cells `sc` tagged INSIDE by `mb` over grid `g`.
- * A solid without faces (nothing INSIDE) gets bound = +inf (no stand-in
- * can be within a finite distance of nothing), one with more than
- * MESO_CELLS_STANDIN_MAX_FACES too (too_many = 1: not measured). threads <= 0: all cores;
- * the result does not depend on it. */
-meso_result meso_cells_standin_measure(const meso_mesh* m, const meso_voxel_grid* g, const meso_split_cells* sc,
-                                       const meso_membership* mb, int threads, meso_cells_standin_error* out,
-                                       meso_error* err);
+/* The surface a cells object draws at level 0 (its voxel faces), collected
+ * once and gridded for every measurement of a bake: the solid of the split
+ * cells `sc` tagged INSIDE by `mb` over grid `g`, with `base` the object's
+ * base mesh (the grid's box holds it). Free with meso_cells_surface_free. */
+typedef struct meso_cells_surface meso_cells_surface;
+meso_result meso_cells_surface_build(const meso_mesh* base, const meso_voxel_grid* g, const meso_split_cells* sc,
+                                     const meso_membership* mb, meso_cells_surface** out, meso_error* err);
+/* Its faces (counted up to the limit), and whether there were more than
+ * MESO_CELLS_STANDIN_MAX_FACES (then none are held). */
+uint64_t meso_cells_surface_faces(const meso_cells_surface* f, int* too_many);
+void meso_cells_surface_free(meso_cells_surface* f);
+
+/* The bound for stand-in mesh `m` (at least one triangle, inside the box
+ * of the tile grid and the base mesh) against the surface `f`. A solid
+ * without faces (nothing INSIDE) gets bound = +inf (no stand-in can be
+ * within a finite distance of nothing), one with more than
+ * MESO_CELLS_STANDIN_MAX_FACES too (too_many = 1: not measured). threads
+ * <= 0: all cores; the result does not depend on it. */
+meso_result meso_cells_standin_measure(const meso_mesh* m, meso_cells_surface* f, int threads,
+                                       meso_cells_standin_error* out, meso_error* err);
 
 /* The error of a native coarser level (grid gl, split cells scl, tags mbl;
- * cells_levels.h) against level 0 (g0, sc0, mb0): the same bound, with
+ * cells_levels.h) against level 0's surface f0: the same bound, with
  * level L's voxel faces in the stand-in's place, plus the clipping term
  * sqrt(3) hL that cells_standin.c derives. Nothing INSIDE at either level, or more than
  * MESO_CELLS_STANDIN_MAX_FACES faces at either, gives bound = +inf. */
-meso_result meso_cells_level_measure(const meso_voxel_grid* g0, const meso_split_cells* sc0, const meso_membership* mb0,
-                                     const meso_voxel_grid* gl, const meso_split_cells* scl,
+meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_grid* gl, const meso_split_cells* scl,
                                      const meso_membership* mbl, int threads, meso_cells_standin_error* out,
                                      meso_error* err);
 
