@@ -473,7 +473,10 @@ static meso_result check_level(meso_file* f, const meso_object_record* rec, uint
             required(&c, rec->kind, MESO_CHUNK_CELL);
         if (!c.stop)
             colour_chunk(&c, MESO_CHUNK_TX3D, 0, MESO_ISSUE_CELLS_COLOUR_GRID);
-        if (!c.stop && lod > 0) { /* a native coarser level: the chunks it resolves to against its CELL */
+        /* A native coarser level whose CELL is another lod's: the chunks it
+         * resolves to against that CELL (a level with its own CELL is
+         * checked by the full tier's pass over every CELL). */
+        if (!c.stop && lod > 0 && meso_file_find(f, MESO_CHUNK_CELL, rec->id, lod) < 0) {
             meso_error e;
             if (meso_file_check_cells_level(f, rec->id, lod, &e) != MESO_OK)
                 ISSUE(&c, e.code, e.chunk, "%s", e.message);
