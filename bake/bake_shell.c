@@ -11,6 +11,7 @@
 #include "shell_color.h"
 #include "meso_layout.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,6 +37,7 @@
 #include "standin_levels.h"
 
 _Static_assert(MESO_BAKE_SHELL_MAX_LEVELS == MESOI_STANDIN_MAX_LEVELS, "the stand-ins hold every level");
+_Static_assert(1 + MESOI_SHELL_MAX_NATIVE + 1 <= MESOI_STANDIN_MAX_LEVELS, "room for the base mesh stand-in");
 
 meso_bake_shell_options meso_bake_shell_defaults(void)
 {
@@ -685,6 +687,99 @@ static float standin_error(const shell_bake* s)
     return f;
 }
 
+/* The native levels kept (shell_texture_levels.h) and their chunks: each
+ * level's TX2D and DIST at its own lod, appended to chunks[0..n-1]; the
+ * chunks every level shares (SDIR, STHK, COLR, CMAP) move to lod N, the
+ * coarsest native level, which levels 0..N all resolve them to (FORMAT.md
+ * §7.10: per type the smallest lod >= the level); the MESH they draw is the
+ * stand-in's copy at lod N + 1 (standin_levels.c). A level's error is its
+ * heights' sup distance from level 0's times the longest top - bottom of
+ * the output vertices (shell_texture_levels.c derives it), with 4 float
+ * ulps of slack in the heights for the runtime's arithmetic; levels whose
+ * error reaches the base mesh's (e0) are dropped, the base mesh being as
+ * close and cheaper. Returns the chunks appended. */
+static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_out, int sdir_layers,
+                            mesoi_standin_levels* lv, mesoi_chunk* chunks, size_t n)
+{
+    const mesoi_shell_texture* tx = &s->tx;
+    double dmax = 0.0;
+    for (size_t v = 0; v < nv_out; ++v) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const double top = sdir[3 * v + (size_t)k];
+            const double bottom = sdir_layers == 2 ? sdir[3 * ((size_t)nv_out + v) + (size_t)k] : 0.0;
+            d2 += (top - bottom) * (top - bottom);
+        }
+        dmax = fmax(dmax, sqrt(d2));
+    }
+    uint32_t N = 0;
+    for (; N < tx->native_count; ++N) {
+        const double e = (tx->native[N].sup + 4.0 * FLT_EPSILON) * dmax;
+        float f = (float)e;
+        if ((double)f < e)
+            f = nextafterf(f, INFINITY);
+        if (!(f < s->e0))
+            break;
+        lv->native_error[N] = f;
+    }
+    lv->native = N;
+    if (N == 0)
+        return 0;
+    for (size_t k = 0; k < n; ++k) {
+        const uint32_t t = chunks[k].desc.type;
+        if (t == MESO_CHUNK_SDIR || t == MESO_CHUNK_STHK || t == MESO_CHUNK_COLR || t == MESO_CHUNK_CMAP)
+            chunks[k].desc.lod = (uint16_t)N;
+    }
+    size_t m = 0;
+    for (uint32_t l = 1; l <= N; ++l) {
+        const mesoi_shell_tex_level* t = &tx->native[l - 1];
+        chunks[n + m++] = (mesoi_chunk){
+            .desc = {.type = MESO_CHUNK_TX2D, .object = 1, .lod = (uint16_t)l, .dtype = t->fn.dtype, .components = 1,
+                     .dims = {t->fn.dims[0], t->fn.dims[1], 1}},
+            .data = t->fn.encoded, .size = t->fn.encoded_size};
+        chunks[n + m++] = (mesoi_chunk){
+            .desc = {.type = MESO_CHUNK_DIST, .object = 1, .lod = (uint16_t)l, .dtype = t->dist.dtype,
+                     .components = 1, .dims = {t->dist.dims[0], t->dist.dims[1], t->dist.dims[2]}},
+            .data = t->dist.encoded, .size = t->dist.encoded_size};
+    }
+    return m;
+}
+
+/* The native levels worth a slot (shell_texture_levels.h). A file holds at
+ * most MESOI_STANDIN_MAX_LEVELS levels, and a slot a native level takes is
+ * a simplified mesh fewer at the far end; a native level only swaps the
+ * texture and its distance map, while the base mesh, directors and colour
+ * stay. So one is kept only while it draws from at most 9/10 of the bytes
+ * of the level before it (decided here; estimated from the vertex and
+ * triangle counts as mesh_chunk.c lays a MESH out: e.g. spot_uv with
+ * bricks:64 keeps one, 243 KB against 364 KB, where a second would have
+ * saved 16 KB). Deterministic: counts only. */
+static void native_trim(shell_bake* s)
+{
+    mesoi_shell_texture* tx = &s->tx;
+    const uint64_t nv = (uint64_t)s->m.vertex_count + tx->seam_vertices, layers = s->a.kind == MESO_SHELL_EXTERIOR ? 1 : 2;
+    const uint64_t shared = nv * (12 + 12 + 8 + 12 * layers + 4) + 12 * (uint64_t)s->m.triangle_count +
+                            4 * (uint64_t)s->col.dims[0] * s->col.dims[1] * s->col.dims[2];
+    uint64_t prev = shared + tx->fn.encoded_size + tx->dist.encoded_size;
+    uint32_t keep = 0;
+    for (; keep < tx->native_count; ++keep) {
+        const uint64_t bytes = shared + tx->native[keep].fn.encoded_size + tx->native[keep].dist.encoded_size;
+        if (10 * bytes > 9 * prev)
+            break;
+        prev = bytes;
+    }
+    for (uint32_t k = keep; k < tx->native_count; ++k) {
+        meso_texfn_free(&tx->native[k].fn);
+        meso_distmap_free(&tx->native[k].dist);
+    }
+    if (tx->native_count)
+        mesoi_run_stage(&s->run, "texture levels", 0.2, 0.2,
+                        "%u of %u halved height fields kept as native levels (each draws from at most 9/10 of the "
+                        "bytes of the level before)",
+                        keep, tx->native_count);
+    tx->native_count = keep;
+}
+
 /* The base mesh as the MESH chunk has it: seam vertices added where the
  * texture coordinates split (their arrays in *pos, *normals, owned by the
  * caller). Returns 0 when out of memory. */
@@ -726,7 +821,9 @@ static int chain_kept(const shell_bake* s)
 {
     const mesoi_shell_prior* p = &s->prior;
     return s->a.update && s->a.levels != 1 && p->chain_count && p->chain_levels == s->a.levels &&
-           p->chain_moved + p->moved_max <= s->e0;
+           p->chain_moved + p->moved_max <= s->e0 &&
+           1 + s->tx.native_count + 1 + p->chain_count <=
+               (uint32_t)(s->a.levels ? s->a.levels : MESOI_STANDIN_MAX_LEVELS);
 }
 
 static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_error* err)
@@ -760,6 +857,13 @@ static double standin_e0_sampling(const shell_bake* s)
     return texel_max(s) * (s->a.kind == MESO_SHELL_ENVELOPE ? 0.5 * s->h : s->h);
 }
 
+/* The `levels` the stand-ins are built for: what is left of --levels (0:
+ * as many as there may be) after level 0 and the native levels. */
+static int chain_levels(const shell_bake* s)
+{
+    return (s->a.levels ? s->a.levels : MESOI_STANDIN_MAX_LEVELS) - (int)s->tx.native_count;
+}
+
 static int standin_run(void* arg)
 {
     standin_job* j = arg;
@@ -781,7 +885,7 @@ static void standin_begin(shell_bake* s)
     if (!shell_base(s, &j->base, &j->pos, &j->normals))
         return;
     j->e0_sampling = standin_e0_sampling(s);
-    j->levels = s->a.levels;
+    j->levels = chain_levels(s);
     j->threads = s->run.common.threads;
 #ifndef __STDC_NO_THREADS__
     if (thrd_create(&j->thread, standin_run, j) == thrd_success)
@@ -897,7 +1001,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                      .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
                                                base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
         meso_cmap_record_encode(&cr, cmap);
-        mesoi_chunk chunks[11 + MESOI_STANDIN_MAX_LEVELS] = {
+        mesoi_chunk chunks[11 + 2 * MESOI_SHELL_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -949,10 +1053,12 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                 standins = j->out; /* taken: freed below */
                 memset(&j->out, 0, sizeof j->out);
             } else {
-                r = mesoi_standin_levels_build(&base, standin_e0_sampling(s), a->levels, s->run.common.threads,
+                r = mesoi_standin_levels_build(&base, standin_e0_sampling(s), chain_levels(s), s->run.common.threads,
                                                &standins, err);
             }
             standins.e0 = s->e0; /* sampled for e0_sampling, stored with e0 */
+            if (r == MESO_OK)
+                n += native_chunks(s, sdir_out ? sdir_out : sdir, nv_out, sdir_layers, &standins, chunks, n);
             if (r == MESO_OK)
                 n += mesoi_standin_levels_append(&standins, &base, &chunks[0], rec.bbox_min, rec.bbox_max,
                                                  chunks + n, rep);
@@ -1011,6 +1117,8 @@ meso_result meso_bake_shell(const meso_bake_shell_options* o, meso_bake_output**
         r = mesoi_shell_texture_uvs(&s.run, a, &s.m, s.lo, s.hi, &s.tx, err);
     if (r == MESO_OK && from_mesh)
         r = color_prepare(&s, 1, err);
+    if (r == MESO_OK)
+        native_trim(&s);
     s.rep->seconds_texture = meso_seconds() - t;
     if (r == MESO_OK && a->update) {
         t = meso_seconds();

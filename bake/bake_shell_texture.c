@@ -9,6 +9,7 @@
  */
 #include "bake_shell.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +28,8 @@ void mesoi_shell_texture_free(mesoi_shell_texture* tx)
     free(tx->indices);
     free(tx->fn_frames);
     free(tx->dist_frames);
+    mesoi_shell_tex_levels_free(tx->native, tx->native_count);
+    tx->native_count = 0;
 }
 
 /* Frames 1..N-1 of an animated texture (frame 0 is tx->fn and tx->dist,
@@ -69,6 +72,42 @@ static meso_result bake_frames(mesoi_bake_run* run, const meso_bake_shell_option
     return r;
 }
 
+/* The native coarser levels of a static height field (shell_texture_levels.h):
+ * `--levels` 0 as many as there may be, K >= 3 at most K - 2 (level 0 and
+ * the base mesh come first, as for cells), else none. They stop where the
+ * sup reaches the highest texel of an exterior shell (1 for the other
+ * kinds, whose surface may reach w = 1: bake_shell.c texel_max), beyond
+ * which the base mesh alone is as close (bake_shell.c also drops any whose
+ * error reaches the base mesh's, once the directors are known). */
+static uint32_t native_wanted(const meso_bake_shell_options* a)
+{
+    return a->levels == 0 ? MESOI_SHELL_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
+}
+
+static meso_result native_levels(mesoi_bake_run* run, const meso_bake_shell_options* a, mesoi_shell_texture* tx,
+                                 meso_error* err)
+{
+    const uint32_t want = native_wanted(a);
+    if (a->frames || tx->fn.kind != MESO_TEXFN_HEIGHT || want == 0)
+        return MESO_OK;
+    double hmax = 1.0;
+    if (a->kind == MESO_SHELL_EXTERIOR) {
+        hmax = 0.0;
+        for (size_t i = 0; i < (size_t)tx->fn.dims[0] * tx->fn.dims[1]; ++i)
+            hmax = fmax(hmax, (double)tx->fn.values[i]);
+    }
+    const double t = meso_seconds();
+    const meso_result r = mesoi_shell_tex_levels_build(&tx->fn, &tx->dist, want, hmax, run->common.threads,
+                                                       tx->native, &tx->native_count, err);
+    if (r == MESO_OK && tx->native_count)
+        mesoi_run_stage(run, "texture levels", 0.05, 0.05,
+                        "height field halved %u times, down to %ux%u, heights within %g of level 0's (%.0f ms)",
+                        tx->native_count, tx->native[tx->native_count - 1].fn.dims[0],
+                        tx->native[tx->native_count - 1].fn.dims[1], tx->native[tx->native_count - 1].sup,
+                        1e3 * (meso_seconds() - t));
+    return r;
+}
+
 /* Parse the spec, sample the function, bake its distance map. */
 meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_shell_options* a, mesoi_shell_texture* tx,
                                         meso_error* err)
@@ -87,7 +126,12 @@ meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_she
     /* Limits up front: the texture is held, the distance map not yet made. */
     const uint64_t cells = (uint64_t)res[0] * res[1] * res[2];
     const uint64_t texels = (uint64_t)td[0] * td[1] * td[2];
-    r = meso_budget_check(meso_size_add(meso_texture_estimate(texels), meso_distmap_estimate(cells)),
+    /* A height field's native levels (native_levels) hold at most a third
+     * more: each level a quarter of the one before, its map an eighth. */
+    uint64_t need = meso_size_add(meso_texture_estimate(texels), meso_distmap_estimate(cells));
+    if (tx->fn.kind == MESO_TEXFN_HEIGHT && !a->frames && native_wanted(a))
+        need = meso_size_add(need, need / 3);
+    r = meso_budget_check(need,
                           run->common.max_memory, MESO_LIMIT_ISSUE_REQUEST, err,
                           "distance map %ux%ux%u (%s) of a %ux%ux%u texture", res[0], res[1], res[2],
                           a->dist_res[0] ? "--dist-res" : "default", td[0], td[1], td[2]);
@@ -104,6 +148,8 @@ meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_she
                         1e3 * (meso_seconds() - t));
     if (r == MESO_OK && a->frames)
         r = bake_frames(run, a, tx, err);
+    if (r == MESO_OK)
+        r = native_levels(run, a, tx, err);
     return r;
 }
 

@@ -424,28 +424,33 @@ typedef struct meso_bake_shell_options {
      * given, the thickness) must be the old bake's; without `thickness` the
      * old bake's thickness is kept (an edit may move the diagonal that
      * thickness_rel refers to). The report's vertices_lp / vertices_normal
-     * then count the recomputed vertices only. OLD's stand-in levels 2..
-     * (`levels`) are kept, each error raised by the farthest any vertex
-     * moved, while their base mesh has moved no farther than level 1's
-     * error over this and earlier updates and `levels` is OLD's; otherwise
+     * then count the recomputed vertices only. OLD's simplified stand-in
+     * levels (`levels`) are kept, each error raised by the farthest any
+     * vertex moved, while their base mesh has moved no farther than the
+     * base-mesh stand-in's error over this and earlier updates, `levels` is
+     * OLD's and they fit beside this bake's native levels; otherwise
      * they are built anew (report: update_levels_kept). NULL: a full bake. */
     const char* update;
     /* Colour function (FORMAT.md §7.2 "Shell colour"; needs `texture`); NULL: none. SPEC:
      * FILE.png (2D, tiled like the texture function), volume:FILE.raw:WxHxD (RGBA8, over a
      * volume texture) or from-mesh (the glTF input's base colour at the mesh's own uv). */
     const char* color;
-    /* Levels of detail (FORMAT.md §7.10): 0 (auto): level 0 and, as level 1,
-     * the base mesh drawn as a plain mesh (a stand-in for when the whole
-     * shell is thinner than the error on screen) with its error (the
-     * largest offset of the surface drawn), then the base mesh's simplified
-     * levels (meshoptimizer, as meso_bake_mesh's auto), each with the base
-     * mesh's error plus its own; 1: level 0 only (the file of earlier
-     * bakes); N: at most N levels (2: the base mesh only; at most
-     * MESO_BAKE_SHELL_MAX_LEVELS). */
+    /* Levels of detail (FORMAT.md §7.10): 0 (auto): level 0; for a static
+     * height field its native coarser levels (the height field halved, with
+     * its own distance map and the exact error: bake/shell_texture_levels.h;
+     * up to 4, each kept while it draws from at most 9/10 of the bytes of
+     * the level before); then the base mesh drawn as a plain mesh (a
+     * stand-in for when the whole shell is thinner than the error on
+     * screen) with its error (the largest offset of the surface drawn), then
+     * the base mesh's simplified levels (meshoptimizer, as meso_bake_mesh's
+     * auto), each with the base mesh's error plus its own; 1: level 0 only
+     * (the file of earlier bakes); N: at most N levels (2: the base mesh
+     * only; N >= 3: the base mesh, then native levels, then simplified
+     * ones; at most MESO_BAKE_SHELL_MAX_LEVELS). */
     int levels;
 } meso_bake_shell_options;
 
-#define MESO_BAKE_SHELL_MAX_LEVELS 9 /* level 0, the base mesh, 7 simplified meshes */
+#define MESO_BAKE_SHELL_MAX_LEVELS 9 /* in all: level 0, native levels, the base mesh, simplified meshes */
 
 typedef struct meso_bake_shell_report {
     meso_bake_mesh_fixes fixes;
@@ -500,7 +505,7 @@ typedef struct meso_bake_shell_report {
     uint32_t vertices_moved, vertices_recomputed;
     double update_radius;
     /* With options.update: how far the farthest vertex moved, and the
-     * stand-in levels (2..) kept from OLD instead of simplified and
+     * simplified stand-in levels (after the base mesh's) kept from OLD instead of simplified and
      * measured again (0: built anew; see meso_bake_shell_options.levels). */
     double update_moved_max;
     uint32_t update_levels_kept;

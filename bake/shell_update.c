@@ -285,25 +285,31 @@ static meso_result read_whole(meso_file* f, int32_t idx, void** data, size_t* si
     return meso_file_read_chunk(f, (uint32_t)idx, *data, *size, err);
 }
 
-/* OLD's stand-in chain: levels 2.. of object `id` when its level 1 is the
- * base mesh and each of them a raw MESH (what mesobake shell writes). Each
- * one's own bound against OLD's base mesh, from the stored errors: level L
- * stores f32_up(e0 + c_L) and level 1 f32_up(e0), so c_L <= err_L - err_1 +
- * ulp(err_1). A file that has no such chain gives chain_count 0. */
+/* OLD's stand-in chain: the levels after the base mesh's (level S: the
+ * first stand-in, after any native levels) of object `id`, each a raw
+ * MESH (what mesobake shell writes). Each one's own bound against OLD's
+ * base mesh, from the stored errors: level L stores f32_up(e0 + c_L) and
+ * level S f32_up(e0), so c_L <= err_L - err_S + ulp(err_S). A file that
+ * has no such chain gives chain_count 0. */
 static meso_result read_chain(meso_file* f, uint32_t id, mesoi_shell_prior* out, meso_error* err)
 {
-    meso_level_info lv[MESO_BAKE_SHELL_MAX_LEVELS + 1];
-    uint32_t count = 0;
-    meso_result r = meso_file_levels(f, id, lv, MESO_BAKE_SHELL_MAX_LEVELS + 1, &count, err);
-    if (r != MESO_OK || count < 3 || count > MESO_BAKE_SHELL_MAX_LEVELS || lv[1].rec.form != MESO_LEVEL_MESH)
+    enum { MAX = MESO_BAKE_SHELL_MAX_LEVELS };
+    meso_level_info lv[MAX + 1];
+    uint32_t count = 0, S = 1;
+    meso_result r = meso_file_levels(f, id, lv, MAX + 1, &count, err);
+    if (r != MESO_OK || count > MAX) /* count is the file's, lv holds MAX + 1 */
         return r;
-    const double e1 = lv[1].rec.error, ulp1 = (double)nextafterf(lv[1].rec.error, INFINITY) - e1;
-    for (uint32_t L = 2; r == MESO_OK && L < count; ++L) {
+    while (S < count && lv[S].rec.form == MESO_LEVEL_NATIVE)
+        ++S;
+    if (count < S + 2 || lv[S].rec.form != MESO_LEVEL_MESH)
+        return r;
+    const double e1 = lv[S].rec.error, ulp1 = (double)nextafterf(lv[S].rec.error, INFINITY) - e1;
+    for (uint32_t L = S + 1; r == MESO_OK && L < count; ++L) {
         const int32_t ci = meso_file_find(f, MESO_CHUNK_MESH, id, (uint16_t)L);
         const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
         if (!c || c->encoding != MESO_ENCODING_RAW || lv[L].rec.form != MESO_LEVEL_MESH)
             break; /* not a chain this bake wrote: build a new one */
-        meso_mesh_chunk* mc = &out->chain_chunk[L - 2];
+        meso_mesh_chunk* mc = &out->chain_chunk[L - S - 1];
         size_t size = 0;
         if ((r = read_whole(f, ci, &mc->data, &size, err)) != MESO_OK) {
             free(mc->data);
@@ -317,12 +323,12 @@ static meso_result read_chain(meso_file* f, uint32_t id, mesoi_shell_prior* out,
         meso_mesh_view view;
         if ((r = meso_mesh_parse(mc->data, mc->size, &view, err)) != MESO_OK)
             break;
-        out->chain_triangles[L - 2] = view.layout.index_count / 3;
-        out->chain_own[L - 2] = (double)lv[L].rec.error - e1 + ulp1;
-        memcpy(out->chain_bbox[L - 2], lv[L].rec.bbox_min, 3 * sizeof(float));
-        memcpy(out->chain_bbox[L - 2] + 3, lv[L].rec.bbox_max, 3 * sizeof(float));
+        out->chain_triangles[L - S - 1] = view.layout.index_count / 3;
+        out->chain_own[L - S - 1] = (double)lv[L].rec.error - e1 + ulp1;
+        memcpy(out->chain_bbox[L - S - 1], lv[L].rec.bbox_min, 3 * sizeof(float));
+        memcpy(out->chain_bbox[L - S - 1] + 3, lv[L].rec.bbox_max, 3 * sizeof(float));
     }
-    if (r != MESO_OK || out->chain_count != count - 2) { /* all of it or none */
+    if (r != MESO_OK || out->chain_count != count - S - 1) { /* all of it or none */
         for (uint32_t k = 0; k < out->chain_count; ++k)
             free(out->chain_chunk[k].data);
         memset(out->chain_chunk, 0, sizeof(out->chain_chunk));
@@ -379,8 +385,8 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
     void *mesh_data = NULL, *sdir_data = NULL;
     size_t mesh_size = 0, sdir_size = 0;
     meso_mesh_view view;
-    const int32_t mi = r == MESO_OK ? meso_file_find(f, MESO_CHUNK_MESH, id, 0) : -1;
-    const int32_t si = r == MESO_OK ? meso_file_find(f, MESO_CHUNK_SDIR, id, 0) : -1;
+    const int32_t mi = r == MESO_OK ? meso_file_find_level(f, MESO_CHUNK_MESH, id, 0) : -1;
+    const int32_t si = r == MESO_OK ? meso_file_find_level(f, MESO_CHUNK_SDIR, id, 0) : -1;
     if (r == MESO_OK && (mi < 0 || si < 0))
         r = meso_bake_fail(err, MESO_ERR_CORRUPT, 3116, "%s: the shell has no %s chunk", mesoi_base_name(path),
                            mi < 0 ? "MESH" : "SDIR");

@@ -96,8 +96,8 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_MESH MESO_FOURCC('M', 'E', 'S', 'H') /* triangle mesh: header + positions, normals, uvs, indices */
 #define MESO_CHUNK_SDIR MESO_FOURCC('S', 'D', 'I', 'R') /* shell directors: f32x3 per base vertex */
 #define MESO_CHUNK_STHK MESO_FOURCC('S', 'T', 'H', 'K') /* shell thickness: f32 per base vertex */
-#define MESO_CHUNK_TX2D MESO_FOURCC('T', 'X', '2', 'D') /* 2D texture, one mip level per chunk (lod = level) */
-#define MESO_CHUNK_TX3D MESO_FOURCC('T', 'X', '3', 'D') /* 3D texture, one mip level per chunk */
+#define MESO_CHUNK_TX2D MESO_FOURCC('T', 'X', '2', 'D') /* 2D texture (a shell's height field; a native coarser level's own at its lod, FORMAT.md §7.10) */
+#define MESO_CHUNK_TX3D MESO_FOURCC('T', 'X', '3', 'D') /* 3D texture (a shell's density volume, a cells object's colour grid) */
 #define MESO_CHUNK_DIST MESO_FOURCC('D', 'I', 'S', 'T') /* distance map for sphere tracing (3D) */
 #define MESO_CHUNK_TILE MESO_FOURCC('T', 'I', 'L', 'E') /* tile map: split-cell index per voxel (3D) */
 #define MESO_CHUNK_SPLT MESO_FOURCC('S', 'P', 'L', 'T') /* split-cell table: face codes per split cell */

@@ -34,10 +34,10 @@
 /* >>loading ---------------------------------------------------------------- */
 
 /* COLR + CMAP (FORMAT.md §7.2 "Shell colour"); none: MESO_OK, color.w 0. */
-static meso_result load_color(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err)
+static meso_result load_color(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_shell* out, meso_error* err)
 {
-    const int32_t ci = meso_file_find(f, MESO_CHUNK_COLR, object_id, 0);
-    const int32_t mi = meso_file_find(f, MESO_CHUNK_CMAP, object_id, 0);
+    const int32_t ci = meso_file_find_level(f, MESO_CHUNK_COLR, object_id, lod);
+    const int32_t mi = meso_file_find_level(f, MESO_CHUNK_CMAP, object_id, lod);
     if (ci < 0 && mi < 0)
         return MESO_OK;
     const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
@@ -64,6 +64,12 @@ static meso_result load_color(meso_file* f, uint32_t object_id, meso_ref_shell* 
 
 meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err)
 {
+    return meso_ref_shell_load_level(f, object_id, 0, out, err);
+}
+
+meso_result meso_ref_shell_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_shell* out,
+                                      meso_error* err)
+{
     if (!f || !out)
         return mesoi_ref_fail(err, MESO_ERR_INVALID_ARG, "shell", object_id, "NULL file or output");
     memset(out, 0, sizeof(*out));
@@ -74,8 +80,8 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
     memcpy(out->bbox_min, rec.bbox_min, sizeof(out->bbox_min));
     memcpy(out->bbox_max, rec.bbox_max, sizeof(out->bbox_max));
 
-    const int32_t mi = mesoi_ref_find_chunk(f, MESO_CHUNK_MESH, object_id),
-                  di = mesoi_ref_find_chunk(f, MESO_CHUNK_SDIR, object_id);
+    const int32_t mi = meso_file_find_level(f, MESO_CHUNK_MESH, object_id, lod),
+                  di = meso_file_find_level(f, MESO_CHUNK_SDIR, object_id, lod);
     if (mi < 0 || di < 0)
         return mesoi_ref_fail(err, MESO_ERR_NOT_FOUND, "shell", object_id, mi < 0 ? "no MESH chunk" : "no SDIR chunk");
     void *mesh = NULL, *dirs = NULL;
@@ -115,8 +121,8 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
         memcpy(out->uvs, mv.uvs, sizeof(float) * 2 * (size_t)nv);
 
     /* The texture function: TX2D (height) before TX3D (density), as libmeso. */
-    const int32_t hi = meso_file_find(f, MESO_CHUNK_TX2D, object_id, 0);
-    const int32_t vi = meso_file_find(f, MESO_CHUNK_TX3D, object_id, 0);
+    const int32_t hi = meso_file_find_level(f, MESO_CHUNK_TX2D, object_id, lod);
+    const int32_t vi = meso_file_find_level(f, MESO_CHUNK_TX3D, object_id, lod);
     if (hi >= 0 || vi >= 0) {
         const int32_t ti = hi >= 0 ? hi : vi;
         const meso_chunk_info* tc = meso_file_chunk(f, (uint32_t)ti);
@@ -133,7 +139,7 @@ meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell
         out->tex.d = tc->dims[2];
         out->tex.values = out->tex_values;
     }
-    r = load_color(f, object_id, out, err);
+    r = load_color(f, object_id, lod, out, err);
 done:
     free(mesh);
     free(dirs);

@@ -51,6 +51,11 @@ typedef struct meso_ref_shell {
 
 /* Load a shell object (kind 2) from an open file. */
 meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err);
+/* The same for level `lod` of a levelled file (FORMAT.md §7.10: per chunk
+ * type the smallest lod >= `lod`): a native coarser level's own texture
+ * function (bake/shell_texture_levels.h). meso_ref_shell_load is lod 0. */
+meso_result meso_ref_shell_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_shell* out,
+                                      meso_error* err);
 void meso_ref_shell_free(meso_ref_shell* s);
 /* Animated texture functions (FORMAT.md §7.2): replace the loaded function
  * with the object's stored frame for time t (meso_anim_frame_at), as

@@ -50,4 +50,16 @@ static inline void test_assert_one_level(const char* path)
     meso_file_close(f);
 }
 
+/* The file at `path` (a bake with --levels 2) has level 0 and the base
+ * mesh as a mesh stand-in: no native coarser level, no simplified one. */
+static inline void test_assert_base_mesh_only(const char* path)
+{
+    meso_file* f = NULL;
+    meso_level_info li[4];
+    uint32_t n = 0;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_levels(f, 1, li, 4, &n, NULL) == MESO_OK && n == 2 && li[1].rec.form == MESO_LEVEL_MESH);
+    meso_file_close(f);
+}
+
 #endif /* MESO_TEST_STANDIN_CHECK_H */

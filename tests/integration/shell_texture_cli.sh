@@ -17,7 +17,7 @@ check() { # DESCRIPTION COMMAND...
 }
 spot="$data/spot_low_resolution.obj"
 # chunk_row FILE TYPE: the chunk's row of 'mesoinspect info'
-chunk_row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t'; }
+chunk_row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t && $5 == 0'; } # level 0's
 bytes() { wc -c <"$1" | tr -d ' '; }
 
 # 1. Built-in height field on a mesh without uvs: planar fallback + warning.
@@ -34,7 +34,7 @@ for key in uv_source dist_res tiling dist_solid_cells; do
   check "bricks: report has texture.$key" grep -q "\"$key\":" "$tmp/bricks.json"
 done
 check "bricks: report says the uvs are planar" grep -q '"uv_source":[[:space:]]*"planar"' "$tmp/bricks.json"
-"$inspect" dump "$tmp/bricks.meso" DIST:1 -o "$tmp/bricks.dist" >/dev/null 2>&1
+"$inspect" dump "$tmp/bricks.meso" DIST:1:0 -o "$tmp/bricks.dist" >/dev/null 2>&1
 dims=$(chunk_row "$tmp/bricks.meso" DIST | awk '{print $9}')
 expect=$(echo "$dims" | awk -F x '{print $1 * $2 * $3}')
 check "bricks: DIST payload is W*H*D bytes ($dims)" test "$(bytes "$tmp/bricks.dist")" = "$expect"

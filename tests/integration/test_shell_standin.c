@@ -98,12 +98,7 @@ int main(int argc, char** argv)
     snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' --texture bricks:32 --levels 2 -o '%s' >/dev/null", argv[1],
              test_data("spot_low_resolution.obj"), path);
     assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    meso_level_info li[4];
-    uint32_t n = 0;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    assert(meso_file_levels(f, 1, li, 4, &n, NULL) == MESO_OK && n == 2 && li[1].rec.form == MESO_LEVEL_MESH);
-    meso_file_close(f);
+    test_assert_base_mesh_only(path);
     test_temp_dir_remove(dir);
     puts("test_shell_standin: ok");
     return 0;

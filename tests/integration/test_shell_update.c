@@ -104,7 +104,7 @@ static baked bake(const meso_bake_shell_options* o, const char* path)
     meso_file* f = NULL;
     meso_error err = {0};
     assert(meso_file_open_memory(bytes, size, NULL, &f, &err) == MESO_OK);
-    const int32_t si = meso_file_find(f, MESO_CHUNK_SDIR, 1, 0);
+    const int32_t si = meso_file_find_level(f, MESO_CHUNK_SDIR, 1, 0);
     assert(si >= 0);
     const meso_chunk_info* ci = meso_file_chunk(f, (uint32_t)si);
     b.n = ci->dims[0];
