@@ -195,4 +195,24 @@ check "frames: validate --full" "$inspect" validate --full "$tmp/seq.meso"
 "$inspect" preview "$tmp/seq.meso" -o "$tmp/seq0.png" --reference --size 40x40 --samples 32 >/dev/null 2>&1
 check "frames: preview --reference --time 0.3 (frame 2) = the bake at 0.25" cmp -s "$tmp/seq2.png" "$tmp/t2.png"
 check "frames: ... and not frame 0" sh -c "! cmp -s '$tmp/seq0.png' '$tmp/t2.png'"
+
+# 9. Native coarser levels of a height field (FORMAT.md 7.10): info lists
+# them, and preview --reference --level L draws level L's own height field
+# (another image than level 0's); a level that is a mesh stand-in, or none,
+# leaves the object out with a note and, with nothing left, exits 5; --level
+# without --reference is a usage error.
+"$bake" shell -i "$data/spot_uv.obj" -o "$tmp/lv.meso" --texture bricks:256 --thickness-rel 0.02 -j 2 2>/dev/null
+check "levels: info lists native level 1" sh -c "'$inspect' info '$tmp/lv.meso' | awk '\$2 == 1 && \$3 == \"native\"' | grep -q ."
+standin=$("$inspect" info "$tmp/lv.meso" | awk '$1 == 1 && $3 == "mesh" {print $2; exit}')
+"$inspect" preview "$tmp/lv.meso" -o "$tmp/lv0.png" --reference --size 40x40 --samples 32 >/dev/null 2>&1
+"$inspect" preview "$tmp/lv.meso" -o "$tmp/lv1.png" --reference --level 1 --size 40x40 --samples 32 >/dev/null 2>&1
+check "levels: preview --reference --level 1 writes an image" test -s "$tmp/lv1.png"
+check "levels: ... not level 0's" sh -c "! cmp -s '$tmp/lv0.png' '$tmp/lv1.png'"
+"$inspect" preview "$tmp/lv.meso" -o "$tmp/lvs.png" --reference --level "$standin" --size 40x40 --samples 32 \
+  >/dev/null 2>"$tmp/lvs.err"
+check "levels: --level $standin (the mesh stand-in): exit 5" test $? -eq 5
+check "levels: ... says it is a mesh stand-in" grep -q "level $standin is a mesh stand-in" "$tmp/lvs.err"
+check "levels: ... writes no image" test ! -e "$tmp/lvs.png"
+"$inspect" preview "$tmp/lv.meso" -o "$tmp/lvg.png" --level 1 >/dev/null 2>"$tmp/lvg.err"
+check "levels: --level without --reference: exit 1" test $? -eq 1
 exit $fail

@@ -132,6 +132,10 @@ static const char* const usage_preview =
     "                      --technique curved selects the curved shell mapping,\n"
     "                      smooth, tetra and slices the smooth one; mesh objects are skipped\n"
     "      --samples N     reference: samples per prism along each ray (default 1024)\n"
+    "      --level L       reference: draw each shell's and cells object's native level L\n"
+    "                      (its own texture or tile map, FORMAT.md 7.10) instead of level 0;\n"
+    "                      an object whose level L is a mesh stand-in, or that has no level\n"
+    "                      L, is left out with a note on stderr\n"
     "      --cells MODE    cells objects: first (first hit, default), reflect or refract\n"
     "      --bounces N     cells: reflected rays traced after the first hit, or refraction\n"
     "                      events after it (0..8, default 2)\n"
@@ -182,6 +186,7 @@ typedef struct preview_knobs {
     double pixel_error;    /* --pixel-error: pixels of the PNG (0: finest) */
     uint64_t stream_bytes; /* --stream-bytes: 0 = the whole file */
     const char* stats;     /* --stats FILE or NULL */
+    int level;             /* --level L with --reference: a native level's own chunks; -1: level 0 */
 } preview_knobs;
 
 /* Background: the GL preview's clear colour. */
@@ -238,6 +243,35 @@ typedef struct ref_object {
     meso_ref_cells cells;
 } ref_object;
 
+/* --level L: whether the reference can draw object `rec`'s level L (a
+ * native level of a shell or cells object: their references load a
+ * level's own chunks); otherwise a note on stderr saying why not. */
+static int native_level(meso_file* f, const meso_object_record* rec, uint16_t lod)
+{
+    uint32_t n = 0;
+    meso_level_info li;
+    meso_error err;
+    if (meso_file_levels(f, rec->id, NULL, 0, &n, &err) != MESO_OK || lod >= n) {
+        fprintf(stderr, "mesoinspect: object %u (%s) has %u level%s, no level %u: left out\n", rec->id, rec->name, n,
+                n == 1 ? "" : "s", lod);
+        return 0;
+    }
+    meso_level_info* all = malloc(sizeof(*all) * n);
+    const int ok = all && meso_file_levels(f, rec->id, all, n, &n, &err) == MESO_OK;
+    if (ok)
+        li = all[lod];
+    free(all);
+    if (!ok)
+        return 0;
+    if (li.rec.form != MESO_LEVEL_NATIVE || rec->kind == MESO_OBJECT_FRUSTA) {
+        fprintf(stderr, "mesoinspect: object %u (%s): level %u is %s: left out\n", rec->id, rec->name, lod,
+                li.rec.form != MESO_LEVEL_NATIVE ? "a mesh stand-in, which the reference does not draw"
+                                                 : "a frusta level, which the reference does not load");
+        return 0;
+    }
+    return 1;
+}
+
 static int render_reference(const char* path, const char* out, int width, int height, uint32_t only, double yaw,
                             double pitch, int curved, int samples, const preview_knobs* knobs)
 {
@@ -293,11 +327,14 @@ static int render_reference(const char* path, const char* out, int width, int he
                     rec->id, rec->name);
             continue;
         }
+        const uint16_t lod = knobs->level > 0 ? (uint16_t)knobs->level : 0;
+        if (lod && !native_level(f, rec, lod))
+            continue;
         ref_object* o = &objs[nobj];
         o->kind = rec->kind;
-        r = rec->kind == MESO_OBJECT_SHELL    ? meso_ref_shell_load(f, rec->id, &o->shell, &err)
+        r = rec->kind == MESO_OBJECT_SHELL    ? meso_ref_shell_load_level(f, rec->id, lod, &o->shell, &err)
             : rec->kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_load(f, rec->id, &o->frusta, &err)
-                                              : meso_ref_cells_load(f, rec->id, &o->cells, &err);
+                                              : meso_ref_cells_load_level(f, rec->id, lod, &o->cells, &err);
         if (r == MESO_OK && rec->kind == MESO_OBJECT_SHELL && knobs->has_time)
             r = meso_ref_shell_set_time(f, rec->id, knobs->time, &o->shell, &err);
         if (r != MESO_OK) {
@@ -306,6 +343,12 @@ static int render_reference(const char* path, const char* out, int width, int he
             goto done;
         }
         ++nobj;
+    }
+    if (nobj == 0 && knobs->level > 0) {
+        fprintf(stderr, "mesoinspect error: %s: no %sshell or cells object has a native level %d\n", path,
+                only ? "such " : "", knobs->level);
+        code = MESO_EXIT_UNSUPPORTED;
+        goto done;
     }
     if (nobj == 0) {
         fprintf(stderr, "mesoinspect error: %s: no shell, frusta or cells object%s\n", path,
@@ -785,7 +828,7 @@ int mesoinspect_preview(int argc, char** argv)
     const char* only_name = NULL;
     double yaw = 30, pitch = 20;
     meso_shell_technique technique = MESO_SHELL_SMOOTH;
-    preview_knobs knobs = {.cell_bounces = 2, .zoom = 1.0, .pixel_error = 1.0};
+    preview_knobs knobs = {.cell_bounces = 2, .zoom = 1.0, .pixel_error = 1.0, .level = -1};
     int reference = 0;
     long samples = 0;
     for (int i = 0; i < argc; ++i) {
@@ -872,6 +915,14 @@ int mesoinspect_preview(int argc, char** argv)
                                 "See 'mesoinspect --help'.\n", argv[i]);
                 return MESO_EXIT_USAGE;
             }
+        } else if (!strcmp(a, "--level") && val) {
+            const long l = strtol(argv[++i], &end, 10);
+            if (!end || *end || end == argv[i] || l < 0 || l > 65535) {
+                fprintf(stderr, "mesoinspect error: --level expects 0..65535, got '%s'\nSee 'mesoinspect --help'.\n",
+                        argv[i]);
+                return MESO_EXIT_USAGE;
+            }
+            knobs.level = (int)l;
         } else if (!strcmp(a, "--time") && val) {
             knobs.time = strtod(argv[++i], &end);
             knobs.has_time = 1;
@@ -973,7 +1024,8 @@ int mesoinspect_preview(int argc, char** argv)
                      !strcmp(a, "--cell-step") || !strcmp(a, "--zoom") || !strcmp(a, "--time") ||
                      !strcmp(a, "--depth") || !strcmp(a, "--slices") || !strcmp(a, "--slice-interp") ||
                      !strcmp(a, "--slice-axis") || !strcmp(a, "--api") || !strcmp(a, "--pass") ||
-                     !strcmp(a, "--pixel-error") || !strcmp(a, "--stream-bytes") || !strcmp(a, "--stats"))
+                     !strcmp(a, "--pixel-error") || !strcmp(a, "--stream-bytes") || !strcmp(a, "--stats") ||
+                     !strcmp(a, "--level"))
                         ? "missing value for option"
                         : "unrecognized option",
                     a);
@@ -992,6 +1044,11 @@ int mesoinspect_preview(int argc, char** argv)
     }
     if (reference && (knobs.stats || knobs.stream_bytes)) {
         fprintf(stderr, "mesoinspect error: --stats and --stream-bytes describe libmeso's draw, not the reference's\n"
+                        "See 'mesoinspect --help'.\n");
+        return MESO_EXIT_USAGE;
+    }
+    if (!reference && knobs.level >= 0) {
+        fprintf(stderr, "mesoinspect error: --level is the reference's; libmeso picks levels by --pixel-error\n"
                         "See 'mesoinspect --help'.\n");
         return MESO_EXIT_USAGE;
     }
