@@ -10,6 +10,7 @@
  */
 #include "bake_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +21,7 @@
 #include "color_map.h"
 #include "frusta_chunks.h"
 #include "frusta_standin.h"
+#include "height_field_levels.h"
 #include "standin_levels.h"
 #include "meso_clock.h"
 #include "frustum_model.h"
@@ -186,11 +188,68 @@ static void report_json(cJSON* rep, const meso_bake_frusta_report* s)
     mesoi_report_fixes(rep, &src->fixes);
 }
 
+/* Native relief levels (bake/height_field_levels.h): the relief map
+ * halved, drawn by the same frusta. A level's error is the exact sup of
+ * its heights' change times the stand-in's relief gain (max over frusta of
+ * depth x G_f, frusta_standin.h term 1: for a fixed (u, v) the surface
+ * point is affine in the relief height, and |dp/dh| is at most that; the
+ * walls between two frusta's reliefs are covered as there), with 4 float
+ * ulps of slack in the heights; nothing else changes, so no chord or
+ * rounding term. Levels stop before their error reaches the stand-in's,
+ * and one is kept only while it draws from at most 9/10 of the bytes of
+ * the level before (as a shell's, bake_shell.c native_trim: each takes a
+ * place a simplified stand-in could have). */
+typedef struct native_levels {
+    mesoi_height_level level[MESOI_HEIGHT_MAX_NATIVE];
+    double error[MESOI_HEIGHT_MAX_NATIVE];
+    uint32_t count;
+} native_levels;
+
+static float f32_up(double x)
+{
+    float f = (float)x;
+    if ((double)f < x)
+        f = nextafterf(f, INFINITY);
+    return f;
+}
+
+static meso_result relief_levels(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
+                                 const meso_texfn* relief, const meso_color_map* color, const meso_frusta_standin* st,
+                                 native_levels* nl, meso_error* err)
+{
+    memset(nl, 0, sizeof *nl);
+    const uint32_t want = a->levels == 0 ? MESOI_HEIGHT_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
+    if (!a->relief || relief->kind != MESO_TEXFN_HEIGHT || !(st->relief_gain > 0) || want == 0)
+        return MESO_OK;
+    uint32_t built = 0;
+    const meso_result r = mesoi_height_levels_build(relief, NULL, want, st->error / st->relief_gain,
+                                                    a->common.threads, nl->level, &built, err);
+    if (r != MESO_OK)
+        return r;
+    const uint64_t shared = (uint64_t)obj->count * (MESO_FRUS_RECORD_SIZE + MESO_FSEG_RECORD_SIZE) +
+                            (uint64_t)obj->ball_count * MESO_BALL_RECORD_SIZE +
+                            (uint64_t)obj->node_count * MESO_SKEL_RECORD_SIZE +
+                            (a->relief_color ? 4 * (uint64_t)color->width * color->height : 0);
+    uint64_t prev = shared + relief->encoded_size;
+    for (; nl->count < built; ++nl->count) {
+        const mesoi_height_level* l = &nl->level[nl->count];
+        const uint64_t bytes = shared + l->fn.encoded_size;
+        const float e = f32_up((l->sup + 4.0 * FLT_EPSILON) * st->relief_gain);
+        if (10 * bytes > 9 * prev || !((double)e < st->error))
+            break;
+        nl->error[nl->count] = e;
+        prev = bytes;
+    }
+    mesoi_height_levels_free(nl->level + nl->count, built - nl->count);
+    return MESO_OK;
+}
+
 /* The file: META, RPRT, OBJT, SKEL, FRUS, FSEG, BALL (when there are balls),
  * RELF (with a relief), COLR (with a colour map). */
 static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
                             const meso_texfn* relief, const meso_color_map* color, const meso_frusta_standin* st,
-                            meso_bake_frusta_report* s, meso_bake_output** out, meso_error* err)
+                            const native_levels* nl, meso_bake_frusta_report* s, meso_bake_output** out,
+                            meso_error* err)
 {
     uint8_t *frus = NULL, *fseg = NULL, *ball = NULL;
     meso_result r = meso_frusta_object_encode(obj, &frus, &fseg, &ball, err);
@@ -231,8 +290,16 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     if (r == MESO_OK && st) { /* level 1: the stand-in (frusta_standin.h), 2..: its simplifications */
         r = meso_bake_mesh_chunk(&st->mesh, NULL, &mc, err);
         if (r == MESO_OK)
-            r = mesoi_standin_levels_build(&st->mesh, st->error, a->levels, a->common.threads, &lv, err);
-        s->level_count = lv.count + 1;
+            r = mesoi_standin_levels_build(&st->mesh, st->error,
+                                           (a->levels && a->levels < MESOI_STANDIN_MAX_LEVELS ? a->levels
+                                                                                         : MESOI_STANDIN_MAX_LEVELS) -
+                                               (int)nl->count,
+                                           a->common.threads, &lv, err);
+        lv.native = nl->count;
+        for (uint32_t k = 0; k < nl->count; ++k)
+            lv.native_error[k] = nl->error[k];
+        s->level_count = lv.count + 1 + nl->count;
+        s->native_levels = nl->count;
         s->standin_triangles = st->mesh.triangle_count;
         s->standin_vertices = st->mesh.vertex_count;
         s->standin_bytes = mc.size;
@@ -243,7 +310,7 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     }
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
-    mesoi_chunk chunks[7 + MESOI_STANDIN_MAX_LEVELS];
+    mesoi_chunk chunks[7 + MESOI_HEIGHT_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS];
     int count = 0;
     chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
                                     .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};
@@ -265,15 +332,30 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8,
                                                  .components = 4, .dims = {color->width, color->height, 1}},
                                         .data = color->rgba, .size = 4 * (size_t)color->width * color->height};
+    if (r == MESO_OK && st && nl->count) {
+        /* Native relief levels: each its own RELF at lod l; the records and
+         * the colour, which every level shares, once at lod N, which levels
+         * 0..N all resolve them to (FORMAT.md §7.10). */
+        for (int k = 0; k < count; ++k)
+            if (chunks[k].desc.type != MESO_CHUNK_RELF)
+                chunks[k].desc.lod = (uint16_t)nl->count;
+        for (uint32_t l = 1; l <= nl->count; ++l) {
+            const meso_texfn* t = &nl->level[l - 1].fn;
+            chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_RELF, .object = 1, .lod = (uint16_t)l,
+                                                     .dtype = t->dtype, .components = 1,
+                                                     .dims = {t->dims[0], t->dims[1], 1}},
+                                            .data = t->encoded, .size = t->encoded_size};
+        }
+    }
     if (r == MESO_OK && st) {
-        /* The stand-in exists only as level 1 (the native level does not
-         * use it): append puts the tessellation's chunk at lod 1. */
+        /* The stand-in exists only as level N + 1 (the native levels do not
+         * use it): append puts the tessellation's chunk there. */
         const mesoi_chunk tess = {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                                            .encoding = mc.encoding, .decoded_size = mc.decoded_size},
                                   .data = mc.data, .size = mc.size};
         count += (int)mesoi_standin_levels_append(&lv, &st->mesh, &tess, rec.bbox_min, rec.bbox_max, chunks + count,
                                                   rep);
-        cJSON* l1 = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(rep, "levels"), 1);
+        cJSON* l1 = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(rep, "levels"), 1 + (int)nl->count);
         cJSON_AddNumberToObject(l1, "vertices", s->standin_vertices);
         cJSON_AddNumberToObject(l1, "relief_error", s->standin_relief_error);
         cJSON_AddNumberToObject(l1, "chord_error", s->standin_chord_error);
@@ -449,10 +531,21 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
                 *err = serr;
         }
     }
+    native_levels nl = {0};
+    if (r == MESO_OK && with_standin) {
+        const double t = meso_seconds();
+        r = relief_levels(&a, &obj, &relief, &color, &st, &nl, err);
+        if (r == MESO_OK && nl.count)
+            mesoi_run_stage(&run, "levels", 0.92, 0.92,
+                            "%u native relief levels, down to %ux%u, error %.4g (%.0f ms)", nl.count,
+                            nl.level[nl.count - 1].fn.dims[0], nl.level[nl.count - 1].fn.dims[1],
+                            nl.error[nl.count - 1], 1e3 * (meso_seconds() - t));
+    }
     if (r == MESO_OK) {
         fill_report(&m, &obj, s);
-        r = assemble(&a, &obj, &relief, &color, with_standin ? &st : NULL, s, out, err);
+        r = assemble(&a, &obj, &relief, &color, with_standin ? &st : NULL, &nl, s, out, err);
     }
+    mesoi_height_levels_free(nl.level, nl.count);
     meso_frusta_standin_free(&st);
     meso_texfn_free(&relief);
     meso_color_map_free(&color);

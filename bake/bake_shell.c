@@ -37,7 +37,7 @@
 #include "standin_levels.h"
 
 _Static_assert(MESO_BAKE_SHELL_MAX_LEVELS == MESOI_STANDIN_MAX_LEVELS, "the stand-ins hold every level");
-_Static_assert(1 + MESOI_SHELL_MAX_NATIVE + 1 <= MESOI_STANDIN_MAX_LEVELS, "room for the base mesh stand-in");
+_Static_assert(1 + MESOI_HEIGHT_MAX_NATIVE + 1 <= MESOI_STANDIN_MAX_LEVELS, "room for the base mesh stand-in");
 
 meso_bake_shell_options meso_bake_shell_defaults(void)
 {
@@ -687,14 +687,14 @@ static float standin_error(const shell_bake* s)
     return f;
 }
 
-/* The native levels kept (shell_texture_levels.h) and their chunks: each
+/* The native levels kept (height_field_levels.h) and their chunks: each
  * level's TX2D and DIST at its own lod, appended to chunks[0..n-1]; the
  * chunks every level shares (SDIR, STHK, COLR, CMAP) move to lod N, the
  * coarsest native level, which levels 0..N all resolve them to (FORMAT.md
  * §7.10: per type the smallest lod >= the level); the MESH they draw is the
  * stand-in's copy at lod N + 1 (standin_levels.c). A level's error is its
  * heights' sup distance from level 0's times the longest top - bottom of
- * the output vertices (shell_texture_levels.c derives it), with 4 float
+ * the output vertices (height_field_levels.c derives it), with 4 float
  * ulps of slack in the heights for the runtime's arithmetic; levels whose
  * error reaches the base mesh's (e0) are dropped, the base mesh being as
  * close and cheaper. Returns the chunks appended. */
@@ -732,7 +732,7 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
     }
     size_t m = 0;
     for (uint32_t l = 1; l <= N; ++l) {
-        const mesoi_shell_tex_level* t = &tx->native[l - 1];
+        const mesoi_height_level* t = &tx->native[l - 1];
         chunks[n + m++] = (mesoi_chunk){
             .desc = {.type = MESO_CHUNK_TX2D, .object = 1, .lod = (uint16_t)l, .dtype = t->fn.dtype, .components = 1,
                      .dims = {t->fn.dims[0], t->fn.dims[1], 1}},
@@ -745,7 +745,7 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
     return m;
 }
 
-/* The native levels worth a slot (shell_texture_levels.h). A file holds at
+/* The native levels worth a slot (height_field_levels.h). A file holds at
  * most MESOI_STANDIN_MAX_LEVELS levels, and a slot a native level takes is
  * a simplified mesh fewer at the far end; a native level only swaps the
  * texture and its distance map, while the base mesh, directors and colour
@@ -1001,7 +1001,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                      .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
                                                base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
         meso_cmap_record_encode(&cr, cmap);
-        mesoi_chunk chunks[11 + 2 * MESOI_SHELL_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS] = {
+        mesoi_chunk chunks[11 + 2 * MESOI_HEIGHT_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS] = {
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},

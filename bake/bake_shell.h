@@ -7,7 +7,7 @@
 
 #include "bake_internal.h"
 #include "distance_map.h"
-#include "shell_texture_levels.h"
+#include "height_field_levels.h"
 #include "texture_function.h"
 
 typedef struct mesoi_shell_texture {
@@ -25,9 +25,9 @@ typedef struct mesoi_shell_texture {
      * frame k at k * the frame's size (frame 0 is fn and dist); else NULL. */
     uint8_t* fn_frames;
     uint8_t* dist_frames;
-    /* Native coarser levels (shell_texture_levels.h): a static height field
+    /* Native coarser levels (height_field_levels.h): a static height field
      * halved, lod 1..native_count; none for volumes, frames or --levels < 3. */
-    mesoi_shell_tex_level native[MESOI_SHELL_MAX_NATIVE];
+    mesoi_height_level native[MESOI_HEIGHT_MAX_NATIVE];
     uint32_t native_count;
 } mesoi_shell_texture;
 

@@ -28,7 +28,7 @@ void mesoi_shell_texture_free(mesoi_shell_texture* tx)
     free(tx->indices);
     free(tx->fn_frames);
     free(tx->dist_frames);
-    mesoi_shell_tex_levels_free(tx->native, tx->native_count);
+    mesoi_height_levels_free(tx->native, tx->native_count);
     tx->native_count = 0;
 }
 
@@ -72,7 +72,7 @@ static meso_result bake_frames(mesoi_bake_run* run, const meso_bake_shell_option
     return r;
 }
 
-/* The native coarser levels of a static height field (shell_texture_levels.h):
+/* The native coarser levels of a static height field (height_field_levels.h):
  * `--levels` 0 as many as there may be, K >= 3 at most K - 2 (level 0 and
  * the base mesh come first, as for cells), else none. They stop where the
  * sup reaches the highest texel of an exterior shell (1 for the other
@@ -81,7 +81,7 @@ static meso_result bake_frames(mesoi_bake_run* run, const meso_bake_shell_option
  * error reaches the base mesh's, once the directors are known). */
 static uint32_t native_wanted(const meso_bake_shell_options* a)
 {
-    return a->levels == 0 ? MESOI_SHELL_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
+    return a->levels == 0 ? MESOI_HEIGHT_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
 }
 
 static meso_result native_levels(mesoi_bake_run* run, const meso_bake_shell_options* a, mesoi_shell_texture* tx,
@@ -97,7 +97,7 @@ static meso_result native_levels(mesoi_bake_run* run, const meso_bake_shell_opti
             hmax = fmax(hmax, (double)tx->fn.values[i]);
     }
     const double t = meso_seconds();
-    const meso_result r = mesoi_shell_tex_levels_build(&tx->fn, &tx->dist, want, hmax, run->common.threads,
+    const meso_result r = mesoi_height_levels_build(&tx->fn, &tx->dist, want, hmax, run->common.threads,
                                                        tx->native, &tx->native_count, err);
     if (r == MESO_OK && tx->native_count)
         mesoi_run_stage(run, "texture levels", 0.05, 0.05,

@@ -153,8 +153,11 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
     if (has_relief)
         for (uint32_t f = 0; f < obj->count; ++f) {
             const double d = obj->recs[f].relief_depth;
-            if (d > 0)
-                relief_err = fmax(relief_err, d * 0.5 * (hhi - hlo) * relief_gain(&obj->recs[f]));
+            if (d > 0) {
+                const double g = d * relief_gain(&obj->recs[f]);
+                relief_err = fmax(relief_err, 0.5 * (hhi - hlo) * g);
+                out->relief_gain = fmax(out->relief_gain, g);
+            }
         }
     if (!isfinite(relief_err))
         return meso_bake_fail(err, MESO_ERR_UNSUPPORTED, 0,

@@ -70,6 +70,8 @@ typedef struct meso_frusta_standin {
     meso_mesh mesh;        /* positions, normals, indices (malloc'd; meso_frusta_standin_free) */
     double error;          /* the stated error: relief + chord + rounding */
     double relief_error, chord_error;
+    double relief_gain;    /* max over the frusta with a relief of depth x G_f (term 1): a height change dh
+                              at a relief coordinate moves the surface there by at most dh x this */
     uint32_t nu_min, nu_max; /* cells around, over the frusta */
     float bbox_min[3], bbox_max[3];
 } meso_frusta_standin;

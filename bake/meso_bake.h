@@ -437,7 +437,7 @@ typedef struct meso_bake_shell_options {
     const char* color;
     /* Levels of detail (FORMAT.md §7.10): 0 (auto): level 0; for a static
      * height field its native coarser levels (the height field halved, with
-     * its own distance map and the exact error: bake/shell_texture_levels.h;
+     * its own distance map and the exact error: bake/height_field_levels.h;
      * up to 4, each kept while it draws from at most 9/10 of the bytes of
      * the level before); then the base mesh drawn as a plain mesh (a
      * stand-in for when the whole shell is thinner than the error on
@@ -601,11 +601,15 @@ typedef struct meso_bake_frusta_options {
                                    twist=DEG replaces it for its segment); finite, |twist| <=
                                    MESO_BAKE_MAX_TWIST, and no segment over 1000 turns */
     int levels;                 /* levels of detail, level 0 included (FORMAT.md §7.10): 0 = auto (level
-                                   0; as level 1, a triangle tessellation drawn as a plain mesh with its
-                                   measured error, bake/frusta_standin.h; then its simplifications, as
-                                   meso_bake_mesh's auto, each with level 1's error plus its own), 1 =
-                                   level 0 only (no LODS chunk, the file of earlier bakes), N = at most N
-                                   (1..MESO_BAKE_FRUSTA_MAX_LEVELS; at most 9 are made) */
+                                   0; with a relief, native levels with the relief map halved and the
+                                   exact error, bake/height_field_levels.h, up to 4, each kept while it
+                                   draws from at most 9/10 of the bytes of the level before; then a
+                                   triangle tessellation drawn as a plain mesh with its measured error,
+                                   bake/frusta_standin.h; then its simplifications, as meso_bake_mesh's
+                                   auto, each with the tessellation's error plus its own), 1 = level 0
+                                   only (no LODS chunk, the file of earlier bakes), N = at most N
+                                   (1..MESO_BAKE_FRUSTA_MAX_LEVELS; at most 9 are made; N >= 3: the
+                                   tessellation, then native levels, then simplified ones) */
 } meso_bake_frusta_options;
 
 #define MESO_BAKE_FRUSTA_MAX_LEVELS 16
@@ -627,6 +631,7 @@ typedef struct meso_bake_frusta_report {
     size_t standin_bytes;      /* its stored MESH payload */
     double standin_error;      /* its stated error (object units): relief + chord + rounding terms */
     double standin_relief_error, standin_chord_error; /* the first two terms */
+    uint32_t native_levels;    /* relief-map levels before the stand-in (bake/height_field_levels.h), lod 1.. */
 } meso_bake_frusta_report;
 
 /* The CLI's defaults (max_joint_angle 150, relief_repeat 1). Zero-initialised

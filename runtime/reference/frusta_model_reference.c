@@ -226,6 +226,12 @@ int meso_ref_frusta_albedo(const meso_ref_frusta* m, const meso_ref_frustum_hit*
 
 meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frusta* out, meso_error* err)
 {
+    return meso_ref_frusta_load_level(f, object_id, 0, out, err);
+}
+
+meso_result meso_ref_frusta_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_frusta* out,
+                                       meso_error* err)
+{
     if (!f || !out)
         return mesoi_ref_fail(err, MESO_ERR_INVALID_ARG, "frusta", object_id, "NULL file or output");
     memset(out, 0, sizeof(*out));
@@ -235,11 +241,11 @@ meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frus
         return r;
     memcpy(out->bbox_min, rec.bbox_min, sizeof(out->bbox_min));
     memcpy(out->bbox_max, rec.bbox_max, sizeof(out->bbox_max));
-    const int32_t fi = mesoi_ref_find_chunk(f, MESO_CHUNK_FRUS, object_id);
-    const int32_t si = mesoi_ref_find_chunk(f, MESO_CHUNK_FSEG, object_id);
-    const int32_t bi = mesoi_ref_find_chunk(f, MESO_CHUNK_BALL, object_id);
-    const int32_t ri = meso_file_find(f, MESO_CHUNK_RELF, object_id, 0);
-    const int32_t ci = meso_file_find(f, MESO_CHUNK_COLR, object_id, 0);
+    const int32_t fi = meso_file_find_level(f, MESO_CHUNK_FRUS, object_id, lod);
+    const int32_t si = meso_file_find_level(f, MESO_CHUNK_FSEG, object_id, lod);
+    const int32_t bi = meso_file_find_level(f, MESO_CHUNK_BALL, object_id, lod);
+    const int32_t ri = meso_file_find_level(f, MESO_CHUNK_RELF, object_id, lod);
+    const int32_t ci = meso_file_find_level(f, MESO_CHUNK_COLR, object_id, lod);
     if (fi < 0 || si < 0)
         return mesoi_ref_fail(err, MESO_ERR_NOT_FOUND, "frusta", object_id, fi < 0 ? "no FRUS chunk" : "no FSEG chunk");
     void *frus = NULL, *fseg = NULL, *ball = NULL;

@@ -245,7 +245,7 @@ typedef struct meso_ref_frusta {
     uint32_t seg_count, ball_count;
     meso_ref_frustum* segs;     /* seg_count, FRUS/FSEG order */
     meso_ref_ball* balls;       /* ball_count (NULL when 0) */
-    meso_ref_relief relief;     /* height kind 1 from the object's RELF (lod 0), kind 0 without one */
+    meso_ref_relief relief;     /* height kind 1 from the object's RELF (the level's), kind 0 without one */
     float* relief_values;       /* owned storage of relief.height.values */
     uint32_t color_w, color_h;  /* the COLR colour map; 0 without one */
     double* color;              /* its texels decoded to linear RGB, 3 per texel, row 0 first (t = 0) */
@@ -259,6 +259,11 @@ typedef struct meso_ref_frusta {
  * chunk is missing; MESO_ERR_CORRUPT: counts disagree; MESO_ERR_UNSUPPORTED:
  * a RELF dtype other than U8/U16 × 1, a COLR other than U8 × 4, W × H × 1. Free with meso_ref_frusta_free. */
 meso_result meso_ref_frusta_load(meso_file* f, uint32_t object_id, meso_ref_frusta* out, meso_error* err);
+/* The same for level `lod` of a levelled file (FORMAT.md §7.10: per chunk
+ * type the smallest lod >= `lod`): a native coarser level's own relief map
+ * (bake/height_field_levels.h). meso_ref_frusta_load is lod 0. */
+meso_result meso_ref_frusta_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_frusta* out,
+                                       meso_error* err);
 void meso_ref_frusta_free(meso_ref_frusta* m);
 
 /* The albedo of a hit of meso_ref_frusta_intersect_relief on `m` (its

@@ -53,7 +53,7 @@ typedef struct meso_ref_shell {
 meso_result meso_ref_shell_load(meso_file* f, uint32_t object_id, meso_ref_shell* out, meso_error* err);
 /* The same for level `lod` of a levelled file (FORMAT.md §7.10: per chunk
  * type the smallest lod >= `lod`): a native coarser level's own texture
- * function (bake/shell_texture_levels.h). meso_ref_shell_load is lod 0. */
+ * function (bake/height_field_levels.h). meso_ref_shell_load is lod 0. */
 meso_result meso_ref_shell_load_level(meso_file* f, uint32_t object_id, uint16_t lod, meso_ref_shell* out,
                                       meso_error* err);
 void meso_ref_shell_free(meso_ref_shell* s);

@@ -6,6 +6,7 @@
 #define MESO_TEST_STANDIN_CHECK_H
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "meso_file.h"
@@ -23,20 +24,47 @@ static inline uint8_t* test_read_level_mesh(meso_file* f, uint16_t lod, meso_mes
     return mb;
 }
 
-/* Object 1's levels of `f` (at most 16, at least min_levels): level 0
- * native, every coarser one a mesh stand-in with an error no smaller than
- * the finer one's, in a shorter prefix of the file. Returns the count. */
-static inline uint32_t test_standin_chain(meso_file* f, meso_level_info li[16], uint32_t min_levels)
+/* Object 1's levels of `f` (at most 16, at least min_levels mesh
+ * stand-ins after level 0): level 0 native, then any native coarser levels
+ * (a halved texture or relief: tests of their own check them), then mesh
+ * stand-ins only, each with an error no smaller than the finer one's, in a
+ * shorter prefix of the file. Returns the count; *first the first
+ * stand-in's level. */
+static inline uint32_t test_standin_chain(meso_file* f, meso_level_info li[16], uint32_t min_levels, uint32_t* first)
 {
-    uint32_t n = 0;
-    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n >= min_levels && n <= 9);
+    uint32_t n = 0, S = 1;
+    assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK && n <= 9);
     assert(li[0].rec.form == MESO_LEVEL_NATIVE);
+    while (S < n && li[S].rec.form == MESO_LEVEL_NATIVE)
+        ++S;
+    assert(n >= S + min_levels - 1);
     for (uint32_t L = 1; L < n; ++L) {
-        assert(li[L].rec.form == MESO_LEVEL_MESH && li[L].rec.error > 0);
+        assert((L < S || li[L].rec.form == MESO_LEVEL_MESH) && li[L].rec.error > 0);
         assert(li[L].rec.error >= li[L - 1].rec.error); /* never finer when coarser */
         assert(li[L].prefix_bytes < li[L - 1].prefix_bytes);
     }
+    *first = S;
     return n;
+}
+
+/* `mesobake KIND -i INPUT ARGS -o DIR/NAME.meso`, with `--report
+ * DIR/NAME.json` when `report` is not NULL (its path written there, 512
+ * bytes): the file opened and valid in the full tier. */
+static inline meso_file* test_bake_open(const char* mesobake, const char* kind, const char* input, const char* args,
+                                        const char* dir, const char* name, char* report)
+{
+    char path[512], rep[600] = "", cmd[10240];
+    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
+    if (report) {
+        snprintf(report, 512, "%s/%s.json", dir, name);
+        snprintf(rep, sizeof rep, "--report '%s'", report);
+    }
+    snprintf(cmd, sizeof cmd, "'%s' %s -i '%s' %s -o '%s' %s >/dev/null", mesobake, kind, input, args, path, rep);
+    assert(system(cmd) == 0);
+    meso_file* f = NULL;
+    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    return f;
 }
 
 /* The file at `path` (a bake with --levels 1) has one level and no LODS. */

@@ -26,7 +26,9 @@
  *  - A frusta object baked by mesobake (tests/data/saguaro.skel with a
  *    brick relief) draws its native level near and its tessellated
  *    stand-in (level 1, form mesh) far away, covering the same pixels as
- *    the native level there (its error is under a pixel). */
+ *    the native level there (its error is under a pixel); its native
+ *    relief levels, each drawn from the file cut at its prefix, match the
+ *    exact reference's level, not level 0's. */
 #include "test_util.h"
 
 #include <GL/glcorearb.h>
@@ -35,6 +37,7 @@
 
 #include "camera.h"
 #include "egl_context.h"
+#include "frustum_reference.h"
 #include "gl_api.h"
 #include "gl_fbo.h"
 #include "meso_bake.h"
@@ -486,30 +489,48 @@ static int frusta_coverage(meso_rt* rt, meso_rt_object obj, const double c[3], d
     return n;
 }
 
-static void frusta_standin_far_away(meso_rt* rt)
+/* tests/data/saguaro.skel baked by mesobake's code with a brick relief
+ * and `levels`, in memory (malloc'd, *size bytes), and the centre and
+ * radius of level 0's box. */
+static uint8_t* bake_saguaro(const char* relief, int levels, size_t* size, double c[3], double* radius)
 {
     meso_bake_frusta_options o = meso_bake_frusta_defaults();
     o.input = test_data("saguaro.skel");
-    o.relief = "bricks:32";
-    o.levels = 2; /* the tessellation only (its simplifications: test_frusta_standin) */
+    o.relief = relief;
+    o.levels = levels;
     meso_bake_output* out = NULL;
     meso_error err;
     assert(meso_bake_frusta(&o, &out, NULL, &err) == MESO_OK);
-    const size_t size = meso_bake_output_size(out);
-    uint8_t* data = malloc(size);
-    assert(data && meso_bake_output_copy(out, data, size, NULL) == MESO_OK);
+    *size = meso_bake_output_size(out);
+    uint8_t* data = malloc(*size);
+    assert(data && meso_bake_output_copy(out, data, *size, NULL) == MESO_OK);
     meso_bake_output_free(out);
+    meso_object_record rec;
+    meso_file* f = NULL;
+    uint32_t n = 0;
+    assert(meso_file_open_memory(data, *size, NULL, &f, NULL) == MESO_OK);
+    assert(meso_file_objects(f, &rec, 1, &n, NULL) == MESO_OK && n == 1);
+    meso_file_close(f);
+    *radius = 0;
+    for (int k = 0; k < 3; ++k) {
+        c[k] = 0.5 * ((double)rec.bbox_min[k] + rec.bbox_max[k]);
+        *radius += 0.25 * pow((double)rec.bbox_max[k] - rec.bbox_min[k], 2);
+    }
+    *radius = sqrt(*radius);
+    return data;
+}
+
+static void frusta_standin_far_away(meso_rt* rt)
+{
+    /* --levels 2: the tessellation only (its simplifications: test_frusta_standin) */
+    size_t size = 0;
+    double c[3], radius = 0;
+    uint8_t* data = bake_saguaro("bricks:32", 2, &size, c, &radius);
     meso_file* f = NULL;
     assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
     meso_level_info li[2];
     uint32_t n = 0;
     assert(meso_file_levels(f, 1, li, 2, &n, NULL) == MESO_OK && n == 2 && li[1].rec.form == MESO_LEVEL_MESH);
-    double c[3], radius = 0;
-    for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * ((double)li[0].rec.bbox_min[k] + li[0].rec.bbox_max[k]);
-        radius += 0.25 * pow((double)li[0].rec.bbox_max[k] - li[0].rec.bbox_min[k], 2);
-    }
-    radius = sqrt(radius);
     meso_rt_object obj;
     assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
     uint8_t* fine = malloc(W * H);
@@ -540,6 +561,77 @@ static void frusta_standin_far_away(meso_rt* rt)
     free(lod);
     meso_rt_release_object(rt, obj);
     meso_file_close(f);
+    free(data);
+}
+
+/* A frusta object's native relief levels (bake/height_field_levels.h):
+ * the file cut at level L's prefix_bytes draws level L (the finest that
+ * has arrived), and its depth image is the exact reference's level L
+ * (runtime/reference, its own RELF), much nearer to it than to the
+ * reference's level 0: libmeso draws the level's own relief. */
+static void frusta_native_levels(meso_rt* rt)
+{
+    size_t size = 0;
+    double c[3], radius = 0;
+    uint8_t* data = bake_saguaro("bricks:64", 0, &size, c, &radius);
+    meso_file* wf = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &wf, NULL) == MESO_OK);
+    meso_level_info li[16];
+    uint32_t n = 0;
+    assert(meso_file_levels(wf, 1, li, 16, &n, NULL) == MESO_OK && n >= 3 && li[1].rec.form == MESO_LEVEL_NATIVE);
+    meso_rt_draw_desc d = {.pixel_error = -1.0f};
+    const double eye[3] = {c[0] + 0.6 * radius, c[1] + 0.4 * radius, c[2] + 2.0 * radius}, up[3] = {0, 1, 0};
+    meso_camera_look_at(d.view, eye, c, up);
+    meso_camera_perspective(d.proj, 30.0 * M_PI / 180.0, (double)W / H, 0.05 * radius, 100.0 * radius);
+    meso_ref_view v = {.width = W, .height = H};
+    for (int k = 0; k < 16; ++k) {
+        v.view[k] = d.view[k];
+        v.proj[k] = d.proj[k];
+    }
+    meso_ref_frusta r0;
+    meso_ref_image i0;
+    assert(meso_ref_frusta_load(wf, 1, &r0, NULL) == MESO_OK && meso_ref_frusta_render(&r0, &v, &i0) == MESO_OK);
+    for (uint32_t L = 1; L < n && li[L].rec.form == MESO_LEVEL_NATIVE; ++L) {
+        prefix_io p = {data, li[L].prefix_bytes};
+        const meso_io io = {.read_fn = prefix_read, .size = (uint64_t)size, .user = &p};
+        meso_file* f = NULL;
+        assert(meso_file_open_io(&io, NULL, &f, NULL) == MESO_OK);
+        meso_rt_object obj;
+        assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+        float* depth = draw_depth(rt, obj, &d);
+        meso_rt_levels_state st;
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK && st.last_drawn == (int)L);
+        meso_ref_frusta rl;
+        meso_ref_image il;
+        assert(meso_ref_frusta_load_level(wf, 1, (uint16_t)L, &rl, NULL) == MESO_OK &&
+               meso_ref_frusta_render(&rl, &v, &il) == MESO_OK);
+        int covered = 0, mismatch = 0, both = 0;
+        double to_l = 0, to_0 = 0;
+        for (int i = 0; i < W * H; ++i) {
+            const int g = depth[i] < 1.0f;
+            covered += g;
+            mismatch += g != (il.coverage[i] != 0);
+            if (g && il.coverage[i] && i0.coverage[i]) {
+                ++both;
+                to_l += fabs((double)depth[i] - il.depth[i]);
+                to_0 += fabs((double)depth[i] - i0.depth[i]);
+            }
+        }
+        printf("  frusta native level %u from its %llu-byte prefix: %d px, %d differ in coverage from the "
+               "reference's level %u; mean depth difference %.3g to it, %.3g to level 0's\n",
+               L, (unsigned long long)li[L].prefix_bytes, covered, mismatch, L, to_l / both, to_0 / both);
+        fflush(stdout);
+        assert(covered > W * H / 20 && mismatch <= covered / 50 + 4);
+        assert(to_l < 0.5 * to_0);
+        free(depth);
+        meso_ref_image_free(&il);
+        meso_ref_frusta_free(&rl);
+        meso_rt_release_object(rt, obj);
+        meso_file_close(f);
+    }
+    meso_ref_image_free(&i0);
+    meso_ref_frusta_free(&r0);
+    meso_file_close(wf);
     free(data);
 }
 
@@ -694,6 +786,7 @@ int main(void)
         requests_decode_off_thread(data, size, li);
     }
     frusta_standin_far_away(rt);
+    frusta_native_levels(rt);
     budget_settles_and_comes_back(data, size);
     meso_file_close(f);
     meso_rt_destroy(rt);

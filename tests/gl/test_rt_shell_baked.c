@@ -313,7 +313,7 @@ typedef struct baked {
     metrics native[4];             /* each drawn from the file cut at its prefix_bytes */
 } baked;
 
-/* The native coarser levels (bake/shell_texture_levels.h): the file cut at
+/* The native coarser levels (bake/height_field_levels.h): the file cut at
  * level L's prefix_bytes (prefix_io.h: reads past it fail), loaded with its
  * levels and drawn at the finest level that has arrived (pixel_error < 0),
  * against the reference's level L (its own texture function). */

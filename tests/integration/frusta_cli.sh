@@ -16,6 +16,8 @@ check() { # DESCRIPTION COMMAND...
 }
 # row FILE TYPE: the chunk's row of 'mesoinspect info'
 row() { "$inspect" info "$1" | awk -v t="$2" '$2 == t'; }
+# row0 FILE TYPE: the row of level 0's chunk (lod 0; a native level has its own RELF)
+row0() { "$inspect" info "$1" | awk -v t="$2" '$2 == t && $5 == 0'; }
 key() { grep -q "\"$2\":" "$1"; }
 num() { sed -n "s/.*\"$2\":[[:space:]]*\([-0-9.e+]*\).*/\1/p" "$1"; }
 
@@ -55,7 +57,7 @@ SKEL
 check "arm: bake succeeds" test -s "$tmp/arm1.meso"
 check "arm: validates fully" sh -c "'$inspect' validate --full '$tmp/arm1.meso' >/dev/null"
 check "arm: two bakes are byte-identical" cmp -s "$tmp/arm1.meso" "$tmp/arm2.meso"
-check "arm: RELF u16 64x64" test "$(row "$tmp/arm1.meso" RELF | awk '{print $7, $9}')" = "u16 64x64x1"
+check "arm: RELF u16 64x64" test "$(row0 "$tmp/arm1.meso" RELF | awk '{print $7, $9}')" = "u16 64x64x1"
 check "arm: 4 segments, 1 branch point" test "$(num "$tmp/arm.json" segments) $(num "$tmp/arm.json" branch_points)" = "4 1"
 check "arm: report says text input" grep -q '"input":[[:space:]]*"text"' "$tmp/arm.json"
 check "arm: META records the relief" sh -c "'$inspect' info '$tmp/arm1.meso' | grep -q '\"spec\":[[:space:]]*\"bricks:64\"'"
@@ -162,8 +164,8 @@ check "colour: COLR u8 x 4, 24x16x1 on object 1" \
   test "$(row "$tmp/col1.meso" COLR | awk '{print $4, $7, $8, $9}')" = "1 u8 4 24x16x1"
 check "colour: two bakes are byte-identical" cmp -s "$tmp/col1.meso" "$tmp/col2.meso"
 for t in FRUS FSEG RELF; do
-  check "colour: $t as without it" test "$(row "$tmp/arm1.meso" $t | awk '{print $13}')" = \
-    "$(row "$tmp/col1.meso" $t | awk '{print $13}')"
+  check "colour: $t as without it" test "$(row0 "$tmp/arm1.meso" $t | awk '{print $13}')" = \
+    "$(row0 "$tmp/col1.meso" $t | awk '{print $13}')"
 done
 "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/colplain.meso" --relief-color "$tmp/col.png" >/dev/null 2>&1
 check "colour without relief: COLR and no RELF" \
@@ -235,6 +237,12 @@ check "--help documents --relief-depth" test $? = 0
 # --levels 1 (the stand-in's error bound: test_frusta_standin); bad counts exit 1.
 check "levels: the default file has a MESH and LODS" test -n "$(row "$tmp/arm1.meso" MESH)" -a -n "$(row "$tmp/arm1.meso" LODS)"
 check "levels: report lists them" key "$tmp/arm.json" levels
+# Native relief levels (the relief map halved: bake/height_field_levels.h)
+# come first, each with its own RELF, then the stand-in; --levels 2 keeps
+# the stand-in only (the error bounds: test_frusta_standin).
+check "levels: native level 1 has its own RELF" sh -c "'$inspect' info '$tmp/arm1.meso' | awk '\$2 == 1 && \$3 == \"native\"' | grep -q . && test -n \"\$('$inspect' info '$tmp/arm1.meso' | awk '\$2 == \"RELF\" && \$5 == 1')\""
+"$bake" frusta -i "$tmp/arm.skel" -o "$tmp/two.meso" --relief bricks:64 --relief-depth 0.05 --levels 2 >/dev/null 2>&1
+check "--levels 2: one RELF, level 1 the stand-in" sh -c "test \$('$inspect' info '$tmp/two.meso' | awk '\$2 == \"RELF\"' | wc -l) -eq 1 && '$inspect' info '$tmp/two.meso' | awk '\$2 == 1 && \$3 == \"mesh\"' | grep -q ."
 "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/one.meso" --relief bricks:64 --relief-depth 0.05 --levels 1 >/dev/null 2>&1
 check "--levels 1: no MESH, no LODS" test -z "$(row "$tmp/one.meso" MESH)$(row "$tmp/one.meso" LODS)"
 for v in 0 17 two; do

@@ -1,4 +1,4 @@
-/* A height-field shell's native coarser levels (bake/shell_texture_levels.h;
+/* A height-field shell's native coarser levels (bake/height_field_levels.h;
  * FORMAT.md §7.10; issue 14): the height field halved, each level with the
  * error mesobake states for it.
  *
@@ -198,14 +198,7 @@ static double grid_sup(const meso_ref_texfn* a, const meso_ref_texfn* b, int n)
 
 static void check(const char* mesobake, const char* dir, const char* name, const char* args, uint32_t min_native)
 {
-    char path[512], cmd[10240];
-    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
-    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' %s -o '%s' >/dev/null", mesobake, test_data("spot_uv.obj"), args,
-             path);
-    assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_file* f = test_bake_open(mesobake, "shell", test_data("spot_uv.obj"), args, dir, name, NULL);
     meso_level_info li[16];
     uint32_t n = 0, native = 0;
     assert(meso_file_levels(f, 1, li, 16, &n, NULL) == MESO_OK);

@@ -64,17 +64,11 @@ static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, con
 
 static void check(const char* mesobake, const char* dir, const char* name, const char* args)
 {
-    char path[512], cmd[10240];
-    snprintf(path, sizeof path, "%s/%s.meso", dir, name);
-    snprintf(cmd, sizeof cmd, "'%s' shell -i '%s' %s -o '%s' >/dev/null", mesobake, test_data("spot_uv.obj"),
-             args, path);
-    assert(system(cmd) == 0);
-    meso_file* f = NULL;
-    assert(meso_file_open_path(path, NULL, &f, NULL) == MESO_OK);
-    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_file* f = test_bake_open(mesobake, "shell", test_data("spot_uv.obj"), args, dir, name, NULL);
     meso_level_info li[16];
-    const uint32_t n = test_standin_chain(f, li, 4);
-    check_level(f, li, 1, name);
+    uint32_t S = 1;
+    const uint32_t n = test_standin_chain(f, li, 4, &S);
+    check_level(f, li, S, name);
     check_level(f, li, n - 1, name);
     meso_file_close(f);
 }

@@ -1,8 +1,13 @@
 /*
- * shell_texture_levels.c — native coarser levels of a height-field shell
- * (shell_texture_levels.h; FORMAT.md §7.10; issue 14: "prefiltered
- * pyramids of the texture function ... the distance map of each level
- * conservative for that level's function").
+ * height_field_levels.c — native coarser levels of an object drawn from a
+ * height field (height_field_levels.h; FORMAT.md §7.10; issue 14:
+ * "prefiltered pyramids of the texture function ... the distance map of
+ * each level conservative for that level's function", and a frusta
+ * object's "relief-map mip levels"). Written for shells below; a frusta
+ * object's relief is sampled the same way (bilinear, wrapping in s and t,
+ * FORMAT.md §7.2 kind 4), so the same sup holds, and bake/bake_frusta.c
+ * turns it into object units through the stand-in's gain
+ * (frusta_standin.h, term 1).
  *
  * The pyramid. Level l halves level l - 1: texel (i, j) is the mean of
  * texels (2i..2i+1, 2j..2j+1), quantised to the nearest stored value
@@ -47,12 +52,12 @@
  *
  * Decided here: the same 2 x 2 box as the runtime (not a wider filter that
  * would alias less and move the surface more); levels stop at
- * MESOI_SHELL_MIN_LEVEL_RES texels a side or an odd side (no half texels
+ * MESOI_HEIGHT_MIN_LEVEL_RES texels a side or an odd side (no half texels
  * to average), and where the sup reaches the highest texel (the base mesh
  * is then no farther). The distance map's w resolution halves too but
  * stays at least 8, the default's own lower clamp (distance_map.c).
  */
-#include "shell_texture_levels.h"
+#include "height_field_levels.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -61,7 +66,7 @@
 #include "bake_internal.h"
 #include "bake_threads.h"
 
-double mesoi_shell_tex_sup_diff(const meso_texfn* a, const meso_texfn* b, int threads)
+double mesoi_height_sup_diff(const meso_texfn* a, const meso_texfn* b, int threads)
 {
     const int64_t W = 2 * (int64_t)b->dims[0], H = 2 * (int64_t)b->dims[1];
     double sup = 0.0;
@@ -99,37 +104,37 @@ static meso_result halve(const meso_texfn* prev, meso_texfn* out, meso_error* er
     return r;
 }
 
-meso_result mesoi_shell_tex_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, double stop_sup,
-                                         int threads, mesoi_shell_tex_level* out, uint32_t* count, meso_error* err)
+meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, double stop_sup,
+                                         int threads, mesoi_height_level* out, uint32_t* count, meso_error* err)
 {
     *count = 0;
-    memset(out, 0, sizeof(*out) * (want < MESOI_SHELL_MAX_NATIVE ? want : MESOI_SHELL_MAX_NATIVE));
+    memset(out, 0, sizeof(*out) * (want < MESOI_HEIGHT_MAX_NATIVE ? want : MESOI_HEIGHT_MAX_NATIVE));
     if (f0->kind != MESO_TEXFN_HEIGHT)
         return MESO_OK;
     const meso_texfn* prev = f0;
     meso_result r = MESO_OK;
-    for (uint32_t l = 1; r == MESO_OK && l <= want && l <= MESOI_SHELL_MAX_NATIVE; ++l) {
-        if (prev->dims[0] % 2 || prev->dims[1] % 2 || prev->dims[0] / 2 < MESOI_SHELL_MIN_LEVEL_RES ||
-            prev->dims[1] / 2 < MESOI_SHELL_MIN_LEVEL_RES)
+    for (uint32_t l = 1; r == MESO_OK && l <= want && l <= MESOI_HEIGHT_MAX_NATIVE; ++l) {
+        if (prev->dims[0] % 2 || prev->dims[1] % 2 || prev->dims[0] / 2 < MESOI_HEIGHT_MIN_LEVEL_RES ||
+            prev->dims[1] / 2 < MESOI_HEIGHT_MIN_LEVEL_RES)
             break;
-        mesoi_shell_tex_level* lv = &out[l - 1];
+        mesoi_height_level* lv = &out[l - 1];
         if ((r = halve(prev, &lv->fn, err)) != MESO_OK)
             break;
-        lv->sup = mesoi_shell_tex_sup_diff(&lv->fn, f0, threads);
+        lv->sup = mesoi_height_sup_diff(&lv->fn, f0, threads);
         if (l > 1 && lv->sup < out[l - 2].sup) /* errors never decrease (FORMAT.md §7.10): still a bound */
             lv->sup = out[l - 2].sup;
         if (lv->sup >= stop_sup) {
             meso_texfn_free(&lv->fn);
             break;
         }
-        uint32_t dd[3];
-        for (int k = 0; k < 3; ++k) {
+        uint32_t dd[3] = {1, 1, 1};
+        for (int k = 0; d0 && k < 3; ++k) {
             dd[k] = d0->dims[k] >> l;
             dd[k] = dd[k] ? dd[k] : 1;
         }
-        if (dd[2] < 8)
+        if (d0 && dd[2] < 8)
             dd[2] = d0->dims[2] < 8 ? d0->dims[2] : 8;
-        if ((r = meso_distmap_build(&lv->fn, dd, d0->dtype, threads, &lv->dist, err)) != MESO_OK) {
+        if (d0 && (r = meso_distmap_build(&lv->fn, dd, d0->dtype, threads, &lv->dist, err)) != MESO_OK) {
             meso_texfn_free(&lv->fn);
             break;
         }
@@ -137,13 +142,13 @@ meso_result mesoi_shell_tex_levels_build(const meso_texfn* f0, const meso_distma
         prev = &lv->fn;
     }
     if (r != MESO_OK) {
-        mesoi_shell_tex_levels_free(out, *count);
+        mesoi_height_levels_free(out, *count);
         *count = 0;
     }
     return r;
 }
 
-void mesoi_shell_tex_levels_free(mesoi_shell_tex_level* l, uint32_t count)
+void mesoi_height_levels_free(mesoi_height_level* l, uint32_t count)
 {
     for (uint32_t k = 0; k < count; ++k) {
         meso_texfn_free(&l[k].fn);
