@@ -5,8 +5,10 @@
  * frusta (relief-mapped-conical-frusta.md §2, bake/frustum_model.h), with an
  * optional relief map (§3) and colour map (sampled at the relief
  * coordinates), as one .meso frusta object: SKEL, FRUS, FSEG, BALL, RELF
- * and COLR (FORMAT.md §7.2 kind 4); with levels (the default), a triangle
- * tessellation as level 1 (a MESH at lod 1, frusta_standin.h) and LODS.
+ * and COLR (FORMAT.md §7.2 kind 4); with levels (the default), native
+ * relief levels (the relief map halved, relief_levels below), then a
+ * triangle tessellation (a MESH, frusta_standin.h) and its simplifications,
+ * and LODS.
  */
 #include "bake_internal.h"
 
@@ -361,6 +363,15 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         cJSON_AddNumberToObject(l1, "chord_error", s->standin_chord_error);
         cJSON_AddNumberToObject(l1, "cells_around_min", st->nu_min);
         cJSON_AddNumberToObject(l1, "cells_around_max", st->nu_max);
+        /* A native relief level draws no MESH: its relief instead. */
+        for (uint32_t l = 1; l <= nl->count; ++l) {
+            cJSON* o = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(rep, "levels"), (int)l);
+            cJSON_DeleteItemFromObjectCaseSensitive(o, "triangles");
+            cJSON_DeleteItemFromObjectCaseSensitive(o, "mesh_bytes");
+            cJSON_AddNumberToObject(o, "relief_width", nl->level[l - 1].fn.dims[0]);
+            cJSON_AddNumberToObject(o, "relief_height", nl->level[l - 1].fn.dims[1]);
+            cJSON_AddNumberToObject(o, "relief_bytes", (double)nl->level[l - 1].fn.encoded_size);
+        }
     }
     if (r == MESO_OK)
         r = mesoi_output_build(meta, rep, &rec, chunks, count, out, err);

@@ -149,14 +149,9 @@ static int anim_load(meso_file* f, const meso_rt* rt, meso_rt_object obj, uint32
     a->obj = obj;
     if (meso_rt_shell_info(rt, obj, &a->n, &a->layers) != MESO_OK || a->n == 0)
         return 0;
-    int mi = -1, di = -1;
-    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
-        const meso_chunk_info* c = meso_file_chunk(f, i);
-        if (c->object == id && c->lod == 0 && c->type == MESO_CHUNK_MESH)
-            mi = (int)i;
-        if (c->object == id && c->lod == 0 && c->type == MESO_CHUNK_SDIR)
-            di = (int)i;
-    }
+    /* Level 0's chunks (FORMAT.md 7.10: a levelled shell's SDIR sits at its
+     * coarsest native lod, which level 0 resolves to as well). */
+    const int mi = meso_file_find_level(f, MESO_CHUNK_MESH, id, 0), di = meso_file_find_level(f, MESO_CHUNK_SDIR, id, 0);
     if (mi < 0 || di < 0)
         return 0;
     const meso_chunk_info* mc = meso_file_chunk(f, (uint32_t)mi);

@@ -58,12 +58,6 @@ meso_result mesoi_ref_object(meso_file* f, uint32_t id, uint32_t kind, const cha
     return r;
 }
 
-int32_t mesoi_ref_find_chunk(const meso_file* f, uint32_t type, uint32_t id)
-{
-    const int32_t i = meso_file_find(f, type, id, 0);
-    return i >= 0 ? i : meso_file_find(f, type, id, UINT16_MAX);
-}
-
 meso_result mesoi_ref_read_whole(meso_file* f, int32_t ci, void** out, size_t* size, meso_error* err)
 {
     const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;

@@ -25,8 +25,6 @@ meso_result mesoi_ref_fail(meso_error* err, meso_result r, const char* what, uin
 meso_result mesoi_ref_object(meso_file* f, uint32_t id, uint32_t kind, const char* what, meso_object_record* out,
     meso_error* err);
 
-/* Index of the object's chunk of `type` at lod 0 (else any lod), or -1. */
-int32_t mesoi_ref_find_chunk(const meso_file* f, uint32_t type, uint32_t id);
 
 /* Chunk `ci` read whole (meso_file_read_chunk) into a new malloc'd buffer. */
 meso_result mesoi_ref_read_whole(meso_file* f, int32_t ci, void** out, size_t* size, meso_error* err);

@@ -24,8 +24,8 @@ static inline uint8_t* test_read_level_mesh(meso_file* f, uint16_t lod, meso_mes
     return mb;
 }
 
-/* Object 1's levels of `f` (at most 16, at least min_levels mesh
- * stand-ins after level 0): level 0 native, then any native coarser levels
+/* Object 1's levels of `f` (at most 16; counting level 0 and the mesh
+ * stand-ins, at least min_levels): level 0 native, then any native coarser levels
  * (a halved texture or relief: tests of their own check them), then mesh
  * stand-ins only, each with an error no smaller than the finer one's, in a
  * shorter prefix of the file. Returns the count; *first the first

@@ -163,9 +163,10 @@ check "colour: validates fully" sh -c "'$inspect' validate --full '$tmp/col1.mes
 check "colour: COLR u8 x 4, 24x16x1 on object 1" \
   test "$(row "$tmp/col1.meso" COLR | awk '{print $4, $7, $8, $9}')" = "1 u8 4 24x16x1"
 check "colour: two bakes are byte-identical" cmp -s "$tmp/col1.meso" "$tmp/col2.meso"
-for t in FRUS FSEG RELF; do
-  check "colour: $t as without it" test "$(row0 "$tmp/arm1.meso" $t | awk '{print $13}')" = \
-    "$(row0 "$tmp/col1.meso" $t | awk '{print $13}')"
+for t in FRUS FSEG RELF; do # one FRUS and FSEG (at the coarsest native lod); level 0's RELF
+  r=row; [ "$t" = RELF ] && r=row0
+  a=$($r "$tmp/arm1.meso" $t | awk '{print $13}') b=$($r "$tmp/col1.meso" $t | awk '{print $13}')
+  check "colour: $t as without it ($a)" test -n "$a" -a "$a" = "$b"
 done
 "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/colplain.meso" --relief-color "$tmp/col.png" >/dev/null 2>&1
 check "colour without relief: COLR and no RELF" \
@@ -175,6 +176,10 @@ if [ -n "$probe" ]; then
   "$inspect" preview "$tmp/col1.meso" -o "$tmp/col_ref.png" --size 48x48 --reference >/dev/null 2>&1
   check "colour: the preview shows it (differs from the uncoloured one)" \
     sh -c "test \"\$('$probe' --diff '$tmp/arm_ref.png' '$tmp/col_ref.png' | cut -d' ' -f1)\" -gt 50"
+  # preview --reference --level 1: the native level's own (halved) relief.
+  "$inspect" preview "$tmp/arm1.meso" -o "$tmp/arm_ref1.png" --size 48x48 --reference --level 1 >/dev/null 2>&1
+  check "levels: preview --reference --level 1 draws level 1's relief (another image)" \
+    sh -c "test -s '$tmp/arm_ref1.png' && test \"\$('$probe' --diff '$tmp/arm_ref.png' '$tmp/arm_ref1.png' | cut -d' ' -f1)\" -gt 0"
 fi
 badcol() { # NAME EXIT CODE: --relief-color $tmp/NAME
   "$bake" frusta -i "$tmp/arm.skel" -o "$tmp/badcol.meso" --relief-color "$tmp/$1" >/dev/null 2>"$tmp/badcol.err"

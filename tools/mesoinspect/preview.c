@@ -132,8 +132,8 @@ static const char* const usage_preview =
     "                      --technique curved selects the curved shell mapping,\n"
     "                      smooth, tetra and slices the smooth one; mesh objects are skipped\n"
     "      --samples N     reference: samples per prism along each ray (default 1024)\n"
-    "      --level L       reference: draw each shell's and cells object's native level L\n"
-    "                      (its own texture or tile map, FORMAT.md 7.10) instead of level 0;\n"
+    "      --level L       reference: draw each shell, frusta and cells object's native level L\n"
+    "                      (its own texture, relief or tile map, FORMAT.md 7.10), not level 0;\n"
     "                      an object whose level L is a mesh stand-in, or that has no level\n"
     "                      L, is left out with a note on stderr\n"
     "      --cells MODE    cells objects: first (first hit, default), reflect or refract\n"
@@ -244,8 +244,8 @@ typedef struct ref_object {
 } ref_object;
 
 /* --level L: whether the reference can draw object `rec`'s level L (a
- * native level of a shell or cells object: their references load a
- * level's own chunks); otherwise a note on stderr saying why not. */
+ * native level: the shell, frusta and cells references load a level's own
+ * chunks); otherwise a note on stderr saying why not. */
 static int native_level(meso_file* f, const meso_object_record* rec, uint16_t lod)
 {
     uint32_t n = 0;
@@ -263,10 +263,10 @@ static int native_level(meso_file* f, const meso_object_record* rec, uint16_t lo
     free(all);
     if (!ok)
         return 0;
-    if (li.rec.form != MESO_LEVEL_NATIVE || rec->kind == MESO_OBJECT_FRUSTA) {
-        fprintf(stderr, "mesoinspect: object %u (%s): level %u is %s: left out\n", rec->id, rec->name, lod,
-                li.rec.form != MESO_LEVEL_NATIVE ? "a mesh stand-in, which the reference does not draw"
-                                                 : "a frusta level, which the reference does not load");
+    if (li.rec.form != MESO_LEVEL_NATIVE) {
+        fprintf(stderr, "mesoinspect: object %u (%s): level %u is a mesh stand-in, which the reference does not "
+                        "draw: left out\n",
+                rec->id, rec->name, lod);
         return 0;
     }
     return 1;
@@ -333,7 +333,7 @@ static int render_reference(const char* path, const char* out, int width, int he
         ref_object* o = &objs[nobj];
         o->kind = rec->kind;
         r = rec->kind == MESO_OBJECT_SHELL    ? meso_ref_shell_load_level(f, rec->id, lod, &o->shell, &err)
-            : rec->kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_load(f, rec->id, &o->frusta, &err)
+            : rec->kind == MESO_OBJECT_FRUSTA ? meso_ref_frusta_load_level(f, rec->id, lod, &o->frusta, &err)
                                               : meso_ref_cells_load_level(f, rec->id, lod, &o->cells, &err);
         if (r == MESO_OK && rec->kind == MESO_OBJECT_SHELL && knobs->has_time)
             r = meso_ref_shell_set_time(f, rec->id, knobs->time, &o->shell, &err);
@@ -345,7 +345,7 @@ static int render_reference(const char* path, const char* out, int width, int he
         ++nobj;
     }
     if (nobj == 0 && knobs->level > 0) {
-        fprintf(stderr, "mesoinspect error: %s: no %sshell or cells object has a native level %d\n", path,
+        fprintf(stderr, "mesoinspect error: %s: no %sshell, frusta or cells object has a native level %d\n", path,
                 only ? "such " : "", knobs->level);
         code = MESO_EXIT_UNSUPPORTED;
         goto done;
