@@ -365,9 +365,7 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
     if (a->levels == 0)
         mesoi_run_warning(run, 0, "built without meshoptimizer: the base mesh is the only stand-in");
 #endif
-    uint32_t want = a->levels == 0 ? MESO_CELLS_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
-    if (want > MESO_CELLS_MAX_NATIVE)
-        want = MESO_CELLS_MAX_NATIVE;
+    const uint32_t want = mesoi_native_wanted(a->levels, MESO_CELLS_MAX_NATIVE);
     uint32_t nn = 0;
     r = make_native(run, want, g, sc, mb, tm, cc, f0, se.bound, native, &nn, err);
     meso_cells_surface_free(f0);

@@ -198,29 +198,20 @@ static void report_json(cJSON* rep, const meso_bake_frusta_report* s)
  * walls between two frusta's reliefs are covered as there), with 4 float
  * ulps of slack in the heights; nothing else changes, so no chord or
  * rounding term. Levels stop before their error reaches the stand-in's,
- * and one is kept only while it draws from at most 9/10 of the bytes of
- * the level before (as a shell's, bake_shell.c native_trim: each takes a
- * place a simplified stand-in could have). */
+ * and are kept while they are worth a place (mesoi_height_levels_trim:
+ * what every level shares is the records and the colour). */
 typedef struct native_levels {
     mesoi_height_level level[MESOI_HEIGHT_MAX_NATIVE];
     double error[MESOI_HEIGHT_MAX_NATIVE];
     uint32_t count;
 } native_levels;
 
-static float f32_up(double x)
-{
-    float f = (float)x;
-    if ((double)f < x)
-        f = nextafterf(f, INFINITY);
-    return f;
-}
-
 static meso_result relief_levels(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
                                  const meso_texfn* relief, const meso_color_map* color, const meso_frusta_standin* st,
                                  native_levels* nl, meso_error* err)
 {
     memset(nl, 0, sizeof *nl);
-    const uint32_t want = a->levels == 0 ? MESOI_HEIGHT_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
+    const uint32_t want = mesoi_native_wanted(a->levels, MESOI_HEIGHT_MAX_NATIVE);
     if (!a->relief || relief->kind != MESO_TEXFN_HEIGHT || !(st->relief_gain > 0) || want == 0)
         return MESO_OK;
     uint32_t built = 0;
@@ -232,17 +223,14 @@ static meso_result relief_levels(const meso_bake_frusta_options* a, const meso_f
                             (uint64_t)obj->ball_count * MESO_BALL_RECORD_SIZE +
                             (uint64_t)obj->node_count * MESO_SKEL_RECORD_SIZE +
                             (a->relief_color ? 4 * (uint64_t)color->width * color->height : 0);
-    uint64_t prev = shared + relief->encoded_size;
-    for (; nl->count < built; ++nl->count) {
-        const mesoi_height_level* l = &nl->level[nl->count];
-        const uint64_t bytes = shared + l->fn.encoded_size;
-        const float e = f32_up((l->sup + 4.0 * FLT_EPSILON) * st->relief_gain);
-        if (10 * bytes > 9 * prev || !((double)e < st->error))
+    const uint32_t kept = mesoi_height_levels_trim(nl->level, built, shared, shared + relief->encoded_size);
+    for (; nl->count < kept; ++nl->count) {
+        const float e = mesoi_f32_up((nl->level[nl->count].sup + 4.0 * FLT_EPSILON) * st->relief_gain);
+        if (!((double)e < st->error))
             break;
         nl->error[nl->count] = e;
-        prev = bytes;
     }
-    mesoi_height_levels_free(nl->level + nl->count, built - nl->count);
+    mesoi_height_levels_free(nl->level + nl->count, kept - nl->count);
     return MESO_OK;
 }
 

@@ -680,11 +680,7 @@ static float standin_error(const shell_bake* s)
         const float* d = s->d + 3 * i;
         dmax = fmax(dmax, sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]));
     }
-    const double e = texel_max(s) * dmax;
-    float f = (float)e;
-    if ((double)f < e)
-        f = nextafterf(f, INFINITY);
-    return f;
+    return mesoi_f32_up(texel_max(s) * dmax);
 }
 
 /* The native levels kept (height_field_levels.h) and their chunks: each
@@ -714,10 +710,7 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
     }
     uint32_t N = 0;
     for (; N < tx->native_count; ++N) {
-        const double e = (tx->native[N].sup + 4.0 * FLT_EPSILON) * dmax;
-        float f = (float)e;
-        if ((double)f < e)
-            f = nextafterf(f, INFINITY);
+        const float f = mesoi_f32_up((tx->native[N].sup + 4.0 * FLT_EPSILON) * dmax);
         if (!(f < s->e0))
             break;
         lv->native_error[N] = f;
@@ -745,33 +738,19 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
     return m;
 }
 
-/* The native levels worth a slot (height_field_levels.h). A file holds at
- * most MESOI_STANDIN_MAX_LEVELS levels, and a slot a native level takes is
- * a simplified mesh fewer at the far end; a native level only swaps the
- * texture and its distance map, while the base mesh, directors and colour
- * stay. So one is kept only while it draws from at most 9/10 of the bytes
- * of the level before it (decided here; estimated from the vertex and
- * triangle counts as mesh_chunk.c lays a MESH out: e.g. spot_uv with
- * bricks:64 keeps one, 243 KB against 364 KB, where a second would have
- * saved 16 KB). Deterministic: counts only. */
+/* The native levels worth a place (mesoi_height_levels_trim): what every
+ * level shares, the base mesh, directors, thickness and colour, estimated
+ * from the vertex and triangle counts as mesh_chunk.c lays a MESH out
+ * (e.g. spot_uv with bricks:64 keeps one, 243 KB against 364 KB, where a
+ * second would have saved 16 KB). */
 static void native_trim(shell_bake* s)
 {
     mesoi_shell_texture* tx = &s->tx;
     const uint64_t nv = (uint64_t)s->m.vertex_count + tx->seam_vertices, layers = s->a.kind == MESO_SHELL_EXTERIOR ? 1 : 2;
     const uint64_t shared = nv * (12 + 12 + 8 + 12 * layers + 4) + 12 * (uint64_t)s->m.triangle_count +
                             4 * (uint64_t)s->col.dims[0] * s->col.dims[1] * s->col.dims[2];
-    uint64_t prev = shared + tx->fn.encoded_size + tx->dist.encoded_size;
-    uint32_t keep = 0;
-    for (; keep < tx->native_count; ++keep) {
-        const uint64_t bytes = shared + tx->native[keep].fn.encoded_size + tx->native[keep].dist.encoded_size;
-        if (10 * bytes > 9 * prev)
-            break;
-        prev = bytes;
-    }
-    for (uint32_t k = keep; k < tx->native_count; ++k) {
-        meso_texfn_free(&tx->native[k].fn);
-        meso_distmap_free(&tx->native[k].dist);
-    }
+    const uint32_t keep = mesoi_height_levels_trim(tx->native, tx->native_count, shared,
+                                                   shared + tx->fn.encoded_size + tx->dist.encoded_size);
     if (tx->native_count)
         mesoi_run_stage(&s->run, "texture levels", 0.2, 0.2,
                         "%u of %u halved height fields kept as native levels (each draws from at most 9/10 of the "

@@ -18,6 +18,7 @@
 
 #include "memory_budget.h"
 #include "meso_clock.h"
+#include "standin_levels.h"
 
 void mesoi_shell_texture_free(mesoi_shell_texture* tx)
 {
@@ -79,15 +80,10 @@ static meso_result bake_frames(mesoi_bake_run* run, const meso_bake_shell_option
  * kinds, whose surface may reach w = 1: bake_shell.c texel_max), beyond
  * which the base mesh alone is as close (bake_shell.c also drops any whose
  * error reaches the base mesh's, once the directors are known). */
-static uint32_t native_wanted(const meso_bake_shell_options* a)
-{
-    return a->levels == 0 ? MESOI_HEIGHT_MAX_NATIVE : a->levels >= 3 ? (uint32_t)a->levels - 2 : 0;
-}
-
 static meso_result native_levels(mesoi_bake_run* run, const meso_bake_shell_options* a, mesoi_shell_texture* tx,
                                  meso_error* err)
 {
-    const uint32_t want = native_wanted(a);
+    const uint32_t want = mesoi_native_wanted(a->levels, MESOI_HEIGHT_MAX_NATIVE);
     if (a->frames || tx->fn.kind != MESO_TEXFN_HEIGHT || want == 0)
         return MESO_OK;
     double hmax = 1.0;
@@ -129,7 +125,7 @@ meso_result mesoi_shell_texture_prepare(mesoi_bake_run* run, const meso_bake_she
     /* A height field's native levels (native_levels) hold at most a third
      * more: each level a quarter of the one before, its map an eighth. */
     uint64_t need = meso_size_add(meso_texture_estimate(texels), meso_distmap_estimate(cells));
-    if (tx->fn.kind == MESO_TEXFN_HEIGHT && !a->frames && native_wanted(a))
+    if (tx->fn.kind == MESO_TEXFN_HEIGHT && !a->frames && mesoi_native_wanted(a->levels, MESOI_HEIGHT_MAX_NATIVE))
         need = meso_size_add(need, need / 3);
     r = meso_budget_check(need,
                           run->common.max_memory, MESO_LIMIT_ISSUE_REQUEST, err,

@@ -148,6 +148,20 @@ meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* 
     return r;
 }
 
+uint32_t mesoi_height_levels_trim(mesoi_height_level* l, uint32_t count, uint64_t shared, uint64_t level0)
+{
+    uint64_t prev = level0;
+    uint32_t keep = 0;
+    for (; keep < count; ++keep) {
+        const uint64_t bytes = shared + l[keep].fn.encoded_size + l[keep].dist.encoded_size;
+        if (10 * bytes > 9 * prev)
+            break;
+        prev = bytes;
+    }
+    mesoi_height_levels_free(l + keep, count - keep);
+    return keep;
+}
+
 void mesoi_height_levels_free(mesoi_height_level* l, uint32_t count)
 {
     for (uint32_t k = 0; k < count; ++k) {

@@ -41,6 +41,16 @@ meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* 
  * Exact up to double evaluation of the stored values (see the .c). */
 double mesoi_height_sup_diff(const meso_texfn* a, const meso_texfn* b, int threads);
 
+/* The levels worth a place among a file's MESOI_STANDIN_MAX_LEVELS: a
+ * native level only swaps the height field (and its map), the rest of what
+ * it draws (`shared` bytes) stays, and each place it takes is a simplified
+ * stand-in fewer at the far end. So level l is kept only while it draws
+ * from at most 9/10 of the bytes of the level before (level 0 draws
+ * `level0` bytes); decided for shells and frusta alike. Frees the levels
+ * after the kept ones and returns how many are kept. Counts only:
+ * deterministic. */
+uint32_t mesoi_height_levels_trim(mesoi_height_level* l, uint32_t count, uint64_t shared, uint64_t level0);
+
 void mesoi_height_levels_free(mesoi_height_level* l, uint32_t count);
 
 #endif /* MESO_HEIGHT_FIELD_LEVELS_H */

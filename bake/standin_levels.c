@@ -9,15 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* f32 no smaller than x: a stored bound stays a bound. */
-static float f32_up(double x)
-{
-    float f = (float)x;
-    if ((double)f < x)
-        f = nextafterf(f, INFINITY);
-    return f;
-}
-
 meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int levels, int threads,
                                        mesoi_standin_levels* out, meso_error* err)
 {
@@ -94,7 +85,7 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
                                                  .encoding = mc->encoding, .decoded_size = mc->decoded_size},
                                         .data = mc->data, .size = mc->size};
         }
-        lr.error = f32_up(e);
+        lr.error = mesoi_f32_up(e);
         meso_level_record_encode(&lr, lv->lods + (size_t)MESO_LODS_RECORD_SIZE * L);
         lv->error[L] = lr.error;
         lv->triangles[L] = lm->triangle_count;

@@ -12,6 +12,8 @@
 #ifndef MESO_STANDIN_LEVELS_H
 #define MESO_STANDIN_LEVELS_H
 
+#include <math.h>
+
 #include <cjson/cJSON.h>
 
 #include "bake_internal.h"
@@ -21,6 +23,25 @@
 
 /* Level 0, the base mesh and at most 7 simplified meshes. */
 #define MESOI_STANDIN_MAX_LEVELS 9
+
+/* f32 no smaller than x: a stored bound stays a bound. */
+static inline float mesoi_f32_up(double x)
+{
+    float f = (float)x;
+    if ((double)f < x)
+        f = nextafterf(f, INFINITY);
+    return f;
+}
+
+/* The native coarser levels `levels` (a bake's --levels: 0 auto, K at most
+ * K in all) leaves room for, at most `max`: auto as many as there may be;
+ * K >= 3 K - 2, since level 0 and the base-mesh stand-in come first;
+ * K <= 2 none (FORMAT.md §7.10, what mesobake writes). */
+static inline uint32_t mesoi_native_wanted(int levels, uint32_t max)
+{
+    const uint32_t want = levels == 0 ? max : levels >= 3 ? (uint32_t)levels - 2 : 0;
+    return want < max ? want : max;
+}
 
 typedef struct mesoi_standin_levels {
     uint32_t count;          /* stand-in levels, the base mesh's included (0: none, no LODS) */
