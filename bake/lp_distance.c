@@ -38,24 +38,34 @@ struct meso_lp_field {
     uint32_t nt;
     uint32_t node_count;
     double* tri;      /* 9 doubles per triangle in tree order, internal units */
+    double* sphere;   /* 5 per triangle in tree order: centroid, bounding radius about it, area */
     lp_node* nodes;
 };
 
 /* >>small vector helpers ------------------------------------------------- */
 
-/* r^−p from r² (pint: p as an integer or 0): integer p avoids pow(), which
- * dominates the quadrature and far-field cost otherwise. */
-static inline double inv_pow(double r2, double p, int pint)
+/* r^−p from 1/r² (pint: p as an integer or 0): integer p avoids pow(), which
+ * dominates the quadrature and far-field cost otherwise. The far field's
+ * callers take the further powers r^−p−2k by multiplying with 1/r², so a
+ * far term costs one division and (p odd) one square root, not the four
+ * divisions that were most of an evaluation's time. */
+static inline double inv_pow_from_inverse(double inv_r2, double p, int pint)
 {
     if (pint > 0) {
         double q = 1.0;
         for (int k = 0; k < pint / 2; ++k)
-            q *= r2;
+            q *= inv_r2;
         if (pint & 1)
-            q *= sqrt(r2);
-        return 1.0 / q;
+            q *= sqrt(inv_r2);
+        return q;
     }
-    return pow(r2, -0.5 * p);
+    return pow(inv_r2, 0.5 * p);
+}
+
+/* r^−p from r². */
+static inline double inv_pow(double r2, double p, int pint)
+{
+    return inv_pow_from_inverse(1.0 / r2, p, pint);
 }
 
 /* >>p = 3 closed form ----------------------------------------------------- */
@@ -485,6 +495,26 @@ static uint32_t build_node(build_ctx* b, uint32_t first, uint32_t count)
     return idx;
 }
 
+/* A triangle's bounding sphere about its centroid g (3), its radius and its
+ * area, into s[0..5): computed once at build, as every evaluation that
+ * opens the triangle's leaf needs them. */
+static void tri_sphere(const double* v, double s[5])
+{
+    double rad2 = 0.0, e1[3], e2[3], cr[3];
+    for (int k = 0; k < 3; ++k)
+        s[k] = (v[k] + v[3 + k] + v[6 + k]) / 3.0;
+    for (int c = 0; c < 3; ++c) {
+        double d[3];
+        sub3(v + 3 * c, s, d);
+        rad2 = fmax(rad2, dot3(d, d));
+    }
+    s[3] = sqrt(rad2);
+    sub3(v + 3, v, e1);
+    sub3(v + 6, v, e2);
+    cross3(e1, e2, cr);
+    s[4] = 0.5 * sqrt(dot3(cr, cr));
+}
+
 /* >>create / destroy ------------------------------------------------------- */
 
 meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint32_t* indices, uint32_t nt,
@@ -549,8 +579,9 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
     sort_key* keys = malloc(sizeof(sort_key) * 2 * (size_t)nt);
     lp_node* nodes = malloc(sizeof(lp_node) * 2 * (size_t)nt);
     double* tri_out = malloc(sizeof(double) * 9 * (size_t)nt);
+    double* sphere = malloc(sizeof(double) * 5 * (size_t)nt);
     meso_result r = MESO_OK;
-    if (!f || !tri || !cent || !area || !perm || !keys || !nodes || !tri_out) {
+    if (!f || !tri || !cent || !area || !perm || !keys || !nodes || !tri_out || !sphere) {
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "lp field: out of memory (%u triangles)", nt);
         goto fail;
     }
@@ -577,8 +608,10 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
     }
     build_ctx b = {tri, cent, area, perm, keys, nodes, 0};
     build_node(&b, 0, nt);
-    for (uint32_t i = 0; i < nt; ++i)
+    for (uint32_t i = 0; i < nt; ++i) {
         memcpy(tri_out + 9 * (size_t)i, tri + 9 * (size_t)perm[i], 9 * sizeof(double));
+        tri_sphere(tri_out + 9 * (size_t)i, sphere + 5 * (size_t)i);
+    }
     f->opt = o;
     memcpy(f->origin, origin, sizeof(origin));
     f->scale = scale;
@@ -587,8 +620,10 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
     f->nt = nt;
     f->node_count = b.count;
     f->tri = tri_out;
+    f->sphere = sphere;
     f->nodes = nodes;
     tri_out = NULL;
+    sphere = NULL;
     nodes = NULL;
     *out = f;
     f = NULL;
@@ -601,6 +636,7 @@ fail:
     free(keys);
     free(nodes);
     free(tri_out);
+    free(sphere);
     return r;
 }
 
@@ -609,6 +645,7 @@ void meso_lp_field_destroy(meso_lp_field* f)
     if (!f)
         return;
     free(f->tri);
+    free(f->sphere);
     free(f->nodes);
     free(f);
 }
@@ -652,7 +689,7 @@ static inline void add_point(const meso_lp_field* f, const double x[3], const do
     double R[3];
     sub3(x, y, R);
     double r2 = dot3(R, R);
-    double k0 = inv_pow(r2, f->opt.p, f->pint), k2 = k0 / r2;
+    const double ir2 = 1.0 / r2, k0 = inv_pow_from_inverse(ir2, f->opt.p, f->pint), k2 = k0 * ir2;
     acc->I += w * k0;
     for (int k = 0; k < 3; ++k)
         acc->J[k] += w * k2 * R[k];
@@ -661,7 +698,7 @@ static inline void add_point(const meso_lp_field* f, const double x[3], const do
 static void add_multipole(const meso_lp_field* f, const lp_node* nd, const double R[3], double r2, eval_acc* acc)
 {
     double p = f->opt.p;
-    double k0 = inv_pow(r2, p, f->pint), k2 = k0 / r2;
+    const double ir2 = 1.0 / r2, k0 = inv_pow_from_inverse(ir2, p, f->pint), k2 = k0 * ir2;
     acc->I += nd->area * k0;
     for (int k = 0; k < 3; ++k)
         acc->J[k] += nd->area * k2 * R[k];
@@ -673,7 +710,7 @@ static void add_multipole(const meso_lp_field* f, const lp_node* nd, const doubl
     double MR[3] = {m[0] * R[0] + m[3] * R[1] + m[4] * R[2], m[3] * R[0] + m[1] * R[1] + m[5] * R[2],
                     m[4] * R[0] + m[5] * R[1] + m[2] * R[2]};
     double tr = m[0] + m[1] + m[2], q = dot3(R, MR);
-    double k4 = k2 / r2, k6 = k4 / r2;
+    const double k4 = k2 * ir2, k6 = k4 * ir2;
     acc->I += 0.5 * (-p * k2 * tr + p * (p + 2.0) * k4 * q);
     for (int k = 0; k < 3; ++k)
         acc->J[k] -= 0.5 * (p + 2.0) * (k4 * tr * R[k] + 2.0 * k4 * MR[k] - (p + 4.0) * k6 * q * R[k]);
@@ -687,21 +724,6 @@ static inline int far_enough(double rad, double r2, double theta, double near_r)
     return near_r <= 0.0 || sqrt(r2) - rad > near_r;
 }
 
-/* A triangle's bounding sphere about its centroid g: g, R = x − g and the
- * squared radius. */
-static inline void tri_sphere(const double* v, const double x[3], double g[3], double R[3], double* rad2)
-{
-    for (int k = 0; k < 3; ++k)
-        g[k] = (v[k] + v[3 + k] + v[6 + k]) / 3.0;
-    *rad2 = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        double d[3];
-        sub3(v + 3 * c, g, d);
-        *rad2 = fmax(*rad2, dot3(d, d));
-    }
-    sub3(x, g, R);
-}
-
 /* Does a cluster of radius rad at squared distance r2 lie entirely beyond
  * the cut-off (localisation)? */
 static inline int beyond(double rad, double r2, double cut_r)
@@ -709,26 +731,25 @@ static inline int beyond(double rad, double r2, double cut_r)
     return r2 > (cut_r + rad) * (cut_r + rad);
 }
 
-static void add_leaf_triangle(const meso_lp_field* f, const double* v, const double x[3], double theta,
-                              double near_r, double cut_r, eval_acc* acc, meso_lp_stats* st)
+static void add_leaf_triangle(const meso_lp_field* f, uint32_t t, const double x[3], double theta, double near_r,
+                              double cut_r, eval_acc* acc, meso_lp_stats* st)
 {
-    double g[3], R[3], rad2;
-    tri_sphere(v, x, g, R, &rad2);
-    if (cut_r > 0.0 && beyond(sqrt(rad2), dot3(R, R), cut_r))
+    const double* v = f->tri + 9 * (size_t)t;
+    const double* s = f->sphere + 5 * (size_t)t;
+    double R[3];
+    sub3(x, s, R);
+    const double r2 = dot3(R, R);
+    if (cut_r > 0.0 && beyond(s[3], r2, cut_r))
         return;
-    if (!far_enough(sqrt(rad2), dot3(R, R), theta, near_r)) {
+    if (!far_enough(s[3], r2, theta, near_r)) {
         add_exact(f, v, x, acc);
         if (st)
             st->exact_triangles++;
         return;
     }
-    double e1[3], e2[3], cr[3];
-    sub3(v + 3, v, e1);
-    sub3(v + 6, v, e2);
-    cross3(e1, e2, cr);
-    double area = 0.5 * sqrt(dot3(cr, cr));
+    const double area = s[4];
     if (f->opt.order < 2) {
-        add_point(f, x, g, area, acc);
+        add_point(f, x, s, area, acc);
     } else {
         /* Edge-midpoint rule: exact for quadratics, the same order as the
          * nodes' quadrupole expansion. */
@@ -761,8 +782,9 @@ static meso_result eval(const meso_lp_field* f, const double xin[3], double thet
     if (!(theta > 0.0)) {
         for (uint32_t t = 0; t < f->nt; ++t) {
             const double* v = f->tri + 9 * (size_t)t;
-            double g[3], R[3], rad2;
-            if (cut_r > 0.0 && (tri_sphere(v, x, g, R, &rad2), beyond(sqrt(rad2), dot3(R, R), cut_r)))
+            const double* s = f->sphere + 5 * (size_t)t;
+            double R[3];
+            if (cut_r > 0.0 && (sub3(x, s, R), beyond(s[3], dot3(R, R), cut_r)))
                 continue;
             add_exact(f, v, x, &acc);
             if (st)
@@ -787,7 +809,7 @@ static meso_result eval(const meso_lp_field* f, const double xin[3], double thet
                     st->multipoles++;
             } else if (nd->right == 0) {
                 for (uint32_t t = nd->first; t < nd->first + nd->count; ++t)
-                    add_leaf_triangle(f, f->tri + 9 * (size_t)t, x, theta, near_r, cut_r, &acc, st);
+                    add_leaf_triangle(f, t, x, theta, near_r, cut_r, &acc, st);
             } else {
                 /* Second child first on the stack so the first is summed first. */
                 stack[top++] = nd->right;
