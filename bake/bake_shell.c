@@ -292,6 +292,8 @@ typedef struct shell_bake {
     uint8_t *lp_mask, *lp_side;
     meso_field_surface fs;
     meso_lp_field* field;
+    int field_all;           /* the field's tree is whole, not built for a region (field_for) */
+    double field_box[6];     /* else the region it was built for */
     mesoi_shell_prior prior; /* --update: the old bake's directors and the region to redo */
     standin_job chain;       /* levels 2..: built beside repair and validation (standin_job) */
     float e0;                /* level 1's error (standin_error), once the directors are final */
@@ -360,6 +362,43 @@ static meso_result allowed_side(shell_bake* s, int layer, int sign, double h_sid
  * Envelope: layer 0 (top) along +n, layer 1 (bottom) along -n. */
 static void standin_begin(shell_bake* s);
 
+/* The field for the pass about to run: redo NULL, every vertex (the whole
+ * tree); else only redo's vertices are traced, and every evaluation of a
+ * trace lies within h_side of its vertex (shell_directors.c), so the tree
+ * is built for the box of those balls (lp_distance.h, >>regions: the same
+ * bits there as the whole tree's, for a fraction of its build on a small
+ * edit). Built again only when a grown region leaves the box. */
+static meso_result field_for(shell_bake* s, const uint8_t* redo, double h_side, meso_error* err)
+{
+    const meso_mesh* m = &s->m;
+    double box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t v = 0; redo && v < m->vertex_count; ++v)
+        for (int k = 0; redo[v] && k < 3; ++k) {
+            box[k] = fmin(box[k], m->positions[3 * (size_t)v + k]);
+            box[3 + k] = fmax(box[3 + k], m->positions[3 * (size_t)v + k]);
+        }
+    const double grow = 1.01 * h_side + 1e-6 * s->h;
+    for (int k = 0; k < 3; ++k)
+        box[k] -= grow, box[3 + k] += grow;
+    const int all = !redo || !(box[0] <= box[3]); /* no redo vertex: nothing is traced, any tree serves */
+    if (s->field &&
+        (s->field_all || (!all && box[0] >= s->field_box[0] && box[1] >= s->field_box[1] &&
+                          box[2] >= s->field_box[2] && box[3] <= s->field_box[3] && box[4] <= s->field_box[4] &&
+                          box[5] <= s->field_box[5])))
+        return MESO_OK;
+    const double t = meso_seconds();
+    meso_lp_field_destroy(s->field);
+    s->field = NULL;
+    const meso_lp_options lo_opt = {
+        .p = s->a.p, .theta = s->a.theta, .near_radius = 2.0 * h_side, .region = all ? NULL : box};
+    const meso_result r = meso_lp_field_create(s->fs.positions, s->fs.vertex_count, s->fs.indices,
+                                               s->fs.triangle_count, &lo_opt, &s->field, err);
+    s->field_all = all;
+    memcpy(s->field_box, box, sizeof(box));
+    s->rep->seconds_field += meso_seconds() - t;
+    return r;
+}
+
 static meso_result directors(shell_bake* s, meso_error* err)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -377,12 +416,9 @@ static meso_result directors(shell_bake* s, meso_error* err)
         r = meso_vertex_normals(m, s->normals, err);
     if (r == MESO_OK)
         r = meso_field_surface_build(m, s->normals, s->topo.boundary, s->topo.boundary_edges, h_side, &s->fs, err);
-    if (r == MESO_OK && a->directors != MESO_DIRECTORS_NORMAL) {
-        const meso_lp_options lo_opt = {.p = a->p, .theta = a->theta, .near_radius = 2.0 * h_side};
-        r = meso_lp_field_create(s->fs.positions, s->fs.vertex_count, s->fs.indices, s->fs.triangle_count, &lo_opt,
-                                 &s->field, err);
-    }
     s->rep->seconds_field = meso_seconds() - t;
+    if (r == MESO_OK && a->directors != MESO_DIRECTORS_NORMAL)
+        r = field_for(s, a->update ? s->prior.redo : NULL, h_side, err);
     const meso_trace_options topt = {.thickness = h_side, .angle_tol = a->angle_tol_deg * M_PI / 180.0,
                                      .theta = a->theta, .smooth_iterations = a->smooth,
                                      .progress = s->run.common.progress ? mesoi_run_tick : NULL,
@@ -400,6 +436,10 @@ static meso_result directors(shell_bake* s, meso_error* err)
             const int everything = pass > MESOI_SHELL_UPDATE_GROWTH_PASSES;
             meso_hybrid_stats hs = {0};
             const uint8_t* redo = everything ? NULL : s->prior.redo; /* --update: only these; the rest OLD's */
+            if (r == MESO_OK && a->directors != MESO_DIRECTORS_NORMAL)
+                r = field_for(s, redo, h_side, err); /* a grown region may leave the tree's box */
+            if (r != MESO_OK)
+                break;
             if (redo)
                 memcpy(dl, s->prior.d + 3 * (size_t)nv * (size_t)layer, sizeof(float) * 3 * (size_t)nv);
             else if (everything)

@@ -406,7 +406,21 @@ typedef struct build_ctx {
     sort_key* keys; /* 2 x triangles: the keys, then sort_keys' scratch */
     lp_node* nodes;
     uint32_t count;
+    int has_region;          /* >>regions: the box, internal units */
+    double rlo[3], rhi[3], theta2;
 } build_ctx;
+
+/* Is node nd far (far_enough, no near ball) from every point of the
+ * region? With 1e-9 of relative margin for the rounding of |x − c|². */
+static int far_from_region(const build_ctx* b, const lp_node* nd)
+{
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double e = fmax(fmax(b->rlo[k] - nd->c[k], nd->c[k] - b->rhi[k]), 0.0);
+        d2 += e * e;
+    }
+    return nd->radius * nd->radius < b->theta2 * d2 * (1.0 - 1e-9);
+}
 
 /* Area, centroid, second moment and radius of triangles perm[first..+count). */
 static void node_aggregate(const build_ctx* b, lp_node* nd, uint32_t first, uint32_t count)
@@ -467,7 +481,7 @@ static uint32_t build_node(build_ctx* b, uint32_t first, uint32_t count)
     nd->first = first;
     nd->count = count;
     nd->right = 0;
-    if (count <= LEAF_SIZE)
+    if (count <= LEAF_SIZE || (b->has_region && far_from_region(b, nd)))
         return idx;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = first; i < first + count; ++i)
@@ -545,6 +559,10 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "lp field: quad_tol = %g is outside (0, 0.1]", o.quad_tol);
     if (o.order != 1 && o.order != 2)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "lp field: order = %d is not 1 or 2", o.order);
+    for (int k = 0; o.region && k < 3; ++k)
+        if (!(isfinite(o.region[k]) && isfinite(o.region[3 + k]) && o.region[k] <= o.region[3 + k]))
+            return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "lp field: region axis %d is [%g, %g]", k, o.region[k],
+                                  o.region[3 + k]);
 
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = 0; i < nv; ++i)
@@ -606,7 +624,13 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
                            nt);
         goto fail;
     }
-    build_ctx b = {tri, cent, area, perm, keys, nodes, 0};
+    build_ctx b = {tri, cent, area, perm, keys, nodes, 0, o.region != NULL, {0, 0, 0}, {0, 0, 0},
+                   o.theta * o.theta};
+    for (int k = 0; o.region && k < 3; ++k) {
+        b.rlo[k] = (o.region[k] - origin[k]) / scale;
+        b.rhi[k] = (o.region[3 + k] - origin[k]) / scale;
+    }
+    o.region = NULL; /* read here only */
     build_node(&b, 0, nt);
     for (uint32_t i = 0; i < nt; ++i) {
         memcpy(tri_out + 9 * (size_t)i, tri + 9 * (size_t)perm[i], 9 * sizeof(double));

@@ -534,6 +534,65 @@ static void test_far_field(void)
     meso_mesh_free(&m);
 }
 
+/* >>regions (lp_distance.h): a tree built for a box gives, at points in
+ * the box, the whole tree's evaluation bit for bit (d, gradient and the
+ * work counters: the same clusters in the same order), and at points
+ * outside it a correct field (against exact summation, as close as the
+ * whole tree is, give or take), by summing the unsplit clusters triangle
+ * by triangle (more triangles than the whole tree touches). */
+static void test_region(void)
+{
+    meso_mesh m = {0};
+    if (!test_load_mesh(test_data("torus.obj"), &m))
+        return;
+    double lo[3], hi[3];
+    const double size = meso_mesh_bounds(&m, lo, hi);
+    const float* v0 = m.positions + 3 * (size_t)(m.vertex_count / 3);
+    const double box[6] = {v0[0] - 0.08 * size, v0[1] - 0.08 * size, v0[2] - 0.08 * size,
+                           v0[0] + 0.08 * size, v0[1] + 0.08 * size, v0[2] + 0.08 * size};
+    meso_lp_options whole_opt = {.theta = 0.5}, region_opt = {.theta = 0.5, .region = box};
+    meso_lp_field* whole = make_field(&m, &whole_opt);
+    meso_lp_field* part = make_field(&m, &region_opt);
+    uint64_t s = 0x4e610aULL;
+    int inside = 0, outside = 0, unsplit = 0;
+    double worst_whole = 0, worst_part = 0;
+    for (int i = 0; i < 400; ++i) {
+        double x[3], dw, dp, gw[3], gp[3];
+        const int in = i % 2 == 0;
+        for (int k = 0; k < 3; ++k)
+            x[k] = in ? test_rng_uniform(&s, box[k], box[3 + k]) : test_rng_uniform(&s, lo[k], hi[k]);
+        const int in_box = x[0] >= box[0] && x[0] <= box[3] && x[1] >= box[1] && x[1] <= box[4] &&
+                           x[2] >= box[2] && x[2] <= box[5];
+        meso_lp_stats sw = {0}, sp = {0};
+        if (meso_lp_eval_ex(whole, x, 0.5, 0.0, &dw, gw, &sw) != MESO_OK)
+            continue; /* on the surface */
+        assert(meso_lp_eval_ex(part, x, 0.5, 0.0, &dp, gp, &sp) == MESO_OK);
+        if (in_box) {
+            ++inside;
+            assert(memcmp(&dw, &dp, sizeof dw) == 0 && memcmp(gw, gp, sizeof gw) == 0);
+            assert(sw.nodes_visited == sp.nodes_visited && sw.multipoles == sp.multipoles &&
+                   sw.exact_triangles == sp.exact_triangles && sw.far_triangles == sp.far_triangles);
+        } else {
+            ++outside;
+            double de, ge[3];
+            assert(meso_lp_eval_exact(whole, x, &de, ge) == MESO_OK);
+            worst_whole = fmax(worst_whole, fabs(dw / de - 1));
+            worst_part = fmax(worst_part, fabs(dp / de - 1));
+            assert(angle_deg(gp, ge) < 2.0);
+            assert(sp.exact_triangles + sp.far_triangles >= sw.exact_triangles + sw.far_triangles);
+            unsplit += sp.exact_triangles + sp.far_triangles > sw.exact_triangles + sw.far_triangles;
+        }
+    }
+    fprintf(stderr, "    torus, box of 0.16 x size: %d points inside (same bits), %d outside (%d met an unsplit "
+                    "cluster): max |d/d_exact - 1| %.2e (whole tree %.2e)\n", inside, outside, unsplit, worst_part,
+            worst_whole);
+    assert(inside > 150 && outside > 150 && unsplit > outside / 2);
+    assert(worst_part < 1e-2 && worst_part <= 2 * worst_whole + 1e-6);
+    meso_lp_field_destroy(whole);
+    meso_lp_field_destroy(part);
+    meso_mesh_free(&m);
+}
+
 /* >>6. bad input ------------------------------------------------------------ */
 
 /* >>localisation: meso_lp_eval_local over a sphere A and a far copy B
@@ -623,6 +682,9 @@ static void test_bad_input(void)
     expect_error(pos, 4, idx, 2, &(meso_lp_options){.p = 1.0}, "p = 1");
     expect_error(pos, 4, idx, 2, &(meso_lp_options){.theta = -1.0}, "theta");
     expect_error(pos, 4, idx, 2, &(meso_lp_options){.near_radius = NAN}, "near_radius");
+    const double inverted_box[6] = {0, 0, 1, 1, 1, 0}, nan_box[6] = {0, 0, 0, NAN, 1, 1};
+    expect_error(pos, 4, idx, 2, &(meso_lp_options){.region = inverted_box}, "region axis 2");
+    expect_error(pos, 4, idx, 2, &(meso_lp_options){.region = nan_box}, "region axis 0");
     expect_error(pos, 4, idx, 2, &(meso_lp_options){.order = 3}, "order");
 
     meso_lp_field* f = NULL;
@@ -745,6 +807,7 @@ int main(void)
     TEST_RUN(test_symmetric_fields);
     TEST_RUN(test_far_field);
     TEST_RUN(test_localised);
+    TEST_RUN(test_region);
     TEST_RUN(test_bad_input);
     TEST_RUN(test_threads_and_speed);
     fprintf(stderr, "lp_distance: all tests passed\n");
