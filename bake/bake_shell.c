@@ -380,7 +380,10 @@ static meso_result field_for(shell_bake* s, const uint8_t* redo, double h_side, 
     const double grow = 1.01 * h_side + 1e-6 * s->h;
     for (int k = 0; k < 3; ++k)
         box[k] -= grow, box[3 + k] += grow;
-    const int all = !redo || !(box[0] <= box[3]); /* no redo vertex: nothing is traced, any tree serves */
+    /* No redo vertex: nothing is traced, any tree serves. theta 0 is exact
+     * summation over the triangles in tree order, which an unsplit
+     * cluster would change: the whole tree. */
+    const int all = !redo || !(box[0] <= box[3]) || !(s->a.theta > 0);
     if (s->field &&
         (s->field_all || (!all && box[0] >= s->field_box[0] && box[1] >= s->field_box[1] &&
                           box[2] >= s->field_box[2] && box[3] <= s->field_box[3] && box[4] <= s->field_box[4] &&

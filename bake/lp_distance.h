@@ -76,7 +76,10 @@
  * whole tree's evaluation would, with the same moments summed in the same
  * order, so it gives the same bits; one outside the box, or with a smaller
  * theta or a near ball, that finds it not far sums its triangles one by
- * one as any opened leaf's (correct, slower, other bits).
+ * one as any opened leaf's (correct, slower, other bits). Exact summation
+ * (theta 0) visits the triangles in tree order, which unsplit clusters
+ * leave unsorted: other bits too (the shell bake builds the whole tree
+ * for it).
  *
  * >>localisation
  * The paper integrates only over the surface within 2h of x (h = thickness).

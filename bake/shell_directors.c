@@ -28,7 +28,10 @@
  *    without bound towards the surface (we measured directors 1.4 h long on
  *    average on the bunny). We therefore move by Δ g / max(|g|, 1): unit
  *    speed where the field is strong, the paper's compression where it is
- *    weak, and never a director longer than h.
+ *    weak, and never a director longer than h. Every point evaluated,
+ *    trial steps included, is so within h of x0 (a trial step is at most
+ *    h − s, at speed at most 1): an update's field is built for that box
+ *    only (bake_shell.c field_for, lp_distance.h >>regions).
  *  - An evaluation that lands on the surface (possible only if a step
  *    crosses it) is treated like a large turn: the step is halved.
  *  - Localisation (§4.2): with opt->cutoff = 2h only the surface within
