@@ -509,24 +509,21 @@ static uint32_t build_node(build_ctx* b, uint32_t first, uint32_t count)
     return idx;
 }
 
-/* A triangle's bounding sphere about its centroid g (3), its radius and its
- * area, into s[0..5): computed once at build, as every evaluation that
- * opens the triangle's leaf needs them. */
-static void tri_sphere(const double* v, double s[5])
+/* A triangle's bounding sphere about its centroid g and its area into
+ * s[0..5): g and the area as the build computed them (cent, area), the
+ * radius here; kept, as every evaluation that opens the triangle's leaf
+ * needs them. */
+static void tri_sphere(const double* v, const double g[3], double area, double s[5])
 {
-    double rad2 = 0.0, e1[3], e2[3], cr[3];
-    for (int k = 0; k < 3; ++k)
-        s[k] = (v[k] + v[3 + k] + v[6 + k]) / 3.0;
+    double rad2 = 0.0;
     for (int c = 0; c < 3; ++c) {
         double d[3];
-        sub3(v + 3 * c, s, d);
+        sub3(v + 3 * c, g, d);
         rad2 = fmax(rad2, dot3(d, d));
     }
+    memcpy(s, g, 3 * sizeof(double));
     s[3] = sqrt(rad2);
-    sub3(v + 3, v, e1);
-    sub3(v + 6, v, e2);
-    cross3(e1, e2, cr);
-    s[4] = 0.5 * sqrt(dot3(cr, cr));
+    s[4] = area;
 }
 
 /* >>create / destroy ------------------------------------------------------- */
@@ -634,7 +631,7 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
     build_node(&b, 0, nt);
     for (uint32_t i = 0; i < nt; ++i) {
         memcpy(tri_out + 9 * (size_t)i, tri + 9 * (size_t)perm[i], 9 * sizeof(double));
-        tri_sphere(tri_out + 9 * (size_t)i, sphere + 5 * (size_t)i);
+        tri_sphere(tri_out + 9 * (size_t)i, cent + 3 * (size_t)perm[i], area[perm[i]], sphere + 5 * (size_t)i);
     }
     f->opt = o;
     memcpy(f->origin, origin, sizeof(origin));
