@@ -333,8 +333,9 @@ static meso_result make_native(mesoi_bake_run* run, uint32_t want, const meso_vo
 
 static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_options* a, const meso_mesh* m,
                                const meso_voxel_grid* g, const meso_split_cells* sc, const meso_membership* mb,
-                               const meso_tile_map* tm, const meso_cells_chunks* cc, mesoi_standin_levels* out,
-                               meso_cells_level* native, meso_bake_cells_report* s, meso_error* err)
+                               const meso_tile_map* tm, const meso_cells_chunks* cc, const colour_grid* cg,
+                               mesoi_standin_levels* out, meso_cells_level* native, meso_bake_cells_report* s,
+                               meso_error* err)
 {
     memset(out, 0, sizeof *out);
     if (a->levels == 1)
@@ -368,19 +369,32 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
     const uint32_t want = mesoi_native_wanted(a->levels, MESO_CELLS_MAX_NATIVE);
     uint32_t nn = 0;
     r = make_native(run, want, g, sc, mb, tm, cc, f0, se.bound, native, &nn, err);
-    meso_cells_surface_free(f0);
     if (r == MESO_OK) /* the rest for the stand-ins: at most MAX levels in all (auto), or --levels */
         r = mesoi_standin_levels_build(m, se.bound, (a->levels ? a->levels : (int)MESOI_STANDIN_MAX_LEVELS) - (int)nn,
                                        run->common.threads, out, err);
+    /* Their colours: what the voxel faces show, sampled half a voxel apart
+     * (FORMAT.md §7.3 VCOL). */
+    const double tv = meso_seconds();
+    meso_cells_colours colours = {.colr = cc->colr, .grid = cg->rgba};
+    memcpy(colours.grid_dims, cg->dims, sizeof colours.grid_dims);
+    for (int k = 0; k < 3; ++k) {
+        colours.origin[k] = g->origin[k];
+        colours.extent[k] = (double)g->tiles[k] * g->tile_res * g->voxel_size;
+    }
+    mesoi_appearance shows;
+    if (r == MESO_OK && meso_cells_surface_appearance(f0, &colours, &shows))
+        r = mesoi_standin_levels_appearance(out, m, 0.5 * g->voxel_size, &shows, run->common.threads, err);
+    meso_cells_surface_free(f0);
     if (r != MESO_OK)
         return r;
+    const double colour_ms = 1e3 * (meso_seconds() - tv);
     out->native = nn;
     for (uint32_t k = 0; k < nn; ++k)
         out->native_error[k] = native[k].error.bound;
     mesoi_run_stage(run, "levels", 0.97, 0.97,
                     "stand-in: base mesh within %g of the %llu voxel faces drawn (sampled %g, radius %g); %u "
-                    "simplified levels (%.0f ms)",
-                    se.bound, (unsigned long long)se.faces, se.sampled, se.radius, out->chain_count,
+                    "simplified levels, their colours in %.0f ms (%.0f ms in all)",
+                    se.bound, (unsigned long long)se.faces, se.sampled, se.radius, out->chain_count, colour_ms,
                     1e3 * (meso_seconds() - t));
     return MESO_OK;
 }
@@ -414,7 +428,7 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
     report_json(rep, s);
 
     const uint32_t REQ = MESO_CHUNK_FLAG_REQUIRED;
-    mesoi_chunk chunks[8 + 6 * MESO_CELLS_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS + 1];
+    mesoi_chunk chunks[8 + 6 * MESO_CELLS_MAX_NATIVE + 2 * MESOI_STANDIN_MAX_LEVELS + 1]; /* stand-ins: MESH and VCOL each */
     chunks[0] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = REQ, .object = 1,
                                        .encoding = mesh_chunk.encoding, .decoded_size = mesh_chunk.decoded_size},
                               .data = mesh_chunk.data, .size = mesh_chunk.size};
@@ -586,7 +600,7 @@ meso_result meso_bake_cells(const meso_bake_cells_options* o, meso_bake_output**
     meso_cells_level native[MESO_CELLS_MAX_NATIVE];
     memset(native, 0, sizeof native);
     if (r == MESO_OK)
-        r = make_levels(&run, a, &m, &g, &sc, &mb, &tm, &cc, &lv, native, s, err);
+        r = make_levels(&run, a, &m, &g, &sc, &mb, &tm, &cc, &cg, &lv, native, s, err);
     if (r == MESO_OK)
         r = assemble(a, &m, &g, R, &sc, &cc, &cg, &lv, native, s, out, err);
     for (int k = 0; k < MESO_CELLS_MAX_NATIVE; ++k)

@@ -30,6 +30,7 @@
 #include "memory_budget.h"
 #include "mesh_chunk.h"
 #include "skeleton_swc.h"
+#include "surface_distance.h"
 #include "texture_function.h"
 #if MESO_HAVE_CGAL
 #include "skeleton_from_mesh.h"
@@ -285,6 +286,16 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
                                                                                          : MESOI_STANDIN_MAX_LEVELS) -
                                                (int)nl->count,
                                            a->common.threads, &lv, err);
+        /* With a colour map, the stand-ins' vertex colours (FORMAT.md
+         * §7.3 VCOL): without one, level 0 shows the draw's albedo, which a
+         * stand-in without VCOL shows too. */
+        meso_frusta_colours fc;
+        mesoi_appearance shows;
+        if (r == MESO_OK && a->relief_color) {
+            meso_frusta_standin_appearance(obj, st, a->relief ? relief : NULL, color, &fc, &shows);
+            r = mesoi_standin_levels_appearance(&lv, &st->mesh, 0.25 * meso_mesh_mean_edge(&st->mesh), &shows,
+                                                a->common.threads, err);
+        }
         lv.native = nl->count;
         for (uint32_t k = 0; k < nl->count; ++k)
             lv.native_error[k] = nl->error[k];
@@ -300,7 +311,7 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     }
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
-    mesoi_chunk chunks[7 + MESOI_HEIGHT_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS];
+    mesoi_chunk chunks[7 + MESOI_HEIGHT_MAX_NATIVE + 2 * MESOI_STANDIN_MAX_LEVELS]; /* stand-ins: MESH and VCOL each */
     int count = 0;
     chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
                                     .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};

@@ -35,6 +35,7 @@
 #include "shell_update.h"
 #include "shell_validate.h"
 #include "standin_levels.h"
+#include "surface_distance.h"
 
 _Static_assert(MESO_BAKE_SHELL_MAX_LEVELS == MESOI_STANDIN_MAX_LEVELS, "the stand-ins hold every level");
 _Static_assert(1 + MESOI_HEIGHT_MAX_NATIVE + 1 <= MESOI_STANDIN_MAX_LEVELS, "room for the base mesh stand-in");
@@ -1023,7 +1024,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                      .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
                                                base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
         meso_cmap_record_encode(&cr, cmap);
-        mesoi_chunk chunks[11 + 2 * MESOI_HEIGHT_MAX_NATIVE + MESOI_STANDIN_MAX_LEVELS] = {
+        mesoi_chunk chunks[11 + 2 * MESOI_HEIGHT_MAX_NATIVE + 2 * MESOI_STANDIN_MAX_LEVELS] = { /* stand-ins: MESH and VCOL each */
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -1079,6 +1080,21 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                                &standins, err);
             }
             standins.e0 = s->e0; /* sampled for e0_sampling, stored with e0 */
+            /* With a colour, the stand-ins' vertex colours (FORMAT.md §7.3
+             * VCOL): without one, level 0 shows the draw's albedo, which a
+             * stand-in without VCOL shows too. */
+            mesoi_shell_colours sc;
+            mesoi_appearance shows;
+            if (r == MESO_OK && s->col.rgba && base.uvs && !a->frames) {
+                const double tc = meso_seconds();
+                mesoi_shell_appearance(&base, &s->tx.fn, &s->col, (const double[2]){cr.scale[0], cr.scale[1]}, &sc,
+                                       &shows);
+                r = mesoi_standin_levels_appearance(&standins, &base, 0.25 * meso_mesh_mean_edge(&base), &shows,
+                                                    s->run.common.threads, err);
+                if (r == MESO_OK)
+                    mesoi_run_stage(&s->run, "levels", 0.99, 0.99, "stand-in colours: %u levels (%.0f ms)",
+                                    standins.count, 1e3 * (meso_seconds() - tc));
+            }
             if (r == MESO_OK)
                 n += native_chunks(s, sdir_out ? sdir_out : sdir, nv_out, sdir_layers, &standins, chunks, n);
             if (r == MESO_OK)

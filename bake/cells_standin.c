@@ -69,11 +69,13 @@
 #include <string.h>
 
 #include "bake_threads.h"
+#include "srgb.h"
 #include "triangle_grid.h"
 
 typedef struct soup {
     float* xyz;
     uint32_t* tri;
+    uint32_t* vox; /* per face: its solid voxel's index within the tile, x + R (y + R z) (the COLR texel) */
     uint64_t faces, cap;
     int count_only; /* 1: add_face counts */
 } soup;
@@ -107,7 +109,10 @@ static int add_face(soup* s, const meso_voxel_grid* g, int64_t i, int64_t j, int
         uint32_t* t = realloc(s->tri, sizeof(uint32_t) * 6 * cap);
         if (t)
             s->tri = t;
-        if (!x || !t)
+        uint32_t* o = realloc(s->vox, sizeof(uint32_t) * cap);
+        if (o)
+            s->vox = o;
+        if (!x || !t || !o)
             return 0;
         s->cap = cap;
     }
@@ -127,6 +132,8 @@ static int add_face(soup* s, const meso_voxel_grid* g, int64_t i, int64_t j, int
     uint32_t* t = s->tri + 6 * s->faces;
     const uint32_t idx[6] = {v, v + 1, v + 2, v, v + 2, v + 3};
     memcpy(t, idx, sizeof idx);
+    const int64_t R = g->tile_res;
+    s->vox[s->faces] = (uint32_t)((i % R) + R * ((j % R) + R * (k % R)));
     ++s->faces;
     return 1;
 }
@@ -340,7 +347,8 @@ static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, c
             s.count_only = 0;
             s.xyz = malloc(sizeof(float) * 12 * s.cap);
             s.tri = malloc(sizeof(uint32_t) * 6 * s.cap);
-            ok = s.xyz && s.tri;
+            s.vox = malloc(sizeof(uint32_t) * s.cap);
+            ok = s.xyz && s.tri && s.vox;
         } else {
             s.count_only = 1;
         }
@@ -380,8 +388,10 @@ static int collect_faces(const meso_voxel_grid* g, const meso_split_cells* sc, c
     if (*too_many) {
         free(s.xyz);
         free(s.tri);
+        free(s.vox);
         s.xyz = NULL;
         s.tri = NULL;
+        s.vox = NULL;
         ok = 1;
     }
     *out = s;
@@ -439,6 +449,7 @@ void meso_cells_surface_free(meso_cells_surface* f)
     free(f->fxyz);
     free(f->s.xyz);
     free(f->s.tri);
+    free(f->s.vox);
     free(f);
 }
 
@@ -509,6 +520,7 @@ meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_gr
     if (!collect_faces(gl, scl, mbl, &s, &too_many)) {
         free(s.xyz);
         free(s.tri);
+        free(s.vox);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "cells level: out of memory for its voxel faces");
     }
     if (too_many || s.faces == 0) { /* nothing drawn, or too much to measure: no bound */
@@ -517,6 +529,7 @@ meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_gr
         out->bound = INFINITY;
         free(s.xyz);
         free(s.tri);
+        free(s.vox);
         return MESO_OK;
     }
     const meso_mesh faces = {.vertex_count = (uint32_t)(4 * s.faces), .triangle_count = (uint32_t)(2 * s.faces),
@@ -526,5 +539,70 @@ meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_gr
         out->bound += sqrt(3.0) * gl->voxel_size;
     free(s.xyz);
     free(s.tri);
+    free(s.vox);
     return r;
+}
+
+/* >>appearance. What level 0 shows at a point of a stand-in: the colour of
+ * the voxel whose face is nearest (the face the stand-in is measured
+ * against), as cells_frag.glsl colours a hit on it: COLR's texel of the
+ * voxel, or the mesh's colour grid trilinear at the face's point. Cells
+ * are not darkened: occlusion 1. */
+static double srgb_byte(uint8_t b) { return meso_srgb_to_linear(b / 255.0); }
+
+static void cells_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3],
+                     const double p[3], float out[4])
+{
+    (void)t;
+    (void)b;
+    const meso_cells_colours* c = a->ctx;
+    uint32_t tri = 0;
+    double bw[2];
+    mesoi_tri_grid_closest(grid, p, &tri, bw);
+    out[3] = 1.0f;
+    if (!c->grid) {
+        const uint8_t* q = c->colr + 4 * (size_t)c->vox[tri / 2];
+        for (int k = 0; k < 3; ++k)
+            out[k] = (float)srgb_byte(q[k]);
+        return;
+    }
+    /* The face's point, then the grid's sample coordinates (clamped to
+     * [0, G - 1]) as the shader computes them. */
+    const uint32_t* v = grid->tri + 3 * (size_t)tri;
+    double x[3];
+    int i0[3], i1[3];
+    for (int k = 0; k < 3; ++k) {
+        const double q = (1 - bw[0] - bw[1]) * grid->xyz[3 * (size_t)v[0] + k] + bw[0] * grid->xyz[3 * (size_t)v[1] + k] +
+                         bw[1] * grid->xyz[3 * (size_t)v[2] + k];
+        const double G = c->grid_dims[k];
+        x[k] = fmin(fmax((q - c->origin[k]) / c->extent[k] * G - 0.5, 0.0), G - 1);
+        i0[k] = (int)x[k];
+        if (i0[k] > (int)G - 1)
+            i0[k] = (int)G - 1;
+        i1[k] = i0[k] + 1 < (int)G ? i0[k] + 1 : (int)G - 1;
+        x[k] -= i0[k];
+    }
+    double rgb[3] = {0, 0, 0};
+    for (int corner = 0; corner < 8; ++corner) {
+        const int ix = corner & 1 ? i1[0] : i0[0], iy = corner & 2 ? i1[1] : i0[1], iz = corner & 4 ? i1[2] : i0[2];
+        const double w = (corner & 1 ? x[0] : 1 - x[0]) * (corner & 2 ? x[1] : 1 - x[1]) * (corner & 4 ? x[2] : 1 - x[2]);
+        const uint8_t* q = c->grid + 4 * ((size_t)ix + c->grid_dims[0] * ((size_t)iy + (size_t)c->grid_dims[1] * iz));
+        for (int k = 0; k < 3; ++k)
+            rgb[k] += w * srgb_byte(q[k]);
+    }
+    for (int k = 0; k < 3; ++k)
+        out[k] = (float)rgb[k];
+}
+
+int meso_cells_surface_appearance(const meso_cells_surface* f, meso_cells_colours* c, mesoi_appearance* out)
+{
+    if (!f->gridded)
+        return 0;
+    c->vox = f->s.vox;
+    /* A query from a stand-in point may search tens of voxels out (the
+     * stand-in is up to its error from the faces): 2 x 2 sub-triangles at
+     * most. Against 4 x 4 on spot: 158 ms instead of 448, the stand-ins'
+     * block colour error in test_rt_standin_colour 14.27 instead of 14.38. */
+    *out = (mesoi_appearance){.at = cells_at, .grid = &f->grid, .ctx = c, .subdivisions = 2};
+    return 1;
 }

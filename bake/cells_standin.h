@@ -12,6 +12,7 @@
 
 #include "membership.h"
 #include "split_cells.h"
+#include "standin_appearance.h"
 #include "voxelize.h"
 
 /* The largest surface measured: about 170 bytes per face are held while
@@ -55,5 +56,22 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, meso_cells_surface* f
 meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_grid* gl, const meso_split_cells* scl,
                                      const meso_membership* mbl, int threads, meso_cells_standin_error* out,
                                      meso_error* err);
+
+/* The colours a cells object draws at level 0 (FORMAT.md §7.2 kind 3):
+ * COLR (R³ RGBA8 sRGB, one texel per voxel of a tile) or, when `grid` is
+ * set, the mesh's colour grid (TX3D, grid_dims, RGBA8 sRGB) over the tile
+ * grid's box (origin, extent). `vox` is set by meso_cells_surface_appearance. */
+typedef struct meso_cells_colours {
+    const uint8_t* colr;
+    const uint8_t* grid;
+    uint32_t grid_dims[3];
+    double origin[3], extent[3];
+    const uint32_t* vox;
+} meso_cells_colours;
+
+/* What level 0 shows on a stand-in (standin_appearance.h): at each point,
+ * the colour of the voxel whose face of `f` is nearest. `c` and `f` are
+ * borrowed by `out`. Returns 0 when `f` holds no faces (nothing to show). */
+int meso_cells_surface_appearance(const meso_cells_surface* f, meso_cells_colours* c, mesoi_appearance* out);
 
 #endif /* MESO_CELLS_STANDIN_H */

@@ -11,6 +11,7 @@
 
 #include "frusta_tessellation.h"
 #include "meso_layout.h"
+#include "srgb.h"
 
 #define MAX_CELLS 256u
 
@@ -21,6 +22,8 @@ void meso_frusta_standin_free(meso_frusta_standin* s)
     free(s->mesh.positions);
     free(s->mesh.normals);
     free(s->mesh.indices);
+    free(s->owner);
+    free(s->uv);
     memset(s, 0, sizeof(*s));
 }
 
@@ -213,6 +216,12 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
             out->bbox_min[k] = fminf(out->bbox_min[k], x);
             out->bbox_max[k] = fmaxf(out->bbox_max[k], x);
         }
+    if (r == MESO_OK) { /* kept for the stand-in's colours */
+        out->owner = t.owner;
+        out->uv = t.uv;
+        t.owner = NULL;
+        t.uv = NULL;
+    }
     meso_frusta_tess_free(&t);
     if (r != MESO_OK) {
         meso_frusta_standin_free(out);
@@ -226,4 +235,64 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
         fe = nextafterf(fe, INFINITY);
     out->error = fe;
     return MESO_OK;
+}
+
+/* >>appearance */
+
+static double srgb_byte(uint8_t b) { return meso_srgb_to_linear(b / 255.0); }
+
+/* The colour map at (s, t) as frusta_frag.glsl's color_bilinear at level 0. */
+static void map_bilinear(const meso_color_map* m, double s, double t, float out[3])
+{
+    const double W = m->width, H = m->height, x = s * W - 0.5, y = t * H - 0.5;
+    const double x0 = floor(x), y0 = floor(y), fx = x - x0, fy = y - y0;
+    const uint32_t a[2] = {(uint32_t)fmin(fmod(fmod(x0, W) + W, W), W - 1), (uint32_t)fmin(fmod(fmod(x0 + 1, W) + W, W), W - 1)};
+    const uint32_t b[2] = {(uint32_t)fmin(fmod(fmod(y0, H) + H, H), H - 1), (uint32_t)fmin(fmod(fmod(y0 + 1, H) + H, H), H - 1)};
+    for (int k = 0; k < 3; ++k) {
+        double c[2][2];
+        for (int j = 0; j < 2; ++j)
+            for (int i = 0; i < 2; ++i)
+                c[j][i] = srgb_byte(m->rgba[4 * ((size_t)b[j] * m->width + a[i]) + (size_t)k]);
+        out[k] = (float)((1 - fy) * ((1 - fx) * c[0][0] + fx * c[0][1]) + fy * ((1 - fx) * c[1][0] + fx * c[1][1]));
+    }
+}
+
+static void frusta_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3],
+                      const double p[3], float out[4])
+{
+    (void)grid;
+    (void)p;
+    const meso_frusta_colours* c = a->ctx;
+    const uint32_t* ix = c->st->mesh.indices + 3 * (size_t)t;
+    const uint32_t o = c->st->owner[ix[0]];
+    out[3] = 1.0f;
+    if (o >= c->obj->count) { /* a ball */
+        memcpy(out, c->mean, sizeof c->mean);
+        return;
+    }
+    const meso_frustum_rec* r = &c->obj->recs[o];
+    double uv[2] = {0, 0};
+    for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 2; ++j)
+            uv[j] += b[k] * c->st->uv[2 * (size_t)ix[k] + (size_t)j];
+    const double s = uv[0] * r->u_scale, tt = r->v_offset + uv[1] * r->v_scale;
+    map_bilinear(c->color, s, tt, out);
+    if (c->relief && r->relief_depth > 0)
+        out[3] = (float)(0.25 + 0.75 * fmin(fmax(meso_texfn_sample(c->relief, s, tt, 0), 0), 1));
+}
+
+void meso_frusta_standin_appearance(const meso_frusta_object* obj, const meso_frusta_standin* st,
+    const meso_texfn* relief, const meso_color_map* color, meso_frusta_colours* ctx, mesoi_appearance* out)
+{
+    double sum[3] = {0, 0, 0};
+    const size_t n = (size_t)color->width * color->height;
+    for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k)
+            sum[k] += srgb_byte(color->rgba[4 * i + (size_t)k]);
+    *ctx = (meso_frusta_colours){.obj = obj, .st = st, .relief = relief, .color = color};
+    for (int k = 0; k < 3; ++k)
+        ctx->mean[k] = (float)(n ? sum[k] / (double)n : 0.5);
+    /* Asking is cheap (two bilinear lookups): 16 x 16 sub-triangles at
+     * most, as a triangle may span many texels of the map. */
+    *out = (mesoi_appearance){.at = frusta_at, .ctx = ctx, .subdivisions = 16};
 }

@@ -62,8 +62,10 @@
 #ifndef MESO_FRUSTA_STANDIN_H
 #define MESO_FRUSTA_STANDIN_H
 
+#include "color_map.h"
 #include "frusta_chunks.h"
 #include "meso_bake.h"
+#include "standin_appearance.h"
 #include "texture_function.h"
 
 typedef struct meso_frusta_standin {
@@ -74,6 +76,8 @@ typedef struct meso_frusta_standin {
                               at a relief coordinate moves the surface there by at most dh x this */
     uint32_t nu_min, nu_max; /* cells around, over the frusta */
     float bbox_min[3], bbox_max[3];
+    uint32_t* owner;       /* per mesh vertex: the tessellation's (frusta_tessellation.h) */
+    float* uv;             /* per mesh vertex: its (u, v), 2 each, the tessellation's */
 } meso_frusta_standin;
 
 /* The stand-in of `obj`; `relief` is the object's height field (the stored
@@ -84,5 +88,22 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
     meso_frusta_standin* out, meso_error* err);
 
 void meso_frusta_standin_free(meso_frusta_standin* s);
+
+/* What level 0 of `obj` shows on the stand-in `st` and its simplifications
+ * (standin_appearance.h), as frusta_frag.glsl shades a hit: a frustum's
+ * point shows the colour map bilinear (wrapping, in linear light) at the
+ * relief coordinates (s, t) = (u u_scale, v_offset + v v_scale) of its
+ * (u, v), with occlusion 0.25 + 0.75 h(s, t) on a frustum with a relief
+ * (1 without); a cap's point shows its rim's; a ball the map's mean colour,
+ * occlusion 1. `ctx` is filled here and borrowed by `out` with the rest. */
+typedef struct meso_frusta_colours {
+    const meso_frusta_object* obj;
+    const meso_frusta_standin* st;
+    const meso_texfn* relief; /* NULL: none */
+    const meso_color_map* color;
+    float mean[3];            /* the map's mean linear colour */
+} meso_frusta_colours;
+void meso_frusta_standin_appearance(const meso_frusta_object* obj, const meso_frusta_standin* st,
+    const meso_texfn* relief, const meso_color_map* color, meso_frusta_colours* ctx, mesoi_appearance* out);
 
 #endif /* MESO_FRUSTA_STANDIN_H */

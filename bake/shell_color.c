@@ -30,6 +30,8 @@
 #include "meso_file.h"
 #include "png_io.h"
 #include "srgb.h"
+#include "standin_appearance.h"
+#include "texture_function.h"
 
 int mesoi_shell_color_is_from_mesh(const char* spec)
 {
@@ -240,4 +242,94 @@ meso_result mesoi_shell_color_from_mesh(const char* input, const meso_mesh* m, c
     out->mapping = MESO_CMAP_BASE;
     out->source = "from-mesh";
     return MESO_OK;
+}
+
+/* >>stand-in appearance */
+
+static double wrap01(double x) { return x - floor(x); }
+
+/* COLR at texture-space colour coordinates c (linear light, trilinear
+ * between texel centres, wrapping in s and t', clamped in w), as a
+ * GL_SRGB8_ALPHA8 texture with REPEAT, REPEAT, CLAMP_TO_EDGE samples it. */
+static void colr_at(const mesoi_shell_color* col, const double c[3], float out[3])
+{
+    int i0[3], i1[3];
+    double f[3];
+    for (int k = 0; k < 3; ++k) {
+        const int n = (int)col->dims[k];
+        double x = (k < 2 ? wrap01(c[k]) : fmin(fmax(c[k], 0), 1)) * n - 0.5;
+        double fl = floor(x);
+        f[k] = x - fl;
+        if (k < 2) {
+            i0[k] = (((int)fl % n) + n) % n;
+            i1[k] = (i0[k] + 1) % n;
+        } else {
+            i0[k] = fl < 0 ? 0 : (int)fl > n - 1 ? n - 1 : (int)fl;
+            i1[k] = fl + 1 > n - 1 ? n - 1 : fl + 1 < 0 ? 0 : (int)fl + 1;
+        }
+    }
+    double rgb[3] = {0, 0, 0};
+    for (int corner = 0; corner < 8; ++corner) {
+        const int ix = corner & 1 ? i1[0] : i0[0], iy = corner & 2 ? i1[1] : i0[1], iz = corner & 4 ? i1[2] : i0[2];
+        const double w = (corner & 1 ? f[0] : 1 - f[0]) * (corner & 2 ? f[1] : 1 - f[1]) * (corner & 4 ? f[2] : 1 - f[2]);
+        if (w == 0)
+            continue;
+        const uint8_t* q = col->rgba + 4 * ((size_t)ix + col->dims[0] * ((size_t)iy + (size_t)col->dims[1] * iz));
+        for (int k = 0; k < 3; ++k)
+            rgb[k] += w * meso_srgb_to_linear(q[k] / 255.0);
+    }
+    for (int k = 0; k < 3; ++k)
+        out[k] = (float)rgb[k];
+}
+
+static void shell_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3],
+                     const double p[3], float out[4])
+{
+    (void)grid;
+    (void)p;
+    const mesoi_shell_colours* c = a->ctx;
+    const uint32_t* ix = c->base->indices + 3 * (size_t)t;
+    double st[2] = {0, 0};
+    for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 2; ++j)
+            st[j] += b[k] * c->base->uvs[2 * (size_t)ix[k] + (size_t)j];
+    double w;
+    if (c->fn->kind == MESO_TEXFN_HEIGHT) {
+        w = fmin(fmax(meso_texfn_sample(c->fn, st[0], st[1], 0), 0), 1);
+    } else {
+        const int steps = 2 * (int)c->fn->dims[2];
+        double hi = 1, lo = -1;
+        for (int i = 0; i <= steps && lo < 0; ++i) {
+            const double x = 1 - (double)i / steps;
+            if (meso_texfn_sample(c->fn, st[0], st[1], x) >= 0.5)
+                lo = x;
+            else
+                hi = x;
+        }
+        if (lo < 0) { /* no solid in this column: nothing is drawn there */
+            out[0] = out[1] = out[2] = 0;
+            out[3] = -1;
+            return;
+        }
+        for (int i = 0; i < 16 && hi > lo; ++i) { /* the crossing, between lo (solid) and hi */
+            const double m = 0.5 * (lo + hi);
+            if (meso_texfn_sample(c->fn, st[0], st[1], m) >= 0.5)
+                lo = m;
+            else
+                hi = m;
+        }
+        w = lo;
+    }
+    const double cc[3] = {st[0] * c->scale[0], st[1] * c->scale[1], w};
+    colr_at(c->col, cc, out);
+    out[3] = (float)(0.25 + 0.75 * w);
+}
+
+void mesoi_shell_appearance(const meso_mesh* base, const struct meso_texfn* fn, const mesoi_shell_color* col,
+                            const double scale[2], mesoi_shell_colours* ctx, struct mesoi_appearance* out)
+{
+    *ctx = (mesoi_shell_colours){.base = base, .fn = fn, .col = col, .scale = {scale[0], scale[1]}};
+    /* A height field is two bilinear lookups a point, a volume's march some
+     * dozens: 8 x 8 and 4 x 4 sub-triangles at most. */
+    *out = (mesoi_appearance){.at = shell_at, .ctx = ctx, .subdivisions = fn->kind == MESO_TEXFN_HEIGHT ? 8 : 4};
 }

@@ -52,4 +52,24 @@ meso_result mesoi_shell_color_from_mesh(const char* input, const meso_mesh* m, c
 
 void mesoi_shell_color_free(mesoi_shell_color* c);
 
+/* What a shell's level 0 shows on its base-mesh stand-in and the stand-in's
+ * simplifications (standin_appearance.h), as shell_frag.glsl shades a hit
+ * seen from outside (from w = 1): over the base point with texture
+ * coordinates (s, t') = Σ λ_k uv_k the highest solid w of `fn` (a height
+ * field: h(s, t'); a volume: the first α ≥ 1/2 marched down from w = 1 at
+ * half its texels, then bisected), the COLR colour there (trilinear in
+ * linear light at (s scale[0], t' scale[1], w), wrapping in s and t',
+ * clamped in w) and occlusion 0.25 + 0.75 w; a column with no solid shows
+ * nothing (the point is left out of the means). `base` has the MESH's
+ * uvs. ctx is filled here and borrowed by `out` with the rest. */
+typedef struct mesoi_shell_colours {
+    const meso_mesh* base;
+    const struct meso_texfn* fn;
+    const mesoi_shell_color* col;
+    double scale[2];
+} mesoi_shell_colours;
+struct mesoi_appearance;
+void mesoi_shell_appearance(const meso_mesh* base, const struct meso_texfn* fn, const mesoi_shell_color* col,
+                            const double scale[2], mesoi_shell_colours* ctx, struct mesoi_appearance* out);
+
 #endif

@@ -43,6 +43,79 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
     return MESO_OK;
 }
 
+/* A simplified level's points show what the base stand-in's vertex
+ * colours show there: they are interpolated at the nearest point of it
+ * (cheaper than asking the kind again, and as coarse levels should be,
+ * smoothed once more). */
+static void base_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3], const double p[3],
+                    float out[4])
+{
+    (void)grid;
+    (void)p;
+    const meso_mesh* base = ((const void* const*)a->ctx)[0];
+    const float* shows = ((const void* const*)a->ctx)[1];
+    const uint32_t* ix = base->indices + 3 * (size_t)t;
+    for (int k = 0; k < 4; ++k)
+        out[k] = (float)(b[0] * shows[4 * (size_t)ix[0] + k] + b[1] * shows[4 * (size_t)ix[1] + k] +
+                         b[2] * shows[4 * (size_t)ix[2] + k]);
+}
+
+meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso_mesh* base, double spacing,
+                                            const mesoi_appearance* a, int threads, meso_error* err)
+{
+    uint32_t most = base->vertex_count;
+    for (uint32_t S = 0; S < lv->count; ++S) {
+        const meso_mesh* m = S == 0 ? base : &lv->chain[S - 1].mesh;
+        most = m->vertex_count > most ? m->vertex_count : most;
+        if (!(lv->vcol[S] = malloc(4 * (size_t)m->vertex_count)))
+            return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+    }
+    float* shows = malloc(sizeof(float) * 4 * (size_t)base->vertex_count);
+    float* level = malloc(sizeof(float) * 4 * (size_t)most);
+    double* xyz = malloc(sizeof(double) * 3 * (size_t)base->vertex_count);
+    if (!shows || !level || !xyz) {
+        free(shows);
+        free(level);
+        free(xyz);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+    }
+    meso_result r = mesoi_vertex_appearance(base, spacing, a, NULL, threads, shows, err);
+    if (r == MESO_OK)
+        mesoi_appearance_rgba8(shows, base->vertex_count, lv->vcol[0]);
+    int built = 0;
+    mesoi_tri_grid g;
+    if (r == MESO_OK && lv->count > 1) { /* the simplified levels: a grid over the base mesh in double */
+        for (size_t k = 0; k < 3 * (size_t)base->vertex_count; ++k)
+            xyz[k] = base->positions[k];
+        double lo[3], hi[3];
+        meso_mesh_bounds(base, lo, hi);
+        r = mesoi_tri_grid_build(xyz, base->indices, base->triangle_count, lo, hi, &g, err);
+        built = r == MESO_OK; /* a failed build has freed g */
+    }
+    const void* ctx[2] = {base, shows};
+    const mesoi_appearance from_base = {.at = base_at, .ctx = ctx, .subdivisions = 8};
+    for (uint32_t S = 1; r == MESO_OK && S < lv->count; ++S) {
+        const meso_mesh* m = &lv->chain[S - 1].mesh;
+        if ((r = mesoi_vertex_appearance(m, spacing, &from_base, &g, threads, level, err)) == MESO_OK)
+            mesoi_appearance_rgba8(level, m->vertex_count, lv->vcol[S]);
+    }
+    if (built)
+        mesoi_tri_grid_free(&g);
+    free(shows);
+    free(level);
+    free(xyz);
+    return r;
+}
+
+/* The VCOL chunk of stand-in S at lod L. */
+static mesoi_chunk vcol_chunk(const mesoi_standin_levels* lv, uint32_t S, const meso_mesh* m, uint32_t object,
+                              uint16_t L)
+{
+    return (mesoi_chunk){.desc = {.type = MESO_CHUNK_VCOL, .object = object, .lod = L, .dtype = MESO_DTYPE_U8,
+                                  .components = 4, .dims = {m->vertex_count, 1, 1}},
+                         .data = lv->vcol[S], .size = 4 * (size_t)m->vertex_count};
+}
+
 size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* base, const mesoi_chunk* base_chunk,
                                    const float l0_min[3], const float l0_max[3], mesoi_chunk* chunks, cJSON* rep)
 {
@@ -55,7 +128,7 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
         meso_level_record lr = {.object = base_chunk->desc.object, .lod = (uint16_t)L,
                                 .form = native ? MESO_LEVEL_NATIVE : MESO_LEVEL_MESH};
         const meso_mesh* lm = native || S == 1 ? base : &lv->chain[S - 2].mesh;
-        size_t bytes = base_chunk->size;
+        size_t bytes = base_chunk->size, vbytes = 0;
         double e = 0;
         if (native) {
             memcpy(lr.bbox_min, l0_min, sizeof lr.bbox_min);
@@ -71,6 +144,10 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
             e = lv->e0;
             chunks[n] = *base_chunk;
             chunks[n++].desc.lod = (uint16_t)L;
+            if (lv->vcol[0]) {
+                chunks[n] = vcol_chunk(lv, 0, base, base_chunk->desc.object, (uint16_t)L);
+                vbytes = chunks[n++].size;
+            }
         } else {
             const meso_mesh_level* c = &lv->chain[S - 2];
             const meso_mesh_chunk* mc = &lv->chunk[S - 2];
@@ -84,6 +161,10 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
                                                  .object = base_chunk->desc.object, .lod = (uint16_t)L,
                                                  .encoding = mc->encoding, .decoded_size = mc->decoded_size},
                                         .data = mc->data, .size = mc->size};
+            if (lv->vcol[S - 1]) {
+                chunks[n] = vcol_chunk(lv, S - 1, &c->mesh, base_chunk->desc.object, (uint16_t)L);
+                vbytes = chunks[n++].size;
+            }
         }
         lr.error = mesoi_f32_up(e);
         meso_level_record_encode(&lr, lv->lods + (size_t)MESO_LODS_RECORD_SIZE * L);
@@ -95,6 +176,8 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
         cJSON_AddNumberToObject(o, "error", (double)lr.error);
         cJSON_AddNumberToObject(o, "triangles", lm->triangle_count);
         cJSON_AddNumberToObject(o, "mesh_bytes", (double)bytes);
+        if (vbytes)
+            cJSON_AddNumberToObject(o, "colour_bytes", (double)vbytes);
         cJSON_AddItemToArray(jl, o);
     }
     chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_LODS, .dtype = MESO_DTYPE_BYTES, .components = 1,
@@ -106,7 +189,9 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
 void mesoi_standin_levels_free(mesoi_standin_levels* lv)
 {
     meso_mesh_levels_free(lv->chain, lv->chain_count);
-    for (uint32_t k = 0; k < MESOI_STANDIN_MAX_LEVELS; ++k)
+    for (uint32_t k = 0; k < MESOI_STANDIN_MAX_LEVELS; ++k) {
         free(lv->chunk[k].data);
+        free(lv->vcol[k]);
+    }
     memset(lv, 0, sizeof *lv);
 }

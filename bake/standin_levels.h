@@ -20,6 +20,7 @@
 #include "mesh_chunk.h"
 #include "mesh_levels.h"
 #include "meso_layout.h"
+#include "standin_appearance.h"
 
 /* Level 0, the base mesh and at most 7 simplified meshes. */
 #define MESOI_STANDIN_MAX_LEVELS 9
@@ -58,6 +59,9 @@ typedef struct mesoi_standin_levels {
     uint8_t lods[MESOI_STANDIN_MAX_LEVELS * MESO_LODS_RECORD_SIZE];
     float error[MESOI_STANDIN_MAX_LEVELS];      /* per level by lod (0 for level 0), as stored */
     uint32_t triangles[MESOI_STANDIN_MAX_LEVELS]; /* per level by lod; native levels: the base mesh's */
+    /* Per stand-in (0 the base mesh, 1.. the chain): its VCOL, RGBA8 per
+     * vertex, or NULL (mesoi_standin_levels_appearance). */
+    uint8_t* vcol[MESOI_STANDIN_MAX_LEVELS];
 } mesoi_standin_levels;
 
 /* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base
@@ -67,12 +71,20 @@ typedef struct mesoi_standin_levels {
 meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int levels, int threads,
                                        mesoi_standin_levels* out, meso_error* err);
 
+/* Gives every stand-in of `lv` (built for `base`) its vertex colours:
+ * what `a` says level 0 shows over each vertex's part of the base mesh,
+ * sampled `spacing` apart at most (standin_appearance.h); the simplified
+ * levels take it at the nearest point of the base mesh. */
+meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso_mesh* base, double spacing,
+                                            const mesoi_appearance* a, int threads, meso_error* err);
+
 /* Appends to `chunks` the stand-ins' chunks: `base_chunk` (the object's
  * base MESH, level 0's) again at lod N + 1, the simplified meshes at lod
  * N + 2.. (N = lv->native), and the LODS chunk of every level (level 0's
  * and the native levels' bounds l0_min/l0_max), and adds the report's
- * "levels" array to `rep`. Returns the chunks appended
- * (at most MESOI_STANDIN_MAX_LEVELS + 1). `lv` keeps the chunks' bytes. */
+ * "levels" array to `rep`; with vertex colours, each stand-in's VCOL at
+ * its lod. Returns the chunks appended (at most
+ * 2 MESOI_STANDIN_MAX_LEVELS + 1). `lv` keeps the chunks' bytes. */
 size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* base, const mesoi_chunk* base_chunk,
                                    const float l0_min[3], const float l0_max[3], mesoi_chunk* chunks, cJSON* rep);
 

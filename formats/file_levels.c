@@ -111,13 +111,20 @@ int32_t meso_file_find_level(const meso_file* f, uint32_t type, uint32_t object,
     return best;
 }
 
+int32_t meso_file_find_vertex_colours(const meso_file* f, uint32_t object, uint16_t lod)
+{
+    const int32_t m = meso_file_find_level(f, MESO_CHUNK_MESH, object, lod);
+    return m < 0 ? -1 : meso_file_find(f, MESO_CHUNK_VCOL, object, f->chunks[m].lod);
+}
+
 /* Where the chunk's stored bytes end (its padding is not needed to read it). */
 static uint64_t stored_end(const meso_chunk_info* c) { return c->offset + c->stored_size; }
 
 /* Bytes and prefix of level `lod` of `object`: the chunks it draws are, per
  * type the object has, the one with the smallest lod >= `lod` (MESH alone
- * for a MESH stand-in; a frusta object's native levels draw no MESH: its
- * MESH is the stand-in's); the prefix also covers the file-wide chunks. */
+ * for a MESH stand-in, with the VCOL at its own lod if there is one; a
+ * frusta object's native levels draw no MESH: its MESH is the stand-in's;
+ * native levels draw no VCOL); the prefix also covers the file-wide chunks. */
 static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uint16_t lod, uint16_t form,
                          meso_level_info* out)
 {
@@ -126,10 +133,12 @@ static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uin
         const meso_chunk_info* c = &f->chunks[i];
         if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
             end = stored_end(c) > end ? stored_end(c) : end;
-        if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH) ||
-            (form == MESO_LEVEL_NATIVE && kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH))
+        if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH && c->type != MESO_CHUNK_VCOL) ||
+            (form == MESO_LEVEL_NATIVE && kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH) ||
+            (form == MESO_LEVEL_NATIVE && c->type == MESO_CHUNK_VCOL))
             continue;
-        if (meso_file_find_level(f, c->type, object, lod) != (int32_t)i)
+        if ((c->type == MESO_CHUNK_VCOL ? meso_file_find_vertex_colours(f, object, lod)
+                                        : meso_file_find_level(f, c->type, object, lod)) != (int32_t)i)
             continue;
         bytes += c->stored_size;
         end = stored_end(c) > end ? stored_end(c) : end;

@@ -55,7 +55,8 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_LODS:
     case MESO_CHUNK_TXFR:
     case MESO_CHUNK_DSFR:
-    case MESO_CHUNK_RELF: return 1;
+    case MESO_CHUNK_RELF:
+    case MESO_CHUNK_VCOL: return 1;
     default: return 0;
     }
 }
@@ -221,6 +222,10 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_COLR:
         if (c->dtype != MESO_DTYPE_U8 || c->components != 4)
             return elem_error(c, chunk, err, "U8 x 4");
+        return MESO_OK;
+    case MESO_CHUNK_VCOL:
+        if (c->dtype != MESO_DTYPE_U8 || c->components != 4 || !flat)
+            return elem_error(c, chunk, err, "U8 x 4, dims N x 1 x 1");
         return MESO_OK;
     default: return MESO_OK;
     }

@@ -141,6 +141,20 @@ static int mesh_header(obj_check* c, int32_t i, meso_mesh_layout* l)
     return 1;
 }
 
+/* The VCOL that goes with the MESH this level draws (at the MESH's own
+ * lod): one U8 x 4 per vertex of it (6002). */
+static void vertex_colours(obj_check* c, const meso_mesh_layout* l)
+{
+    const int32_t i = meso_file_find_vertex_colours(c->f, c->id, c->lod);
+    if (i < 0 || !rules_ok(c, i))
+        return;
+    const meso_chunk_info* k = &c->f->chunks[i];
+    if (k->dims[0] != l->vertex_count)
+        ISSUE(c, MESO_ISSUE_MESH_VCOL, i,
+              "object %u, lod %u: VCOL holds %u vertex colours, its MESH has %u vertices (FORMAT.md 7.3)", c->id,
+              (unsigned)k->lod, k->dims[0], l->vertex_count);
+}
+
 /* >>shell (kind 2) ---------------------------------------------------------- */
 
 /* The texture function (§7.2 "A shell may carry one texture function"):
@@ -462,8 +476,8 @@ static meso_result check_level(meso_file* f, const meso_object_record* rec, uint
     int32_t i;
     switch (rec->kind) {
     case MESO_OBJECT_MESH:
-        if ((i = required(&c, rec->kind, MESO_CHUNK_MESH)) >= 0)
-            mesh_header(&c, i, &l);
+        if ((i = required(&c, rec->kind, MESO_CHUNK_MESH)) >= 0 && mesh_header(&c, i, &l) && !c.stop)
+            vertex_colours(&c, &l);
         break;
     case MESO_OBJECT_CELLS:
         /* The CELL record and what it implies: meso_file_check_cells. */

@@ -52,7 +52,10 @@ static int tess_grow(tess_buf* b, uint64_t add_v, uint64_t add_i)
         uint32_t* o = realloc(m->owner, sizeof(uint32_t) * (size_t)nc);
         if (o)
             m->owner = o;
-        if (!p || !n || !o)
+        float* uv = realloc(m->uv, 2 * sizeof(float) * (size_t)nc);
+        if (uv)
+            m->uv = uv;
+        if (!p || !n || !o || !uv)
             return 0;
         b->cap_v = (uint32_t)nc;
     }
@@ -106,8 +109,10 @@ static double grid_sag(tess_fn fn, const void* ctx, uint32_t nu, uint32_t nv)
     return worst;
 }
 
+/* cap_end: -1 for a lateral grid or a ball (uv = the grid's (u, v)), else
+ * the end whose cap this is (uv = (u, end): the rim point's). */
 static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t owner, uint32_t nu, uint32_t nv, int flip,
-    int measure)
+    int measure, int cap_end)
 {
     if (!tess_grow(b, ((uint64_t)nu + 1) * ((uint64_t)nv + 1), 6 * (uint64_t)nu * nv))
         return 0;
@@ -140,6 +145,8 @@ static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t owner, u
                 P[k] = (float)p[k];
                 N[k] = (float)(l > 0 ? (flip ? -n[k] : n[k]) / l : 0);
             }
+            m->uv[2 * (size_t)m->vertex_count] = (float)u;
+            m->uv[2 * (size_t)m->vertex_count + 1] = (float)(cap_end < 0 ? v : cap_end);
             m->owner[m->vertex_count++] = owner;
         }
     for (uint32_t j = 0; j < nv; ++j)
@@ -209,7 +216,7 @@ int meso_frusta_tessellate(const meso_frustum_rec* recs, uint32_t count, const m
         if (!nu || !nv)
             goto fail;
         const seg_ctx c = {&recs[f], grid->height, grid->height_ctx};
-        if (!tess_grid(&b, seg_fn, &c, f, nu, nv, 0, 1))
+        if (!tess_grid(&b, seg_fn, &c, f, nu, nv, 0, 1, -1))
             goto fail;
         for (int e = 0; e < 2; ++e) {
             if (!(recs[f].flags & (e ? MESO_FSEG_CAP1 : MESO_FSEG_CAP0)))
@@ -220,13 +227,13 @@ int meso_frusta_tessellate(const meso_frustum_rec* recs, uint32_t count, const m
              * rim points, so it is within the rim's sag (measured there)
              * of the fan; its (u, v) midpoints would only measure the
              * fan's parametrisation */
-            if (!tess_grid(&b, cap_fn, &cc, f, nu, 1, e == 0, 0))
+            if (!tess_grid(&b, cap_fn, &cc, f, nu, 1, e == 0, 0, e))
                 goto fail;
         }
     }
     for (uint32_t i = 0; i < ball_count; ++i) {
         const uint32_t nu = grid->ball_nu[i];
-        if (!nu || !tess_grid(&b, ball_fn, &balls[i], count + i, nu, nu / 2 ? nu / 2 : 1, 1, 1))
+        if (!nu || !tess_grid(&b, ball_fn, &balls[i], count + i, nu, nu / 2 ? nu / 2 : 1, 1, 1, -1))
             goto fail;
     }
     *out = b.m;
@@ -241,6 +248,7 @@ void meso_frusta_tess_free(meso_frusta_tess_mesh* m)
     free(m->positions);
     free(m->normals);
     free(m->owner);
+    free(m->uv);
     free(m->indices);
     memset(m, 0, sizeof(*m));
 }

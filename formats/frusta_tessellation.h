@@ -45,6 +45,8 @@ typedef struct meso_frusta_tess_mesh {
     float* positions; /* 3 per vertex */
     float* normals;   /* 3 per vertex, unit (0 where the grid degenerates) */
     uint32_t* owner;  /* per vertex: frustum i (its lateral grid or caps) < count, else ball count + j */
+    float* uv;        /* 2 per vertex: its grid's (u, v) (a frustum's as meso_frusta_tess_point takes them,
+                         a ball's latitude-longitude ones); a cap's vertex: (u, end), its rim point's */
     uint32_t* indices;
 } meso_frusta_tess_mesh;
 

@@ -115,6 +115,7 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_DSFR MESO_FOURCC('D', 'S', 'F', 'R') /* their distance maps: DIST slabs stacked along z */
 #define MESO_CHUNK_CMAP MESO_FOURCC('C', 'M', 'A', 'P') /* how a shell's COLR maps to texture space (one record) */
 #define MESO_CHUNK_LODS MESO_FOURCC('L', 'O', 'D', 'S') /* levels of detail: error and bounds per object level (1.1) */
+#define MESO_CHUNK_VCOL MESO_FOURCC('V', 'C', 'O', 'L') /* a MESH's vertex appearance: sRGB albedo + occlusion, U8 x 4 per vertex (1.1) */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -483,6 +484,7 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_LODS_SIZE 4921u           /* LODS size not a multiple of 48 */
 #define MESO_ISSUE_LODS_VALUE 4922u          /* LODS record out of order, out of range, or reserved bytes not zero */
 #define MESO_ISSUE_OBJ_CHUNKS 6001u          /* an object lacks a chunk its kind requires */
+#define MESO_ISSUE_MESH_VCOL 6002u           /* VCOL count != the vertex count of its lod's MESH */
 #define MESO_ISSUE_SHELL_COUNT 6101u         /* SDIR/STHK count != MESH vertex count, or no triangles */
 #define MESO_ISSUE_SHELL_SDIR 6102u          /* non-finite director */
 #define MESO_ISSUE_SHELL_STHK 6103u          /* thickness not finite or not > 0 */
@@ -649,6 +651,11 @@ typedef struct meso_level_info {
 /* Index of the chunk of `type` and `object` with the smallest lod >= `lod`
  * (what level `lod` draws), or -1. */
 MESO_API int32_t meso_file_find_level(const meso_file* f, uint32_t type, uint32_t object, uint16_t lod);
+
+/* The VCOL chunk (vertex colours, FORMAT.md §7.3) that goes with the MESH
+ * level `lod` of `object` draws: the one at that MESH's own lod, or -1
+ * (no MESH, or none there: the mesh is drawn with the draw's albedo). */
+MESO_API int32_t meso_file_find_vertex_colours(const meso_file* f, uint32_t object, uint16_t lod);
 /* The levels of `object`: reads and checks the LODS chunk (when there is
  * one) and writes up to `cap` entries finest first (NULL with cap 0 only
  * counts); *count gets the number of levels (>= 1 for an object in OBJT).

@@ -498,10 +498,12 @@ typedef enum meso_rt_pass {
     MESO_PASS_GBUFFER,     /* into the host's attachments, which it binds with glDrawBuffers before the
                               draw: location 0 albedo: rgb the linear material colour (desc->albedo; for
                               cells the colour map's texel at the hit; for shells with a colour, COLR +
-                              CMAP, FORMAT.md 7.2, the colour at the hit's texture point), a the built-in
-                              occlusion factor
+                              CMAP, FORMAT.md 7.2, the colour at the hit's texture point; for a mesh or
+                              mesh stand-in with vertex colours, VCOL, FORMAT.md 7.3, theirs), a the
+                              built-in occlusion factor
                               (shells and relief frusta 0.25 + 0.75 w, w the hit's height in the shell or
-                              relief layer; 1 for meshes, balls, smooth frusta and cells); location 1 the
+                              relief layer; a mesh's VCOL occlusion; 1 for other meshes, balls, smooth
+                              frusta and cells); location 1 the
                               world-space unit shading normal, facing the viewer, encoded rgb = n · 0.5 +
                               0.5 (a = 1) for UNORM and float attachments alike; and the exact depth.
                               Cells in REFLECT / REFRACT modes write their first hit's material and normal

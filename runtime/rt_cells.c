@@ -202,7 +202,7 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     o->cells = c;
     r = read_grid(rt, f, id, ci[0], c);
     if (r == MESO_OK)
-        r = mesoi_mesh_upload(rt, f, id, o);
+        r = mesoi_mesh_upload(rt, f, id, 0, o);
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
     if (r == MESO_OK) {
         const meso_chunk_info* tc = meso_file_chunk(f, (uint32_t)ci[1]);

@@ -17,6 +17,7 @@ typedef struct mesoi_object {
     struct mesoi_cells* cells;   /* MESO_OBJECT_CELLS only (vao/buffer: its base mesh) */
     GLsizei index_count;
     uint64_t indices_offset;
+    int vertex_colours; /* MESO_OBJECT_MESH: a VCOL is in the buffer (attribute 2) */
     float bbox_min[3], bbox_max[3];
     struct mesoi_levels* levels; /* meso_rt_load_object_levels: the levels, each its own slot (rt_levels.c);
                                     such an object has no GL resources of its own */
@@ -380,7 +381,9 @@ void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions
  * at attribute 0, normals at 1, the chunk's own layout). Cells use it for
  * their base mesh. */
-meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
+/* colours: also the VCOL at the MESH's lod, when there is one (a mesh or
+ * stand-in draw; a cells object's base mesh takes none). */
+meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int colours, mesoi_object* o);
 meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass); /* builds the pass's program */
 meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count);

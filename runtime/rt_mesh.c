@@ -7,7 +7,11 @@
  * The decoded MESH chunk is uploaded as it is: its positions, normals and
  * indices arrays sit at 16-byte aligned offsets inside the chunk
  * (FORMAT.md), so one buffer serves as vertex and index buffer and the
- * attribute pointers are the chunk's own offsets. No repacking.
+ * attribute pointers are the chunk's own offsets. No repacking. A stand-in
+ * level's vertex colours (VCOL: sRGB albedo and occlusion per vertex, the
+ * appearance the baker averaged over each vertex's part of the finer
+ * surface) follow the mesh in the same buffer; without them the mesh is
+ * drawn with the draw's albedo.
  */
 #include "rt_internal.h"
 #include "shaders_embedded.h"
@@ -39,7 +43,7 @@ meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass)
     return mesh_program(rt, pass) ? MESO_OK : MESO_ERR_GL;
 }
 
-meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o)
+meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int colours, mesoi_object* o)
 {
     const int32_t ci = mesoi_find_chunk(rt, f, MESO_CHUNK_MESH, object_id);
     if (ci < 0) {
@@ -65,6 +69,25 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
         mesoi_rt_free(rt, data);
         return MESO_ERR_UNSUPPORTED;
     }
+    /* The vertex colours (FORMAT.md 7.3 VCOL) go into the same buffer,
+     * after the mesh at the next multiple of 16. One that does not fit the
+     * mesh (a file not validated in full) is not drawn, and said. */
+    void* vcol = NULL;
+    size_t vcol_size = 0;
+    const int32_t vi = colours ? meso_file_find_vertex_colours(f, object_id, rt->load_lod) : -1;
+    if (vi >= 0) {
+        const meso_chunk_info* vc = meso_file_chunk(f, (uint32_t)vi);
+        if (vc->dtype != MESO_DTYPE_U8 || vc->components != 4 || vc->dims[0] != mv.layout.vertex_count ||
+            vc->dims[1] != 1 || vc->dims[2] != 1) {
+            mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                      "object %u: VCOL (chunk %d) is not U8 x 4 for each of the MESH's %u vertices; drawn without it",
+                      object_id, (int)vi, mv.layout.vertex_count);
+        } else if ((r = mesoi_read_whole(rt, f, vi, &vcol, &vcol_size)) != MESO_OK) {
+            mesoi_rt_free(rt, data);
+            return r;
+        }
+    }
+    const size_t vcol_offset = (size + 15) & ~(size_t)15, total = vcol ? vcol_offset + vcol_size : size;
     mesoi_gl* gl = &rt->gl;
     GLint prev_vao = 0, prev_array = 0, stored = 0;
     gl->GetIntegerv(GL_VERTEX_ARRAY_BINDING, &prev_vao);
@@ -73,22 +96,31 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
     gl->GenBuffers(1, &o->buffer);
     gl->BindVertexArray(o->vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, o->buffer);
-    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)size, data, GL_STATIC_DRAW);
+    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)total, vcol ? NULL : data, GL_STATIC_DRAW);
+    if (vcol) {
+        gl->BufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)size, data);
+        gl->BufferSubData(GL_ARRAY_BUFFER, (GLintptr)vcol_offset, (GLsizeiptr)vcol_size, vcol);
+    }
     gl->GetBufferParameteriv(GL_ARRAY_BUFFER, GL_BUFFER_SIZE, &stored);
     gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, o->buffer);
     gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.positions_offset);
     gl->EnableVertexAttribArray(0);
     gl->VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.normals_offset);
     gl->EnableVertexAttribArray(1);
+    if (vcol) {
+        gl->VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, 4, (const void*)(uintptr_t)vcol_offset);
+        gl->EnableVertexAttribArray(2);
+    }
     gl->BindVertexArray((GLuint)prev_vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, (GLuint)prev_array);
     mesoi_rt_free(rt, data);
+    mesoi_rt_free(rt, vcol);
     /* No store (out of memory) shows in the buffer's size; the host's GL
      * error queue is read only on request. */
     const GLenum e = rt->check_gl_errors ? gl->GetError() : GL_NO_ERROR;
-    if ((size_t)stored != size || e != GL_NO_ERROR) {
+    if ((size_t)stored != total || e != GL_NO_ERROR) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "uploading object %u: %zu-byte buffer (GL error 0x%04x)",
-                  object_id, size, e);
+                  object_id, total, e);
         gl->DeleteVertexArrays(1, &o->vao);
         gl->DeleteBuffers(1, &o->buffer);
         o->vao = o->buffer = 0;
@@ -96,6 +128,7 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, mes
     }
     o->index_count = (GLsizei)mv.layout.index_count;
     o->indices_offset = mv.layout.indices_offset;
+    o->vertex_colours = vcol != NULL;
     return MESO_OK;
 }
 
@@ -139,6 +172,7 @@ meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_des
     gl->UniformMatrix4fv(u[MESOI_U_proj], 1, GL_FALSE, d->proj);
     gl->UniformMatrix4fv(u[MESOI_U_model], 1, GL_FALSE, ds.model);
     gl->Uniform3fv(u[MESOI_U_light_dir], 1, light);
+    gl->Uniform1i(u[MESOI_U_has_color], o->vertex_colours);
     gl->BindVertexArray(o->vao);
     if (inst)
         gl->DrawElementsInstanced(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT,

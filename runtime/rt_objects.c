@@ -92,7 +92,7 @@ meso_result mesoi_load_slot(meso_rt* rt, meso_file* f, const meso_object_record*
     if (!o)
         return MESO_ERR_OUT_OF_MEMORY;
     rt->load_lod = lod;
-    const meso_result r = kind == MESO_OBJECT_MESH     ? mesoi_mesh_upload(rt, f, rec->id, o)
+    const meso_result r = kind == MESO_OBJECT_MESH     ? mesoi_mesh_upload(rt, f, rec->id, 1, o)
                           : kind == MESO_OBJECT_SHELL  ? mesoi_shell_load(rt, f, rec->id, o)
                           : kind == MESO_OBJECT_FRUSTA ? mesoi_frusta_load(rt, f, rec->id, o)
                                                        : mesoi_cells_load(rt, f, rec->id, o);

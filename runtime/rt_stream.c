@@ -166,12 +166,14 @@ uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
 
 /* Whether chunk i is one the level draws and the loader reads through
  * mesoi_read_whole (FORMAT.md §7.10: per type the smallest lod >= the
- * level's; a MESH stand-in reads MESH alone; TILE and MEMB of a CELLS level
+ * level's; a MESH stand-in reads MESH and the VCOL at its lod; TILE and MEMB of a CELLS level
  * come from the cells check) — the chunks meso_file_levels counts. */
 static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint32_t i)
 {
     if (c->object != q->object)
         return 0;
+    if (c->type == MESO_CHUNK_VCOL) /* a stand-in's vertex colours, at its MESH's own lod */
+        return q->form == MESO_LEVEL_MESH && meso_file_find_vertex_colours(q->file, q->object, q->lod) == (int32_t)i;
     if (q->form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH)
         return 0;
     if (q->kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH)

@@ -46,7 +46,9 @@ static const char* const usage_cells =
     "      --voxelizer V       auto (default): parity for closed meshes, else winding\n"
     "                          parity, vdb: exact ray parity (closed meshes only; 'vdb' is an alias:\n"
     "                          the exact path replaced OpenVDB, which misclassifies near the surface)\n"
-    "                          winding: generalized winding number (open or defective meshes)\n"
+    "                          winding: generalized winding number (open or defective meshes)\n";
+/* The rest (one string would pass the 4095 characters C99 promises). */
+static const char* const usage_cells_levels =
     "Levels of detail:\n"
     "      --levels auto|N     auto (default): native coarser levels first, the tile map halved\n"
     "                          each level (down to 4 voxels a tile edge; each cell keeps its tag,\n"
@@ -57,13 +59,14 @@ static const char* const usage_cells =
     "                          faces drawn, both ways (empty cells carve below the mesh); then the\n"
     "                          base mesh's simplified levels (meshoptimizer, as mesobake mesh\n"
     "                          --levels auto), each with the base's error plus its own (LODS).\n"
-    "                          N (1..9): at most N levels; 1 = level 0 only (no LODS chunk),\n"
+    "                          Every mesh level carries the cells' colours around each vertex\n"
+    "                          (VCOL). N (1..9): at most N levels; 1 = level 0 only (no LODS chunk),\n"
     "                          2 = the base mesh only, then native levels, then simplified ones\n"
     "Other:\n"
     "  -j, --threads N         threads (default: all cores); the output does not depend on it\n"
     "      --report FILE       the bake report as JSON: tiles, split_cells, cells_inside,\n"
     "                          cells_outside, cells_intersected, bytes, seconds_total, voxelizer,\n"
-    "                          levels (lod, form, error, triangles, mesh_bytes), ...\n"
+    "                          levels (lod, form, error, triangles, mesh_bytes, colour_bytes), ...\n"
     MEMORY_OPTION_HELP
     "  -v, --verbose           one line per stage on stderr\n"
     "  -h, --help              this text\n";
@@ -86,7 +89,8 @@ static int parse_args(int argc, char** argv, cells_args* a)
         const char* s = argv[i];
         const char* v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(s, "-h") || !strcmp(s, "--help")) {
-            print_help(usage_cells);
+            fputs(usage_cells, stdout);
+            print_help(usage_cells_levels);
             return -1;
         } else if (!strcmp(s, "-v") || !strcmp(s, "--verbose")) {
             verbose = 1;
