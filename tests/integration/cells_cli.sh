@@ -43,6 +43,17 @@ for m in sphere spot_low_resolution torus; do
   check "$m: info summarises CELL" sh -c "'$inspect' info '$tmp/$m.meso' | grep -q 'CELL: 6x6x6 tiles of 16^3 voxels'"
 done
 
+# Stand-in colours (FORMAT.md 7.3 VCOL): info's Levels table names a VCOL
+# for every mesh level and none for a native one, and so does the JSON.
+"$inspect" info "$tmp/spot_low_resolution.meso" |
+  awk '/^Levels:/ { on = 1; next } on && /^$/ { exit } on && $1 == "1"' >"$tmp/levels.txt"
+check "spot: mesh levels have vertex colours" sh -c "awk '\$3 == \"mesh\"' '$tmp/levels.txt' | grep -q . &&
+  ! awk '\$3 == \"mesh\" && \$8 != \"VCOL\"' '$tmp/levels.txt' | grep -q ."
+check "spot: native levels have none" sh -c "! awk '\$3 == \"native\" && \$8 != \"-\"' '$tmp/levels.txt' | grep -q ."
+"$inspect" info --format json "$tmp/spot_low_resolution.meso" >"$tmp/levels.json"
+check "spot: JSON levels[].vertex_colours for every level" test \
+  "$(grep -c '"vertex_colours":' "$tmp/levels.json")" = "$(grep -c '"prefix_bytes":' "$tmp/levels.json")"
+
 # 2. Determinism: -j 1 and -j 2 give the same bytes.
 "$bake" cells -i "$data/spot_low_resolution.obj" -o "$tmp/j1.meso" --tiles 6 --tile-res 16 -j 1 >/dev/null 2>&1
 check "-j 1 = -j 2 byte for byte" cmp -s "$tmp/j1.meso" "$tmp/spot_low_resolution.meso"

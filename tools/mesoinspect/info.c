@@ -303,8 +303,8 @@ static void print_text(info_state* s, const meso_object_record* objs, uint32_t n
 
         /* Levels of detail: one line per object and level (FORMAT.md §7.10). */
         printf("\nLevels:\n");
-        mi_table_init(&t, 7, (1u << 0) | (1u << 1) | (1u << 3) | (1u << 4) | (1u << 5) | (1u << 6));
-        const char* lhead[7] = {"object", "lod", "form", "error", "triangles", "bytes", "prefix_bytes"};
+        mi_table_init(&t, 8, (1u << 0) | (1u << 1) | (1u << 3) | (1u << 4) | (1u << 5) | (1u << 6));
+        const char* lhead[8] = {"object", "lod", "form", "error", "triangles", "bytes", "prefix_bytes", "colours"};
         mi_table_row(&t, lhead);
         for (uint32_t i = 0; i < nobj; ++i) {
             uint32_t nl = 0;
@@ -319,7 +319,14 @@ static void print_text(info_state* s, const meso_object_record* objs, uint32_t n
                     snprintf(tri, sizeof(tri), "%lld", (long long)nt);
                 snprintf(bytes, sizeof(bytes), "%llu", (unsigned long long)lv[k].bytes);
                 snprintf(prefix, sizeof(prefix), "%llu", (unsigned long long)lv[k].prefix_bytes);
-                const char* row[7] = {id, lod, form_name(lv[k].rec.form), err, tri, bytes, prefix};
+                /* a stand-in's vertex colours (FORMAT.md 7.3 VCOL): "-" for none or a native level */
+                const int32_t vc = lv[k].rec.form == MESO_LEVEL_MESH
+                                       ? meso_file_find_vertex_colours(f, objs[i].id, lv[k].rec.lod)
+                                       : -1;
+                char colours[24] = "-";
+                if (vc >= 0)
+                    snprintf(colours, sizeof(colours), "VCOL %d", (int)vc);
+                const char* row[8] = {id, lod, form_name(lv[k].rec.form), err, tri, bytes, prefix, colours};
                 mi_table_row(&t, row);
             }
             free(lv);
@@ -440,6 +447,13 @@ static cJSON* build_json(info_state* s, const meso_object_record* objs, uint32_t
             cJSON_AddNumberToObject(jl, "error", (double)lv[k].rec.error);
             cJSON_AddNumberToObject(jl, "bytes", (double)lv[k].bytes);
             cJSON_AddNumberToObject(jl, "prefix_bytes", (double)lv[k].prefix_bytes);
+            /* the chunk of a stand-in's vertex colours (FORMAT.md 7.3), or null */
+            const int32_t vc = lv[k].rec.form == MESO_LEVEL_MESH ? meso_file_find_vertex_colours(f, o->id, lv[k].rec.lod)
+                                                                 : -1;
+            if (vc >= 0)
+                cJSON_AddNumberToObject(jl, "vertex_colours", vc);
+            else
+                cJSON_AddNullToObject(jl, "vertex_colours");
             cJSON_AddItemToObject(jl, "bbox_min", vec3(lv[k].rec.bbox_min));
             cJSON_AddItemToObject(jl, "bbox_max", vec3(lv[k].rec.bbox_max));
             const int64_t nt = level_triangles(f, o->id, lv[k].rec.lod);
