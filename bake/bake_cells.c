@@ -372,8 +372,9 @@ static meso_result make_levels(mesoi_bake_run* run, const meso_bake_cells_option
     if (r == MESO_OK) /* the rest for the stand-ins: at most MAX levels in all (auto), or --levels */
         r = mesoi_standin_levels_build(m, se.bound, (a->levels ? a->levels : (int)MESOI_STANDIN_MAX_LEVELS) - (int)nn,
                                        run->common.threads, out, err);
-    /* Their colours: what the voxel faces show, sampled half a voxel apart
-     * (FORMAT.md §7.3 VCOL). */
+    /* Their colours: what the voxel faces show (FORMAT.md §7.3 VCOL),
+     * sampled half a voxel apart where a triangle is small enough, at most
+     * 2 x 2 sub-triangles a triangle (cells_standin.c says why). */
     const double tv = meso_seconds();
     meso_cells_colours colours = {.colr = cc->colr, .grid = cg->rgba};
     memcpy(colours.grid_dims, cg->dims, sizeof colours.grid_dims);

@@ -869,6 +869,20 @@ static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_err
         }
         out->chunk[k] = p->chain_chunk[k]; /* the bytes move to `out` */
         p->chain_chunk[k].data = NULL;
+        /* Its positions and triangles, for its vertex colours (the
+         * appearance reads nothing else); a mesh left empty gets none. */
+        meso_mesh_view mv;
+        const meso_mesh_chunk* mc = &out->chunk[k];
+        if (mc->encoding == MESO_ENCODING_RAW && meso_mesh_parse(mc->data, mc->size, &mv, NULL) == MESO_OK) {
+            const uint32_t nv = mv.layout.vertex_count, ni = mv.layout.index_count;
+            c->mesh.positions = malloc(sizeof(float) * 3 * (size_t)nv);
+            c->mesh.indices = malloc(sizeof(uint32_t) * (ni ? (size_t)ni : 1));
+            if (!c->mesh.positions || !c->mesh.indices)
+                return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "update: out of memory");
+            memcpy(c->mesh.positions, mv.positions, sizeof(float) * 3 * (size_t)nv);
+            memcpy(c->mesh.indices, mv.indices, sizeof(uint32_t) * (size_t)ni);
+            c->mesh.vertex_count = nv;
+        }
     }
     p->chain_count = 0;
     return MESO_OK;
@@ -1080,14 +1094,15 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                                &standins, err);
             }
             standins.e0 = s->e0; /* sampled for e0_sampling, stored with e0 */
-            /* With a colour, the stand-ins' vertex colours (FORMAT.md §7.3
-             * VCOL): without one, level 0 shows the draw's albedo, which a
-             * stand-in without VCOL shows too. */
+            /* The stand-ins' vertex colours (FORMAT.md §7.3 VCOL): with a
+             * colour, what it shows and the occlusion; without one the
+             * occlusion alone (level 0 shows the draw's albedo, darkened
+             * where the surface is low in the shell). */
             mesoi_shell_colours sc;
             mesoi_appearance shows;
-            if (r == MESO_OK && s->col.rgba && base.uvs && !a->frames) {
+            if (r == MESO_OK && a->texture && base.uvs && !a->frames) {
                 const double tc = meso_seconds();
-                mesoi_shell_appearance(&base, &s->tx.fn, &s->col, (const double[2]){cr.scale[0], cr.scale[1]}, &sc,
+                mesoi_shell_appearance(&base, &s->tx.fn, s->col.rgba ? &s->col : NULL, (const double[2]){cr.scale[0], cr.scale[1]}, &sc,
                                        &shows);
                 r = mesoi_standin_levels_appearance(&standins, &base, 0.25 * meso_mesh_mean_edge(&base), &shows,
                                                     s->run.common.threads, err);

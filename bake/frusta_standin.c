@@ -275,17 +275,26 @@ static void frusta_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t 
     for (int k = 0; k < 3; ++k)
         for (int j = 0; j < 2; ++j)
             uv[j] += b[k] * c->st->uv[2 * (size_t)ix[k] + (size_t)j];
-    const double s = uv[0] * r->u_scale, tt = r->v_offset + uv[1] * r->v_scale;
-    map_bilinear(c->color, s, tt, out);
+    /* A cap's point (v outside [0, 1]: frusta_tessellation.h) shows the
+     * colour at its end's relief coordinates, and on a relief frustum
+     * occlusion 0.25: it lies inside the cone, below the relief layer, so
+     * the shader's w there is negative, clamped to 0. */
+    const int cap = uv[1] < 0 || uv[1] > 1;
+    const double v = cap ? (uv[1] < 0 ? 0 : 1) : uv[1];
+    const double s = uv[0] * r->u_scale, tt = r->v_offset + v * r->v_scale;
+    if (c->color)
+        map_bilinear(c->color, s, tt, out);
+    else
+        out[0] = out[1] = out[2] = 1.0f; /* the draw's albedo */
     if (c->relief && r->relief_depth > 0)
-        out[3] = (float)(0.25 + 0.75 * fmin(fmax(meso_texfn_sample(c->relief, s, tt, 0), 0), 1));
+        out[3] = cap ? 0.25f : (float)(0.25 + 0.75 * fmin(fmax(meso_texfn_sample(c->relief, s, tt, 0), 0), 1));
 }
 
 void meso_frusta_standin_appearance(const meso_frusta_object* obj, const meso_frusta_standin* st,
     const meso_texfn* relief, const meso_color_map* color, meso_frusta_colours* ctx, mesoi_appearance* out)
 {
     double sum[3] = {0, 0, 0};
-    const size_t n = (size_t)color->width * color->height;
+    const size_t n = color ? (size_t)color->width * color->height : 0;
     for (size_t i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k)
             sum[k] += srgb_byte(color->rgba[4 * i + (size_t)k]);
@@ -294,5 +303,5 @@ void meso_frusta_standin_appearance(const meso_frusta_object* obj, const meso_fr
         ctx->mean[k] = (float)(n ? sum[k] / (double)n : 0.5);
     /* Asking is cheap (two bilinear lookups): 16 x 16 sub-triangles at
      * most, as a triangle may span many texels of the map. */
-    *out = (mesoi_appearance){.at = frusta_at, .ctx = ctx, .subdivisions = 16};
+    *out = (mesoi_appearance){.at = frusta_at, .ctx = ctx, .subdivisions = 16, .occlusion_only = color == NULL};
 }

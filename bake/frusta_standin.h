@@ -94,13 +94,17 @@ void meso_frusta_standin_free(meso_frusta_standin* s);
  * point shows the colour map bilinear (wrapping, in linear light) at the
  * relief coordinates (s, t) = (u u_scale, v_offset + v v_scale) of its
  * (u, v), with occlusion 0.25 + 0.75 h(s, t) on a frustum with a relief
- * (1 without); a cap's point shows its rim's; a ball the map's mean colour,
- * occlusion 1. `ctx` is filled here and borrowed by `out` with the rest. */
+ * (1 without); a cap's point the colour at its end, occlusion 0.25 on a
+ * relief frustum (it lies below the relief layer, w < 0) and 1 without; a
+ * ball the map's mean colour, occlusion 1. `color` NULL (a relief without a colour map): level 0 shows
+ * the draw's albedo darkened by the relief's occlusion, and `out` says the
+ * occlusion alone (occlusion_only; bake_frusta.c does not use it, why is
+ * said there). `ctx` is filled here and borrowed by `out` with the rest. */
 typedef struct meso_frusta_colours {
     const meso_frusta_object* obj;
     const meso_frusta_standin* st;
     const meso_texfn* relief; /* NULL: none */
-    const meso_color_map* color;
+    const meso_color_map* color; /* NULL: none */
     float mean[3];            /* the map's mean linear colour */
 } meso_frusta_colours;
 void meso_frusta_standin_appearance(const meso_frusta_object* obj, const meso_frusta_standin* st,

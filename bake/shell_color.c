@@ -321,7 +321,10 @@ static void shell_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t
         w = lo;
     }
     const double cc[3] = {st[0] * c->scale[0], st[1] * c->scale[1], w};
-    colr_at(c->col, cc, out);
+    if (c->col)
+        colr_at(c->col, cc, out);
+    else
+        out[0] = out[1] = out[2] = 1.0f; /* the draw's albedo */
     out[3] = (float)(0.25 + 0.75 * w);
 }
 
@@ -331,5 +334,6 @@ void mesoi_shell_appearance(const meso_mesh* base, const struct meso_texfn* fn, 
     *ctx = (mesoi_shell_colours){.base = base, .fn = fn, .col = col, .scale = {scale[0], scale[1]}};
     /* A height field is two bilinear lookups a point, a volume's march some
      * dozens: 8 x 8 and 4 x 4 sub-triangles at most. */
-    *out = (mesoi_appearance){.at = shell_at, .ctx = ctx, .subdivisions = fn->kind == MESO_TEXFN_HEIGHT ? 8 : 4};
+    *out = (mesoi_appearance){.at = shell_at, .ctx = ctx, .subdivisions = fn->kind == MESO_TEXFN_HEIGHT ? 8 : 4,
+                              .occlusion_only = col == NULL};
 }

@@ -61,7 +61,9 @@ void mesoi_shell_color_free(mesoi_shell_color* c);
  * linear light at (s scale[0], t' scale[1], w), wrapping in s and t',
  * clamped in w) and occlusion 0.25 + 0.75 w; a column with no solid shows
  * nothing (the point is left out of the means). `base` has the MESH's
- * uvs. ctx is filled here and borrowed by `out` with the rest. */
+ * uvs. `col` NULL: the shell has no colour, level 0 shows the draw's albedo
+ * darkened by the occlusion, and `out` says the occlusion alone
+ * (occlusion_only). ctx is filled here and borrowed by `out` with the rest. */
 typedef struct mesoi_shell_colours {
     const meso_mesh* base;
     const struct meso_texfn* fn;

@@ -28,6 +28,16 @@
 
 enum { DEFAULT_SUBDIVISIONS = 4, SUMS = 5 }; /* per corner: w occ albedo (3), w occ, w */
 
+/* About this many samples a level at most: a large mesh's triangles get
+ * fewer sub-triangles, at least 2 x 2 on the base stand-in (about 24
+ * samples around a vertex of what the kind shows) and 1 on a simplified
+ * level (which reads the base stand-in's colours, smooth already: about 6
+ * around a vertex). The colours of a 94k-triangle brick shell's 7
+ * stand-ins took 2.4 s with 8 x 8 everywhere (README, "Stand-ins show
+ * their object's colours"). */
+#define SAMPLE_BUDGET_BASE 131072.0
+#define SAMPLE_BUDGET_SIMPLIFIED 32768.0
+
 static double edge(const float* a, const float* b)
 {
     const double d[3] = {(double)a[0] - b[0], (double)a[1] - b[1], (double)a[2] - b[2]};
@@ -46,7 +56,7 @@ static int grid_copy(const mesoi_tri_grid* g, mesoi_tri_grid* out)
 }
 
 /* Triangle t's sums over its sub-triangle centroids, SUMS per corner. */
-static void triangle_sums(const meso_mesh* m, uint32_t t, double spacing, const mesoi_appearance* a,
+static void triangle_sums(const meso_mesh* m, uint32_t t, double spacing, int most, const mesoi_appearance* a,
                           mesoi_tri_grid* mine_a, mesoi_tri_grid* mine_src, double* s)
 {
     const uint32_t* ix = m->indices + 3 * (size_t)t;
@@ -54,7 +64,6 @@ static void triangle_sums(const meso_mesh* m, uint32_t t, double spacing, const 
                          m->positions + 3 * (size_t)ix[2]};
     const double longest = fmax(edge(P[0], P[1]), fmax(edge(P[1], P[2]), edge(P[2], P[0])));
     const double q = spacing > 0 ? ceil(longest / spacing) : 1;
-    const int most = a->subdivisions > 0 ? a->subdivisions : DEFAULT_SUBDIVISIONS;
     const int n = q < 1 || !isfinite(q) ? 1 : q > most ? most : (int)q;
     memset(s, 0, sizeof(double) * 3 * SUMS);
     /* The n² sub-triangles of equal area: (i, j) upright with centroid
@@ -104,6 +113,59 @@ static void triangle_sums(const meso_mesh* m, uint32_t t, double spacing, const 
         s[k] *= area;
 }
 
+/* Copies of one vertex (the same position and normal: a uv seam splits a
+ * smooth surface's vertices, a crease's copies have other normals) pool
+ * their sums, so the two sides of a seam get one colour, not each its own
+ * side's. In position order, ties by index: the same sums whatever the
+ * order the copies come in. Returns 0 when out of memory. */
+typedef struct vkey {
+    float p[6];
+    uint32_t v;
+} vkey;
+
+static int vkey_cmp(const void* a, const void* b)
+{
+    const vkey *x = a, *y = b;
+    for (int k = 0; k < 6; ++k)
+        if (x->p[k] != y->p[k])
+            return x->p[k] < y->p[k] ? -1 : 1;
+    return (x->v > y->v) - (x->v < y->v);
+}
+
+static int same_place(const vkey* a, const vkey* b)
+{
+    for (int k = 0; k < 6; ++k)
+        if (a->p[k] != b->p[k])
+            return 0;
+    return 1;
+}
+
+static int pool_copies(const meso_mesh* m, double* acc)
+{
+    vkey* keys = malloc(sizeof *keys * (m->vertex_count ? m->vertex_count : 1));
+    if (!keys)
+        return 0;
+    for (uint32_t v = 0; v < m->vertex_count; ++v) {
+        for (int k = 0; k < 3; ++k) {
+            keys[v].p[k] = m->positions[3 * (size_t)v + k];
+            keys[v].p[3 + k] = m->normals ? m->normals[3 * (size_t)v + k] : 0.0f;
+        }
+        keys[v].v = v;
+    }
+    qsort(keys, m->vertex_count, sizeof *keys, vkey_cmp);
+    for (uint32_t i = 0, j; i < m->vertex_count; i = j) {
+        double pooled[SUMS] = {0, 0, 0, 0, 0};
+        for (j = i; j < m->vertex_count && same_place(&keys[j], &keys[i]); ++j)
+            for (int k = 0; k < SUMS; ++k)
+                pooled[k] += acc[SUMS * (size_t)keys[j].v + k];
+        if (j - i > 1)
+            for (uint32_t q = i; q < j; ++q)
+                memcpy(acc + SUMS * (size_t)keys[q].v, pooled, sizeof pooled);
+    }
+    free(keys);
+    return 1;
+}
+
 meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const mesoi_appearance* a,
                                     const mesoi_tri_grid* source_grid, int threads, float* shows, meso_error* err)
 {
@@ -112,6 +174,12 @@ meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const me
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
     int bad = 0;
     const int nth = meso_bake_thread_count(threads);
+    /* The most sub-triangles along an edge: the kind's, within the budget. */
+    const int kind_most = a->subdivisions > 0 ? a->subdivisions : DEFAULT_SUBDIVISIONS;
+    const double budget = source_grid ? SAMPLE_BUDGET_SIMPLIFIED : SAMPLE_BUDGET_BASE;
+    const int least = source_grid ? 1 : 2;
+    const double fit = floor(sqrt(budget / (m->triangle_count ? m->triangle_count : 1)));
+    const int most = fit < least ? (kind_most < least ? kind_most : least) : fit < kind_most ? (int)fit : kind_most;
 #ifdef _OPENMP
 #pragma omp parallel num_threads(nth) reduction(| : bad)
 #else
@@ -126,7 +194,7 @@ meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const me
 #endif
         for (int64_t t = 0; t < (int64_t)m->triangle_count; ++t)
             if (ok_a && ok_s)
-                triangle_sums(m, (uint32_t)t, spacing, a, a->grid ? &ga : NULL, source_grid ? &gs : NULL,
+                triangle_sums(m, (uint32_t)t, spacing, most, a, a->grid ? &ga : NULL, source_grid ? &gs : NULL,
                               sums + 3 * SUMS * (size_t)t);
         if (a->grid)
             free(ga.stamp);
@@ -142,11 +210,17 @@ meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const me
         for (int c = 0; c < 3; ++c)
             for (int k = 0; k < SUMS; ++k)
                 acc[SUMS * (size_t)m->indices[3 * (size_t)t + c] + k] += sums[3 * SUMS * (size_t)t + SUMS * c + k];
+    if (!pool_copies(m, acc)) {
+        free(acc);
+        free(sums);
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+    }
     for (uint32_t v = 0; v < m->vertex_count; ++v) {
         const double* s = acc + SUMS * (size_t)v;
         float* o = shows + 4 * (size_t)v;
-        /* A vertex on no triangle, or on only degenerate ones: mid grey,
-         * not darkened; fully occluded: black. */
+        /* A vertex on no triangle, or on only degenerate ones, or whose
+         * every sample showed nothing (the empty columns of a volume
+         * shell): mid grey, not darkened; fully occluded: black. */
         for (int k = 0; k < 3; ++k)
             o[k] = (float)(s[3] > 0 ? s[k] / s[3] : s[4] > 0 ? 0 : 0.5);
         o[3] = (float)(s[4] > 0 ? s[3] / s[4] : 1);
@@ -156,13 +230,14 @@ meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const me
     return MESO_OK;
 }
 
-void mesoi_appearance_rgba8(const float* shows, uint32_t vertex_count, uint8_t* rgba)
+void mesoi_appearance_encode(const float* shows, uint32_t vertex_count, int components, uint8_t* out)
 {
     for (size_t v = 0; v < vertex_count; ++v) {
         const float* s = shows + 4 * v;
-        uint8_t* o = rgba + 4 * v;
-        for (int k = 0; k < 3; ++k)
-            o[k] = (uint8_t)lrint(255 * meso_linear_to_srgb(s[k]));
-        o[3] = (uint8_t)lrint(255 * (s[3] < 0 ? 0 : s[3] > 1 ? 1 : s[3]));
+        uint8_t* o = out + (size_t)components * v;
+        if (components == 4)
+            for (int k = 0; k < 3; ++k)
+                o[k] = (uint8_t)lrint(255 * meso_linear_to_srgb(s[k]));
+        o[components - 1] = (uint8_t)lrint(255 * (s[3] < 0 ? 0 : s[3] > 1 ? 1 : s[3]));
     }
 }

@@ -28,6 +28,8 @@ struct mesoi_appearance {
     const mesoi_tri_grid* grid; /* a grid `at` queries, or NULL */
     const void* ctx;
     int subdivisions;           /* the most sub-triangles along an edge (below); 0: 4 */
+    int occlusion_only;         /* 1: level 0 shows the draw's albedo (no colour of its own), darkened by
+                                   the occlusion: VCOL holds the occlusion alone (U8 x 1) */
 };
 
 /* Per vertex of `m`, what `a` shows around it (4 floats per vertex, as
@@ -37,7 +39,9 @@ struct mesoi_appearance {
  * mesh shader multiplies, is the mean of the kind's albedo × occlusion. The
  * integrals are sums over the centroids of n² equal sub-triangles of each
  * triangle, n = its longest edge / `spacing` rounded up, 1 to
- * a->subdivisions (an appearance that is cheap to ask takes more). With
+ * a->subdivisions (an appearance that is cheap to ask takes more), and to
+ * about 2^17 samples for the level (but not below 2; a simplified level:
+ * 2^15, not below 1). With
  * source_grid non-NULL (a grid over the base stand-in), `m` is a
  * simplified level: each of its points takes what `a` shows at the nearest
  * point of the base stand-in. threads <= 0: all cores; the result does not
@@ -46,8 +50,9 @@ meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const me
                                     const mesoi_tri_grid* source_grid, int threads, float* shows,
                                     meso_error* err);
 
-/* The same as VCOL stores it (FORMAT.md §7.3): RGBA8, rgb the sRGB
- * encoding of the albedo, a 255 × the occlusion. */
-void mesoi_appearance_rgba8(const float* shows, uint32_t vertex_count, uint8_t* rgba);
+/* The same as VCOL stores it (FORMAT.md §7.3): components 4, RGBA8 (rgb
+ * the sRGB encoding of the albedo, a 255 × the occlusion); components 1,
+ * the occlusion byte alone. */
+void mesoi_appearance_encode(const float* shows, uint32_t vertex_count, int components, uint8_t* out);
 
 #endif /* MESO_STANDIN_APPEARANCE_H */

@@ -64,10 +64,13 @@ meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso
                                             const mesoi_appearance* a, int threads, meso_error* err)
 {
     uint32_t most = base->vertex_count;
+    const int nc = lv->vcol_components = a->occlusion_only ? 1 : 4;
     for (uint32_t S = 0; S < lv->count; ++S) {
         const meso_mesh* m = S == 0 ? base : &lv->chain[S - 1].mesh;
+        if (!m->vertex_count || !m->positions || !m->indices)
+            continue; /* a kept chain level that could not be read back: no colours */
         most = m->vertex_count > most ? m->vertex_count : most;
-        if (!(lv->vcol[S] = malloc(4 * (size_t)m->vertex_count)))
+        if (!(lv->vcol[S] = malloc((size_t)nc * m->vertex_count)))
             return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
     }
     float* shows = malloc(sizeof(float) * 4 * (size_t)base->vertex_count);
@@ -81,7 +84,7 @@ meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso
     }
     meso_result r = mesoi_vertex_appearance(base, spacing, a, NULL, threads, shows, err);
     if (r == MESO_OK)
-        mesoi_appearance_rgba8(shows, base->vertex_count, lv->vcol[0]);
+        mesoi_appearance_encode(shows, base->vertex_count, nc, lv->vcol[0]);
     int built = 0;
     mesoi_tri_grid g;
     if (r == MESO_OK && lv->count > 1) { /* the simplified levels: a grid over the base mesh in double */
@@ -96,8 +99,10 @@ meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso
     const mesoi_appearance from_base = {.at = base_at, .ctx = ctx, .subdivisions = 8};
     for (uint32_t S = 1; r == MESO_OK && S < lv->count; ++S) {
         const meso_mesh* m = &lv->chain[S - 1].mesh;
+        if (!lv->vcol[S])
+            continue;
         if ((r = mesoi_vertex_appearance(m, spacing, &from_base, &g, threads, level, err)) == MESO_OK)
-            mesoi_appearance_rgba8(level, m->vertex_count, lv->vcol[S]);
+            mesoi_appearance_encode(level, m->vertex_count, nc, lv->vcol[S]);
     }
     if (built)
         mesoi_tri_grid_free(&g);
@@ -111,9 +116,10 @@ meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso
 static mesoi_chunk vcol_chunk(const mesoi_standin_levels* lv, uint32_t S, const meso_mesh* m, uint32_t object,
                               uint16_t L)
 {
+    const uint16_t nc = (uint16_t)lv->vcol_components;
     return (mesoi_chunk){.desc = {.type = MESO_CHUNK_VCOL, .object = object, .lod = L, .dtype = MESO_DTYPE_U8,
-                                  .components = 4, .dims = {m->vertex_count, 1, 1}},
-                         .data = lv->vcol[S], .size = 4 * (size_t)m->vertex_count};
+                                  .components = nc, .dims = {m->vertex_count, 1, 1}},
+                         .data = lv->vcol[S], .size = nc * (size_t)m->vertex_count};
 }
 
 size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* base, const mesoi_chunk* base_chunk,

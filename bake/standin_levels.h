@@ -59,9 +59,11 @@ typedef struct mesoi_standin_levels {
     uint8_t lods[MESOI_STANDIN_MAX_LEVELS * MESO_LODS_RECORD_SIZE];
     float error[MESOI_STANDIN_MAX_LEVELS];      /* per level by lod (0 for level 0), as stored */
     uint32_t triangles[MESOI_STANDIN_MAX_LEVELS]; /* per level by lod; native levels: the base mesh's */
-    /* Per stand-in (0 the base mesh, 1.. the chain): its VCOL, RGBA8 per
-     * vertex, or NULL (mesoi_standin_levels_appearance). */
+    /* Per stand-in (0 the base mesh, 1.. the chain): its VCOL, vcol_components
+     * (4: RGBA8, 1: occlusion alone) bytes per vertex, or NULL
+     * (mesoi_standin_levels_appearance). */
     uint8_t* vcol[MESOI_STANDIN_MAX_LEVELS];
+    int vcol_components;
 } mesoi_standin_levels;
 
 /* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base

@@ -114,7 +114,15 @@ int32_t meso_file_find_level(const meso_file* f, uint32_t type, uint32_t object,
 int32_t meso_file_find_vertex_colours(const meso_file* f, uint32_t object, uint16_t lod)
 {
     const int32_t m = meso_file_find_level(f, MESO_CHUNK_MESH, object, lod);
-    return m < 0 ? -1 : meso_file_find(f, MESO_CHUNK_VCOL, object, f->chunks[m].lod);
+    if (m < 0)
+        return -1;
+    /* exactly the MESH's lod (meso_file_find takes lod 65535 for any) */
+    for (uint32_t i = 0; i < f->chunk_count; i++) {
+        const meso_chunk_info* c = &f->chunks[i];
+        if (c->type == MESO_CHUNK_VCOL && c->object == object && c->lod == f->chunks[m].lod)
+            return (int32_t)i;
+    }
+    return -1;
 }
 
 /* Where the chunk's stored bytes end (its padding is not needed to read it). */
@@ -122,9 +130,10 @@ static uint64_t stored_end(const meso_chunk_info* c) { return c->offset + c->sto
 
 /* Bytes and prefix of level `lod` of `object`: the chunks it draws are, per
  * type the object has, the one with the smallest lod >= `lod` (MESH alone
- * for a MESH stand-in, with the VCOL at its own lod if there is one; a
- * frusta object's native levels draw no MESH: its MESH is the stand-in's;
- * native levels draw no VCOL); the prefix also covers the file-wide chunks. */
+ * for a MESH stand-in, with the VCOL at its own lod if there is one, as
+ * every level of a mesh object; a frusta object's native levels draw no
+ * MESH: its MESH is the stand-in's; native levels of the other kinds draw
+ * no VCOL); the prefix also covers the file-wide chunks. */
 static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uint16_t lod, uint16_t form,
                          meso_level_info* out)
 {
@@ -133,9 +142,10 @@ static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uin
         const meso_chunk_info* c = &f->chunks[i];
         if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
             end = stored_end(c) > end ? stored_end(c) : end;
+        const int plain_mesh = form == MESO_LEVEL_MESH || kind == MESO_OBJECT_MESH; /* draws MESH as a mesh */
         if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH && c->type != MESO_CHUNK_VCOL) ||
             (form == MESO_LEVEL_NATIVE && kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH) ||
-            (form == MESO_LEVEL_NATIVE && c->type == MESO_CHUNK_VCOL))
+            (!plain_mesh && c->type == MESO_CHUNK_VCOL))
             continue;
         if ((c->type == MESO_CHUNK_VCOL ? meso_file_find_vertex_colours(f, object, lod)
                                         : meso_file_find_level(f, c->type, object, lod)) != (int32_t)i)

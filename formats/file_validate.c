@@ -224,8 +224,8 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
             return elem_error(c, chunk, err, "U8 x 4");
         return MESO_OK;
     case MESO_CHUNK_VCOL:
-        if (c->dtype != MESO_DTYPE_U8 || c->components != 4 || !flat)
-            return elem_error(c, chunk, err, "U8 x 4, dims N x 1 x 1");
+        if (c->dtype != MESO_DTYPE_U8 || (c->components != 4 && c->components != 1) || !flat)
+            return elem_error(c, chunk, err, "U8 x 4 or U8 x 1, dims N x 1 x 1");
         return MESO_OK;
     default: return MESO_OK;
     }

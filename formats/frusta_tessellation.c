@@ -110,7 +110,7 @@ static double grid_sag(tess_fn fn, const void* ctx, uint32_t nu, uint32_t nv)
 }
 
 /* cap_end: -1 for a lateral grid or a ball (uv = the grid's (u, v)), else
- * the end whose cap this is (uv = (u, end): the rim point's). */
+ * the end whose cap this is (uv = (u, -1) at end 0, (u, 2) at end 1). */
 static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t owner, uint32_t nu, uint32_t nv, int flip,
     int measure, int cap_end)
 {
@@ -146,7 +146,7 @@ static int tess_grid(tess_buf* b, tess_fn fn, const void* ctx, uint32_t owner, u
                 N[k] = (float)(l > 0 ? (flip ? -n[k] : n[k]) / l : 0);
             }
             m->uv[2 * (size_t)m->vertex_count] = (float)u;
-            m->uv[2 * (size_t)m->vertex_count + 1] = (float)(cap_end < 0 ? v : cap_end);
+            m->uv[2 * (size_t)m->vertex_count + 1] = (float)(cap_end < 0 ? v : cap_end ? 2 : -1);
             m->owner[m->vertex_count++] = owner;
         }
     for (uint32_t j = 0; j < nv; ++j)

@@ -46,7 +46,8 @@ typedef struct meso_frusta_tess_mesh {
     float* normals;   /* 3 per vertex, unit (0 where the grid degenerates) */
     uint32_t* owner;  /* per vertex: frustum i (its lateral grid or caps) < count, else ball count + j */
     float* uv;        /* 2 per vertex: its grid's (u, v) (a frustum's as meso_frusta_tess_point takes them,
-                         a ball's latitude-longitude ones); a cap's vertex: (u, end), its rim point's */
+                         a ball's latitude-longitude ones); a cap's vertex: (u, -1) at end 0, (u, 2) at
+                         end 1 (its rim point's u; v outside [0, 1] says it is a cap's) */
     uint32_t* indices;
 } meso_frusta_tess_mesh;
 

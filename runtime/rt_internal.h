@@ -17,7 +17,8 @@ typedef struct mesoi_object {
     struct mesoi_cells* cells;   /* MESO_OBJECT_CELLS only (vao/buffer: its base mesh) */
     GLsizei index_count;
     uint64_t indices_offset;
-    int vertex_colours; /* MESO_OBJECT_MESH: a VCOL is in the buffer (attribute 2) */
+    int vertex_colours; /* MESO_OBJECT_MESH: a VCOL in the buffer (attribute 2): 0 none, 1 albedo and
+                           occlusion, 2 occlusion alone */
     float bbox_min[3], bbox_max[3];
     struct mesoi_levels* levels; /* meso_rt_load_object_levels: the levels, each its own slot (rt_levels.c);
                                     such an object has no GL resources of its own */

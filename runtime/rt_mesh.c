@@ -8,10 +8,10 @@
  * indices arrays sit at 16-byte aligned offsets inside the chunk
  * (FORMAT.md), so one buffer serves as vertex and index buffer and the
  * attribute pointers are the chunk's own offsets. No repacking. A stand-in
- * level's vertex colours (VCOL: sRGB albedo and occlusion per vertex, the
- * appearance the baker averaged over each vertex's part of the finer
- * surface) follow the mesh in the same buffer; without them the mesh is
- * drawn with the draw's albedo.
+ * level's vertex colours (VCOL: sRGB albedo and occlusion per vertex, or
+ * the occlusion alone, the appearance the baker averaged over each
+ * vertex's part of the finer surface) follow the mesh in the same buffer;
+ * without them the mesh is drawn with the draw's albedo, not darkened.
  */
 #include "rt_internal.h"
 #include "shaders_embedded.h"
@@ -77,10 +77,11 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
     const int32_t vi = colours ? meso_file_find_vertex_colours(f, object_id, rt->load_lod) : -1;
     if (vi >= 0) {
         const meso_chunk_info* vc = meso_file_chunk(f, (uint32_t)vi);
-        if (vc->dtype != MESO_DTYPE_U8 || vc->components != 4 || vc->dims[0] != mv.layout.vertex_count ||
-            vc->dims[1] != 1 || vc->dims[2] != 1) {
+        if (vc->dtype != MESO_DTYPE_U8 || (vc->components != 4 && vc->components != 1) ||
+            vc->dims[0] != mv.layout.vertex_count || vc->dims[1] != 1 || vc->dims[2] != 1) {
             mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
-                      "object %u: VCOL (chunk %d) is not U8 x 4 for each of the MESH's %u vertices; drawn without it",
+                      "object %u: VCOL (chunk %d) is not U8 x 4 or x 1 for each of the MESH's %u vertices; drawn "
+                      "without it",
                       object_id, (int)vi, mv.layout.vertex_count);
         } else if ((r = mesoi_read_whole(rt, f, vi, &vcol, &vcol_size)) != MESO_OK) {
             mesoi_rt_free(rt, data);
@@ -107,8 +108,9 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
     gl->EnableVertexAttribArray(0);
     gl->VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 12, (const void*)(uintptr_t)mv.layout.normals_offset);
     gl->EnableVertexAttribArray(1);
+    const GLint nc = vi >= 0 ? (GLint)meso_file_chunk(f, (uint32_t)vi)->components : 0;
     if (vcol) {
-        gl->VertexAttribPointer(2, 4, GL_UNSIGNED_BYTE, GL_TRUE, 4, (const void*)(uintptr_t)vcol_offset);
+        gl->VertexAttribPointer(2, nc, GL_UNSIGNED_BYTE, GL_TRUE, nc, (const void*)(uintptr_t)vcol_offset);
         gl->EnableVertexAttribArray(2);
     }
     gl->BindVertexArray((GLuint)prev_vao);
@@ -128,7 +130,7 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
     }
     o->index_count = (GLsizei)mv.layout.index_count;
     o->indices_offset = mv.layout.indices_offset;
-    o->vertex_colours = vcol != NULL;
+    o->vertex_colours = vcol ? (nc == 4 ? 1 : 2) : 0;
     return MESO_OK;
 }
 

@@ -172,8 +172,8 @@ static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint3
 {
     if (c->object != q->object)
         return 0;
-    if (c->type == MESO_CHUNK_VCOL) /* a stand-in's vertex colours, at its MESH's own lod */
-        return q->form == MESO_LEVEL_MESH && meso_file_find_vertex_colours(q->file, q->object, q->lod) == (int32_t)i;
+    if (c->type == MESO_CHUNK_VCOL) /* a mesh's or stand-in's vertex colours, at its MESH's own lod */
+        return q->kind == MESO_OBJECT_MESH && meso_file_find_vertex_colours(q->file, q->object, q->lod) == (int32_t)i;
     if (q->form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH)
         return 0;
     if (q->kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH)

@@ -1,6 +1,7 @@
 // mesh_vert.glsl - base-mesh pass: positions and normals straight from the
-// MESH chunk buffer, and a stand-in's vertex colours (VCOL, FORMAT.md 7.3:
-// sRGB albedo, linear occlusion; u_has_color 0 leaves attribute 2 unread).
+// MESH chunk buffer, and a stand-in's vertex colours (VCOL, FORMAT.md 7.3):
+// u_has_color 1: sRGB albedo and linear occlusion (4 components); 2: the
+// occlusion alone (1 component, in .r); 0 leaves attribute 2 unread.
 // Prepended: the #version prelude (rt_common.c: mesoi_glsl_prelude),
 // instance.glsl (u_model).
 layout(location = 0) in vec3 a_position;
@@ -10,7 +11,7 @@ uniform mat4 u_view;
 uniform mat4 u_proj;
 uniform int u_has_color;
 out vec3 v_normal;
-out vec4 v_color; // linear albedo, occlusion
+out vec4 v_color; // linear albedo (1 when the draw's), occlusion
 void main()
 {
     instance_begin();
@@ -21,6 +22,8 @@ void main()
         // the kinds' SRGB8_ALPHA8 colour maps.
         vec3 c = a_color.rgb;
         v_color = vec4(mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), c)), a_color.a);
+    } else if (u_has_color == 2) {
+        v_color.a = a_color.r;
     }
     gl_Position = u_proj * u_view * u_model * vec4(a_position, 1.0);
 }

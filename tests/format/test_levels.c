@@ -2,7 +2,8 @@
  * LODS records round-trip; a level resolves each chunk type to the smallest
  * lod >= its own (checked against a brute-force scan of the TOC); its bytes
  * and prefix come from the TOC; the writer lays levels out coarse first; and
- * every broken rule is refused with its issue code (4921, 4922, 6401). */
+ * every broken rule is refused with its issue code (4921, 4922, 6401); a
+ * VCOL goes with the MESH at its own lod (6002). */
 #undef NDEBUG /* the checks are asserts: they must run in release builds too */
 #include "meso_file.h"
 #include "meso_layout.h"
@@ -52,11 +53,30 @@ static void add(meso_writer* w, uint32_t type, uint32_t object, uint16_t lod, co
 
 static const char meta[] = "{\"tool\":\"test_levels\"}";
 
+/* Vertex colours (FORMAT.md §7.3 VCOL) make_file adds, as bits: */
+enum {
+    VCOL_L1 = 1,       /* object 1, lod 1: U8 x 4 for its 18 vertices */
+    VCOL_L2_OCC = 2,   /* object 1, lod 2: U8 x 1 (occlusion alone) for its 6 vertices */
+    VCOL_O2_SHORT = 4  /* object 2, lod 0: U8 x 4, one short of its 10 vertices (6002) */
+};
+
+static void add_vcol(meso_writer* w, uint32_t object, uint16_t lod, uint16_t components, uint32_t n)
+{
+    uint8_t* c = (uint8_t*)calloc((size_t)components * n, 1);
+    assert(c);
+    const meso_chunk_desc d = {.type = MESO_CHUNK_VCOL, .object = object, .lod = lod, .dtype = MESO_DTYPE_U8,
+                               .components = components, .dims = {n, 1, 1}};
+    meso_error e;
+    assert(meso_writer_add(w, &d, c, (size_t)components * n, &e) == MESO_OK);
+    free(c);
+}
+
 /* Object 1: a mesh with levels 0..2 (64, 16, 4 triangles), object 2: a mesh
  * with no LODS records. `recs`/`n` are the LODS records written (none when
- * n == 0); lods_raw replaces them with raw bytes (for corruption tests). */
-static uint8_t* make_file(const meso_level_record* recs, size_t n, const uint8_t* lods_raw, size_t lods_raw_size,
-                          size_t* size)
+ * n == 0); lods_raw replaces them with raw bytes (for corruption tests);
+ * `vcol`: the VCOL bits above. */
+static uint8_t* make_file_vcol(const meso_level_record* recs, size_t n, const uint8_t* lods_raw,
+                               size_t lods_raw_size, int vcol, size_t* size)
 {
     meso_writer* w = NULL;
     assert(meso_writer_create(NULL, &w) == MESO_OK);
@@ -79,6 +99,12 @@ static uint8_t* make_file(const meso_level_record* recs, size_t n, const uint8_t
     uint8_t* m = fan_mesh(8, &ms);
     add(w, MESO_CHUNK_MESH, 2, 0, m, ms);
     free(m);
+    if (vcol & VCOL_L1)
+        add_vcol(w, 1, 1, 4, 18);
+    if (vcol & VCOL_L2_OCC)
+        add_vcol(w, 1, 2, 1, 6);
+    if (vcol & VCOL_O2_SHORT)
+        add_vcol(w, 2, 0, 4, 9);
     if (lods_raw) {
         add(w, MESO_CHUNK_LODS, 0, 0, lods_raw, lods_raw_size);
     } else if (n) {
@@ -92,6 +118,12 @@ static uint8_t* make_file(const meso_level_record* recs, size_t n, const uint8_t
     uint8_t* out = writer_to_memory(w, size);
     meso_writer_destroy(w);
     return out;
+}
+
+static uint8_t* make_file(const meso_level_record* recs, size_t n, const uint8_t* lods_raw, size_t lods_raw_size,
+                          size_t* size)
+{
+    return make_file_vcol(recs, n, lods_raw, lods_raw_size, 0, size);
 }
 
 static meso_level_record level(uint32_t object, uint16_t lod, uint16_t form, float error)
@@ -175,6 +207,61 @@ static uint32_t validate_issue(const uint8_t* file, size_t size)
     meso_error e;
     meso_result r = open_and_validate(file, size, &e);
     return r == MESO_OK ? 0u : e.code;
+}
+
+/* A VCOL belongs to the MESH at its own lod: it is found for the levels
+ * that draw that MESH (not for a finer level whose own MESH has none, as
+ * the smallest-lod->=-L rule alone would), it counts in their bytes, U8 x 4
+ * and U8 x 1 are valid, and a count that is not the MESH's vertex count
+ * (6002) or another component count (4001, by the writer) is refused. */
+static void vertex_colours_go_with_their_mesh(void)
+{
+    size_t size;
+    uint8_t* file = make_file_vcol(good, 3, NULL, 0, VCOL_L1 | VCOL_L2_OCC, &size);
+    meso_file* f = NULL;
+    meso_error e;
+    assert(meso_file_open_memory(file, size, NULL, &f, &e) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    int32_t vc[3];
+    for (uint16_t lod = 0; lod < 3; lod++) {
+        vc[lod] = -1; /* brute force: the VCOL at exactly the lod of the MESH the level draws */
+        const int32_t mi = meso_file_find_level(f, MESO_CHUNK_MESH, 1, lod);
+        for (uint32_t i = 0; i < meso_file_chunk_count(f); i++) {
+            const meso_chunk_info* c = meso_file_chunk(f, i);
+            if (c->type == MESO_CHUNK_VCOL && c->object == 1 && c->lod == meso_file_chunk(f, (uint32_t)mi)->lod)
+                vc[lod] = (int32_t)i;
+        }
+        assert(meso_file_find_vertex_colours(f, 1, lod) == vc[lod]);
+    }
+    assert(vc[0] < 0 && vc[1] >= 0 && vc[2] >= 0);
+    assert(meso_file_find_vertex_colours(f, 2, 0) == -1 && meso_file_find_vertex_colours(f, 9, 0) == -1);
+    meso_level_info li[3];
+    uint32_t count = 0;
+    assert(meso_file_levels(f, 1, li, 3, &count, &e) == MESO_OK && count == 3);
+    for (uint16_t lod = 0; lod < 3; lod++) {
+        const meso_chunk_info* c = meso_file_chunk(f, (uint32_t)meso_file_find(f, MESO_CHUNK_MESH, 1, lod));
+        uint64_t want = c->stored_size, end = c->offset + c->stored_size;
+        if (vc[lod] >= 0) {
+            const meso_chunk_info* v = meso_file_chunk(f, (uint32_t)vc[lod]);
+            want += v->stored_size;
+            end = v->offset + v->stored_size > end ? v->offset + v->stored_size : end;
+        }
+        assert(li[lod].bytes == want && li[lod].prefix_bytes >= end);
+    }
+    meso_file_close(f);
+    free(file);
+
+    file = make_file_vcol(good, 3, NULL, 0, VCOL_O2_SHORT, &size);
+    assert(validate_issue(file, size) == MESO_ISSUE_MESH_VCOL);
+    free(file);
+    /* U8 x 3: refused already by the writer (the element rules, 4001) */
+    meso_writer* w = NULL;
+    assert(meso_writer_create(NULL, &w) == MESO_OK);
+    uint8_t rgb[30] = {0};
+    const meso_chunk_desc d = {.type = MESO_CHUNK_VCOL, .object = 2, .dtype = MESO_DTYPE_U8, .components = 3,
+                               .dims = {10, 1, 1}};
+    assert(meso_writer_add(w, &d, rgb, sizeof rgb, &e) != MESO_OK && e.code == MESO_ISSUE_TYPE_ELEMENT);
+    meso_writer_destroy(w);
 }
 
 static void expect_issue(const meso_level_record* recs, size_t n, uint32_t code, const char* what)
@@ -271,6 +358,7 @@ int main(void)
 {
     levels_resolve_and_measure_against_the_toc();
     broken_levels_are_refused_with_their_issue();
+    vertex_colours_go_with_their_mesh();
     puts("test_levels: ok");
     return 0;
 }

@@ -1,9 +1,14 @@
 /* A mesh stand-in shows its object's colours (FORMAT.md §7.3 VCOL, issue
  * 14: "the base mesh with baked appearance"), measured on llvmpipe.
  *
- * Spot baked as a cells object by the baker's own API (the bundled
- * tests/data/spot_low_resolution.obj, the default Voronoi tile map: cells
- * of many colours), then:
+ * Four objects baked by the baker's own API: spot as a cells object (the
+ * bundled tests/data/spot_low_resolution.obj, the default Voronoi tile
+ * map: cells of many colours); spot_uv.obj as a brick shell (bricks:256,
+ * --tiling 8,8, 2 %) coloured by the bundled brick colours, and the same
+ * shell without a colour (its stand-ins' VCOL holds the occlusion alone:
+ * level 0 shows the draw's albedo darkened where the surface is low); the
+ * saguaro with a 256-texel brick relief and colour map repeated 8 times
+ * around. For each:
  *  - the file passes the full validation, every stand-in level has a VCOL
  *    at its MESH's lod with one colour per vertex, and a VCOL whose count
  *    does not fit its MESH is refused (6002);
@@ -15,8 +20,11 @@
  *    per block). The same level with its VCOL chunks left out of the file
  *    (drawn with the draw's albedo, what libmeso did before) is the
  *    baseline. Asserted: with colours the blocks' mean error is at most
- *    half the baseline's at every stand-in level, and the images are not
- *    flat (the blocks' colours vary as much as a third of the reference's).
+ *    half the baseline's at every stand-in level (measured 0.04-0.22), with
+ *    the occlusion alone at most 0.75 of it (measured 0.54-0.62: what is
+ *    left is the shading of the bricks' scattered normals, which no vertex
+ *    colour holds), and the images are not flat (the blocks' colours vary
+ *    as much as a third of the reference's).
  * Printed: both errors per level. MESO_TEST_PNG=DIR writes the images. */
 #include "test_util.h"
 
@@ -178,9 +186,12 @@ static void write_png(const char* name, const uint8_t* rgba, int n)
     assert(meso_png_write_rgba8(path, rgba, n, n, 1, w, sizeof w) == 0);
 }
 
-static const char* const kind_names[3] = {"cells", "shell", "frusta"};
+enum { KINDS = 4 };
+static const char* const kind_names[KINDS] = {"cells", "shell", "frusta", "shell_grey"};
 
-/* Bakes the case of kind 0 cells, 1 shell, 2 frusta (the top). */
+/* Bakes the case of kind 0 cells, 1 shell, 2 frusta (the top), 3 the
+ * shell without a colour (a VCOL of the occlusion alone: level 0 shows the
+ * draw's albedo, darkened where it is low). */
 static uint8_t* bake(int kind, size_t* size)
 {
     meso_bake_output* out = NULL;
@@ -191,13 +202,13 @@ static uint8_t* bake(int kind, size_t* size)
         meso_bake_cells_options o = meso_bake_cells_defaults();
         o.input = test_data("spot_low_resolution.obj");
         assert(meso_bake_cells(&o, &out, NULL, &err) == MESO_OK);
-    } else if (kind == 1) {
+    } else if (kind == 1 || kind == 3) {
         meso_bake_shell_options o = meso_bake_shell_defaults();
         o.input = test_data("spot_uv.obj");
         o.texture = "bricks:256";
         o.tiling[0] = o.tiling[1] = 8;
         o.thickness_rel = 0.02;
-        o.color = colour;
+        o.color = kind == 1 ? colour : NULL;
         assert(meso_bake_shell(&o, &out, NULL, &err) == MESO_OK);
     } else {
         meso_bake_frusta_options o = meso_bake_frusta_defaults();
@@ -226,7 +237,7 @@ static void check_kind(meso_rt* rt, const char* name, const uint8_t* data, size_
     meso_object_record rec;
     uint32_t no = 0;
     assert(meso_file_objects(f, &rec, 1, &no, NULL) == MESO_OK && no == 1);
-    int standins = 0;
+    int standins = 0, with_albedo = 0; /* with_albedo: the VCOLs hold the occlusion alone (U8 x 1) */
     for (uint32_t l = 0; l < nl; ++l) {
         const int32_t vi = meso_file_find_vertex_colours(f, 1, (uint16_t)l);
         if (li[l].rec.form != MESO_LEVEL_MESH) {
@@ -241,6 +252,7 @@ static void check_kind(meso_rt* rt, const char* name, const uint8_t* data, size_
         assert(mesh && meso_file_read_chunk(f, (uint32_t)mi, mesh, ms, NULL) == MESO_OK);
         assert(meso_mesh_parse(mesh, ms, &mv, NULL) == MESO_OK);
         assert(meso_file_chunk(f, (uint32_t)vi)->dims[0] == mv.layout.vertex_count);
+        with_albedo = meso_file_chunk(f, (uint32_t)vi)->components == 1;
         free(mesh);
     }
     assert(standins >= 2);
@@ -322,7 +334,7 @@ static void check_kind(meso_rt* rt, const char* name, const uint8_t* data, size_
                name, l, (double)li[l].rec.error, (unsigned long long)li[l].bytes, blocks[1], e[1], e[0], e[1] / e[0],
                spread[1], sref);
         fflush(stdout);
-        assert(e[1] <= 0.5 * e[0]);
+        assert(e[1] <= (with_albedo ? 0.75 : 0.5) * e[0]);
         assert(spread[1] >= sref / 3);
     }
     free(plain);
@@ -344,7 +356,7 @@ int main(void)
     meso_rt* rt = NULL;
     assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
 
-    for (int kind = 0; kind < 3; ++kind) {
+    for (int kind = 0; kind < KINDS; ++kind) {
         size_t size = 0;
         uint8_t* data = bake(kind, &size);
         check_kind(rt, kind_names[kind], data, size);
