@@ -548,8 +548,6 @@ meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_gr
  * against), as cells_frag.glsl colours a hit on it: COLR's texel of the
  * voxel, or the mesh's colour grid trilinear at the face's point. Cells
  * are not darkened: occlusion 1. */
-static double srgb_byte(uint8_t b) { return meso_srgb_to_linear(b / 255.0); }
-
 static void cells_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3],
                      const double p[3], float out[4])
 {
@@ -563,7 +561,7 @@ static void cells_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t
     if (!c->grid) {
         const uint8_t* q = c->colr + 4 * (size_t)c->vox[tri / 2];
         for (int k = 0; k < 3; ++k)
-            out[k] = (float)srgb_byte(q[k]);
+            out[k] = (float)meso_srgb8_to_linear(q[k]);
         return;
     }
     /* The face's point, then the grid's sample coordinates (clamped to
@@ -588,7 +586,7 @@ static void cells_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t
         const double w = (corner & 1 ? x[0] : 1 - x[0]) * (corner & 2 ? x[1] : 1 - x[1]) * (corner & 4 ? x[2] : 1 - x[2]);
         const uint8_t* q = c->grid + 4 * ((size_t)ix + c->grid_dims[0] * ((size_t)iy + (size_t)c->grid_dims[1] * iz));
         for (int k = 0; k < 3; ++k)
-            rgb[k] += w * srgb_byte(q[k]);
+            rgb[k] += w * meso_srgb8_to_linear(q[k]);
     }
     for (int k = 0; k < 3; ++k)
         out[k] = (float)rgb[k];

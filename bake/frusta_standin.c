@@ -239,8 +239,6 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
 
 /* >>appearance */
 
-static double srgb_byte(uint8_t b) { return meso_srgb_to_linear(b / 255.0); }
-
 /* The colour map at (s, t) as frusta_frag.glsl's color_bilinear at level 0. */
 static void map_bilinear(const meso_color_map* m, double s, double t, float out[3])
 {
@@ -252,7 +250,7 @@ static void map_bilinear(const meso_color_map* m, double s, double t, float out[
         double c[2][2];
         for (int j = 0; j < 2; ++j)
             for (int i = 0; i < 2; ++i)
-                c[j][i] = srgb_byte(m->rgba[4 * ((size_t)b[j] * m->width + a[i]) + (size_t)k]);
+                c[j][i] = meso_srgb8_to_linear(m->rgba[4 * ((size_t)b[j] * m->width + a[i]) + (size_t)k]);
         out[k] = (float)((1 - fy) * ((1 - fx) * c[0][0] + fx * c[0][1]) + fy * ((1 - fx) * c[1][0] + fx * c[1][1]));
     }
 }
@@ -297,7 +295,7 @@ void meso_frusta_standin_appearance(const meso_frusta_object* obj, const meso_fr
     const size_t n = color ? (size_t)color->width * color->height : 0;
     for (size_t i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k)
-            sum[k] += srgb_byte(color->rgba[4 * i + (size_t)k]);
+            sum[k] += meso_srgb8_to_linear(color->rgba[4 * i + (size_t)k]);
     *ctx = (meso_frusta_colours){.obj = obj, .st = st, .relief = relief, .color = color};
     for (int k = 0; k < 3; ++k)
         ctx->mean[k] = (float)(n ? sum[k] / (double)n : 0.5);

@@ -276,7 +276,7 @@ static void colr_at(const mesoi_shell_color* col, const double c[3], float out[3
             continue;
         const uint8_t* q = col->rgba + 4 * ((size_t)ix + col->dims[0] * ((size_t)iy + (size_t)col->dims[1] * iz));
         for (int k = 0; k < 3; ++k)
-            rgb[k] += w * meso_srgb_to_linear(q[k] / 255.0);
+            rgb[k] += w * meso_srgb8_to_linear(q[k]);
     }
     for (int k = 0; k < 3; ++k)
         out[k] = (float)rgb[k];

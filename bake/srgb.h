@@ -14,6 +14,9 @@ static inline double meso_srgb_to_linear(double x)
     return x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4);
 }
 
+/* A stored 8-bit value to linear light. */
+static inline double meso_srgb8_to_linear(unsigned char b) { return meso_srgb_to_linear(b / 255.0); }
+
 /* Linear light (clamped to [0, 1]) to the stored value in [0, 1]. */
 static inline double meso_linear_to_srgb(double l)
 {
