@@ -283,8 +283,10 @@ void mesoi_cells_programs_destroy(meso_rt* rt)
             mesoi_program_delete(rt, &rt->cells_programs[pass][st]);
 }
 
-/* 1 when the near plane's rectangle (its bounding box in object space)
- * reaches into the grid box: then rays must also start at the near plane. */
+/* 1 when the near plane may reach into the grid box (its rectangle's
+ * bounding box in object space overlaps the grid's, and some corner of the
+ * grid is not beyond the near plane): then rays must also start at the
+ * near plane. */
 static int near_plane_in_grid(const mesoi_draw* ds, const mesoi_cells* c)
 {
     double inv[16], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -301,12 +303,30 @@ static int near_plane_in_grid(const mesoi_draw* ds, const mesoi_cells* c)
             hi[a] = fmax(hi[a], p[a] / p[3]);
         }
     }
+    double g0[3], g1[3];
     for (int a = 0; a < 3; ++a) {
-        const double g0 = c->origin[a], g1 = c->origin[a] + (double)c->tiles[a] * c->res * c->voxel;
-        if (hi[a] < g0 || lo[a] > g1)
+        g0[a] = c->origin[a];
+        g1[a] = c->origin[a] + (double)c->tiles[a] * c->res * c->voxel;
+        if (hi[a] < g0[a] || lo[a] > g1[a])
             return 0;
     }
-    return 1;
+    /* The rectangle's box is loose for a tilted view: it may overlap the
+     * grid while the whole grid lies beyond the near plane, and back faces
+     * drawn then tie in depth with the front faces' hits. So also: some
+     * corner of the grid on the eye's side of the near plane (or behind the
+     * eye). The grid is convex: with none, no ray starts inside it. */
+    const double n0 = ds->depth_ndc[0], towards_far = ds->depth_ndc[1] - ds->depth_ndc[0];
+    for (int k = 0; k < 8; ++k) {
+        const double q[4] = {k & 1 ? g1[0] : g0[0], k & 2 ? g1[1] : g0[1], k & 4 ? g1[2] : g0[2], 1.0};
+        double z = 0.0, w = 0.0;
+        for (int col = 0; col < 4; ++col) {
+            z += (double)ds->mvp[4 * col + 2] * q[col];
+            w += (double)ds->mvp[4 * col + 3] * q[col];
+        }
+        if (!(w > 0.0) || (z / w - n0) * towards_far <= 0.0)
+            return 1;
+    }
+    return 0;
 }
 
 /* The model's rotation, object -> world directions (u_env_rot). */

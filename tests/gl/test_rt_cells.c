@@ -588,6 +588,78 @@ static void test_camera_inside(ctx* c)
     unload(c, &l);
 }
 
+/* A far view whose near plane lies just in front of the object, tilted:
+ * the near plane's rectangle is then as large as the object and its
+ * bounding box overlaps the grid's, while the whole grid lies beyond the
+ * plane, so no ray starts inside it. The draw must then rasterise front
+ * faces only, as it does with a near plane close to the eye: x and y of a
+ * perspective projection do not depend on the near plane, so both views
+ * cover the same pixels with the same fragments (before, the first drew
+ * back faces as well, twice the fragments, whose hits tied in depth with
+ * the front faces'). Both match the reference. */
+static void test_near_plane_in_front(ctx* c)
+{
+    const char* p = bake(c, "voronoi_far", "sphere.obj", "--tiles 5 --tile-res 16 --tile-map voronoi:8");
+    loaded l = load(c, p);
+    const double dir[3] = {0.3, 0.8, 1.0};
+    camera cam[2];
+    cam[0] = cam[1] = view_box(&l, dir, 2.0);
+    double r = 0.0, fwd[3], dist = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        r += 0.25 * (l.hi[k] - l.lo[k]) * (l.hi[k] - l.lo[k]);
+        fwd[k] = cam[0].at[k] - cam[0].eye[k];
+        dist += fwd[k] * fwd[k];
+    }
+    r = sqrt(r);
+    dist = sqrt(dist);
+    for (int k = 0; k < 3; ++k)
+        fwd[k] /= dist;
+    cam[0].zn = dist - 1.05 * r; /* just in front of the grid's corners */
+    cam[1].zn = 0.01 * dist;
+    /* The case is the one meant: every grid corner beyond the near plane,
+     * and the near rectangle's bounding box overlapping the grid's box. */
+    double up[3] = {0, 1, 0}, right[3], u[3];
+    right[0] = fwd[1] * up[2] - fwd[2] * up[1];
+    right[1] = fwd[2] * up[0] - fwd[0] * up[2];
+    right[2] = fwd[0] * up[1] - fwd[1] * up[0];
+    const double rl = sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
+    for (int k = 0; k < 3; ++k)
+        right[k] /= rl;
+    u[0] = right[1] * fwd[2] - right[2] * fwd[1];
+    u[1] = right[2] * fwd[0] - right[0] * fwd[2];
+    u[2] = right[0] * fwd[1] - right[1] * fwd[0];
+    for (int i = 0; i < 8; ++i) {
+        double depth = 0.0;
+        for (int k = 0; k < 3; ++k)
+            depth += ((i >> k & 1 ? l.hi[k] : l.lo[k]) - cam[0].eye[k]) * fwd[k];
+        CHECK_MSG(depth > cam[0].zn, "grid corner %d at depth %g is not beyond the near plane %g", i, depth, cam[0].zn);
+    }
+    const double ty = tan(cam[0].fovy / 2), tx = ty * W / H;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < 4; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const double q = cam[0].eye[k] +
+                             cam[0].zn * (fwd[k] + (i & 1 ? tx : -tx) * right[k] + (i & 2 ? ty : -ty) * u[k]);
+            lo[k] = fmin(lo[k], q);
+            hi[k] = fmax(hi[k], q);
+        }
+    int overlap = 1;
+    for (int k = 0; k < 3; ++k)
+        overlap &= hi[k] >= l.lo[k] && lo[k] <= l.hi[k];
+    CHECK_MSG(overlap, "the near rectangle's box does not overlap the grid: not the case meant");
+    result res[2];
+    res[0] = render_compare(c, "near_plane_in_front", &l, &cam[0], NULL);
+    check_close("near_plane_in_front", res[0], 0.01);
+    res[1] = render_compare(c, "near_plane_at_eye", &l, &cam[1], NULL);
+    check_close("near_plane_at_eye", res[1], 0.01);
+    CHECK_MSG(res[0].stats.supported == 0 || res[0].stats.fragments == res[1].stats.fragments,
+              "near plane in front of the grid: %llu fragments, near the eye: %llu (back faces drawn?)",
+              (unsigned long long)res[0].stats.fragments, (unsigned long long)res[1].stats.fragments);
+    printf("near plane in front of the grid: %llu fragments, near the eye: %llu\n",
+           (unsigned long long)res[0].stats.fragments, (unsigned long long)res[1].stats.fragments);
+    unload(c, &l);
+}
+
 /* Small sphere cells under the flat top of a cube, seen steeply and at a
  * grazing angle. The thesis's linear search (Algorithm 3.1) at a fixed step
  * longer than a cell steps over cells (§3.2.2: "at grazing angles ... the
@@ -806,6 +878,7 @@ int main(int argc, char** argv)
     test_reflection_refraction(&c);
     test_environment(&c);
     test_camera_inside(&c);
+    test_near_plane_in_front(&c);
     test_grazing(&c);
     test_state_contract(&c);
     test_streamed(&c);
