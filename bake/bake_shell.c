@@ -129,6 +129,7 @@ static void report_json(cJSON* rep, const meso_bake_shell_report* s)
         cJSON_AddNumberToObject(u, "moved_max", s->update_moved_max);
         cJSON_AddNumberToObject(u, "levels_kept", s->update_levels_kept);
         cJSON_AddNumberToObject(u, "chain_moved", s->update_chain_moved);
+        cJSON_AddNumberToObject(u, "field_unsplit_opened", (double)s->update_field_unsplit);
     }
 }
 
@@ -378,12 +379,14 @@ static meso_result field_for(shell_bake* s, const uint8_t* redo, double h_side, 
             box[k] = fmin(box[k], m->positions[3 * (size_t)v + k]);
             box[3 + k] = fmax(box[3 + k], m->positions[3 * (size_t)v + k]);
         }
+    if (redo && !(box[0] <= box[3]) && m->vertex_count) /* no redo vertex: nothing is traced, any tree */
+        for (int k = 0; k < 3; ++k)                         /* serves; the cheapest, one split near a point */
+            box[k] = box[3 + k] = m->positions[k];
     const double grow = 1.01 * h_side + 1e-6 * s->h;
     for (int k = 0; k < 3; ++k)
         box[k] -= grow, box[3 + k] += grow;
-    /* No redo vertex: nothing is traced, any tree serves. theta 0 is exact
-     * summation over the triangles in tree order, which an unsplit
-     * cluster would change: the whole tree. */
+    /* theta 0 is exact summation over the triangles in tree order, which
+     * an unsplit cluster would change: the whole tree. */
     const int all = !redo || !(box[0] <= box[3]) || !(s->a.theta > 0);
     if (s->field &&
         (s->field_all || (!all && box[0] >= s->field_box[0] && box[1] >= s->field_box[1] &&
@@ -391,6 +394,7 @@ static meso_result field_for(shell_bake* s, const uint8_t* redo, double h_side, 
                           box[5] <= s->field_box[5])))
         return MESO_OK;
     const double t = meso_seconds();
+    s->rep->update_field_unsplit += meso_lp_field_unsplit_opened(s->field);
     meso_lp_field_destroy(s->field);
     s->field = NULL;
     const meso_lp_options lo_opt = {
@@ -555,6 +559,7 @@ static meso_result directors(shell_bake* s, meso_error* err)
     /* an update: the recomputed vertices only (meso_bake.h) */
     s->rep->vertices_normal = (s->prior.redo ? s->prior.redo_count : nv) - lp_count;
     s->rep->field_evaluations = ts.evaluations;
+    s->rep->update_field_unsplit += meso_lp_field_unsplit_opened(s->field);
     s->rep->artificial_faces = s->fs.artificial_faces;
     return r;
 }

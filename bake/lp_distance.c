@@ -6,6 +6,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -40,6 +41,7 @@ struct meso_lp_field {
     double* tri;      /* 9 doubles per triangle in tree order, internal units */
     double* sphere;   /* 5 per triangle in tree order: centroid, bounding radius about it, area */
     lp_node* nodes;
+    _Atomic uint64_t unsplit_opened; /* >>regions: evaluations that opened a cluster left unsplit */
 };
 
 /* >>small vector helpers ------------------------------------------------- */
@@ -600,6 +602,7 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "lp field: out of memory (%u triangles)", nt);
         goto fail;
     }
+    atomic_init(&f->unsplit_opened, 0);
     double total = 0.0;
     for (uint32_t t = 0; t < nt; ++t) {
         double* v = tri + 9 * (size_t)t;
@@ -659,6 +662,11 @@ fail:
     free(tri_out);
     free(sphere);
     return r;
+}
+
+uint64_t meso_lp_field_unsplit_opened(const meso_lp_field* f)
+{
+    return f ? atomic_load_explicit(&((meso_lp_field*)f)->unsplit_opened, memory_order_relaxed) : 0;
 }
 
 void meso_lp_field_destroy(meso_lp_field* f)
@@ -829,6 +837,8 @@ static meso_result eval(const meso_lp_field* f, const double xin[3], double thet
                 if (st)
                     st->multipoles++;
             } else if (nd->right == 0) {
+                if (nd->count > LEAF_SIZE) /* left unsplit for a region (>>regions): not the whole tree's bits */
+                    atomic_fetch_add_explicit(&((meso_lp_field*)f)->unsplit_opened, 1, memory_order_relaxed);
                 for (uint32_t t = nd->first; t < nd->first + nd->count; ++t)
                     add_leaf_triangle(f, t, x, theta, near_r, cut_r, &acc, st);
             } else {

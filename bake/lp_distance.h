@@ -161,6 +161,13 @@ meso_result meso_lp_field_create(const float* positions, uint32_t nv, const uint
 /* NULL is allowed. */
 void meso_lp_field_destroy(meso_lp_field* f);
 
+/* How many times evaluations of f opened a node that opt.region left
+ * unsplit (>>regions) since it was built: every such evaluation summed
+ * those triangles one by one and gave other bits than the whole tree's.
+ * 0 for a field without a region, and for one evaluated only inside its
+ * box with its own theta and no near ball. Thread-safe; 0 for NULL. */
+uint64_t meso_lp_field_unsplit_opened(const meso_lp_field* f);
+
 /* Total area A of the mesh (mesh units squared). */
 double meso_lp_field_area(const meso_lp_field* f);
 

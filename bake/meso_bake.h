@@ -511,6 +511,10 @@ typedef struct meso_bake_shell_report {
     uint32_t update_levels_kept;
     double update_chain_moved; /* kept levels: how far their base mesh has moved in all, over this and
                                   earlier updates, since they were simplified */
+    /* With options.update: how many times a field evaluation opened a cluster of the tree that was
+     * built for the recomputed region only (lp_distance.h >>regions). 0 means every evaluation took
+     * the whole tree's path, so the directors have the bits a full re-bake's field gives them. */
+    uint64_t update_field_unsplit;
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

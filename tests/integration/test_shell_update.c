@@ -276,6 +276,10 @@ static void check_kind(const char* mesh, meso_shell_kind kind, meso_shell_direct
     assert(fabs(upd.rep.update_radius - R) <= 1e-9 * R);
     assert(upd.rep.vertices_recomputed == region);
     assert(upd.rep.vertices_recomputed < nv / 3);
+    /* The update's tree, built for the recomputed region, was never
+     * opened where it differs from the whole tree (lp_distance.h
+     * >>regions): its evaluations have a full bake's field's bits. */
+    assert(upd.rep.update_field_unsplit == 0 && same.rep.update_field_unsplit == 0);
 
     /* Validity identical, and the update's local count the whole shell's. */
     same_verdict(&e, &upd, kind);
@@ -433,6 +437,7 @@ static void check_growth(const char* dir)
     /* The region grew (the case needs it), and kept every vertex of the
      * radius. */
     assert(upd.rep.vertices_recomputed > region && upd.rep.vertices_recomputed <= nv);
+    assert(upd.rep.update_field_unsplit == 0); /* the grown region's tree too (field_for rebuilds it) */
     free(inside), free(pos);
     baked_free(&old), baked_free(&upd), baked_free(&full);
     meso_mesh_free(&m);

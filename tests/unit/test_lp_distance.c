@@ -566,9 +566,14 @@ static void test_region(void)
         meso_lp_stats sw = {0}, sp = {0};
         if (meso_lp_eval_ex(whole, x, 0.5, 0.0, &dw, gw, &sw) != MESO_OK)
             continue; /* on the surface */
+        const uint64_t opened = meso_lp_field_unsplit_opened(part);
         assert(meso_lp_eval_ex(part, x, 0.5, 0.0, &dp, gp, &sp) == MESO_OK);
+        const uint64_t opened_now = meso_lp_field_unsplit_opened(part) - opened;
+        /* the counter says whether this evaluation left the whole tree's path */
+        assert((opened_now > 0) == (sp.exact_triangles + sp.far_triangles > sw.exact_triangles + sw.far_triangles));
         if (in_box) {
             ++inside;
+            assert(opened_now == 0);
             assert(memcmp(&dw, &dp, sizeof dw) == 0 && memcmp(gw, gp, sizeof gw) == 0);
             assert(sw.nodes_visited == sp.nodes_visited && sw.multipoles == sp.multipoles &&
                    sw.exact_triangles == sp.exact_triangles && sw.far_triangles == sp.far_triangles);
@@ -587,6 +592,7 @@ static void test_region(void)
                     "cluster): max |d/d_exact - 1| %.2e (whole tree %.2e)\n", inside, outside, unsplit, worst_part,
             worst_whole);
     assert(inside > 150 && outside > 150 && unsplit > outside / 2);
+    assert(meso_lp_field_unsplit_opened(whole) == 0 && meso_lp_field_unsplit_opened(part) >= (uint64_t)unsplit);
     assert(worst_part < 1e-2 && worst_part <= 2 * worst_whole + 1e-6);
     meso_lp_field_destroy(whole);
     meso_lp_field_destroy(part);
