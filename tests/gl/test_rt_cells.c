@@ -617,17 +617,12 @@ static void test_near_plane_in_front(ctx* c)
     cam[0].zn = dist - 1.05 * r; /* just in front of the grid's corners */
     cam[1].zn = 0.01 * dist;
     /* The case is the one meant: every grid corner beyond the near plane,
-     * and the near rectangle's bounding box overlapping the grid's box. */
-    double up[3] = {0, 1, 0}, right[3], u[3];
-    right[0] = fwd[1] * up[2] - fwd[2] * up[1];
-    right[1] = fwd[2] * up[0] - fwd[0] * up[2];
-    right[2] = fwd[0] * up[1] - fwd[1] * up[0];
-    const double rl = sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
-    for (int k = 0; k < 3; ++k)
-        right[k] /= rl;
-    u[0] = right[1] * fwd[2] - right[2] * fwd[1];
-    u[1] = right[2] * fwd[0] - right[0] * fwd[2];
-    u[2] = right[0] * fwd[1] - right[1] * fwd[0];
+     * and the near rectangle's bounding box overlapping the grid's box.
+     * The eye's axes are the view matrix's rows (camera_matrices' up). */
+    double view[16];
+    const double world_up[3] = {0, 1, 0};
+    meso_camera_look_at_d(view, cam[0].eye, cam[0].at, world_up);
+    const double right[3] = {view[0], view[4], view[8]}, u[3] = {view[1], view[5], view[9]};
     for (int i = 0; i < 8; ++i) {
         double depth = 0.0;
         for (int k = 0; k < 3; ++k)
