@@ -708,6 +708,29 @@ static double texel_max(const shell_bake* s)
     return hmax;
 }
 
+/* The lowest and highest texel a height field stores, of every frame, as
+ * fractions of the shell's thickness; 0 when the texture is not a height
+ * field (then nothing is said of where its surface lies in w). */
+static int texel_range(const shell_bake* s, double* lo, double* hi)
+{
+    const meso_bake_shell_options* a = &s->a;
+    const mesoi_shell_texture* tx = &s->tx;
+    if (!a->texture || tx->fn.kind != MESO_TEXFN_HEIGHT)
+        return 0;
+    const size_t n = (size_t)tx->fn.dims[0] * tx->fn.dims[1] * tx->fn.dims[2] * (a->frames ? a->frames : 1);
+    const uint8_t* b = a->frames ? tx->fn_frames : (const uint8_t*)tx->fn.encoded;
+    const int wide = tx->fn.dtype == MESO_DTYPE_U16;
+    uint32_t bottom = wide ? 65535u : 255u, top = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const uint32_t v = wide ? (uint32_t)b[2 * i] | (uint32_t)b[2 * i + 1] << 8 : b[i];
+        top = v > top ? v : top;
+        bottom = v < bottom ? v : bottom;
+    }
+    *lo = bottom / (wide ? 65535.0 : 255.0);
+    *hi = top / (wide ? 65535.0 : 255.0);
+    return n > 0;
+}
+
 /* The error of the base mesh drawn in the shell's place (FORMAT.md §7.10,
  * level 1, form MESO_LEVEL_MESH): a point the shell draws is
  * Phi(u, v, w) = sum l_k bottom_k + w sum l_k (top_k - bottom_k) (§7.2),
@@ -732,6 +755,54 @@ static float standin_error(const shell_bake* s)
     return mesoi_f32_up(texel_max(s) * dmax);
 }
 
+/* Level 1 of a height-field shell: its mid-surface, not its base mesh
+ * (decided here; the frusta stand-in is raised to its relief's mid height
+ * the same way, frusta_standin.h). Every point the shell draws is
+ * Phi(u, v, w) = sum l_k (bottom_k + w d_k), d_k = top_k - bottom_k
+ * (§7.2), with w in [wlo, whi]: on the height surface w = h(s, t), which
+ * bilinear texels keep within [lowest, highest texel]; on a uv seam's
+ * wall between the two sides' heights, also within it; on an open mesh's
+ * border the prisms' side walls reach down to w = 0, so there wlo = 0.
+ * The mesh whose vertex k is bottom_k + m d_k, m = (wlo + whi) / 2, draws
+ * Phi(u, v, m) over the same (u, v) (a flat triangle, as the smooth
+ * mapping at fixed w is), so the two surfaces are within
+ * |w - m| |sum l_k d_k| <= (whi - wlo) / 2 max_k |d_k| of each other, both
+ * ways: over every point of either there is one of the other. That is at
+ * most half the base mesh's bound (hmax max_k |d_k| for an exterior
+ * shell), and less where the texels do not reach 0. The stored vertices
+ * are f32: each within half an ulp per coordinate of bottom_k + m d_k,
+ * and the corresponding points of a triangle by as much, so 2 f32 epsilons
+ * of the largest coordinate are added. Volumes and shells without a
+ * texture keep the base mesh (a volume's column may be empty: no surface
+ * point over it to pair with). `pos`/`sdir` are the output vertices'
+ * (sdir_layers as SDIR); `mid` gets 3 nv floats. Returns the error, or a
+ * negative value when the base mesh stays level 1. */
+static double midsurface(const shell_bake* s, const float* pos, const float* sdir, uint32_t nv, int sdir_layers,
+                         float* mid)
+{
+    double lo = 0.0, hi = 0.0;
+    if (!texel_range(s, &lo, &hi))
+        return -1.0;
+    if (s->topo.boundary_edges > 0)
+        lo = 0.0;
+    const double m = 0.5 * (lo + hi);
+    double dmax = 0.0, big = 0.0;
+    for (size_t v = 0; v < nv; ++v) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const double top = (double)pos[3 * v + (size_t)k] + sdir[3 * v + (size_t)k];
+            const double bottom =
+                (double)pos[3 * v + (size_t)k] + (sdir_layers == 2 ? sdir[3 * ((size_t)nv + v) + (size_t)k] : 0.0f);
+            const float x = (float)(bottom + m * (top - bottom));
+            mid[3 * v + (size_t)k] = x;
+            big = fmax(big, fabs((double)x));
+            d2 += (top - bottom) * (top - bottom);
+        }
+        dmax = fmax(dmax, sqrt(d2));
+    }
+    return 0.5 * (hi - lo) * dmax + 2.0 * FLT_EPSILON * big;
+}
+
 /* The native levels kept (height_field_levels.h) and their chunks: each
  * level's TX2D and DIST at its own lod, appended to chunks[0..n-1]; the
  * chunks every level shares (SDIR, STHK, COLR, CMAP) move to lod N, the
@@ -746,6 +817,7 @@ static float standin_error(const shell_bake* s)
 static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_out, int sdir_layers,
                             mesoi_standin_levels* lv, mesoi_chunk* chunks, size_t n)
 {
+    const double e1 = lv->e0; /* level 1's, the stand-in a native level must beat */
     const mesoi_shell_texture* tx = &s->tx;
     double dmax = 0.0;
     for (size_t v = 0; v < nv_out; ++v) {
@@ -760,7 +832,7 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
     uint32_t N = 0;
     for (; N < tx->native_count; ++N) {
         const float f = mesoi_f32_up((tx->native[N].sup + 4.0 * FLT_EPSILON) * dmax);
-        if (!(f < s->e0))
+        if (!(f < e1))
             break;
         lv->native_error[N] = f;
     }
@@ -769,7 +841,8 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
         return 0;
     for (size_t k = 0; k < n; ++k) {
         const uint32_t t = chunks[k].desc.type;
-        if (t == MESO_CHUNK_SDIR || t == MESO_CHUNK_STHK || t == MESO_CHUNK_COLR || t == MESO_CHUNK_CMAP)
+        if (t == MESO_CHUNK_SDIR || t == MESO_CHUNK_STHK || t == MESO_CHUNK_COLR || t == MESO_CHUNK_CMAP ||
+            (t == MESO_CHUNK_MESH && lv->standin_mesh)) /* level 1 is not the base mesh: the base at lod N */
             chunks[k].desc.lod = (uint16_t)N;
     }
     size_t m = 0;
@@ -957,10 +1030,12 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     const uint32_t nv = m->vertex_count, nv_out = nv + tx->seam_vertices;
     const int layers = a->kind == MESO_SHELL_ENVELOPE ? 2 : 1;
     float *pos_out = NULL, *normals_out = NULL, *sdir_out = NULL, *thick = NULL;
-    meso_mesh_chunk chunk = {0};
+    meso_mesh_chunk chunk = {0}, mid_chunk = {0};
     mesoi_standin_levels standins = {0};
-    meso_mesh base;
-    meso_result r = shell_base(s, &base, &pos_out, &normals_out)
+    meso_mesh base, mid_mesh;
+    mesoi_chunk mid;
+    float* mid_pos = malloc(sizeof(float) * 3 * (size_t)nv_out);
+    meso_result r = mid_pos && shell_base(s, &base, &pos_out, &normals_out)
                         ? meso_bake_mesh_chunk(&base, NULL, &chunk, err)
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
     /* SDIR as FORMAT.md §7.2 has it: L = 1 for exterior shells; L = 2 for
@@ -1099,6 +1174,24 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                                &standins, err);
             }
             standins.e0 = s->e0; /* sampled for e0_sampling, stored with e0 */
+            /* Level 1 the mid-surface when that is nearer (midsurface). */
+            const double e1 = r == MESO_OK ? midsurface(s, base.positions, sdir_out ? sdir_out : sdir, nv_out,
+                                                        sdir_layers, mid_pos)
+                                           : -1.0;
+            if (e1 >= 0.0 && e1 < s->e0) {
+                mid_mesh = base;
+                mid_mesh.positions = mid_pos;
+                r = meso_bake_mesh_chunk(&mid_mesh, NULL, &mid_chunk, err);
+                mid = chunks[0];
+                mid.data = mid_chunk.data;
+                mid.size = mid_chunk.size;
+                mid.desc.encoding = mid_chunk.encoding;
+                mid.desc.decoded_size = mid_chunk.decoded_size;
+                standins.standin_mesh = &mid_mesh;
+                standins.standin_chunk = &mid;
+                standins.chain_e0 = s->e0;
+                standins.e0 = e1;
+            }
             /* The stand-ins' vertex colours (FORMAT.md §7.3 VCOL): with a
              * colour, what it shows and the occlusion; without one the
              * occlusion alone (level 0 shows the draw's albedo, darkened
@@ -1120,6 +1213,14 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             if (r == MESO_OK)
                 n += mesoi_standin_levels_append(&standins, &base, &chunks[0], rec.bbox_min, rec.bbox_max,
                                                  chunks + n, rep);
+            if (r == MESO_OK && standins.standin_mesh) {
+                /* Level 1's record says it is the mid-surface; the chain's
+                 * errors are the base mesh's plus their own, which an
+                 * update reads back (shell_update.c read_chain). */
+                cJSON* l1 = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(rep, "levels"), 1 + (int)standins.native);
+                cJSON_AddStringToObject(l1, "surface", "mid");
+                cJSON_AddNumberToObject(rep, "standin_chain_base_error", (double)mesoi_f32_up(s->e0));
+            }
         }
         if (r == MESO_OK)
             r = mesoi_output_build(meta, rep, &rec, chunks, n, out, err);
@@ -1128,6 +1229,8 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     cJSON_Delete(rep);
     mesoi_standin_levels_free(&standins);
     free(chunk.data);
+    free(mid_chunk.data);
+    free(mid_pos);
     free(thick);
     free(pos_out);
     free(normals_out);

@@ -288,10 +288,12 @@ static meso_result read_whole(meso_file* f, int32_t idx, void** data, size_t* si
 /* OLD's stand-in chain: the levels after the base mesh's (level S: the
  * first stand-in, after any native levels) of object `id`, each a raw
  * MESH (what mesobake shell writes). Each one's own bound against OLD's
- * base mesh, from the stored errors: level L stores f32_up(e0 + c_L) and
- * level S f32_up(e0), so c_L <= err_L - err_S + ulp(err_S). A file that
- * has no such chain gives chain_count 0. */
-static meso_result read_chain(meso_file* f, uint32_t id, mesoi_shell_prior* out, meso_error* err)
+ * base mesh, from the stored errors: level L stores f32_up(e0 + c_L), e0
+ * the base mesh's error, which is level S's stored error f32_up(e0), or,
+ * when level S is the mid-surface, the report's standin_chain_base_error
+ * (`base_error`, 0 when absent); so c_L <= err_L - e0 + ulp(e0). A file
+ * that has no such chain gives chain_count 0. */
+static meso_result read_chain(meso_file* f, uint32_t id, double base_error, mesoi_shell_prior* out, meso_error* err)
 {
     enum { MAX = MESO_BAKE_SHELL_MAX_LEVELS };
     meso_level_info lv[MAX + 1];
@@ -303,7 +305,8 @@ static meso_result read_chain(meso_file* f, uint32_t id, mesoi_shell_prior* out,
         ++S;
     if (count < S + 2 || lv[S].rec.form != MESO_LEVEL_MESH)
         return r;
-    const double e1 = lv[S].rec.error, ulp1 = (double)nextafterf(lv[S].rec.error, INFINITY) - e1;
+    const float e0 = base_error > 0 ? (float)base_error : lv[S].rec.error;
+    const double e1 = e0, ulp1 = (double)nextafterf(e0, INFINITY) - e1;
     for (uint32_t L = S + 1; r == MESO_OK && L < count; ++L) {
         const int32_t ci = meso_file_find(f, MESO_CHUNK_MESH, id, (uint16_t)L);
         const meso_chunk_info* c = ci >= 0 ? meso_file_chunk(f, (uint32_t)ci) : NULL;
@@ -463,7 +466,8 @@ meso_result mesoi_shell_prior_load(const char* path, const meso_bake_shell_optio
         const cJSON* u = cJSON_GetObjectItemCaseSensitive(rep, "update");
         const cJSON* cm = cJSON_GetObjectItemCaseSensitive(u, "chain_moved");
         out->chain_moved = cJSON_IsNumber(cm) && cm->valuedouble > 0 ? cm->valuedouble : 0.0;
-        r = read_chain(f, id, out, err);
+        const cJSON* cb = cJSON_GetObjectItemCaseSensitive(rep, "standin_chain_base_error");
+        r = read_chain(f, id, cJSON_IsNumber(cb) && cb->valuedouble > 0 ? cb->valuedouble : 0.0, out, err);
     }
     free(old_pos);
     free(mesh_data);

@@ -133,8 +133,10 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
         const uint32_t S = L - N; /* stand-in number: 1 the base mesh, 2.. the chain */
         meso_level_record lr = {.object = base_chunk->desc.object, .lod = (uint16_t)L,
                                 .form = native ? MESO_LEVEL_NATIVE : MESO_LEVEL_MESH};
-        const meso_mesh* lm = native || S == 1 ? base : &lv->chain[S - 2].mesh;
-        size_t bytes = base_chunk->size, vbytes = 0;
+        const meso_mesh* l1 = lv->standin_mesh ? lv->standin_mesh : base;
+        const mesoi_chunk* c1 = lv->standin_chunk ? lv->standin_chunk : base_chunk;
+        const meso_mesh* lm = native ? base : S == 1 ? l1 : &lv->chain[S - 2].mesh;
+        size_t bytes = native ? base_chunk->size : c1->size, vbytes = 0;
         double e = 0;
         if (native) {
             memcpy(lr.bbox_min, l0_min, sizeof lr.bbox_min);
@@ -142,16 +144,16 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
             e = L ? lv->native_error[L - 1] : 0;
         } else if (S == 1) {
             double lo[3], hi[3];
-            meso_mesh_bounds(base, lo, hi);
+            meso_mesh_bounds(l1, lo, hi);
             for (int k = 0; k < 3; ++k) {
                 lr.bbox_min[k] = (float)lo[k];
                 lr.bbox_max[k] = (float)hi[k];
             }
             e = lv->e0;
-            chunks[n] = *base_chunk;
+            chunks[n] = *c1;
             chunks[n++].desc.lod = (uint16_t)L;
             if (lv->vcol[0]) {
-                chunks[n] = vcol_chunk(lv, 0, base, base_chunk->desc.object, (uint16_t)L);
+                chunks[n] = vcol_chunk(lv, 0, l1, base_chunk->desc.object, (uint16_t)L);
                 vbytes = chunks[n++].size;
             }
         } else {
@@ -161,7 +163,7 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
                 lr.bbox_min[k] = (float)c->bbox_min[k];
                 lr.bbox_max[k] = (float)c->bbox_max[k];
             }
-            e = lv->e0 + c->error;
+            e = (lv->chain_e0 > 0 ? lv->chain_e0 : lv->e0) + c->error;
             bytes = mc->size;
             chunks[n++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = base_chunk->desc.flags,
                                                  .object = base_chunk->desc.object, .lod = (uint16_t)L,

@@ -52,7 +52,17 @@ typedef struct mesoi_standin_levels {
      * mesoi_standin_levels_append; 1 + native + count <= MESOI_STANDIN_MAX_LEVELS. */
     uint32_t native;
     double native_error[MESOI_STANDIN_MAX_LEVELS];
-    double e0;               /* the base mesh's error */
+    double e0;               /* level 1's error (the base mesh's, or standin_mesh's when set) */
+    /* What the chain's errors add to their own distance to the base mesh:
+     * the base mesh's error (0: e0). A shell whose level 1 is not the base
+     * mesh but its mid-surface (bake_shell.c, standin_error) has a smaller
+     * e0 than its chain, which was simplified from the base mesh. */
+    double chain_e0;
+    /* Level 1's mesh and MESH chunk when it is not `base` itself (NULL:
+     * base and base_chunk); the same vertices and triangles as base, so
+     * base's vertex colours serve it. */
+    const meso_mesh* standin_mesh;
+    const mesoi_chunk* standin_chunk;
     meso_mesh_level* chain;  /* the simplified meshes, chain_count = count - 1 of them */
     uint32_t chain_count;
     meso_mesh_chunk chunk[MESOI_STANDIN_MAX_LEVELS]; /* the simplified meshes' MESH chunks */
