@@ -459,6 +459,12 @@ static meso_result assemble(const meso_bake_cells_options* a, const meso_mesh* m
             s->level_triangles[L] = lv->triangles[L];
         }
         cJSON_AddNumberToObject(rep, "surface_faces", (double)s->surface_faces);
+        /* How each native level's error was bounded (cells_standin.c): on
+         * the clipped surfaces, or chained where those were not measured. */
+        cJSON* jl = cJSON_GetObjectItemCaseSensitive(rep, "levels");
+        for (uint32_t k = 0; k < lv->native; ++k)
+            cJSON_AddStringToObject(cJSON_GetArrayItem(jl, (int)k + 1), "error_bound",
+                                    isfinite(native[k].error.clipped) ? "clipped" : "chained");
         s->level_count = 1 + lv->native + lv->count;
         s->native_levels = lv->native;
     }

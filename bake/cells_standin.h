@@ -25,6 +25,10 @@ typedef struct meso_cells_standin_error {
     double radius;     /* the larger sampling radius included in bound (h / sqrt(2) or the stand-in's) */
     uint64_t faces;    /* voxel faces of the cells surface (counted up to the limit) */
     int too_many;      /* 1: more than MESO_CELLS_STANDIN_MAX_FACES faces; bound = +inf, not measured */
+    /* Native levels (meso_cells_level_measure): the clipped surfaces'
+     * bound, and the chained one that stands in where that is not measured
+     * (+inf: not computed); 0 for a stand-in. */
+    double chained, clipped;
 } meso_cells_standin_error;
 
 /* The surface a cells object draws at level 0 (its voxel faces), collected
@@ -49,9 +53,11 @@ meso_result meso_cells_standin_measure(const meso_mesh* m, meso_cells_surface* f
                                        meso_cells_standin_error* out, meso_error* err);
 
 /* The error of a native coarser level (grid gl, split cells scl, tags mbl;
- * cells_levels.h) against level 0's surface f0: the same bound, with
- * level L's voxel faces in the stand-in's place, plus the clipping term
- * sqrt(3) hL that cells_standin.c derives. Nothing INSIDE at either level, or more than
+ * cells_levels.h) against level 0's surface f0: measured on the two
+ * surfaces clipped to the base mesh (cells_standin.c, >>clipped levels),
+ * or where that cannot be, the stand-in's bound with level L's voxel faces
+ * in the stand-in's place plus the clipping term sqrt(3) hL derived there.
+ * Nothing INSIDE at either level, or more than
  * MESO_CELLS_STANDIN_MAX_FACES faces at either, gives bound = +inf. */
 meso_result meso_cells_level_measure(meso_cells_surface* f0, const meso_voxel_grid* gl, const meso_split_cells* scl,
                                      const meso_membership* mbl, int threads, meso_cells_standin_error* out,

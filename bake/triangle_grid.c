@@ -198,7 +198,23 @@ double mesoi_tri_grid_distance(mesoi_tri_grid* g, const double p[3])
     return mesoi_tri_grid_closest(g, p, &tri, bw);
 }
 
+static double closest_within(mesoi_tri_grid* g, const double p[3], double r, uint32_t* tri, double bw[2]);
+
 double mesoi_tri_grid_closest(mesoi_tri_grid* g, const double p[3], uint32_t* tri, double bw[2])
+{
+    return closest_within(g, p, INFINITY, tri, bw);
+}
+
+double mesoi_tri_grid_distance_within(mesoi_tri_grid* g, const double p[3], double r)
+{
+    uint32_t tri;
+    double bw[2];
+    return closest_within(g, p, r, &tri, bw);
+}
+
+/* Shells of cells around p until every triangle nearer than the best so
+ * far, or than r, has been seen. */
+static double closest_within(mesoi_tri_grid* g, const double p[3], double r, uint32_t* tri, double bw[2])
 {
     int ci[3];
     for (int k = 0; k < 3; ++k)
@@ -240,7 +256,7 @@ double mesoi_tri_grid_closest(mesoi_tri_grid* g, const double p[3], uint32_t* tr
                 }
             }
         }
-        if (best <= k * g->cell)
+        if (best <= k * g->cell || r <= k * g->cell)
             break;
     }
     return best;

@@ -41,6 +41,10 @@ double mesoi_tri_grid_distance(mesoi_tri_grid* g, const double p[3]);
  * point (the 1st: 1 - bw[0] - bw[1]). */
 double mesoi_tri_grid_closest(mesoi_tri_grid* g, const double p[3], uint32_t* tri, double bw[2]);
 
+/* The same distance when it is below r; otherwise some value >= r (the
+ * search stops once every triangle nearer than r has been seen). */
+double mesoi_tri_grid_distance_within(mesoi_tri_grid* g, const double p[3], double r);
+
 /* Distance from p to triangle f of the grid's mesh (the same exact
  * computation a query makes). */
 double mesoi_tri_grid_triangle_distance(const mesoi_tri_grid* g, uint32_t f, const double p[3]);

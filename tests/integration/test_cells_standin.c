@@ -133,6 +133,219 @@ static const float* corner(const mesh* m, uint32_t t, int k)
     return m->v.positions + 3 * (size_t)m->v.indices[3 * (size_t)t + (size_t)k];
 }
 
+/* >>clipped. What libmeso draws of a level: each pixel ray starts where it
+ * first enters the base mesh and takes the first SOLID point from there
+ * (cells_frag.glsl), the reference traced from that entry. Its surface is
+ * C = (F ∩ M_in) ∪ (∂M ∩ S) (bake/cells_standin.c): here a subset of it,
+ * found without the bake's machinery: points spaced h0 / 2 on the base
+ * mesh that lie in a SOLID voxel, and on every face of F whose parity
+ * along +x says inside the mesh (a crossing too near an edge: the point is
+ * left out). Distances to a subset are no smaller than to C, so a hit
+ * within the stated error of them is within it of C. */
+typedef struct cloud {
+    double* p;
+    size_t n, cap;
+    double lo[3], cell;
+    int dim[3];
+    size_t *start, *item;
+} cloud;
+
+static void cloud_add(cloud* c, const double p[3])
+{
+    if (c->n == c->cap) {
+        c->cap = c->cap ? 2 * c->cap : 4096;
+        c->p = realloc(c->p, sizeof(double) * 3 * c->cap);
+        assert(c->p);
+    }
+    memcpy(c->p + 3 * c->n++, p, 3 * sizeof(double));
+}
+
+static int cloud_cell(const cloud* c, const double p[3], int k)
+{
+    const int i = (int)floor((p[k] - c->lo[k]) / c->cell);
+    return i < 0 ? 0 : i >= c->dim[k] ? c->dim[k] - 1 : i;
+}
+
+static void cloud_grid(cloud* c, double cell)
+{
+    double hi[3];
+    for (int k = 0; k < 3; ++k) {
+        c->lo[k] = INFINITY;
+        hi[k] = -INFINITY;
+    }
+    for (size_t i = 0; i < c->n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            c->lo[k] = fmin(c->lo[k], c->p[3 * i + k]);
+            hi[k] = fmax(hi[k], c->p[3 * i + k]);
+        }
+    c->cell = cell;
+    for (int k = 0; k < 3; ++k)
+        c->dim[k] = (int)((hi[k] - c->lo[k]) / cell) + 1;
+    const size_t cells = (size_t)c->dim[0] * c->dim[1] * c->dim[2];
+    c->start = calloc(cells + 1, sizeof(size_t));
+    c->item = malloc(sizeof(size_t) * (c->n ? c->n : 1));
+    assert(c->start && c->item);
+    for (size_t i = 0; i < c->n; ++i) {
+        const double* p = c->p + 3 * i;
+        ++c->start[cloud_cell(c, p, 0) + (size_t)c->dim[0] * (cloud_cell(c, p, 1) + (size_t)c->dim[1] * cloud_cell(c, p, 2)) + 1];
+    }
+    for (size_t i = 0; i < cells; ++i)
+        c->start[i + 1] += c->start[i];
+    size_t* fill = malloc(sizeof(size_t) * (cells ? cells : 1));
+    assert(fill);
+    memcpy(fill, c->start, sizeof(size_t) * cells);
+    for (size_t i = 0; i < c->n; ++i) {
+        const double* p = c->p + 3 * i;
+        c->item[fill[cloud_cell(c, p, 0) + (size_t)c->dim[0] * (cloud_cell(c, p, 1) + (size_t)c->dim[1] * cloud_cell(c, p, 2))]++] = i;
+    }
+    free(fill);
+}
+
+/* Distance from q to the nearest point of the cloud: rings of cells until
+ * the ring's inner distance passes the best. */
+static double cloud_nearest(const cloud* c, const double q[3])
+{
+    double best = INFINITY;
+    int ci[3];
+    for (int k = 0; k < 3; ++k)
+        ci[k] = cloud_cell(c, q, k);
+    const int maxr = c->dim[0] + c->dim[1] + c->dim[2];
+    for (int r = 0; r <= maxr; ++r) {
+        if ((r - 1) * c->cell > best)
+            break;
+        for (int z = ci[2] - r; z <= ci[2] + r; ++z)
+            for (int y = ci[1] - r; y <= ci[1] + r; ++y)
+                for (int x = ci[0] - r; x <= ci[0] + r; ++x) {
+                    if (abs(x - ci[0]) != r && abs(y - ci[1]) != r && abs(z - ci[2]) != r)
+                        continue;
+                    if (x < 0 || y < 0 || z < 0 || x >= c->dim[0] || y >= c->dim[1] || z >= c->dim[2])
+                        continue;
+                    const size_t cell = (size_t)x + (size_t)c->dim[0] * ((size_t)y + (size_t)c->dim[1] * (size_t)z);
+                    for (size_t i = c->start[cell]; i < c->start[cell + 1]; ++i) {
+                        const double* p = c->p + 3 * c->item[i];
+                        best = fmin(best, sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                                               (p[2] - q[2]) * (p[2] - q[2])));
+                    }
+                }
+    }
+    return best;
+}
+
+/* 1 inside the mesh, 0 outside, -1 undecided (a crossing within 1e-9 of
+ * a triangle's edge): parity of the ray p + t (1, 0, 0), t > 0. */
+static int inside_mesh(const mesh* m, const double p[3])
+{
+    int n = 0;
+    for (uint32_t t = 0; t < m->tris; ++t) {
+        const float *a = corner(m, t, 0), *b = corner(m, t, 1), *c = corner(m, t, 2);
+        if (fmax(a[0], fmax(b[0], c[0])) < p[0] || fmin(a[1], fmin(b[1], c[1])) > p[1] ||
+            fmax(a[1], fmax(b[1], c[1])) < p[1] || fmin(a[2], fmin(b[2], c[2])) > p[2] ||
+            fmax(a[2], fmax(b[2], c[2])) < p[2])
+            continue;
+        /* Barycentrics of (p1, p2) in the triangle's projection on yz. */
+        const double y0 = a[1], z0 = a[2], y1 = b[1] - y0, z1 = b[2] - z0, y2 = c[1] - y0, z2 = c[2] - z0;
+        const double det = y1 * z2 - y2 * z1;
+        if (fabs(det) < 1e-300)
+            continue; /* edge-on: parallel to the ray */
+        const double u = ((p[1] - y0) * z2 - y2 * (p[2] - z0)) / det, v = (y1 * (p[2] - z0) - (p[1] - y0) * z1) / det;
+        if (u < -1e-9 || v < -1e-9 || u + v > 1 + 1e-9)
+            continue;
+        if (u < 1e-9 || v < 1e-9 || u + v > 1 - 1e-9)
+            return -1;
+        const double x = a[0] + u * ((double)b[0] - a[0]) + v * ((double)c[0] - a[0]);
+        if (fabs(x - p[0]) < 1e-9)
+            return -1;
+        n += x > p[0];
+    }
+    return n & 1;
+}
+
+static void clipped_cloud(const meso_ref_cells* c, const faces* fs, const mesh* m, double h0, cloud* out)
+{
+    memset(out, 0, sizeof *out);
+    /* Faces: n x n points a face, n = its edge / (h0 / 2), inside the mesh. */
+    const int n = (int)lround(2.0 * c->voxel / h0);
+    for (size_t f = 0; f < fs->n; ++f) {
+        const int a = fs->axis[f], b = (a + 1) % 3, d = (a + 2) % 3;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                double p[3];
+                memcpy(p, fs->lo + 3 * f, sizeof p);
+                p[b] += (i + 0.5) / n * c->voxel;
+                p[d] += (j + 0.5) / n * c->voxel;
+                if (inside_mesh(m, p) == 1)
+                    cloud_add(out, p);
+            }
+    }
+    /* The mesh: each triangle's barycentric lattice at h0 / 2, in S. */
+    for (uint32_t t = 0; t < m->tris; ++t) {
+        const float *a = corner(m, t, 0), *b = corner(m, t, 1), *cc = corner(m, t, 2);
+        double l = 0;
+        for (int e = 0; e < 3; ++e) {
+            const float *p = corner(m, t, e), *q = corner(m, t, (e + 1) % 3);
+            l = fmax(l, sqrt(((double)p[0] - q[0]) * (p[0] - q[0]) + ((double)p[1] - q[1]) * (p[1] - q[1]) +
+                             ((double)p[2] - q[2]) * (p[2] - q[2])));
+        }
+        const int k = (int)ceil(l / (0.5 * h0));
+        for (int i = 0; i <= k; ++i)
+            for (int j = 0; i + j <= k; ++j) {
+                double p[3];
+                int64_t v[3];
+                for (int d = 0; d < 3; ++d) {
+                    p[d] = a[d] + (double)i / k * ((double)b[d] - a[d]) + (double)j / k * ((double)cc[d] - a[d]);
+                    v[d] = (int64_t)floor((p[d] - c->origin[d]) / c->voxel);
+                }
+                if (meso_ref_cells_solid(c, v[0], v[1], v[2]))
+                    cloud_add(out, p);
+            }
+    }
+    cloud_grid(out, h0);
+}
+
+/* The clipped hits of level `c` from the views: what libmeso draws. */
+static void clipped_hits(const meso_ref_cells* c, const mesh* m, const meso_ref_view* views, int nviews, int size,
+                         cloud* out)
+{
+    memset(out, 0, sizeof *out);
+    static const double light[3] = {0, 0, 1};
+    for (int e = 0; e < nviews; ++e) {
+        mesoi_ref_camera cam;
+        assert(mesoi_ref_camera_init(&views[e], &cam));
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x) {
+                double o[3], dv[3], best = INFINITY;
+                mesoi_ref_pixel_ray(&cam, x, y, size, size, o, dv);
+                for (uint32_t t = 0; t < m->tris; ++t)
+                    best = fmin(best, ray_triangle(o, dv, corner(m, t, 0), corner(m, t, 1), corner(m, t, 2)));
+                if (best == INFINITY)
+                    continue;
+                const double len = sqrt(dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]);
+                const double entry[3] = {o[0] + best * dv[0], o[1] + best * dv[1], o[2] + best * dv[2]};
+                const double u[3] = {dv[0] / len, dv[1] / len, dv[2] / len};
+                meso_ref_cells_path path;
+                meso_ref_cells_trace(c, entry, u, 100.0, light, NULL, &path);
+                if (path.hit)
+                    cloud_add(out, path.p[0]);
+            }
+    }
+}
+
+/* Level L against level 0, the clipped way, both ways: the farthest. */
+static double clipped_worst(const cloud* hits, const cloud* other)
+{
+    double worst = 0;
+    for (size_t i = 0; i < hits->n; ++i)
+        worst = fmax(worst, cloud_nearest(other, hits->p + 3 * i));
+    return worst;
+}
+
+static void cloud_free(cloud* c)
+{
+    free(c->p);
+    free(c->start);
+    free(c->item);
+}
+
 int main(int argc, char** argv)
 {
     assert(argc == 2);
@@ -211,8 +424,27 @@ int main(int argc, char** argv)
         fflush(stdout);
         assert(hits_l > 1000 && hits_0 > 1000);
         assert(worst_l <= err * (1 + 1e-5) + 1e-7 && worst_0 <= err * (1 + 1e-5) + 1e-7);
-        if (L == 1) /* not a loose guess (the bound adds (h0 + hL) sqrt(3) / 2 for clipping) */
-            assert(fmax(worst_l, worst_0) >= 0.2 * err);
+        /* The clipped surfaces, as libmeso draws them (>>clipped above). */
+        mesh base;
+        read_mesh(f, meso_file_find_level(f, MESO_CHUNK_MESH, 1, 0), &base);
+        cloud c0, cl, h0s, hls;
+        clipped_cloud(&rc, &fs, &base, rc.voxel, &c0);
+        clipped_cloud(&rl, &fl, &base, rc.voxel, &cl);
+        clipped_hits(&rc, &base, views, VIEWS, 2 * S, &h0s);
+        clipped_hits(&rl, &base, views, VIEWS, 2 * S, &hls);
+        const double cw_l = clipped_worst(&hls, &c0), cw_0 = clipped_worst(&h0s, &cl);
+        printf("  native level %u, clipped to the mesh: farthest of %zu level-%u hits from level 0's surface %.6g "
+               "(%.0f %%), of %zu level-0 hits from level %u's %.6g (%.0f %%)\n",
+               L, hls.n, L, cw_l, 100.0 * cw_l / err, h0s.n, L, cw_0, 100.0 * cw_0 / err);
+        assert(hls.n > 4000 && h0s.n > 4000);
+        assert(cw_l <= err * (1 + 1e-5) + 1e-7 && cw_0 <= err * (1 + 1e-5) + 1e-7);
+        if (L == 1) /* not a loose guess */
+            assert(fmax(fmax(worst_l, worst_0), fmax(cw_l, cw_0)) >= 0.4 * err);
+        cloud_free(&c0);
+        cloud_free(&cl);
+        cloud_free(&h0s);
+        cloud_free(&hls);
+        free(base.bytes);
         free(fl.lo);
         free(fl.axis);
         meso_ref_cells_free(&rl);
