@@ -687,30 +687,10 @@ static meso_result color_prepare(shell_bake* s, int from_mesh, meso_error* err)
     return r;
 }
 
-/* The largest texel a height field stores, of every frame, as a fraction
- * of the shell's thickness (1 for volumes and shells without a texture). */
-static double texel_max(const shell_bake* s)
-{
-    const meso_bake_shell_options* a = &s->a;
-    const mesoi_shell_texture* tx = &s->tx;
-    double hmax = 1.0;
-    if (a->texture && tx->fn.kind == MESO_TEXFN_HEIGHT && a->kind == MESO_SHELL_EXTERIOR) {
-        const size_t n = (size_t)tx->fn.dims[0] * tx->fn.dims[1] * tx->fn.dims[2] * (a->frames ? a->frames : 1);
-        const uint8_t* b = a->frames ? tx->fn_frames : (const uint8_t*)tx->fn.encoded;
-        const int wide = tx->fn.dtype == MESO_DTYPE_U16;
-        uint32_t top = 0;
-        for (size_t i = 0; i < n; ++i) {
-            const uint32_t v = wide ? (uint32_t)b[2 * i] | (uint32_t)b[2 * i + 1] << 8 : b[i];
-            top = v > top ? v : top;
-        }
-        hmax = top / (wide ? 65535.0 : 255.0);
-    }
-    return hmax;
-}
-
 /* The lowest and highest texel a height field stores, of every frame, as
- * fractions of the shell's thickness; 0 when the texture is not a height
- * field (then nothing is said of where its surface lies in w). */
+ * fractions of the shell's thickness (lowest 1, highest 0 when it stores
+ * none); 0 when the texture is not a height field (then nothing is said of
+ * where its surface lies in w). */
 static int texel_range(const shell_bake* s, double* lo, double* hi)
 {
     const meso_bake_shell_options* a = &s->a;
@@ -728,7 +708,16 @@ static int texel_range(const shell_bake* s, double* lo, double* hi)
     }
     *lo = bottom / (wide ? 65535.0 : 255.0);
     *hi = top / (wide ? 65535.0 : 255.0);
-    return n > 0;
+    return 1;
+}
+
+/* The largest texel an exterior shell's height field stores, of every
+ * frame, as a fraction of the shell's thickness (1 for volumes, shells
+ * without a texture and the other kinds). */
+static double texel_max(const shell_bake* s)
+{
+    double lo = 0.0, hi = 1.0;
+    return s->a.kind == MESO_SHELL_EXTERIOR && texel_range(s, &lo, &hi) ? hi : 1.0;
 }
 
 /* The error of the base mesh drawn in the shell's place (FORMAT.md §7.10,
@@ -781,7 +770,7 @@ static double midsurface(const shell_bake* s, const float* pos, const float* sdi
                          float* mid)
 {
     double lo = 0.0, hi = 0.0;
-    if (!texel_range(s, &lo, &hi))
+    if (!texel_range(s, &lo, &hi) || hi < lo)
         return -1.0;
     if (s->topo.boundary_edges > 0)
         lo = 0.0;
@@ -1034,8 +1023,8 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     mesoi_standin_levels standins = {0};
     meso_mesh base, mid_mesh;
     mesoi_chunk mid;
-    float* mid_pos = malloc(sizeof(float) * 3 * (size_t)nv_out);
-    meso_result r = mid_pos && shell_base(s, &base, &pos_out, &normals_out)
+    float* mid_pos = NULL;
+    meso_result r = shell_base(s, &base, &pos_out, &normals_out)
                         ? meso_bake_mesh_chunk(&base, NULL, &chunk, err)
                         : meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "out of memory");
     /* SDIR as FORMAT.md §7.2 has it: L = 1 for exterior shells; L = 2 for
@@ -1175,6 +1164,9 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             }
             standins.e0 = s->e0; /* sampled for e0_sampling, stored with e0 */
             /* Level 1 the mid-surface when that is nearer (midsurface). */
+            mid_pos = r == MESO_OK ? malloc(sizeof(float) * 3 * (size_t)nv_out) : NULL;
+            if (r == MESO_OK && !mid_pos)
+                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in: out of memory");
             const double e1 = r == MESO_OK ? midsurface(s, base.positions, sdir_out ? sdir_out : sdir, nv_out,
                                                         sdir_layers, mid_pos)
                                            : -1.0;

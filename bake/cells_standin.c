@@ -746,7 +746,8 @@ static void square_centre(const void* u, uint64_t b, uint32_t i, double p[3])
 }
 
 typedef struct tri_pieces {
-    const double* xyz; /* the chosen sub-triangles, 9 doubles each */
+    const double* xyz;  /* the sub-triangles (subtris) */
+    const uint64_t* of; /* the chosen ones */
     uint64_t count;
 } tri_pieces;
 
@@ -758,7 +759,7 @@ static uint32_t piece_count(const void* u, uint64_t b)
 static void piece_centroid(const void* u, uint64_t b, uint32_t i, double p[3])
 {
     const tri_pieces* tp = u;
-    const double* q = tp->xyz + 9 * (b * FACE_BLOCK + i);
+    const double* q = tp->xyz + 9 * tp->of[b * FACE_BLOCK + i];
     for (int k = 0; k < 3; ++k)
         p[k] = (q[k] + q[3 + k] + q[6 + k]) / 3.0;
 }
@@ -822,8 +823,8 @@ static meso_result level_targets(meso_cells_surface* f, const level_view* y, con
 static meso_result clipped_way(meso_cells_surface* f, const level_view* x, const soup* sx, const mesoi_tri_grid* tg,
                                int threads, double* out, meso_error* err)
 {
-    tri_pieces pieces = {0};
-    double* chosen = malloc(sizeof(double) * 9 * (f->st.count ? f->st.count : 1));
+    uint64_t* chosen = malloc(sizeof(uint64_t) * (f->st.count ? f->st.count : 1));
+    tri_pieces pieces = {.xyz = f->st.xyz, .of = chosen};
     int failed = !chosen;
     double rmax = 0;
     for (uint64_t i = 0; !failed && i < f->st.count; ++i) {
@@ -832,7 +833,7 @@ static meso_result clipped_way(meso_cells_surface* f, const level_view* x, const
         subtri_box(p, lo, hi);
         if (!box_solid(x, lo, hi, 0))
             continue;
-        memcpy(chosen + 9 * pieces.count++, p, 9 * sizeof(double));
+        chosen[pieces.count++] = i;
         for (int q = 0; q < 3; ++q) {
             double d2 = 0;
             for (int k = 0; k < 3; ++k) {
@@ -848,7 +849,6 @@ static meso_result clipped_way(meso_cells_surface* f, const level_view* x, const
         const sampler sf = {.blocks = (sx->faces + FACE_BLOCK - 1) / FACE_BLOCK, .count = square_count,
                             .point = square_centre, .u = &fp};
         const double d_faces = sampled_max(&sf, tg, threads, &failed);
-        pieces.xyz = chosen;
         const sampler sp = {.blocks = (pieces.count + FACE_BLOCK - 1) / FACE_BLOCK, .count = piece_count,
                             .point = piece_centroid, .u = &pieces};
         const double d_tris = pieces.count ? sampled_max(&sp, tg, threads, &failed) : 0.0;
