@@ -31,11 +31,12 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
     const meso_draco_options dopt = {o->draco_position_bits ? o->draco_position_bits : 14,
                                      o->draco_normal_bits ? o->draco_normal_bits : 10,
                                      o->draco_uv_bits ? o->draco_uv_bits : 12, 7};
-    if (o->draco && (dopt.position_bits < 1 || dopt.position_bits > 30 || dopt.normal_bits < 2 ||
-                     dopt.normal_bits > 30 || dopt.uv_bits < 1 || dopt.uv_bits > 30))
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
-                              "Draco bits %d,%d,%d: positions and uvs need 1..30, normals 2..30", dopt.position_bits,
-                              dopt.normal_bits, dopt.uv_bits);
+    if (o->draco && (dopt.position_bits < 1 || dopt.position_bits > MESO_DRACO_MAX_BITS || dopt.normal_bits < 2 ||
+                     dopt.normal_bits > MESO_DRACO_MAX_BITS || dopt.uv_bits < 1 ||
+                     dopt.uv_bits > MESO_DRACO_MAX_BITS))
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "Draco bits %d,%d,%d: positions and uvs need 1..%d, normals 2..%d",
+                              dopt.position_bits, dopt.normal_bits, dopt.uv_bits, MESO_DRACO_MAX_BITS,
+                              MESO_DRACO_MAX_BITS);
     mesoi_bake_run run;
     mesoi_run_begin(&run, &o->common);
     meso_mesh m;

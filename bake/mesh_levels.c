@@ -40,10 +40,9 @@
  * are closest to the triangle's face normal; the lowest index on ties.
  * `split_seams` = 1 skips the weld (the tests show what it changes).
  *
- * Draco (mesobake mesh --draco) encodes every level with the same bits. At
- * 29-30 position or normal bits Draco 1.5.5's sequential encoder builds an
- * entropy table over the whole quantised range for the sphere's coarse
- * levels and takes minutes (level 0 does not); not fixed here.
+ * Draco (mesobake mesh --draco) encodes every level with the same bits, at
+ * most MESO_DRACO_MAX_BITS (meso_bake.h: Draco 1.5.5's entropy table spans
+ * the whole quantised range; at 29-30 bits the sphere's levels took minutes).
  *
  * Normals of a coarse level: each vertex keeps its own (the level's
  * vertices are level 0's). Recomputing them from the coarse triangles would

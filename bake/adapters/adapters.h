@@ -180,9 +180,9 @@ meso_result meso_vdb_write_sphere(const char* path, const char* grid_name, const
 /* >>draco --------------------------------------------------------------- */
 
 typedef struct meso_draco_options {
-    int position_bits; /* quantisation bits 1..30, default 14 */
-    int normal_bits;   /* 2..30 (Draco's octahedral normals need 2), default 10 */
-    int uv_bits;       /* 1..30, default 12 */
+    int position_bits; /* quantisation bits 1..MESO_DRACO_MAX_BITS (meso_bake.h: why), default 14 */
+    int normal_bits;   /* 2..MESO_DRACO_MAX_BITS (Draco's octahedral normals need 2), default 10 */
+    int uv_bits;       /* 1..MESO_DRACO_MAX_BITS, default 12 */
     int speed;         /* 0 (best) .. 10 (fastest), default 7 */
 } meso_draco_options;
 

@@ -49,9 +49,10 @@ extern "C" meso_result meso_draco_encode(const meso_mesh* m, const meso_draco_op
     const int nbits = opt && opt->normal_bits ? opt->normal_bits : 10;
     const int tbits = opt && opt->uv_bits ? opt->uv_bits : 12;
     const int speed = opt && opt->speed ? opt->speed : 7;
-    if (pbits < 1 || pbits > 30 || nbits < 2 || nbits > 30 || tbits < 1 || tbits > 30 || speed < 0 || speed > 10)
+    const int most = MESO_DRACO_MAX_BITS;
+    if (pbits < 1 || pbits > most || nbits < 2 || nbits > most || tbits < 1 || tbits > most || speed < 0 || speed > 10)
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
-                              "Draco: quantisation bits must be 1..30 (normals 2..30) and speed 0..10");
+                              "Draco: quantisation bits must be 1..%d (normals 2..%d) and speed 0..10", most, most);
     try {
         draco::Mesh dm;
         dm.set_num_points(m->vertex_count);

@@ -31,8 +31,9 @@ static const char* const usage_mesh =
     "                          output does not depend on N\n"
     "Compression:\n"
     "      --draco             store the mesh (every level) Draco-compressed (quantised)\n"
-    "      --draco-bits P,N,T  quantisation bits for positions (1..30), normals (2..30: Draco's\n"
-    "                          octahedral normals need two) and uvs (1..30); default 14,10,12\n"
+    "      --draco-bits P,N,T  quantisation bits for positions (1..24), normals (2..24: Draco's\n"
+    "                          octahedral normals need two) and uvs (1..24); default 14,10,12\n"
+    "                          (24: a float's precision; Draco's cost doubles per bit)\n"
     "Reporting:\n"
     "      --report FILE       write the bake report as JSON (also stored in the file)\n"
     MEMORY_OPTION_HELP
@@ -42,7 +43,7 @@ static const char* const usage_mesh =
     "A closed mesh (or closed part) whose faces point inward is turned outward with a\n"
     "warning, which the report records (\"reoriented_components\", \"warnings\").\n";
 
-/* "P,N,T": integers in 1..30, N in 2..30 (Draco refuses one-bit normals),
+/* "P,N,T": integers in 1..MESO_DRACO_MAX_BITS, N from 2 (Draco refuses one-bit normals),
  * overflow-checked by parse_int. */
 static int parse_bits(const char* s, meso_bake_mesh_options* o)
 {
@@ -58,7 +59,7 @@ static int parse_bits(const char* s, meso_bake_mesh_options* o)
             return 0;
         if (comma)
             *comma = 0;
-        if (!meso_bake_parse_long(field, k == 1 ? 2 : 1, 30, &bits[k]))
+        if (!meso_bake_parse_long(field, k == 1 ? 2 : 1, MESO_DRACO_MAX_BITS, &bits[k]))
             return 0;
         field = comma + 1;
     }
@@ -114,7 +115,8 @@ int cmd_mesh(int argc, char** argv)
             o.draco = 1;
         } else if (!strcmp(a, "--draco-bits") && has_val) {
             if (!parse_bits(argv[++i], &o))
-                return usage_error("--draco-bits expects P,N,T in 1..30 (N in 2..30), got '%s'", argv[i]);
+                return usage_error("--draco-bits expects P,N,T in 1..%d (N in 2..%d), got '%s'", MESO_DRACO_MAX_BITS,
+                                   MESO_DRACO_MAX_BITS, argv[i]);
             o.draco = 1;
         } else if (!strcmp(a, "-v") || !strcmp(a, "--verbose")) {
             verbose = 1;
