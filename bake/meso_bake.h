@@ -313,8 +313,8 @@ MESO_BAKE_API void meso_bake_output_free(meso_bake_output* o);
 /* The most quantisation bits meso asks of Draco for any attribute. Draco
  * (1.5.5, Debian 12) entropy-codes each quantised attribute with a table
  * over its whole range: on the 642-vertex sphere one 30-bit attribute took
- * 13 s and 4.2 GB, one of 24 bits 0.4 s and 100 MB (mesobake mesh
- * --draco-bits), doubling per bit. 24 bits is also all a float32 holds
+ * 13 s and 4.2 GB, one of 24 bits 0.25 s and 100 MB (mesobake mesh
+ * --draco-bits 30,10,12 and 14,24,12), doubling per bit. 24 bits is also all a float32 holds
  * (a 24-bit significand): a step of 2^-24 of the box is already at the
  * float spacing of its largest coordinates. */
 #define MESO_DRACO_MAX_BITS 24
