@@ -488,8 +488,8 @@ static meso_result directors(shell_bake* s, meso_error* err)
                 /* repair, regrow and bend; bend's allowed thickness is seconds_allowed's */
                 const double allowed_before = s->rep->seconds_allowed;
                 if (r == MESO_OK)
-                    r = meso_shell_repair_in(m, dl, sign, 30, s->run.common.threads, redo, &shortened, &rounds,
-                                             &left, ck, err);
+                    r = meso_shell_repair_in(m, dl, sign, MESO_SHELL_REPAIR_ROUNDS, s->run.common.threads, redo,
+                                             &shortened, &rounds, &left, ck, err);
                 if (r == MESO_OK)
                     mesoi_run_stage(&s->run, "repair", f1, f1,
                                     "repair: %u vertices shortened in %u rounds, %u faces still bad (%.0f ms)",

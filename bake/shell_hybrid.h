@@ -53,6 +53,16 @@ meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_
                                          meso_hybrid_stats* hs, meso_trace_stats* ts, meso_shell_checker* ck,
                                          meso_error* err);
 
+/* Repair rounds of a bake. Each round a director shortened is 0.8 of what
+ * it was, and 72 rounds take one below a float's precision of its own
+ * length; faces turn bad in a cascade (a director shortened lets its
+ * neighbour's offset cross), so a director may start shrinking late. 100
+ * leaves that room. It was 30, and a 0.0002 slot under a 0.087 shell needed
+ * 31 (tests/unit/test_shell_repair.c); a smoothed 94k-triangle spot at 5 %
+ * needed 32 and was refused (E3115) with 10 faces still bad. A bake that
+ * converges sooner stops sooner: the cap costs nothing there. */
+#define MESO_SHELL_REPAIR_ROUNDS 100
+
 /* Repair (issue #4, --repair): shorten the directors of the vertices of
  * still-bad faces by a factor 0.8 per round, until no face is bad or
  * max_rounds pass. Shorter directors can only remove folds and collisions

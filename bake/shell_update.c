@@ -63,7 +63,7 @@
  *    undecided prism, or an offset triangle meeting another or the base)
  *    that has a kept corner, the fix may need that corner's director, which
  *    the update may not touch (spot at 2 %, a 10 % edit: one prism left
- *    inverted after repair's 30 rounds, its other corners OLD's). Then the
+ *    inverted after repair's rounds, its other corners OLD's). Then the
  *    region grows by those faces' corners and their 1-ring (every corner of
  *    every face around them), and the side's rounds run again from the
  *    start over the grown region, at most MESOI_SHELL_UPDATE_GROWTH_PASSES

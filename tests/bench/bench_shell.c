@@ -95,7 +95,7 @@
 #define THETA 0.5 /* mesobake shell's --theta default (the field's MESO_LP_DEFAULT_THETA is 0.3) */
 #define ANGLE_TOL_DEG 5.0
 #define SMOOTH_DEFAULT 0 /* mesobake shell's --smooth default; $MESO_BENCH_SMOOTH overrides */
-#define REPAIR_ROUNDS 30
+#define REPAIR_ROUNDS MESO_SHELL_REPAIR_ROUNDS /* the bake's */
 #define LP_BUDGET 120.0
 
 static const char* goals_dir(void)
