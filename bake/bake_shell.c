@@ -30,6 +30,7 @@
 #include "meso_clock.h"
 #include "shell_allowed.h"
 #include "shell_bend.h"
+#include "shell_envelope.h"
 #include "shell_hybrid.h"
 #include "shell_regrow.h"
 #include "shell_update.h"
@@ -551,6 +552,21 @@ static meso_result directors(shell_bake* s, meso_error* err)
         }
         for (uint32_t v = 0; r == MESO_OK && v < nv; ++v)
             s->lp_mask[v] |= s->lp_side[v];
+    }
+    /* An envelope is drawn from bottom to top: repaired as such too
+     * (shell_envelope.h; each layer above was repaired against the base). */
+    if (r == MESO_OK && a->kind == MESO_SHELL_ENVELOPE && !a->no_repair) {
+        t = meso_seconds();
+        uint32_t shortened = 0, rounds = 0, left = 0;
+        r = meso_shell_envelope_repair(m, s->d, MESO_SHELL_REPAIR_ROUNDS, s->run.common.threads, &shortened, &rounds,
+                                       &left, err);
+        s->rep->seconds_repair += meso_seconds() - t;
+        s->rep->vertices_shortened += shortened;
+        if (r == MESO_OK)
+            mesoi_run_stage(&s->run, "repair", 0.8, 0.8,
+                            "envelope: %u vertices shortened in %u rounds so that no prism inverts from bottom to "
+                            "top, %u left (%.0f ms)",
+                            shortened, rounds, left, mesoi_run_ms(&s->run));
     }
     uint32_t lp_count = 0;
     for (uint32_t v = 0; s->lp_mask && v < nv; ++v)

@@ -31,6 +31,22 @@ check "SDIR and STHK chunks are present" sh -c "'$inspect' info '$tmp/j1.meso' |
 "$bake" shell -i "$data/saddle.obj" -o "$tmp/env.meso" --kind envelope >/dev/null 2>&1
 check "envelope shells of open surfaces bake" test -s "$tmp/env.meso"
 
+# Envelopes are drawn from bottom to top, and each layer repaired against
+# the base alone left such prisms inverted (bake/shell_envelope.h): spot_uv
+# at the default 5 % kept 18 and at 10 % 51, and the bake was refused
+# (exit 8, E3115). Now: exit 0, nothing inverted or intersecting, and the
+# file validates in full.
+for t in 0.05 0.1; do
+  rc=0
+  "$bake" shell -i "$data/spot_uv.obj" -o "$tmp/envt.meso" --kind envelope --thickness-rel $t \
+    --report "$tmp/envt.json" >/dev/null 2>&1 || rc=$?
+  check "spot_uv envelope $t: exit 0 (got $rc)" test "$rc" = 0
+  for key in inverted_prisms offset_self_intersections offset_base_intersections; do
+    check "spot_uv envelope $t: $key = 0" grep -q "\"$key\":[[:space:]]*0," "$tmp/envt.json"
+  done
+  check "spot_uv envelope $t: the file validates fully" "$inspect" validate --full "$tmp/envt.meso" >/dev/null
+done
+
 num() { # KEY: the number under KEY in $tmp/goal.json
   sed -n "s/.*\"$1\":[[:space:]]*\([-+0-9.eE]*\).*/\1/p" "$tmp/goal.json"
 }
