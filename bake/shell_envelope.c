@@ -12,7 +12,7 @@
 #include "shell_hybrid.h"
 #include "shell_validate.h"
 
-/* Whether the prism of face f from bottom to top is proven valid
+/* Whether the prism of face f from bottom to top is not proven valid
  * (shell_validate.h meso_shell_prism_check, sign +1: bottom = base + d1,
  * span = d0 - d1). */
 static int prism_inverted(const meso_mesh* m, const float* d, uint32_t f)

@@ -57,10 +57,11 @@ meso_result meso_shell_side_directors_in(const meso_lp_field* field, const meso_
  * it was, and 72 rounds take one below a float's precision of its own
  * length; faces turn bad in a cascade (a director shortened lets its
  * neighbour's offset cross), so a director may start shrinking late. 100
- * leaves that room. It was 30, and a 0.0002 slot under a 0.087 shell needed
- * 31 (tests/unit/test_shell_repair.c); a smoothed 94k-triangle spot at 5 %
- * needed 32 and was refused (E3115) with 10 faces still bad. A bake that
- * converges sooner stops sooner: the cap costs nothing there. */
+ * leaves that room. It was 30: a 0.0002 slot under a 0.087 shell needed 31
+ * rounds (a 2e-5 one needs 40: tests/unit/test_shell_repair.c), and a
+ * smoothed 94k-triangle spot at 5 % needed 32 and was refused (E3115) with
+ * 10 faces still bad. A bake that converges sooner stops sooner: the cap
+ * costs nothing there. */
 #define MESO_SHELL_REPAIR_ROUNDS 100
 
 /* Repair (issue #4, --repair): shorten the directors of the vertices of

@@ -46,6 +46,15 @@ for t in 0.05 0.1; do
   done
   check "spot_uv envelope $t: the file validates fully" "$inspect" validate --full "$tmp/envt.meso" >/dev/null
 done
+# ...and on every bundled closed mesh at 10 % (spot_low_resolution and blub
+# need the stage there).
+for mesh in spot_low_resolution blub_fish_low_resolution torus sphere; do
+  "$bake" shell -i "$data/$mesh.obj" -o "$tmp/envt.meso" --kind envelope --thickness-rel 0.1 \
+    --report "$tmp/envt.json" >/dev/null 2>&1
+  for key in inverted_prisms offset_self_intersections offset_base_intersections; do
+    check "$mesh envelope 0.1: $key = 0" grep -q "\"$key\":[[:space:]]*0," "$tmp/envt.json"
+  done
+done
 
 num() { # KEY: the number under KEY in $tmp/goal.json
   sed -n "s/.*\"$1\":[[:space:]]*\([-+0-9.eE]*\).*/\1/p" "$tmp/goal.json"
