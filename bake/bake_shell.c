@@ -36,6 +36,7 @@
 #include "shell_update.h"
 #include "shell_validate.h"
 #include "standin_levels.h"
+#include "volume_levels.h"
 #include "surface_distance.h"
 
 _Static_assert(MESO_BAKE_SHELL_MAX_LEVELS == MESOI_STANDIN_MAX_LEVELS, "the stand-ins hold every level");
@@ -808,40 +809,69 @@ static double midsurface(const shell_bake* s, const float* pos, const float* sdi
     return 0.5 * (hi - lo) * dmax + 2.0 * FLT_EPSILON * big;
 }
 
-/* The native levels kept (height_field_levels.h) and their chunks: each
- * level's TX2D and DIST at its own lod, appended to chunks[0..n-1]; the
- * chunks every level shares (SDIR, STHK, COLR, CMAP) move to lod N, the
- * coarsest native level, which levels 0..N all resolve them to (FORMAT.md
- * §7.10: per type the smallest lod >= the level); the MESH they draw is the
- * stand-in's copy at lod N + 1 (standin_levels.c). A level's error is its
- * heights' sup distance from level 0's times the longest top - bottom of
- * the output vertices (height_field_levels.c derives it), with 4 float
- * ulps of slack in the heights for the runtime's arithmetic; levels whose
- * error reaches the base mesh's (e0) are dropped, the base mesh being as
- * close and cheaper. Returns the chunks appended. */
-static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_out, int sdir_layers,
-                            mesoi_standin_levels* lv, mesoi_chunk* chunks, size_t n)
+/* The errors of the native levels (height_field_levels.h, volume_levels.h)
+ * into lv->native_error, and how many are kept into lv->native. A height
+ * field level's error is its heights' sup distance from level 0's times the
+ * longest top - bottom of the output vertices (height_field_levels.c
+ * derives it), with 4 float ulps of slack in the heights for the runtime's
+ * arithmetic. A volume level's is the texture-space Hausdorff bound of its
+ * surface against level 0's times the mapping's factor k
+ * (volume_levels.c), with as much slack. Levels whose error reaches the
+ * base mesh's (e0) are dropped, the base mesh being as close and cheaper. */
+static meso_result native_errors(shell_bake* s, const meso_mesh* base, const float* sdir, int sdir_layers,
+                                 mesoi_standin_levels* lv, meso_error* err)
 {
     const double e1 = lv->e0; /* level 1's, the stand-in a native level must beat */
     const mesoi_shell_texture* tx = &s->tx;
-    double dmax = 0.0;
-    for (size_t v = 0; v < nv_out; ++v) {
-        double d2 = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            const double top = sdir[3 * v + (size_t)k];
-            const double bottom = sdir_layers == 2 ? sdir[3 * ((size_t)nv_out + v) + (size_t)k] : 0.0;
-            d2 += (top - bottom) * (top - bottom);
-        }
-        dmax = fmax(dmax, sqrt(d2));
-    }
+    lv->native = 0;
+    if (!tx->native_count)
+        return MESO_OK;
+    double g[2], k = INFINITY;
+    int scaled = mesoi_volume_level_scales(base, sdir, sdir_layers, g, &k);
+    const double t = meso_seconds();
+    meso_result r = MESO_OK;
+    double d[MESOI_HEIGHT_MAX_NATIVE];
+    if (tx->fn.kind == MESO_TEXFN_DENSITY && scaled && !(k * mesoi_volume_level_floor(&tx->fn, g) < e1))
+        scaled = 0; /* even the finest bound it could state is no nearer than the base mesh */
+    if (tx->fn.kind == MESO_TEXFN_DENSITY && scaled)
+        r = mesoi_volume_level_distances(&tx->fn, tx->native, tx->native_count, g, e1 / k, s->run.common.threads,
+                                         d, err);
     uint32_t N = 0;
-    for (; N < tx->native_count; ++N) {
-        const float f = mesoi_f32_up((tx->native[N].sup + 4.0 * FLT_EPSILON) * dmax);
-        if (!(f < e1))
+    double rho = 0.0;
+    for (; r == MESO_OK && N < tx->native_count; ++N) {
+        double e = INFINITY;
+        if (tx->fn.kind == MESO_TEXFN_HEIGHT) {
+            e = (tx->native[N].sup + 4.0 * FLT_EPSILON) * g[1];
+        } else if (scaled) {
+            rho = fmax(rho, d[N]); /* errors never decrease (FORMAT.md §7.10): still a bound */
+            e = k * (rho + 4.0 * FLT_EPSILON * (g[0] + g[1]));
+        }
+        const float f = mesoi_f32_up(e);
+        if (r != MESO_OK || !(f < e1))
             break;
         lv->native_error[N] = f;
     }
-    lv->native = N;
+    if (r == MESO_OK && tx->fn.kind == MESO_TEXFN_DENSITY)
+        mesoi_run_stage(&s->run, "texture levels", 0.99, 0.99,
+                        "%u of %u halved volumes nearer than the base mesh (%g): the coarsest within %g; a texture "
+                        "tile stretched up to %g object units, a lattice cell's error %g (%.0f ms)",
+                        N, tx->native_count, e1, N ? lv->native_error[N - 1] : 0.0, g[0],
+                        k * mesoi_volume_level_floor(&tx->fn, g), 1e3 * (meso_seconds() - t));
+    lv->native = r == MESO_OK ? N : 0;
+    return r;
+}
+
+/* The native levels kept (lv->native, native_errors) and their chunks:
+ * each level's TX2D or TX3D and DIST at its own lod, appended to
+ * chunks[0..n-1]; the chunks every level shares (SDIR, STHK, COLR, CMAP)
+ * move to lod N, the coarsest native level, which levels 0..N all resolve
+ * them to (FORMAT.md §7.10: per type the smallest lod >= the level); the
+ * MESH they draw is the stand-in's copy at lod N + 1 (standin_levels.c).
+ * Returns the chunks appended. */
+static size_t native_chunks(const shell_bake* s, const mesoi_standin_levels* lv, mesoi_chunk* chunks, size_t n)
+{
+    const mesoi_shell_texture* tx = &s->tx;
+    const uint32_t N = lv->native;
     if (N == 0)
         return 0;
     for (size_t k = 0; k < n; ++k) {
@@ -854,8 +884,9 @@ static size_t native_chunks(const shell_bake* s, const float* sdir, uint32_t nv_
     for (uint32_t l = 1; l <= N; ++l) {
         const mesoi_height_level* t = &tx->native[l - 1];
         chunks[n + m++] = (mesoi_chunk){
-            .desc = {.type = MESO_CHUNK_TX2D, .object = 1, .lod = (uint16_t)l, .dtype = t->fn.dtype, .components = 1,
-                     .dims = {t->fn.dims[0], t->fn.dims[1], 1}},
+            .desc = {.type = tx->fn.kind == MESO_TEXFN_DENSITY ? MESO_CHUNK_TX3D : MESO_CHUNK_TX2D, .object = 1,
+                     .lod = (uint16_t)l, .dtype = t->fn.dtype, .components = 1,
+                     .dims = {t->fn.dims[0], t->fn.dims[1], t->fn.dims[2]}},
             .data = t->fn.encoded, .size = t->fn.encoded_size};
         chunks[n + m++] = (mesoi_chunk){
             .desc = {.type = MESO_CHUNK_DIST, .object = 1, .lod = (uint16_t)l, .dtype = t->dist.dtype,
@@ -880,9 +911,9 @@ static void native_trim(shell_bake* s)
                                                    shared + tx->fn.encoded_size + tx->dist.encoded_size);
     if (tx->native_count)
         mesoi_run_stage(&s->run, "texture levels", 0.2, 0.2,
-                        "%u of %u halved height fields kept as native levels (each draws from at most 9/10 of the "
+                        "%u of %u halved %s kept as native levels (each draws from at most 9/10 of the "
                         "bytes of the level before)",
-                        keep, tx->native_count);
+                        keep, tx->native_count, tx->fn.kind == MESO_TEXFN_DENSITY ? "volumes" : "height fields");
     tx->native_count = keep;
 }
 
@@ -1217,7 +1248,9 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                     standins.count, 1e3 * (meso_seconds() - tc));
             }
             if (r == MESO_OK)
-                n += native_chunks(s, sdir_out ? sdir_out : sdir, nv_out, sdir_layers, &standins, chunks, n);
+                r = native_errors(s, &base, sdir_out ? sdir_out : sdir, sdir_layers, &standins, err);
+            if (r == MESO_OK)
+                n += native_chunks(s, &standins, chunks, n);
             if (r == MESO_OK)
                 n += mesoi_standin_levels_append(&standins, &base, &chunks[0], rec.bbox_min, rec.bbox_max,
                                                  chunks + n, rep);

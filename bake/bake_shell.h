@@ -25,8 +25,9 @@ typedef struct mesoi_shell_texture {
      * frame k at k * the frame's size (frame 0 is fn and dist); else NULL. */
     uint8_t* fn_frames;
     uint8_t* dist_frames;
-    /* Native coarser levels (height_field_levels.h): a static height field
-     * halved, lod 1..native_count; none for volumes, frames or --levels < 3. */
+    /* Native coarser levels (height_field_levels.h, volume_levels.h): a
+     * static height field or volume halved, lod 1..native_count; none for
+     * frames or --levels < 3. */
     mesoi_height_level native[MESOI_HEIGHT_MAX_NATIVE];
     uint32_t native_count;
 } mesoi_shell_texture;

@@ -19,6 +19,7 @@
 #include "memory_budget.h"
 #include "meso_clock.h"
 #include "standin_levels.h"
+#include "volume_levels.h"
 
 void mesoi_shell_texture_free(mesoi_shell_texture* tx)
 {
@@ -73,7 +74,9 @@ static meso_result bake_frames(mesoi_bake_run* run, const meso_bake_shell_option
     return r;
 }
 
-/* The native coarser levels of a static height field (height_field_levels.h):
+/* The native coarser levels of a static height field (height_field_levels.h)
+ * or volume (volume_levels.h, whose errors bake_shell.c measures once the
+ * directors are known):
  * `--levels` 0 as many as there may be, K >= 3 at most K - 2 (level 0 and
  * the base mesh come first, as for cells), else none. They stop where the
  * sup reaches the highest texel of an exterior shell (1 for the other
@@ -84,8 +87,19 @@ static meso_result native_levels(mesoi_bake_run* run, const meso_bake_shell_opti
                                  meso_error* err)
 {
     const uint32_t want = mesoi_native_wanted(a->levels, MESOI_HEIGHT_MAX_NATIVE);
-    if (a->frames || tx->fn.kind != MESO_TEXFN_HEIGHT || want == 0)
+    if (a->frames || want == 0)
         return MESO_OK;
+    if (tx->fn.kind == MESO_TEXFN_DENSITY) {
+        const double t = meso_seconds();
+        const meso_result r = mesoi_volume_levels_build(&tx->fn, &tx->dist, want, run->common.threads, tx->native,
+                                                        &tx->native_count, err);
+        if (r == MESO_OK && tx->native_count)
+            mesoi_run_stage(run, "texture levels", 0.05, 0.05, "volume halved %u times, down to %ux%ux%u (%.0f ms)",
+                            tx->native_count, tx->native[tx->native_count - 1].fn.dims[0],
+                            tx->native[tx->native_count - 1].fn.dims[1], tx->native[tx->native_count - 1].fn.dims[2],
+                            1e3 * (meso_seconds() - t));
+        return r;
+    }
     double hmax = 1.0;
     if (a->kind == MESO_SHELL_EXTERIOR) {
         hmax = 0.0;

@@ -154,6 +154,29 @@ static void edt_1d(const double* f, int n, double c2, double* d, int* v, double*
     }
 }
 
+/* edt_1d for f of 0 and INFINITY only: d[p] = c2 (p - q)^2, q the nearest
+ * p with f[q] = 0 (INFINITY without one), by a scan each way. */
+static void nearest_1d(const double* f, int n, double c2, double* d)
+{
+    int last = -1;
+    for (int p = 0; p < n; ++p) {
+        if (f[p] == 0.0)
+            last = p;
+        d[p] = last < 0 ? INFINITY : c2 * (double)(p - last) * (double)(p - last);
+    }
+    last = -1;
+    for (int p = n - 1; p >= 0; --p) {
+        if (f[p] == 0.0)
+            last = p;
+        if (last >= 0) {
+            const double dp = (double)(last - p), e = c2 * dp * dp;
+            d[p] = e < d[p] ? e : d[p];
+        }
+    }
+}
+
+enum { EDT_BLOCK = 8 };
+
 meso_result meso_distmap_edt(const uint8_t* mask, const uint32_t dims[3], const double spacing[3],
                              const int periodic[3], double* sqdist, int threads, meso_error* err)
 {
@@ -164,20 +187,30 @@ meso_result meso_distmap_edt(const uint8_t* mask, const uint32_t dims[3], const 
     int failed = 0;
     const int nt = meso_bake_thread_count(threads);
     (void)nt;
-    /* Axis w first (usually the shortest lines), then t, then s. */
+    /* Axis w first (usually the shortest lines), then t, then s. The
+     * first pass sees only 0 and INFINITY, where the envelope is the
+     * nearest mark: found by two scans, with the same arithmetic
+     * (c2 dp dp + 0). A periodic line is run over its period with half a
+     * period more on each side (the nearest copy of any point is within
+     * half a period), and the middle kept. */
     for (int axis = 2; axis >= 0; --axis) {
         const uint32_t len = dims[axis];
-        const int rep = periodic[axis] ? 3 : 1;
-        const int m = (int)len * rep;
+        const int half = periodic[axis] ? (int)len / 2 + 1 : 0;
+        const int m = (int)len + 2 * half;
+        const int first = axis == 2;
         const double c2 = spacing[axis] * spacing[axis];
         const int u = axis == 0 ? 1 : 0, w = axis == 2 ? 1 : 2; /* the two other axes */
-        const long lines = (long)dims[u] * dims[w];
+        /* Lines along t and w are gathered EDT_BLOCK at a time, neighbours
+         * along s, so each cache line read serves several (the lines are
+         * independent: the result does not depend on the grouping). */
+        const uint32_t blk = stride[u] == 1 ? EDT_BLOCK : 1;
+        const long nu = (long)((dims[u] + blk - 1) / blk), blocks = nu * (long)dims[w];
 #ifdef _OPENMP
 #pragma omp parallel num_threads(nt) reduction(| : failed)
 #endif
         {
-            double* fin = malloc(sizeof(double) * (size_t)m);
-            double* out = malloc(sizeof(double) * (size_t)m);
+            double* fin = malloc(sizeof(double) * (size_t)m * blk);
+            double* out = malloc(sizeof(double) * (size_t)m * blk);
             double* z = malloc(sizeof(double) * ((size_t)m + 1));
             int* v = malloc(sizeof(int) * (size_t)m);
             const int ok = fin && out && z && v;
@@ -185,16 +218,27 @@ meso_result meso_distmap_edt(const uint8_t* mask, const uint32_t dims[3], const 
 #ifdef _OPENMP
 #pragma omp for schedule(static)
 #endif
-            for (long l = 0; l < lines; ++l) {
+            for (long bl = 0; bl < blocks; ++bl) {
                 if (!ok)
                     continue;
-                const size_t base = (size_t)(l % dims[u]) * stride[u] + (size_t)(l / dims[u]) * stride[w];
-                for (int p = 0; p < m; ++p)
-                    fin[p] = sqdist[base + (size_t)(p % (int)len) * stride[axis]];
-                edt_1d(fin, m, c2, out, v, z);
-                const int off = periodic[axis] ? (int)len : 0;
-                for (uint32_t p = 0; p < len; ++p)
-                    sqdist[base + p * stride[axis]] = out[off + (int)p];
+                const uint32_t i0 = (uint32_t)(bl % nu) * blk, nb = dims[u] - i0 < blk ? dims[u] - i0 : blk;
+                const size_t base = (size_t)i0 * stride[u] + (size_t)(bl / nu) * stride[w];
+                for (int p = 0; p < m; ++p) {
+                    const double* row = sqdist + base + (size_t)((p - half + 2 * (int)len) % (int)len) * stride[axis];
+                    for (uint32_t b = 0; b < nb; ++b)
+                        fin[(size_t)b * (size_t)m + (size_t)p] = row[b * stride[u]];
+                }
+                for (uint32_t b = 0; b < nb; ++b) {
+                    if (first)
+                        nearest_1d(fin + (size_t)b * (size_t)m, m, c2, out + (size_t)b * (size_t)m);
+                    else
+                        edt_1d(fin + (size_t)b * (size_t)m, m, c2, out + (size_t)b * (size_t)m, v, z);
+                }
+                for (uint32_t p = 0; p < len; ++p) {
+                    double* row = sqdist + base + p * stride[axis];
+                    for (uint32_t b = 0; b < nb; ++b)
+                        row[b * stride[u]] = out[(size_t)b * (size_t)m + (size_t)half + p];
+                }
             }
             free(fin);
             free(out);

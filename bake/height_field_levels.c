@@ -104,6 +104,19 @@ static meso_result halve(const meso_texfn* prev, meso_texfn* out, meso_error* er
     return r;
 }
 
+meso_result mesoi_native_distmap(const meso_texfn* fn, const meso_distmap* d0, uint32_t l, int threads,
+                                 meso_distmap* out, meso_error* err)
+{
+    uint32_t dd[3];
+    for (int k = 0; k < 3; ++k) {
+        dd[k] = d0->dims[k] >> l;
+        dd[k] = dd[k] ? dd[k] : 1;
+    }
+    if (dd[2] < 8)
+        dd[2] = d0->dims[2] < 8 ? d0->dims[2] : 8;
+    return meso_distmap_build(fn, dd, d0->dtype, threads, out, err);
+}
+
 meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, double stop_sup,
                                          int threads, mesoi_height_level* out, uint32_t* count, meso_error* err)
 {
@@ -127,14 +140,7 @@ meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* 
             meso_texfn_free(&lv->fn);
             break;
         }
-        uint32_t dd[3] = {1, 1, 1};
-        for (int k = 0; d0 && k < 3; ++k) {
-            dd[k] = d0->dims[k] >> l;
-            dd[k] = dd[k] ? dd[k] : 1;
-        }
-        if (d0 && dd[2] < 8)
-            dd[2] = d0->dims[2] < 8 ? d0->dims[2] : 8;
-        if (d0 && (r = meso_distmap_build(&lv->fn, dd, d0->dtype, threads, &lv->dist, err)) != MESO_OK) {
+        if (d0 && (r = mesoi_native_distmap(&lv->fn, d0, l, threads, &lv->dist, err)) != MESO_OK) {
             meso_texfn_free(&lv->fn);
             break;
         }

@@ -17,10 +17,12 @@
 /* No level whose height field is smaller than this along s or t. */
 #define MESOI_HEIGHT_MIN_LEVEL_RES 4
 
+/* One native level: a halved height field here, or a halved volume
+ * (volume_levels.h builds those into the same struct). */
 typedef struct mesoi_height_level {
-    meso_texfn fn;     /* the halved height field, of level 0's dtype */
+    meso_texfn fn;     /* the halved height field (or volume), of level 0's dtype */
     meso_distmap dist; /* its distance map (distance_map.h), level 0's dtype; none without d0 */
-    double sup;        /* sup over texture space of |h_l - h_0|, both filtered as the runtime samples them */
+    double sup;        /* sup over texture space of |h_l - h_0|, both filtered as the runtime samples them (0 for a volume) */
 } mesoi_height_level;
 
 /* Up to `want` (<= MESOI_HEIGHT_MAX_NATIVE) levels below `f0` (a height
@@ -34,6 +36,12 @@ typedef struct mesoi_height_level {
  * Deterministic for any thread count. */
 meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, double stop_sup,
                                          int threads, mesoi_height_level* out, uint32_t* count, meso_error* err);
+
+/* The distance map of native level l's function `fn` (a height field or a
+ * volume): level 0's map d0's dims halved l times (s and t at least 1, w
+ * at least 8, or d0's when smaller), d0's dtype. */
+meso_result mesoi_native_distmap(const meso_texfn* fn, const meso_distmap* d0, uint32_t l, int threads,
+                                 meso_distmap* out, meso_error* err);
 
 /* sup over (s, t) of |a(s, t) - b(s, t)| for two height fields sampled
  * bilinearly with wrap (meso_texfn_sample), a's sides b's divided by a

@@ -309,11 +309,11 @@ typedef struct baked {
     cJSON* report;
     uint32_t vertex_count, tilted, seam_repeats;
     metrics smooth, curved, tetra;
-    uint32_t native_levels;        /* coarser native levels (a halved height field each) */
+    uint32_t native_levels;        /* coarser native levels (a halved height field or volume each) */
     metrics native[4];             /* each drawn from the file cut at its prefix_bytes */
 } baked;
 
-/* The native coarser levels (bake/height_field_levels.h): the file cut at
+/* The native coarser levels (bake/height_field_levels.h, volume_levels.h): the file cut at
  * level L's prefix_bytes (prefix_io.h: reads past it fail), loaded with its
  * levels and drawn at the finest level that has arrived (pixel_error < 0),
  * against the reference's level L (its own texture function). */
@@ -477,7 +477,7 @@ int main(int argc, char** argv)
                          &c.rt) == MESO_OK);
     CHECK(meso_rt_gl_is_es(c.rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
 
-    enum { SADDLE, SPOT, SPOT_INTERIOR, SPOT_ENVELOPE, TORUS, CASES };
+    enum { SADDLE, SPOT, SPOT_INTERIOR, SPOT_ENVELOPE, TORUS, TORUS_UV, CASES };
     static const bake_case cases[CASES] = {
         [SADDLE] = {"saddle_hybrid", "saddle.obj", "--thickness-rel 0.4 --texture bricks:64", 1, 0, {0.5, -0.6, 1.0}},
         [SPOT] = {"spot_seams", "spot_uv.obj", "--thickness-rel 0.03 --texture bricks:128 --tiling 4,4", 1, 0,
@@ -489,6 +489,8 @@ int main(int argc, char** argv)
                            "--kind envelope --thickness-rel 0.02 --texture bricks:128 --tiling 4,4", 2, 0,
                            {0.2, 0.5, -1.0}},
         [TORUS] = {"torus_volume", "torus.obj", "--thickness-rel 0.08 --texture cells:32", 1, 0, {0.3, 1.0, 0.8}},
+        [TORUS_UV] = {"torus_uv_weave", "torus_uv.obj", "--thickness-rel 0.03 --texture weave:64 --tiling 8,2", 1, 0,
+                      {0.2, 1.0, 0.9}},
     };
     baked b[CASES];
     for (int i = 0; i < CASES; ++i)
@@ -525,6 +527,9 @@ int main(int argc, char** argv)
      * mid-surface stand-in is nearer and they are dropped.) */
     for (int i = SPOT; i <= SPOT_ENVELOPE; ++i)
         CHECK_MSG(b[i].native_levels >= 1, "%s: no native coarser level", cases[i].name);
+    /* The weave on the uv torus: its halved volumes are levels too
+     * (bake/volume_levels.h; their errors: test_shell_volume_levels). */
+    CHECK_MSG(b[TORUS_UV].native_levels >= 2, "torus_uv_weave: %u native levels", b[TORUS_UV].native_levels);
     /* Curved on the torus with the Voronoi walls: the geometric tolerances
      * hold, but GL draws isolated dark pixels (walls stepped over) that the
      * reference has not: colour 1.3 % measured, 0.6 % with no_distance_map,

@@ -48,7 +48,7 @@ for t in 0.05 0.1; do
 done
 # ...and on every bundled closed mesh at 10 % (spot_low_resolution and blub
 # need the stage there).
-for mesh in spot_low_resolution blub_fish_low_resolution torus sphere; do
+for mesh in spot_low_resolution blub_fish_low_resolution torus torus_uv sphere; do
   "$bake" shell -i "$data/$mesh.obj" -o "$tmp/envt.meso" --kind envelope --thickness-rel 0.1 \
     --report "$tmp/envt.json" >/dev/null 2>&1
   for key in inverted_prisms offset_self_intersections offset_base_intersections; do
@@ -62,7 +62,7 @@ num() { # KEY: the number under KEY in $tmp/goal.json
 # The goal, on the bundled closed meshes: zero inverted prisms and
 # zero self- or base intersections at 10 % exterior and 5 % interior with the
 # defaults (hybrid + repair).
-for mesh in spot_low_resolution blub_fish_low_resolution torus sphere; do
+for mesh in spot_low_resolution blub_fish_low_resolution torus torus_uv sphere; do
   for kt in "exterior 0.1" "interior 0.05"; do
     set -- $kt
     "$bake" shell -i "$data/$mesh.obj" -o "$tmp/goal.meso" --kind "$1" --thickness-rel "$2" \
