@@ -429,7 +429,11 @@ static meso_result directors(shell_bake* s, meso_error* err)
     s->rep->seconds_field = meso_seconds() - t;
     if (r == MESO_OK && a->directors != MESO_DIRECTORS_NORMAL)
         r = field_for(s, a->update ? s->prior.redo : NULL, h_side, err);
-    const meso_trace_options topt = {.thickness = h_side, .angle_tol = a->angle_tol_deg * M_PI / 180.0,
+    /* The paper's 2h localisation (§4.2; shell_directors.c has what it
+     * changes), h the shell's thickness: an envelope's whole, though each
+     * of its sides traces half of it. */
+    const meso_trace_options topt = {.thickness = h_side, .cutoff = 2.0 * s->h,
+                                     .angle_tol = a->angle_tol_deg * M_PI / 180.0,
                                      .theta = a->theta, .smooth_iterations = a->smooth,
                                      .progress = s->run.common.progress ? mesoi_run_tick : NULL,
                                      .progress_user = &s->run};

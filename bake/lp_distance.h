@@ -88,8 +88,8 @@
  * whole (so d_p jumps by one small far triangle's share as x moves — far
  * below the Barnes–Hut error for triangles small against h), the rest is
  * Barnes–Hut as usual. The director tracer offers it (meso_trace_options.
- * cutoff); bakes do not use it yet (shell_directors.c, >>localisation, has
- * the measurements). The other reading, every triangle that may come
+ * cutoff) and bakes use it at 2h (shell_directors.c's header has the
+ * measurements). The other reading, every triangle that may come
  * within near_radius of x integrated exactly whatever θ says
  * (meso_lp_eval_ex), is kept for callers that want it; with near_radius =
  * 2h in the tracer, tracing was ~47x slower at 26k triangles.

@@ -38,13 +38,13 @@
  *    2h of x counts (meso_lp_eval_local), by Barnes-Hut;
  *    tests/integration/test_shell_directors.c bounds the change of the
  *    directors against the whole-surface field (max 0.04 h on spot at
- *    10 %). Bakes do not use it (cutoff 0: the whole surface, Barnes-Hut
- *    alone), measured in issue 15 at 106k triangles (spot subdivided, 5 %,
- *    all-Lp): per evaluation 148 instead of 160 nodes visited, 57 instead
- *    of 79 multipoles, tracing ~4 % faster (2.72 vs 2.84 s, medians of 3,
- *    loaded machine), thickness ratio min 0.632 -> 0.634; but spot_uv's
- *    2 % envelope (tests/integration/test_shell_standin.c) was left with 2
- *    inverted prisms (the two layers are repaired against the base only).
+ *    10 %). Bakes use it (bake_shell.c directors): at 106k triangles
+ *    (spot subdivided, 5 %, all-Lp) an evaluation visits 148 instead of
+ *    160 nodes and 57 instead of 79 multipoles, and the hybrid bake's
+ *    directors took 0.97 s instead of 1.05 (issue 15). It was left out
+ *    before because spot_uv's 2 % envelope kept 2 inverted prisms (its
+ *    two layers were repaired against the base only); the envelope stage
+ *    (shell_envelope.h) now rights them.
  *    Exact summation within 2h (opt->near_radius = 2h) made tracing ~47x
  *    slower at 26k triangles.
  */

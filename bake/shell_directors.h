@@ -22,7 +22,7 @@ typedef struct meso_trace_options {
     double theta;       /* Barnes-Hut opening angle (<= 0: exact summation) */
     double near_radius; /* triangles closer than this are integrated exactly (0: θ decides alone) */
     double cutoff;      /* mesh units: integrate only the surface within this distance of x, the
-                         * paper's localisation (meso_lp_eval_local, e.g. 2h); 0 (bakes): all of
+                         * paper's localisation (meso_lp_eval_local; bakes pass 2h); 0: all of
                          * it. Overrides near_radius. */
     int smooth_iterations; /* Laplacian smoothing rounds of traced directors (shell_hybrid.c) */
     /* Optional progress report from the tracing loop (called by one thread

@@ -283,11 +283,13 @@ static void ctx_free(shell_ctx* c)
     meso_mesh_free(&c->m);
 }
 
-/* As bake_shell.c's `topt` (near_radius 0, first/min step at their defaults). */
+/* As bake_shell.c's `topt` (the paper's 2h localisation, first/min step at
+ * their defaults). */
 static meso_trace_options trace_opts(double h, double theta, double tol_deg, int smooth)
 {
-    return (meso_trace_options){.thickness = h, .angle_tol = tol_deg * M_PI / 180.0, .theta = theta,
-                                .smooth_iterations = smooth, .progress = NULL, .progress_user = NULL};
+    return (meso_trace_options){.thickness = h, .cutoff = 2.0 * h, .angle_tol = tol_deg * M_PI / 180.0,
+                                .theta = theta, .smooth_iterations = smooth, .progress = NULL,
+                                .progress_user = NULL};
 }
 
 typedef struct side_result {
