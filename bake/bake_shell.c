@@ -813,6 +813,53 @@ static double midsurface(const shell_bake* s, const float* pos, const float* sdi
     return 0.5 * (hi - lo) * dmax + 2.0 * FLT_EPSILON * big;
 }
 
+/* The longest top - bottom over the vertices of SDIR `sdir` (FORMAT.md
+ * §7.2; `layers` 1 or 2). */
+static double longest_span(const float* sdir, uint32_t nv, int layers)
+{
+    double dmax = 0.0;
+    for (size_t v = 0; v < nv; ++v) {
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const double top = sdir[3 * v + (size_t)k];
+            const double bottom = layers == 2 ? sdir[3 * ((size_t)nv + v) + (size_t)k] : 0.0;
+            d2 += (top - bottom) * (top - bottom);
+        }
+        dmax = fmax(dmax, sqrt(d2));
+    }
+    return dmax;
+}
+
+/* Volume levels' errors (volume_levels.c) into d[0..count-1] (INFINITY
+ * where none is stated), g and k for turning them into object units; a
+ * stage line says what was measured, or why not. */
+static meso_result volume_distances(shell_bake* s, const meso_mesh* base, const float* sdir, int sdir_layers,
+                                    double e1, double g[2], double* k, double* d, meso_error* err)
+{
+    const mesoi_shell_texture* tx = &s->tx;
+    for (uint32_t l = 0; l < tx->native_count; ++l)
+        d[l] = INFINITY;
+    const double t = meso_seconds();
+    const int scaled = mesoi_volume_level_scales(base, sdir, sdir_layers, g[1], g, k);
+    const double floor = scaled ? *k * mesoi_volume_level_floor(&tx->fn, g) : INFINITY;
+    const uint64_t need = mesoi_volume_level_bytes(&tx->fn);
+    const char* why = !scaled          ? "a degenerate texture triangle"
+                      : !(floor < e1)  ? "even one lattice cell bounds no nearer than the base mesh"
+                      : need > s->run.common.max_memory ? "the measurement would exceed --max-memory"
+                                                        : NULL;
+    meso_result r = MESO_OK;
+    if (!why)
+        r = mesoi_volume_level_distances(&tx->fn, tx->native, tx->native_count, g, e1 / *k, s->run.common.threads, d,
+                                         err);
+    if (r == MESO_OK)
+        mesoi_run_stage(&s->run, "texture levels", 0.99, 0.99,
+                        "halved volumes %s%s%s: a texture tile stretched up to %g object units, a lattice "
+                        "cell's error %g, the base mesh's %g (%.0f ms)",
+                        why ? "not measured (" : "measured against level 0", why ? why : "", why ? ")" : "", g[0],
+                        floor, e1, 1e3 * (meso_seconds() - t));
+    return r;
+}
+
 /* The errors of the native levels (height_field_levels.h, volume_levels.h)
  * into lv->native_error, and how many are kept into lv->native. A height
  * field level's error is its heights' sup distance from level 0's times the
@@ -830,37 +877,21 @@ static meso_result native_errors(shell_bake* s, const meso_mesh* base, const flo
     lv->native = 0;
     if (!tx->native_count)
         return MESO_OK;
-    double g[2], k = INFINITY;
-    int scaled = mesoi_volume_level_scales(base, sdir, sdir_layers, g, &k);
-    const double t = meso_seconds();
-    meso_result r = MESO_OK;
+    const int volume = tx->fn.kind == MESO_TEXFN_DENSITY;
+    double g[2] = {0.0, longest_span(sdir, base->vertex_count, sdir_layers)}, k = INFINITY;
     double d[MESOI_HEIGHT_MAX_NATIVE];
-    if (tx->fn.kind == MESO_TEXFN_DENSITY && scaled && !(k * mesoi_volume_level_floor(&tx->fn, g) < e1))
-        scaled = 0; /* even the finest bound it could state is no nearer than the base mesh */
-    if (tx->fn.kind == MESO_TEXFN_DENSITY && scaled)
-        r = mesoi_volume_level_distances(&tx->fn, tx->native, tx->native_count, g, e1 / k, s->run.common.threads,
-                                         d, err);
+    meso_result r = volume ? volume_distances(s, base, sdir, sdir_layers, e1, g, &k, d, err) : MESO_OK;
     uint32_t N = 0;
     double rho = 0.0;
     for (; r == MESO_OK && N < tx->native_count; ++N) {
-        double e = INFINITY;
-        if (tx->fn.kind == MESO_TEXFN_HEIGHT) {
-            e = (tx->native[N].sup + 4.0 * FLT_EPSILON) * g[1];
-        } else if (scaled) {
-            rho = fmax(rho, d[N]); /* errors never decrease (FORMAT.md §7.10): still a bound */
-            e = k * (rho + 4.0 * FLT_EPSILON * (g[0] + g[1]));
-        }
+        rho = volume ? fmax(rho, d[N]) : 0.0; /* errors never decrease (FORMAT.md §7.10): still a bound */
+        const double e = volume ? k * (rho + 4.0 * FLT_EPSILON * (g[0] + g[1]))
+                                : (tx->native[N].sup + 4.0 * FLT_EPSILON) * g[1];
         const float f = mesoi_f32_up(e);
-        if (r != MESO_OK || !(f < e1))
+        if (!(f < e1))
             break;
         lv->native_error[N] = f;
     }
-    if (r == MESO_OK && tx->fn.kind == MESO_TEXFN_DENSITY)
-        mesoi_run_stage(&s->run, "texture levels", 0.99, 0.99,
-                        "%u of %u halved volumes nearer than the base mesh (%g): the coarsest within %g; a texture "
-                        "tile stretched up to %g object units, a lattice cell's error %g (%.0f ms)",
-                        N, tx->native_count, e1, N ? lv->native_error[N - 1] : 0.0, g[0],
-                        k * mesoi_volume_level_floor(&tx->fn, g), 1e3 * (meso_seconds() - t));
     lv->native = r == MESO_OK ? N : 0;
     return r;
 }

@@ -84,27 +84,36 @@ double mesoi_height_sup_diff(const meso_texfn* a, const meso_texfn* b, int threa
     return sup;
 }
 
-/* Level `prev` halved (its sides even), quantised to its dtype. */
+/* Level `prev` halved (its sides even), quantised to its dtype: 2 x 2
+ * means for a height field, 2 x 2 x 2 for a volume (volume_levels.h). */
 static meso_result halve(const meso_texfn* prev, meso_texfn* out, meso_error* err)
 {
-    const uint32_t W = prev->dims[0] / 2, H = prev->dims[1] / 2, dims[3] = {W, H, 1};
-    float* v = malloc(sizeof(float) * (size_t)W * H);
+    const int volume = prev->kind == MESO_TEXFN_DENSITY;
+    const uint32_t W = prev->dims[0] / 2, H = prev->dims[1] / 2, D = volume ? prev->dims[2] / 2 : 1;
+    const uint32_t dims[3] = {W, H, D};
+    float* v = malloc(sizeof(float) * (size_t)W * H * D);
     if (!v)
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture levels: out of memory");
-    const size_t PW = prev->dims[0];
-    for (uint32_t j = 0; j < H; ++j)
-        for (uint32_t i = 0; i < W; ++i) {
-            const float* p = prev->values + 2 * (size_t)j * PW + 2 * (size_t)i;
-            v[(size_t)j * W + i] = (float)(0.25 * ((double)p[0] + p[1] + p[PW] + p[PW + 1]));
-        }
-    const meso_result r = meso_texfn_from_values(MESO_TEXFN_HEIGHT, dims, v, prev->dtype, out, err);
+    const size_t PW = prev->dims[0], PS = PW * prev->dims[1];
+    for (uint32_t k = 0; k < D; ++k)
+        for (uint32_t j = 0; j < H; ++j)
+            for (uint32_t i = 0; i < W; ++i) {
+                const float* p = prev->values + 2 * (size_t)k * PS + 2 * (size_t)j * PW + 2 * (size_t)i;
+                const double sum = (double)p[0] + p[1] + p[PW] + p[PW + 1];
+                v[((size_t)k * H + j) * W + i] =
+                    volume ? (float)(0.125 * (sum + p[PS] + p[PS + 1] + p[PS + PW] + p[PS + PW + 1]))
+                           : (float)(0.25 * sum);
+            }
+    const meso_result r = meso_texfn_from_values(prev->kind, dims, v, prev->dtype, out, err);
     free(v);
     if (r == MESO_OK)
         memcpy(out->source, prev->source, sizeof out->source);
     return r;
 }
 
-meso_result mesoi_native_distmap(const meso_texfn* fn, const meso_distmap* d0, uint32_t l, int threads,
+/* Level l's distance map: d0's dims halved l times (s and t at least 1, w
+ * at least 8, or d0's when smaller), d0's dtype. */
+static meso_result level_distmap(const meso_texfn* fn, const meso_distmap* d0, uint32_t l, int threads,
                                  meso_distmap* out, meso_error* err)
 {
     uint32_t dd[3];
@@ -122,25 +131,30 @@ meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* 
 {
     *count = 0;
     memset(out, 0, sizeof(*out) * (want < MESOI_HEIGHT_MAX_NATIVE ? want : MESOI_HEIGHT_MAX_NATIVE));
-    if (f0->kind != MESO_TEXFN_HEIGHT)
+    if (f0->kind != MESO_TEXFN_HEIGHT && f0->kind != MESO_TEXFN_DENSITY)
         return MESO_OK;
+    const int axes = f0->kind == MESO_TEXFN_DENSITY ? 3 : 2;
     const meso_texfn* prev = f0;
     meso_result r = MESO_OK;
     for (uint32_t l = 1; r == MESO_OK && l <= want && l <= MESOI_HEIGHT_MAX_NATIVE; ++l) {
-        if (prev->dims[0] % 2 || prev->dims[1] % 2 || prev->dims[0] / 2 < MESOI_HEIGHT_MIN_LEVEL_RES ||
-            prev->dims[1] / 2 < MESOI_HEIGHT_MIN_LEVEL_RES)
+        int even = 1;
+        for (int k = 0; k < axes; ++k)
+            even &= prev->dims[k] % 2 == 0 && prev->dims[k] / 2 >= MESOI_HEIGHT_MIN_LEVEL_RES;
+        if (!even)
             break;
         mesoi_height_level* lv = &out[l - 1];
         if ((r = halve(prev, &lv->fn, err)) != MESO_OK)
             break;
-        lv->sup = mesoi_height_sup_diff(&lv->fn, f0, threads);
-        if (l > 1 && lv->sup < out[l - 2].sup) /* errors never decrease (FORMAT.md §7.10): still a bound */
-            lv->sup = out[l - 2].sup;
-        if (lv->sup >= stop_sup) {
-            meso_texfn_free(&lv->fn);
-            break;
+        if (axes == 2) { /* a volume's error needs the shell: volume_levels.h */
+            lv->sup = mesoi_height_sup_diff(&lv->fn, f0, threads);
+            if (l > 1 && lv->sup < out[l - 2].sup) /* errors never decrease (FORMAT.md §7.10): still a bound */
+                lv->sup = out[l - 2].sup;
+            if (lv->sup >= stop_sup) {
+                meso_texfn_free(&lv->fn);
+                break;
+            }
         }
-        if (d0 && (r = mesoi_native_distmap(&lv->fn, d0, l, threads, &lv->dist, err)) != MESO_OK) {
+        if (d0 && (r = level_distmap(&lv->fn, d0, l, threads, &lv->dist, err)) != MESO_OK) {
             meso_texfn_free(&lv->fn);
             break;
         }

@@ -14,7 +14,7 @@
 
 /* At most this many native levels (lod 1..), as for cells. */
 #define MESOI_HEIGHT_MAX_NATIVE 4
-/* No level whose height field is smaller than this along s or t. */
+/* No level whose height field (volume) is smaller than this along s or t (or w). */
 #define MESOI_HEIGHT_MIN_LEVEL_RES 4
 
 /* One native level: a halved height field here, or a halved volume
@@ -26,22 +26,17 @@ typedef struct mesoi_height_level {
 } mesoi_height_level;
 
 /* Up to `want` (<= MESOI_HEIGHT_MAX_NATIVE) levels below `f0` (a height
- * field) and, when `d0` is not NULL, its distance map `d0`, into
- * out[0..*count-1]: level l halves level l - 1 (each texel the mean of its
- * 2 x 2 children, quantised to the nearest stored value), its distance map
- * has d0's dims halved l times (s and t at least 1, w at least 8). Stops
+ * field, or a density volume: volume_levels.h) and, when `d0` is not
+ * NULL, its distance map `d0`, into out[0..*count-1]: level l halves level
+ * l - 1 (each texel the mean of its 2 x 2 children, 2 x 2 x 2 for a
+ * volume, quantised to the nearest stored value), its distance map has
+ * d0's dims halved l times (s and t at least 1, w at least 8). Stops
  * before a side would be odd or smaller than MESOI_HEIGHT_MIN_LEVEL_RES,
- * and before a level whose sup reaches `stop_sup` (a shell passes the
- * highest texel: from there the base mesh alone is as close).
- * Deterministic for any thread count. */
+ * and, for a height field, before a level whose sup reaches `stop_sup` (a
+ * shell passes the highest texel: from there the base mesh alone is as
+ * close); a volume's `sup` stays 0. Deterministic for any thread count. */
 meso_result mesoi_height_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, double stop_sup,
                                          int threads, mesoi_height_level* out, uint32_t* count, meso_error* err);
-
-/* The distance map of native level l's function `fn` (a height field or a
- * volume): level 0's map d0's dims halved l times (s and t at least 1, w
- * at least 8, or d0's when smaller), d0's dtype. */
-meso_result mesoi_native_distmap(const meso_texfn* fn, const meso_distmap* d0, uint32_t l, int threads,
-                                 meso_distmap* out, meso_error* err);
 
 /* sup over (s, t) of |a(s, t) - b(s, t)| for two height fields sampled
  * bilinearly with wrap (meso_texfn_sample), a's sides b's divided by a

@@ -6,12 +6,13 @@
  * over (s, t): halving moves it sideways as well as in w, and a thread
  * thinner than a coarse texel fades below 1/2 and is gone.
  *
- * The pyramid. Level l halves level l - 1 along s, t and w: texel (i, j, k)
- * is the mean of texels (2i..2i+1, 2j..2j+1, 2k..2k+1), quantised to the
- * nearest stored value (meso_texfn_from_values), the box filter of the
- * runtime's own mip levels (rt_mip_box.c). Each level gets the distance map
- * of its own function (distance_map.h: conservative for exactly what is
- * sampled), with level 0's dims halved.
+ * The pyramid (height_field_levels.c builds it for both kinds). Level l
+ * halves level l - 1 along s, t and w: texel (i, j, k) is the mean of
+ * texels (2i..2i+1, 2j..2j+1, 2k..2k+1), quantised to the nearest stored
+ * value (meso_texfn_from_values), the box filter of the runtime's own mip
+ * levels (rt_mip_box.c). Each level gets the distance map of its own
+ * function (distance_map.h: conservative for exactly what is sampled),
+ * with level 0's dims halved.
  *
  * The error in texture space. The runtime samples alpha trilinearly
  * between texel centres, wrapping in s and t and clamped in w, and draws
@@ -61,8 +62,8 @@
  * object-space length is at most k times the segment's length in the
  * metric, so the levels' surfaces are within k rho of each other.
  *
- * What this does not cover (decided here, and measured against the
- * reference in tests/integration/test_shell_native_levels.c): where the
+ * What this does not cover (decided here; the bound is measured against
+ * the reference in tests/integration/test_shell_volume_levels.c): where the
  * texture coordinates jump between two prisms (a uv seam), the nearest
  * surface point in texture space may lie across the seam, where the other
  * side draws other texels; the bound assumes it is drawn. Under the curved
@@ -70,96 +71,59 @@
  * A degenerate texture triangle (A singular) gives no bound: no levels.
  *
  * Decided here: 2 x 2 x 2 means, as the runtime's mips (not a wider filter
- * that would move the surface more); levels stop at
- * MESOI_VOLUME_MIN_LEVEL_RES texels a side or an odd side; the lattice is
- * capped (MESOI_VOLUME_MAX_LATTICE: two transforms of 134 MB of doubles).
+ * that would move the surface more), built by height_field_levels.c's
+ * pyramid; levels stop at MESOI_HEIGHT_MIN_LEVEL_RES texels a side or an
+ * odd side; the lattice is capped (MESOI_VOLUME_MAX_LATTICE: two
+ * transforms of 134 MB of doubles) and a bake under --max-memory measures
+ * it only when mesoi_volume_level_bytes fits.
  */
 #include "volume_levels.h"
 
-#include <float.h>
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "bake_internal.h"
 #include "bake_threads.h"
-
-/* Level `prev` halved along each axis (its sides even), quantised. */
-static meso_result halve(const meso_texfn* prev, meso_texfn* out, meso_error* err)
-{
-    const uint32_t W = prev->dims[0] / 2, H = prev->dims[1] / 2, D = prev->dims[2] / 2, dims[3] = {W, H, D};
-    float* v = malloc(sizeof(float) * (size_t)W * H * D);
-    if (!v)
-        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture levels: out of memory");
-    const size_t PW = prev->dims[0], PS = PW * prev->dims[1];
-    for (uint32_t k = 0; k < D; ++k)
-        for (uint32_t j = 0; j < H; ++j)
-            for (uint32_t i = 0; i < W; ++i) {
-                const float* p = prev->values + 2 * (size_t)k * PS + 2 * (size_t)j * PW + 2 * (size_t)i;
-                const double sum = (double)p[0] + p[1] + p[PW] + p[PW + 1] + p[PS] + p[PS + 1] + p[PS + PW] +
-                                   p[PS + PW + 1];
-                v[((size_t)k * H + j) * W + i] = (float)(0.125 * sum);
-            }
-    const meso_result r = meso_texfn_from_values(MESO_TEXFN_DENSITY, dims, v, prev->dtype, out, err);
-    free(v);
-    if (r == MESO_OK)
-        memcpy(out->source, prev->source, sizeof out->source);
-    return r;
-}
 
 static uint64_t lattice_cells(const meso_texfn* f)
 {
     return 8 * (uint64_t)f->dims[0] * f->dims[1] * f->dims[2];
 }
 
+uint64_t mesoi_volume_level_bytes(const meso_texfn* f0)
+{
+    const uint64_t cells = lattice_cells(f0), points = cells / f0->dims[2] * (2 * (uint64_t)f0->dims[2] + 1) / 2;
+    return points + 2 * cells + 2 * sizeof(double) * cells;
+}
+
 meso_result mesoi_volume_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, int threads,
                                       mesoi_height_level* out, uint32_t* count, meso_error* err)
 {
     *count = 0;
-    memset(out, 0, sizeof(*out) * (want < MESOI_HEIGHT_MAX_NATIVE ? want : MESOI_HEIGHT_MAX_NATIVE));
     if (f0->kind != MESO_TEXFN_DENSITY || lattice_cells(f0) > MESOI_VOLUME_MAX_LATTICE)
         return MESO_OK;
-    const meso_texfn* prev = f0;
-    meso_result r = MESO_OK;
-    for (uint32_t l = 1; r == MESO_OK && l <= want && l <= MESOI_HEIGHT_MAX_NATIVE; ++l) {
-        int ok = 1;
-        for (int k = 0; k < 3; ++k)
-            ok &= prev->dims[k] % 2 == 0 && prev->dims[k] / 2 >= MESOI_VOLUME_MIN_LEVEL_RES;
-        if (!ok)
-            break;
-        mesoi_height_level* lv = &out[l - 1];
-        if ((r = halve(prev, &lv->fn, err)) != MESO_OK)
-            break;
-        if ((r = mesoi_native_distmap(&lv->fn, d0, l, threads, &lv->dist, err)) != MESO_OK) {
-            meso_texfn_free(&lv->fn);
-            break;
-        }
-        *count = l;
-        prev = &lv->fn;
-    }
-    if (r != MESO_OK) {
-        mesoi_height_levels_free(out, *count);
-        *count = 0;
-    }
-    return r;
+    return mesoi_height_levels_build(f0, d0, want, INFINITY, threads, out, count, err);
 }
 
 /* in[p] = alpha >= 1/2 at every point p = (a, b, c) of level 0's half-texel
- * lattice, a < N0, b < N1 (periodic), c <= N2, s fastest. */
-static void solid_points(const meso_texfn* f, const uint32_t N[3], int nt, uint8_t* in)
+ * lattice, a < N0, b < N1 (periodic), c <= N2, s fastest. Returns 0 when
+ * out of memory. */
+static int solid_points(const meso_texfn* f, const uint32_t N[3], int nt, uint8_t* in)
 {
     (void)nt;
-    uint32_t* ax[3][2];
-    double* fr[3];
+    uint32_t* ax[3][2] = {{NULL, NULL}, {NULL, NULL}, {NULL, NULL}};
+    double* fr[3] = {NULL, NULL, NULL};
+    int ok = 1;
     for (int k = 0; k < 3; ++k) {
         const uint32_t n = N[k] + 1;
         ax[k][0] = malloc(sizeof(uint32_t) * n);
         ax[k][1] = malloc(sizeof(uint32_t) * n);
         fr[k] = malloc(sizeof(double) * n);
-        for (uint32_t a = 0; a < n; ++a)
+        ok &= ax[k][0] && ax[k][1] && fr[k];
+        for (uint32_t a = 0; ok && a < n; ++a)
             meso_texfn_axis(f, k, (double)a / (double)N[k], &ax[k][0][a], &ax[k][1][a], &fr[k][a]);
     }
-    const int64_t planes = (int64_t)N[2] + 1;
+    const int64_t planes = ok ? (int64_t)N[2] + 1 : 0;
 #pragma omp parallel for schedule(static) num_threads(nt)
     for (int64_t c = 0; c < planes; ++c)
         for (uint32_t b = 0; b < N[1]; ++b)
@@ -174,6 +138,7 @@ static void solid_points(const meso_texfn* f, const uint32_t N[3], int nt, uint8
         free(ax[k][1]);
         free(fr[k]);
     }
+    return ok;
 }
 
 /* mask[cell] = the cell is a surface cell (the .c's comment) of the level
@@ -238,14 +203,18 @@ meso_result mesoi_volume_level_distances(const meso_texfn* f0, const mesoi_heigh
     const double diag = mesoi_volume_level_floor(f0, g);
     const int periodic[3] = {1, 1, 0};
     uint64_t n0 = 0;
+    if (r == MESO_OK && !solid_points(f0, N, nt, in))
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture levels: out of memory");
     if (r == MESO_OK) {
-        solid_points(f0, N, nt, in);
         n0 = surface_cells(in, N, nt, m0);
         if (n0)
             r = meso_distmap_edt(m0, N, spacing, periodic, sq0, threads, err); /* every level's d_0 */
     }
     for (uint32_t l = 0; r == MESO_OK && l < count; ++l) {
-        solid_points(&levels[l].fn, N, nt, in);
+        if (!solid_points(&levels[l].fn, N, nt, in)) {
+            r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "texture levels: out of memory");
+            break;
+        }
         const uint64_t nl = surface_cells(in, N, nt, ml);
         if (!n0 || !nl) {
             out[l] = !n0 && !nl ? 0.0 : INFINITY;
@@ -312,19 +281,13 @@ static int jacobian_st(const meso_mesh* m, const float* sdir, int layers, uint32
     return 1;
 }
 
-int mesoi_volume_level_scales(const meso_mesh* base, const float* sdir, int layers, double g[2], double* k)
+int mesoi_volume_level_scales(const meso_mesh* base, const float* sdir, int layers, double span, double g[2],
+                              double* k)
 {
-    g[0] = g[1] = 0.0;
+    g[0] = 0.0;
+    g[1] = span;
     *k = INFINITY;
     const size_t nv = base->vertex_count;
-    for (size_t v = 0; v < nv; ++v) {
-        double d2 = 0.0;
-        for (int c = 0; c < 3; ++c) {
-            const double d = (double)sdir[3 * v + (size_t)c] - (layers == 2 ? sdir[3 * (nv + v) + (size_t)c] : 0.0);
-            d2 += d * d;
-        }
-        g[1] = fmax(g[1], sqrt(d2));
-    }
     for (uint32_t f = 0; f < base->triangle_count; ++f) {
         double J[2][2][3];
         if (!base->uvs || !jacobian_st(base, sdir, layers, f, J))

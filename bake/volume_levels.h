@@ -13,24 +13,19 @@
 
 #include "height_field_levels.h"
 
-/* No level whose volume is smaller than this along any axis. */
-#define MESOI_VOLUME_MIN_LEVEL_RES 4
 /* The measurement runs on level 0's half-texel lattice, (2W)(2H)(2D) cells
  * with a double each: above this many cells (weave:128 has 2^23) a volume
  * gets no native level. */
 #define MESOI_VOLUME_MAX_LATTICE ((uint64_t)1 << 24)
 
-/* Up to `want` (<= MESOI_HEIGHT_MAX_NATIVE) levels below `f0` (a density
- * volume) and its distance map `d0`, into out[0..*count-1] (`sup` left 0:
- * the error needs the shell, mesoi_volume_level_distances): level l halves
- * level l - 1 along s, t and w (each texel the mean of its 2 x 2 x 2
- * children, quantised to the nearest stored value); its distance map has
- * d0's dims halved l times (s and t at least 1, w at least 8). Stops
- * before a side would be odd or smaller than MESOI_VOLUME_MIN_LEVEL_RES,
- * and builds none when level 0's lattice exceeds MESOI_VOLUME_MAX_LATTICE.
- * Deterministic for any thread count. */
+/* mesoi_height_levels_build for a density volume `f0` (`sup` left 0: the
+ * error needs the shell, mesoi_volume_level_distances), or none when level
+ * 0's lattice exceeds MESOI_VOLUME_MAX_LATTICE. */
 meso_result mesoi_volume_levels_build(const meso_texfn* f0, const meso_distmap* d0, uint32_t want, int threads,
                                       mesoi_height_level* out, uint32_t* count, meso_error* err);
+
+/* The heap mesoi_volume_level_distances holds for `f0` at its peak. */
+uint64_t mesoi_volume_level_bytes(const meso_texfn* f0);
 
 /* For each of `count` levels of `f0` (mesoi_volume_levels_build), into
  * out[l]: a bound on the two-sided Hausdorff distance between the surfaces
@@ -52,12 +47,13 @@ double mesoi_volume_level_floor(const meso_texfn* f0, const double g[2]);
 /* The scales of that metric for a shell, and the factor that turns it into
  * object units: `base` the output base mesh with its texture coordinates
  * (uvs, tiling included), `sdir` its SDIR (`layers` 1 or 2, FORMAT.md
- * §7.2). g[0] bounds |dPhi/d(s, t)| (the largest singular value over the
- * prisms), g[1] the longest top - bottom; *k bounds the largest singular
- * value of [dPhi/d(s, t) / g[0], dPhi/dw / g[1]] (1 to sqrt(3)), so two
- * points of a prism whose texture coordinates are r apart in the metric
- * are at most k r apart in object space. Returns 0 (and INFINITY in *k)
- * when a prism's texture triangle is degenerate. */
-int mesoi_volume_level_scales(const meso_mesh* base, const float* sdir, int layers, double g[2], double* k);
+ * §7.2), `span` its longest top - bottom. g[0] bounds |dPhi/d(s, t)| (the
+ * largest singular value over the prisms), g[1] = span; *k bounds the
+ * largest singular value of [dPhi/d(s, t) / g[0], dPhi/dw / g[1]] (1 to
+ * sqrt(3)), so two points of a prism whose texture coordinates are r apart
+ * in the metric are at most k r apart in object space. Returns 0 (and
+ * INFINITY in *k) when a prism's texture triangle is degenerate. */
+int mesoi_volume_level_scales(const meso_mesh* base, const float* sdir, int layers, double span, double g[2],
+                              double* k);
 
 #endif /* MESO_VOLUME_LEVELS_H */
