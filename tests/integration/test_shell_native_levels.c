@@ -28,11 +28,11 @@
 
 #include <string.h>
 
-#include "camera.h"
 #include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "shell_map.h"
+#include "shell_hits.h"
 #include "shell_reference.h"
 
 /* Prisms bucketed by bounding box on a G^3 grid over the shell's box. */
@@ -145,25 +145,16 @@ static double column_distance(const meso_ref_shell* other, const meso_ref_shell*
 static double farthest_hit(const meso_ref_shell* from, const meso_ref_shell* to, const buckets* b, size_t* hits)
 {
     static const double eyes[3][3] = {{0, 0.3, 3.2}, {2.6, 1.4, -1.2}, {-1.8, -2.2, 1.5}};
+    cloud h = {0};
+    test_shell_hits(from, eyes, 3, 48, 40.0, &h);
     double worst = 0;
-    for (int e = 0; e < 3; ++e) {
-        meso_ref_view v = {.width = 48, .height = 48, .samples_per_prism = 256};
-        static const double at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
-        meso_camera_look_at_d(v.view, eyes[e], at, up);
-        meso_camera_perspective_d(v.proj, 40.0 * M_PI / 180.0, 1.0, 0.1, 20.0);
-        meso_ref_image img;
-        assert(meso_ref_render(from, &v, &img) == MESO_OK);
-        for (int p = 0; p < v.width * v.height; ++p) {
-            if (!img.coverage[p])
-                continue;
-            const double q[3] = {img.hit[3 * p], img.hit[3 * p + 1], img.hit[3 * p + 2]};
-            const double d = column_distance(to, from, b, q);
-            assert(d >= 0); /* a hit lies in a prism */
-            worst = fmax(worst, d);
-            ++*hits;
-        }
-        meso_ref_image_free(&img);
+    for (size_t i = 0; i < h.n; ++i) {
+        const double d = column_distance(to, from, b, h.p + 3 * i);
+        assert(d >= 0); /* a hit lies in a prism */
+        worst = fmax(worst, d);
     }
+    *hits += h.n;
+    cloud_free(&h);
     return worst;
 }
 

@@ -17,10 +17,10 @@
 
 #include <string.h>
 
-#include "camera.h"
 #include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
+#include "shell_hits.h"
 #include "shell_reference.h"
 
 /* The farthest reference hit from level L's mesh, against its stated error. */
@@ -33,28 +33,19 @@ static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, con
     meso_ref_shell rs;
     assert(meso_ref_shell_load(f, 1, &rs, NULL) == MESO_OK);
     double worst = 0;
-    size_t hits = 0;
     static const double eyes[3][3] = {{0, 0.3, 3.2}, {2.6, 1.4, -1.2}, {-1.8, -2.2, 1.5}};
-    for (int e = 0; e < 3; ++e) {
-        meso_ref_view v = {.width = 40, .height = 40, .samples_per_prism = 256};
-        static const double at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
-        meso_camera_look_at_d(v.view, eyes[e], at, up);
-        meso_camera_perspective_d(v.proj, 40.0 * M_PI / 180.0, 1.0, 0.1, 20.0);
-        meso_ref_image img;
-        assert(meso_ref_render(&rs, &v, &img) == MESO_OK);
-        for (int p = 0; p < v.width * v.height; ++p) {
-            if (!img.coverage[p])
-                continue;
-            const double q[3] = {img.hit[3 * p], img.hit[3 * p + 1], img.hit[3 * p + 2]};
-            double d = INFINITY;
-            for (uint32_t k = 0; k < tris; ++k)
-                d = fmin(d, point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
-                                           mv.positions + 3 * mv.indices[3 * k + 2]));
-            worst = fmax(worst, d);
-            ++hits;
-        }
-        meso_ref_image_free(&img);
+    cloud h = {0};
+    test_shell_hits(&rs, eyes, 3, 40, 40.0, &h);
+    for (size_t i = 0; i < h.n; ++i) {
+        const double* q = h.p + 3 * i;
+        double d = INFINITY;
+        for (uint32_t k = 0; k < tris; ++k)
+            d = fmin(d, point_triangle(q, mv.positions + 3 * mv.indices[3 * k], mv.positions + 3 * mv.indices[3 * k + 1],
+                                       mv.positions + 3 * mv.indices[3 * k + 2]));
+        worst = fmax(worst, d);
     }
+    const size_t hits = h.n;
+    cloud_free(&h);
     printf("  %-9s level %u (%u triangles): stated error %.6g, farthest of %zu reference hits %.6g (%.0f %%)\n", name,
            L, tris, err, hits, worst, 100.0 * worst / err);
     fflush(stdout);

@@ -30,11 +30,11 @@
 
 #include <string.h>
 
-#include "camera.h"
 #include "standin_check.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "point_cloud.h"
+#include "shell_hits.h"
 #include "shell_map.h"
 #include "shell_reference.h"
 
@@ -113,23 +113,13 @@ static void surface_samples(const meso_ref_shell* s, const meso_ref_texfn* t0, c
 static double farthest_hit(const meso_ref_shell* from, const cloud* to, size_t* hits)
 {
     static const double eyes[3][3] = {{0, 2.6, 2.2}, {3.0, 0.8, -0.6}, {-1.6, -2.4, 1.5}};
+    cloud h = {0};
+    test_shell_hits(from, eyes, 3, 64, 45.0, &h);
     double worst = 0;
-    for (int e = 0; e < 3; ++e) {
-        meso_ref_view v = {.width = 64, .height = 64, .samples_per_prism = 256};
-        static const double at[3] = {0, 0, 0}, up[3] = {0, 1, 0};
-        meso_camera_look_at_d(v.view, eyes[e], at, up);
-        meso_camera_perspective_d(v.proj, 45.0 * M_PI / 180.0, 1.0, 0.1, 20.0);
-        meso_ref_image img;
-        assert(meso_ref_render(from, &v, &img) == MESO_OK);
-        for (int p = 0; p < v.width * v.height; ++p) {
-            if (!img.coverage[p])
-                continue;
-            const double q[3] = {img.hit[3 * p], img.hit[3 * p + 1], img.hit[3 * p + 2]};
-            worst = fmax(worst, cloud_nearest(to, q));
-            ++*hits;
-        }
-        meso_ref_image_free(&img);
-    }
+    for (size_t i = 0; i < h.n; ++i)
+        worst = fmax(worst, cloud_nearest(to, h.p + 3 * i));
+    *hits += h.n;
+    cloud_free(&h);
     return worst;
 }
 
