@@ -85,9 +85,11 @@ typedef enum meso_rt_state_policy {
  * (normals, the occlusion term) and colour maps, of shells and of relief
  * frusta. The intersection search always reads the finest level (the
  * distance maps bound that level only; the frusta march samples level 0).
- * Cells objects are not mip-mapped: each of their levels of detail
- * (meso_rt_load_object_levels) shades from its own maps, which the bake
- * prefilters for the coarser native levels (bake/cells_levels.h). */
+ * Cells objects have no texture to prefilter (a voxel's colour and normal
+ * are its cell's): under MESO_FILTER_MIPMAP the forward pass of a pixel
+ * that covers more than a voxel shades the mean of 4 or 9 rays across it
+ * (runtime/shaders/cells_frag.glsl ">>footprint"); the G-buffer and depth
+ * passes keep the pixel's own ray. */
 typedef enum meso_texture_filter {
     MESO_FILTER_MIPMAP = 0, /* a full mip chain built at upload; shading samples the level of the pixel's
                                footprint on the surface (trilinear), and the forward pass's built-in
