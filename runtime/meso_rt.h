@@ -86,10 +86,9 @@ typedef enum meso_rt_state_policy {
  * frusta. The intersection search always reads the finest level (the
  * distance maps bound that level only; the frusta march samples level 0).
  * Cells objects have no texture to prefilter (a voxel's colour and normal
- * are its cell's): under MESO_FILTER_MIPMAP the forward pass of a pixel
- * that covers more than a voxel shades the mean of 4 or 9 rays across it
- * (runtime/shaders/cells_frag.glsl ">>footprint"); the G-buffer and depth
- * passes keep the pixel's own ray. */
+ * are its cell's): under MESO_FILTER_MIPMAP a draw may ask for several
+ * rays across far pixels instead (meso_rt_cells_draw.footprint_rays,
+ * runtime/shaders/cells_frag.glsl ">>footprint"). */
 typedef enum meso_texture_filter {
     MESO_FILTER_MIPMAP = 0, /* a full mip chain built at upload; shading samples the level of the pixel's
                                footprint on the surface (trilinear), and the forward pass's built-in
@@ -473,6 +472,12 @@ typedef enum meso_depth_convention {
                                 the nearer fragment has the smaller depth (GL_LESS, GL_LEQUAL) */
     MESO_DEPTH_REVERSED      /* near at +1, far at 0 (or -1); the nearer fragment has the larger depth
                                 (GL_GREATER, GL_GEQUAL): reversed-Z */
+    int footprint_rays;   /* far pixels, first hit, forward pass, MESO_FILTER_MIPMAP: 0 or 1 one ray a pixel;
+                             N = 2..4: a pixel across more than two voxels shades the mean of N x N rays
+                             across it (2 x 2 up to four voxels), which takes the far aliasing down (3:
+                             0.28 of one ray's error on test_rt_mips's torus) at a cost (3: 3.5x that object's frame time;
+                             bench_lod_scene's 1 px frame took 147 ms against 89, where the levels chosen
+                             still put several voxels in a pixel) [0] */
 } meso_depth_convention;
 
 typedef enum meso_clip_depth {

@@ -355,12 +355,13 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     const meso_rt_cells_draw* k = &d->cells;
     if (k->mode < MESO_CELLS_FIRST_HIT || k->mode > MESO_CELLS_REFRACT || k->bounces < 0 ||
         k->bounces > 8 || !(k->step >= 0.0f) || k->ior < 0.0f || k->reflectivity < 0.0f ||
-        k->reflectivity > 1.0f || k->transparency < 0.0f || k->transparency > 1.0f) {
+        k->reflectivity > 1.0f || k->transparency < 0.0f || k->transparency > 1.0f || k->footprint_rays < 0 ||
+        k->footprint_rays > 4) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT,
                   "meso_rt_draw: cells knobs out of range (mode %d, bounces %d of 0..8, step %g, ior %g, "
-                  "reflectivity %g and transparency %g of 0..1)",
+                  "reflectivity %g and transparency %g of 0..1, footprint_rays %d of 0..4)",
                   (int)k->mode, k->bounces, (double)k->step, (double)k->ior,
-                  (double)k->reflectivity, (double)k->transparency);
+                  (double)k->reflectivity, (double)k->transparency, k->footprint_rays);
         return MESO_ERR_INVALID_ARG;
     }
     mesoi_draw ds;
@@ -413,6 +414,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         bisect = k->step > 0.0f ? (int)ceil(log2((double)k->step * 64.0)) : 0;
     gl->Uniform1i(u[MESOI_U_bisect], bisect > 0 ? bisect : 1);
     gl->Uniform1i(u[MESOI_U_max_steps], k->max_steps > 0 ? k->max_steps : 4096);
+    gl->Uniform1i(u[MESOI_U_footprint_rays], k->footprint_rays);
     if (inst)
         gl->DrawElementsInstanced(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT,
                                   (const void*)(uintptr_t)o->indices_offset, (GLsizei)count);

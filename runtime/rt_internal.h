@@ -36,7 +36,7 @@ typedef struct mesoi_object {
     X(has_color) X(color_scale) X(hull_reject)                         /* shell colour, hull rejection */  \
     X(relief_size) X(relief_steps) X(color_size) X(ball_color)          /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
-    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) /* cells */                              \
+    X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) X(footprint_rays) /* cells */                              \
     X(instanced) X(instance_base)                                      /* instance.glsl */
 
 enum {

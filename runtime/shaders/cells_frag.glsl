@@ -50,6 +50,7 @@ uniform float u_step;       // linear search step in voxels; 0: exact traversal
 uniform int u_fixed_step;
 uniform int u_bisect;       // bisection steps of the linear search
 uniform int u_max_steps;    // per search
+uniform int u_footprint_rays; // N: up to N x N rays across a far pixel (meso_rt_cells_draw.footprint_rays)
 
 // >>membership ---------------------------------------------------------------
 
@@ -331,16 +332,21 @@ vec3 lit(ivec3 v, vec3 n, vec3 p, vec3 u)
 }
 
 // >>footprint: a far pixel's first hit, averaged over the pixel
-// (MESO_FILTER_MIPMAP; meso_rt.h meso_texture_filter). A cells object has
-// no texture to prefilter: each voxel's colour and normal belong to one
-// cell, and a 3D mip level averages the cells hidden behind the surface
-// too (measured on test_rt_mips's torus: 2.6x the error of one ray, the
-// picture a uniform grey). So where a pixel covers more than a voxel, the
-// forward pass casts a few more rays across it and shades their mean.
+// (MESO_FILTER_MIPMAP and meso_rt_cells_draw.footprint_rays = N >= 2). A
+// cells object has no texture to prefilter: each voxel's colour and normal
+// belong to one cell, and a 3D mip level averages the cells hidden behind
+// the surface too (measured on test_rt_mips's torus: 2.6x the error of one
+// ray, the picture a uniform grey). So where a pixel is more than two
+// voxels across, the forward pass casts more rays across it and shades
+// their mean.
 //
 // footprint_level: log2 of the pixel's footprint in voxels (0 up to one
 // voxel): the rays half a pixel either side meeting the plane through p of
 // normal g (raycast_common.glsl plane_offset), OpenGL's isotropic measure.
+// The caller passes the plane facing the ray: a voxel face seen at a
+// grazing angle stretches the footprint along it, and counting that
+// (tried) cast extra rays over most pixels of bench_lod_scene's cells at
+// 1 px, where one ray is as good.
 float footprint_level(vec3 p, vec3 g)
 {
     if (u_mips == 0)
@@ -355,22 +361,22 @@ float footprint_level(vec3 p, vec3 g)
 }
 
 // footprint_mean: the mean of the first hit's shading over the pixel, n x
-// n rays on a regular grid across it (n = 2 below a level of 1, else 3:
-// 9 rays took test_rt_mips's cells case from 13.9 to 3.8 mean error at 3.9x
-// the frame time, 4 to 6.0 at 2.2x, 16 to 2.1 at 5.9x). Each ray enters where
-// it meets the plane through pe of normal ge (the base mesh's tangent
-// plane where the pixel's own ray enters: a pixel wide, the mesh is that
-// plane to well within its footprint), searches at most s_max past it and
-// is shaded as the pixel's own ray is; rays that miss are left out (the
-// pixel's coverage and depth are its own ray's). Blended in over the first
-// level, so where a pixel covers at most a voxel nothing changes and the
-// exact reference still holds (runtime/reference/cell_reference.h casts
-// one ray per pixel).
+// n rays on a regular grid across it (n = 2 up to four voxels, else N;
+// on test_rt_mips's torus, medians of 3 runs: N = 2 took
+// the mean error from 13.9 to 6.0 at 2.1x the frame time, 3 to 3.9 at 3.5x,
+// 4 to 2.3 at 5.4x). Each ray enters where it meets the plane through pe
+// of normal ge (the base mesh's tangent plane where the pixel's own ray
+// enters: a pixel wide, the mesh is that plane to well within its
+// footprint), searches at most s_max past it and is shaded as the pixel's
+// own ray is; rays that miss are left out (the pixel's coverage and depth
+// are its own ray's). Blended in between two and four voxels, so where a
+// pixel covers at most two nothing changes and the exact reference still
+// holds (runtime/reference/cell_reference.h casts one ray per pixel).
 vec3 footprint_mean(vec3 centre, float lod, vec3 pe, vec3 ge, float dstep, float s_max)
 {
-    if (lod <= 0.0)
+    if (lod <= 1.0 || u_footprint_rays < 2)
         return centre;
-    int n = lod < 1.0 ? 2 : 3;
+    int n = lod < 2.0 ? 2 : u_footprint_rays;
     vec3 sum = vec3(0.0);
     float hits = 0.0;
     for (int j = 0; j < n; ++j)
@@ -399,7 +405,7 @@ vec3 footprint_mean(vec3 centre, float lod, vec3 pe, vec3 ge, float dstep, float
                 hits += 1.0;
             }
         }
-    return hits > 0.0 ? mix(centre, sum / hits, min(lod, 1.0)) : centre;
+    return hits > 0.0 ? mix(centre, sum / hits, min(lod - 1.0, 1.0)) : centre;
 }
 
 vec3 env(vec3 u)
@@ -495,7 +501,7 @@ void main()
     vec3 col = lit(h.vox, n, p, rd);
     if (u_mode == 0) {
         vec3 ge = gl_FrontFacing ? normalize(v_nrm) : -rd;
-        float lod = footprint_level(p, h.axis >= 0 ? f : ge);
+        float lod = footprint_level(p, -rd);
         // Each ray searches as far past its entry as this one found its hit,
         // plus two footprints and two voxels.
         col = footprint_mean(col, lod, p0, ge, dstep, h.s + (2.0 * exp2(lod) + 2.0) * u_h);

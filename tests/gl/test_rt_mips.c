@@ -11,10 +11,11 @@
  *    footprint's levels; the march reads level 0). Measured 0.46;
  *  - cells: torus.obj, the default Voronoi tiles and hash colours, one
  *    level (8^3 tiles of 32^3 voxels; most pixels of the ring cover 4 or
- *    more voxels across): no texture levels; a pixel over more than a
- *    voxel shades the mean of 4 or 9 rays across it (cells_frag.glsl
- *    ">>footprint").
- *    Measured 0.27 (3.8 against 13.9), at 3.9x the frame time.
+ *    more voxels across): no texture levels; with
+ *    meso_rt_cells_draw.footprint_rays = 3 (FOOTPRINT_RAYS) a pixel more
+ *    than two voxels across shades the mean of 4 or 9 rays across it
+ *    (cells_frag.glsl ">>footprint"). Measured 0.28 (3.9 against 13.9), at
+ *    3.5x the frame time. A footprint_rays outside 0..4 is refused.
  *
  * Each is drawn at 256 x 256 by a context with mip levels (the default,
  * MESO_FILTER_MIPMAP) and by one without (MESO_FILTER_LEVEL0: one level,
@@ -56,6 +57,9 @@
 #include "test_need.h"
 
 enum { W = 256, SS = 4, JITTER = 8, FRAMES = 5 };
+#ifndef FOOTPRINT_RAYS
+#define FOOTPRINT_RAYS 3
+#endif
 
 static const float clear_rgb[3] = {0.18f, 0.20f, 0.24f}; /* mesoinspect preview's background */
 
@@ -207,6 +211,7 @@ static void measure(ctx* c, const char* name, meso_file* f)
     CHECK(meso_rt_object_bounds(c->rt[0], o[0], lo, hi) == MESO_OK);
     meso_rt_draw_desc d = {0};
     camera(lo, hi, 0.3, &d);
+    d.cells.footprint_rays = FOOTPRINT_RAYS; /* cells only; ignored without mip levels (the reference) */
 
     const size_t n1 = (size_t)W * W, n4 = n1 * SS * SS;
     uint8_t *img[2], *cov[2], *big = malloc(4 * n4), *big_cov = malloc(n4), *ref = malloc(4 * n1),
@@ -274,6 +279,11 @@ static void measure(ctx* c, const char* name, meso_file* f)
          err[1]);
     need(sd_mip >= 0.25 * sd_ref, "%s: the mip-mapped image is flat (luma sd %.2f, reference %.2f)", name, sd_mip,
          sd_ref);
+    if (!strcmp(name, "cells")) {
+        meso_rt_draw_desc bad = d;
+        bad.cells.footprint_rays = 5;
+        need(meso_rt_draw(c->rt[0], o[0], &bad) == MESO_ERR_INVALID_ARG, "cells: footprint_rays 5 was not refused");
+    }
     for (int m = 0; m < 2; ++m) {
         meso_rt_release_object(c->rt[m], o[m]);
         free(img[m]);
