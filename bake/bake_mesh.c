@@ -12,11 +12,99 @@
 
 #include "lod_table.h"
 #include "mesh_chunk.h"
+#include "meso_layout.h"
 #include "mesh_levels.h"
+#include "mesh_parts.h"
 
 meso_bake_mesh_options meso_bake_mesh_defaults(void)
 {
     return (meso_bake_mesh_options){0};
+}
+
+static void st32(uint8_t* p, uint32_t v)
+{
+    for (int k = 0; k < 4; ++k)
+        p[k] = (uint8_t)(v >> (8 * k));
+}
+
+/* The parts (FORMAT.md §7.11, mesh_parts.c): one PMSH per part and level
+ * (dims[0] the part number, lod the part's level), and the PRTS chunk: a
+ * record per part level (LODS layout, `object` the part number; errors
+ * rounded up to f32) and the neighbour pairs. Nothing when the mesh is too
+ * small to cut. */
+static meso_result write_parts(mesoi_bake_run* run, const meso_mesh* m, const meso_bake_mesh_options* o,
+                               const meso_draco_options* dopt, meso_writer* w, meso_bake_mesh_report* rp,
+                               cJSON** jout, meso_error* err)
+{
+    if (o->parts > 0 && o->parts < 64)
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "parts of %d triangles: at least 64 (or 0 = auto, -1 = none)",
+                              o->parts);
+    meso_mesh_parts P;
+    const meso_mesh_parts_options po = {.part_triangles = o->parts > 0 ? (uint32_t)o->parts : 0,
+                                        .max_levels = o->levels,
+                                        .threads = o->common.threads};
+    meso_result r = meso_mesh_parts_build(m, &po, &P, err);
+    uint32_t records = 0;
+    for (uint32_t p = 0; r == MESO_OK && p < P.count; ++p)
+        records += P.part[p].level_count;
+    const size_t size = MESO_PRTS_HDR_SIZE + (size_t)records * MESO_LODS_RECORD_SIZE +
+                        (size_t)P.edge_count * MESO_PRTS_EDGE_SIZE;
+    uint8_t* prts = r == MESO_OK && P.count ? calloc(1, size) : NULL;
+    if (r == MESO_OK && P.count && !prts)
+        r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "mesh parts: out of memory");
+    size_t bytes = 0;
+    uint32_t k = 0;
+    for (uint32_t p = 0; r == MESO_OK && p < P.count; ++p)
+        for (uint32_t l = 0; r == MESO_OK && l < P.part[p].level_count; ++l) {
+            const meso_mesh_part_level* L = &P.part[p].level[l];
+            meso_mesh_chunk chunk;
+            if ((r = meso_bake_mesh_chunk(&L->mesh, dopt, &chunk, err)) != MESO_OK)
+                break;
+            const meso_chunk_desc d = {.type = MESO_CHUNK_PMSH,
+                                       .object = 1,
+                                       .lod = (uint16_t)l,
+                                       .encoding = chunk.encoding,
+                                       .decoded_size = chunk.decoded_size,
+                                       .dims = {p + 1, 1, 1}};
+            r = meso_writer_add(w, &d, chunk.data, chunk.size, err);
+            free(chunk.data);
+            bytes += chunk.size;
+            meso_level_record lr = {.object = p + 1, .lod = (uint16_t)l, .form = MESO_LEVEL_NATIVE};
+            float e = (float)L->error;
+            if ((double)e < L->error)
+                e = nextafterf(e, INFINITY);
+            lr.error = e;
+            for (int a = 0; a < 3; ++a) {
+                lr.bbox_min[a] = (float)L->bbox_min[a];
+                lr.bbox_max[a] = (float)L->bbox_max[a];
+            }
+            meso_level_record_encode(&lr, prts + MESO_PRTS_HDR_SIZE + (size_t)k++ * MESO_LODS_RECORD_SIZE);
+        }
+    if (r == MESO_OK && P.count) {
+        st32(prts + MESO_PRTS_OFF_PARTS, P.count);
+        st32(prts + MESO_PRTS_OFF_RECORDS, records);
+        st32(prts + MESO_PRTS_OFF_EDGES, P.edge_count);
+        uint8_t* e = prts + MESO_PRTS_HDR_SIZE + (size_t)records * MESO_LODS_RECORD_SIZE;
+        for (uint32_t i = 0; i < 2 * P.edge_count; ++i)
+            st32(e + 4 * (size_t)i, P.edges[i] + 1); /* part numbers */
+        const meso_chunk_desc d = {.type = MESO_CHUNK_PRTS, .object = 1};
+        r = meso_writer_add(w, &d, prts, size, err);
+        bytes += size;
+        rp->parts = P.count;
+        rp->part_levels = records;
+        rp->part_bytes = bytes;
+        cJSON* j = cJSON_CreateObject();
+        cJSON_AddNumberToObject(j, "count", P.count);
+        cJSON_AddNumberToObject(j, "levels", records);
+        cJSON_AddNumberToObject(j, "neighbour_pairs", P.edge_count);
+        cJSON_AddNumberToObject(j, "bytes", (double)bytes);
+        *jout = j;
+        mesoi_run_stage(run, "parts", 0.9, 0.95, "%u parts, %u part levels, %zu bytes (%.0f ms)", P.count, records,
+                        bytes, mesoi_run_ms(run));
+    }
+    free(prts);
+    meso_mesh_parts_free(&P);
+    return r;
 }
 
 meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** out, meso_bake_mesh_report* report,
@@ -138,6 +226,9 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
     rp->mesh_bytes = rp->level[0].mesh_bytes;
     if (r == MESO_OK)
         r = mesoi_lod_table_write(&lods, w, err);
+    cJSON* jparts = NULL;
+    if (r == MESO_OK && nlv > 0 && o->parts >= 0)
+        r = write_parts(&run, &m, o, o->draco ? &dopt : NULL, w, rp, &jparts, err);
     mesoi_lod_table_free(&lods);
     meso_mesh_levels_free(lv, nlv);
 
@@ -165,6 +256,8 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
         cJSON_AddItemToObject(rep, "levels", jlevels);
     else
         cJSON_Delete(jlevels);
+    if (jparts)
+        cJSON_AddItemToObject(rep, "parts", jparts);
 
     if (r == MESO_OK)
         r = mesoi_output_finish(meta, rep, &rec, 1, &w, out, err);

@@ -17,8 +17,10 @@
  *   (drop_duplicate_faces);
  * - meshopt's own error target is left open (1.0 = the whole extent): the
  *   count is the target, the error is measured afterwards, not predicted.
- *   meshopt_SimplifyLockBorder is never passed: an open mesh's border is
- *   simplified like the rest, and the measured error says what it cost.
+ *   meshopt_SimplifyLockBorder is passed only for a part of a mesh
+ *   (mesh_parts.c: its border is shared with the next part); an open
+ *   mesh's border is simplified like the rest, and the measured error says
+ *   what it cost.
  *
  * Seams. An importer that splits vertices at uv or normal seams (same
  * position, other attributes) leaves the simplifier vertices that look like
@@ -194,6 +196,14 @@ static int make_level_mesh(const meso_mesh* m, const uint32_t* corners, uint32_t
     return 1;
 }
 
+meso_result meso_mesh_subset(const meso_mesh* m, const uint32_t* corners, uint32_t nt, meso_mesh* out)
+{
+    uint32_t* scratch = malloc(sizeof(uint32_t) * (m->vertex_count ? m->vertex_count : 1));
+    const int ok = scratch && make_level_mesh(m, corners, nt, scratch, out);
+    free(scratch);
+    return ok ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+}
+
 /* Welded positions: *wpos (3 floats per welded vertex), *windex (the mesh's
  * indices in welded ids), the copies of each; or, with split_seams, the
  * mesh as given (every vertex its own copy). */
@@ -330,9 +340,11 @@ static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_option
     size_t cur_n = ni;
     const double spacing = o->spacing > 0 ? o->spacing : 0.5 * meso_mesh_mean_edge(m);
     double running = 0;
-    while ((int)made + 1 < max_levels && cur_n / 3 > MESO_MESH_LEVELS_MIN_TRIANGLES) {
+    const uint32_t min_tris = o->min_triangles ? o->min_triangles : MESO_MESH_LEVELS_MIN_TRIANGLES;
+    const unsigned options = o->lock_border ? meshopt_SimplifyLockBorder : 0;
+    while ((int)made + 1 < max_levels && cur_n / 3 > min_tris) {
         const size_t target = (cur_n / 3 / 2) * 3;
-        size_t got = meshopt_simplify(next, cur, cur_n, wpos, wcount, 3 * sizeof(float), target, 1.0f, 0, NULL);
+        size_t got = meshopt_simplify(next, cur, cur_n, wpos, wcount, 3 * sizeof(float), target, 1.0f, options, NULL);
         got = drop_duplicate_faces(next, got, keys, keep);
         if (got == 0 || (double)got > 0.85 * (double)cur_n)
             break; /* terminal */

@@ -21,6 +21,9 @@ typedef struct meso_mesh_levels_options {
                         topology (seams); 1: simplify the mesh as given (tests: what the seam handling changes) */
     int threads;     /* error measurement; 0 = all cores; never changes the result */
     double spacing;  /* sample spacing of the error measurement; 0 = half level 0's mean edge length */
+    int lock_border; /* 1: meshopt_SimplifyLockBorder (a part's border stays as it is at every level:
+                        mesh_parts.c) */
+    uint32_t min_triangles; /* no level from one of at most this many; 0 = MESO_MESH_LEVELS_MIN_TRIANGLES */
 } meso_mesh_levels_options;
 
 /* A coarse level (lod >= 1). */
@@ -42,5 +45,10 @@ typedef struct meso_mesh_level {
 meso_result meso_mesh_levels_build(const meso_mesh* m, const meso_mesh_levels_options* o, meso_mesh_level** levels,
                                    uint32_t* count, meso_error* err);
 void meso_mesh_levels_free(meso_mesh_level* levels, uint32_t count);
+
+/* The triangles `corners` (3 * nt of m's vertex indices) as a mesh of their
+ * own: the vertices they use, in m's order, with their normals and uvs
+ * (corner_uvs NULL). MESO_ERR_OUT_OF_MEMORY (and *out zeroed) on failure. */
+meso_result meso_mesh_subset(const meso_mesh* m, const uint32_t* corners, uint32_t nt, meso_mesh* out);
 
 #endif /* MESO_MESH_LEVELS_H */

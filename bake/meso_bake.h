@@ -335,6 +335,10 @@ typedef struct meso_bake_mesh_options {
                                 had > 256, at most 8 levels), 1 = the finest only (no LODS chunk, the file of
                                 earlier versions), N = at most N (1..MESO_BAKE_MESH_MAX_LEVELS). Coarse levels
                                 need meshoptimizer: without it auto gives one level, N > 1 fails UNSUPPORTED */
+    int parts;               /* the mesh also cut into parts with levels of their own (FORMAT.md §7.11), so a
+                                reader can draw the near end finer than the far end: 0 = auto (parts of about
+                                1024 triangles, when there are levels and at least 2048 triangles), N > 0 = parts
+                                of about N triangles (at least 64), -1 = none */
 } meso_bake_mesh_options;
 
 #define MESO_BAKE_MESH_MAX_LEVELS 16
@@ -360,6 +364,9 @@ typedef struct meso_bake_mesh_report {
     int has_uvs;
     uint32_t level_count; /* levels written, level 0 included (1: no LODS chunk) */
     meso_bake_mesh_level level[MESO_BAKE_MESH_MAX_LEVELS];
+    uint32_t parts;       /* parts written (0: none) */
+    uint32_t part_levels; /* part levels written, level 0 of each included */
+    size_t part_bytes;    /* stored PMSH and PRTS payload */
 } meso_bake_mesh_report;
 
 /* Zero: the CLI's defaults (raw encoding). */

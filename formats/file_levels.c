@@ -143,7 +143,7 @@ static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uin
         if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
             end = stored_end(c) > end ? stored_end(c) : end;
         const int plain_mesh = form == MESO_LEVEL_MESH || kind == MESO_OBJECT_MESH; /* draws MESH as a mesh */
-        if (c->object != object || (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH && c->type != MESO_CHUNK_VCOL) ||
+        if (c->object != object || c->type == MESO_CHUNK_PMSH || c->type == MESO_CHUNK_PRTS || /* §7.11 */ (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH && c->type != MESO_CHUNK_VCOL) ||
             (form == MESO_LEVEL_NATIVE && kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH) ||
             (!plain_mesh && c->type == MESO_CHUNK_VCOL))
             continue;
@@ -242,4 +242,116 @@ meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_info* out
     mesoi_file_free(&f->alloc, lods);
     mesoi_file_free(&f->alloc, recs);
     return MESO_OK;
+}
+
+/* >>parts (FORMAT.md §7.11; 4931, 4932) -------------------------------------- */
+
+meso_result mesoi_check_prts(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err)
+{
+    if (n < MESO_PRTS_HDR_SIZE)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PRTS_SIZE, base, chunk,
+                                "chunk %d (PRTS): %zu bytes, less than its 16-byte header", (int)chunk, n);
+    const uint32_t parts = mesoi_ld32(d + MESO_PRTS_OFF_PARTS), records = mesoi_ld32(d + MESO_PRTS_OFF_RECORDS),
+                   edges = mesoi_ld32(d + MESO_PRTS_OFF_EDGES);
+    const uint64_t want = MESO_PRTS_HDR_SIZE + (uint64_t)records * MESO_LODS_RECORD_SIZE +
+                          (uint64_t)edges * MESO_PRTS_EDGE_SIZE;
+    if (want != n)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PRTS_SIZE, base, chunk,
+                                "chunk %d (PRTS): %zu bytes, but its header counts %u records and %u neighbour "
+                                "pairs (%llu bytes)",
+                                (int)chunk, n, records, edges, (unsigned long long)want);
+    const char* why = mesoi_ld32(d + MESO_PRTS_OFF_RESERVED) ? "reserved header bytes not zero"
+                      : parts < 2 || parts > 65535 ? "a part count outside 2..65535"
+                      : records < parts            ? "fewer records than parts"
+                                                   : NULL;
+    if (why)
+        return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PRTS_VALUE, base, chunk,
+                                "chunk %d (PRTS): %s (%u parts, %u records)", (int)chunk, why, parts, records);
+    meso_level_record prev = {0}, r;
+    for (uint32_t i = 0; i < records; i++) {
+        const uint8_t* p = d + MESO_PRTS_HDR_SIZE + (size_t)i * MESO_LODS_RECORD_SIZE;
+        meso_level_record_decode(p, &r);
+        why = record_problem(p, &r, i ? &prev : NULL);
+        if (!why && r.form != MESO_LEVEL_NATIVE)
+            why = "a part level that is not native";
+        else if (!why && (i == 0 ? r.object != 1 : r.object != prev.object && r.object != prev.object + 1))
+            why = "parts not numbered 1, 2, ... in order";
+        else if (!why && (r.object > parts || (i + 1 == records && r.object != parts)))
+            why = "records do not cover the parts 1..count";
+        if (why)
+            return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PRTS_VALUE,
+                                    base == UINT64_MAX ? UINT64_MAX : base + MESO_PRTS_HDR_SIZE + i * 48ull, chunk,
+                                    "chunk %d (PRTS): record %u (part %u, lod %u): %s", (int)chunk, i, r.object,
+                                    r.lod, why);
+        prev = r;
+    }
+    const uint8_t* e = d + MESO_PRTS_HDR_SIZE + (size_t)records * MESO_LODS_RECORD_SIZE;
+    for (uint32_t i = 0; i < edges; i++) {
+        const uint32_t a = mesoi_ld32(e + 8 * (size_t)i), b = mesoi_ld32(e + 8 * (size_t)i + 4);
+        const uint32_t pa = i ? mesoi_ld32(e + 8 * (size_t)i - 8) : 0, pb = i ? mesoi_ld32(e + 8 * (size_t)i - 4) : 0;
+        if (a < 1 || a >= b || b > parts || (i > 0 && (a < pa || (a == pa && b <= pb))))
+            return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PRTS_VALUE, base, chunk,
+                                    "chunk %d (PRTS): neighbour pair %u (%u, %u) is not a < b within 1..%u in "
+                                    "ascending order",
+                                    (int)chunk, i, a, b, parts);
+    }
+    return MESO_OK;
+}
+
+int32_t mesoi_find_part(const meso_file* f, uint32_t object, uint32_t part, uint16_t lod)
+{
+    for (uint32_t i = 0; f && i < f->chunk_count; i++) {
+        const meso_chunk_info* c = &f->chunks[i];
+        if (c->type == MESO_CHUNK_PMSH && c->object == object && c->lod == lod && c->dims[0] == part)
+            return (int32_t)i;
+    }
+    return -1;
+}
+
+meso_result meso_file_parts(meso_file* f, uint32_t object, meso_part_level* out, uint32_t cap,
+                            uint32_t* level_count, uint32_t* part_count, uint32_t* edges, uint32_t edge_cap,
+                            uint32_t* edge_count, meso_error* err)
+{
+    mesoi_file_error_clear(err);
+    if (!f || !level_count || !part_count || !edge_count || (!out && cap) || (!edges && edge_cap))
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
+                                "meso_file_parts: NULL file or count, or NULL array with a capacity");
+    *level_count = *part_count = *edge_count = 0;
+    const int32_t pi = meso_file_find(f, MESO_CHUNK_PRTS, object, UINT16_MAX);
+    if (pi < 0)
+        return MESO_OK;
+    const meso_chunk_info* c = &f->chunks[pi];
+    uint8_t* d = (uint8_t*)mesoi_file_alloc(&f->alloc, c->decoded_size ? (size_t)c->decoded_size : 1);
+    if (!d)
+        return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, pi,
+                                "chunk %d (PRTS): out of memory", (int)pi);
+    meso_result r = meso_file_read_chunk(f, (uint32_t)pi, d, (size_t)c->decoded_size, err); /* checks it */
+    if (r == MESO_OK) {
+        const uint32_t records = mesoi_ld32(d + MESO_PRTS_OFF_RECORDS);
+        const uint32_t ne = mesoi_ld32(d + MESO_PRTS_OFF_EDGES);
+        uint64_t head = 64u + (uint64_t)f->chunk_count * f->toc_entry_size;
+        for (uint32_t i = 0; i < f->chunk_count; i++) {
+            const meso_chunk_info* h = &f->chunks[i];
+            if ((h->object == 0 && (h->type == MESO_CHUNK_META || h->type == MESO_CHUNK_OBJT ||
+                                    h->type == MESO_CHUNK_LODS)) ||
+                (int32_t)i == pi)
+                head = stored_end(h) > head ? stored_end(h) : head;
+        }
+        for (uint32_t i = 0; i < records && i < cap; i++) {
+            meso_level_record_decode(d + MESO_PRTS_HDR_SIZE + (size_t)i * MESO_LODS_RECORD_SIZE, &out[i].rec);
+            out[i].chunk = mesoi_find_part(f, object, out[i].rec.object, out[i].rec.lod);
+            const meso_chunk_info* m = out[i].chunk >= 0 ? &f->chunks[out[i].chunk] : NULL;
+            out[i].bytes = m ? m->stored_size : 0;
+            const uint64_t end = m && stored_end(m) > head ? stored_end(m) : head;
+            out[i].prefix_bytes = end < f->file_size ? end : f->file_size;
+        }
+        const uint8_t* e = d + MESO_PRTS_HDR_SIZE + (size_t)records * MESO_LODS_RECORD_SIZE;
+        for (uint32_t i = 0; i < 2 * ne && i < 2 * edge_cap; i++)
+            edges[i] = mesoi_ld32(e + 4 * (size_t)i);
+        *level_count = records;
+        *part_count = mesoi_ld32(d + MESO_PRTS_OFF_PARTS);
+        *edge_count = ne;
+    }
+    mesoi_file_free(&f->alloc, d);
+    return r;
 }

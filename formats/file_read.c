@@ -738,10 +738,10 @@ meso_result meso_file_read_chunk(meso_file* f, uint32_t index, void* dst, size_t
         r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PAYLOAD_CRC, c->offset, ci,
                              "chunk %u (%s, object %u): payload CRC32C 0x%08X != 0x%08X in the TOC", index, cc,
                              c->object, crc, c->crc32c);
-    } else if (c->type == MESO_CHUNK_MESH && c->stored_size < MESO_MESH_HDR_SIZE) {
+    } else if (mesoi_mesh_layout(c->type) && c->stored_size < MESO_MESH_HDR_SIZE) {
         r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_SIZE, c->offset, ci,
-                             "chunk %u (MESH): encoded payload is smaller than the 64-byte mesh header", index);
-    } else if (c->type == MESO_CHUNK_MESH &&
+                             "chunk %u (%s): encoded payload is smaller than the 64-byte mesh header", index, cc);
+    } else if (mesoi_mesh_layout(c->type) &&
                (r = mesoi_check_mesh_header(src, c->decoded_size, NULL, ci, c->offset, err)) != MESO_OK) {
         /* r set */
     } else {

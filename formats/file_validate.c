@@ -56,7 +56,9 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_TXFR:
     case MESO_CHUNK_DSFR:
     case MESO_CHUNK_RELF:
-    case MESO_CHUNK_VCOL: return 1;
+    case MESO_CHUNK_VCOL:
+    case MESO_CHUNK_PRTS:
+    case MESO_CHUNK_PMSH: return 1;
     default: return 0;
     }
 }
@@ -154,7 +156,7 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     /* Unknown types, and dtypes/encodings of a newer minor, have no rules here. */
     if (!mesoi_known_type(c->type) || c->dtype >= MESO_DTYPE_COUNT || c->encoding >= MESO_ENCODING_COUNT)
         return MESO_OK;
-    if (c->encoding != MESO_ENCODING_RAW && !(c->type == MESO_CHUNK_MESH && c->encoding == MESO_ENCODING_DRACO))
+    if (c->encoding != MESO_ENCODING_RAW && !(mesoi_mesh_layout(c->type) && c->encoding == MESO_ENCODING_DRACO))
         return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_TYPE_ENCODING, UINT64_MAX, chunk,
                                 "chunk %d (%s): encoding %u is not allowed for %s", (int)chunk, cc, c->encoding, cc);
     int flat = c->dims[1] == 1 && c->dims[2] == 1;
@@ -222,6 +224,17 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_COLR:
         if (c->dtype != MESO_DTYPE_U8 || c->components != 4)
             return elem_error(c, chunk, err, "U8 x 4");
+        return MESO_OK;
+    case MESO_CHUNK_PRTS:
+        if (c->object == 0)
+            return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_TYPE_OBJECT, UINT64_MAX, chunk,
+                                    "chunk %d (PRTS): object 0; parts belong to an OBJT object", (int)chunk);
+        if (c->dtype != MESO_DTYPE_BYTES || c->components != 1)
+            return elem_error(c, chunk, err, "BYTES x 1");
+        return MESO_OK;
+    case MESO_CHUNK_PMSH: /* dims[0] names the part (1..), so it is not free as for other BYTES chunks */
+        if (c->dtype != MESO_DTYPE_BYTES || c->components != 1 || !flat || c->object == 0)
+            return elem_error(c, chunk, err, "BYTES x 1, dims part x 1 x 1, an OBJT object");
         return MESO_OK;
     case MESO_CHUNK_VCOL:
         if (c->dtype != MESO_DTYPE_U8 || (c->components != 4 && c->components != 1) || !flat)
@@ -589,7 +602,9 @@ meso_result mesoi_check_contents(const meso_chunk_info* c, const uint8_t* data, 
     case MESO_CHUNK_META: return check_json(data, size, chunk, "META", base, err);
     case MESO_CHUNK_RPRT: return check_json(data, size, chunk, "RPRT", base, err);
     case MESO_CHUNK_OBJT: return check_objt(data, size, chunk, base, err);
-    case MESO_CHUNK_MESH: return check_mesh(data, size, chunk, base, err);
+    case MESO_CHUNK_MESH:
+    case MESO_CHUNK_PMSH: return check_mesh(data, size, chunk, base, err);
+    case MESO_CHUNK_PRTS: return mesoi_check_prts(data, size, chunk, base, err);
     case MESO_CHUNK_SKEL: return check_skel(data, size, chunk, base, err);
     case MESO_CHUNK_FRUS: return check_frus(data, size, chunk, base, err);
     case MESO_CHUNK_FSEG: return check_fseg(data, size, chunk, base, err);
@@ -771,7 +786,8 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
                                c->type == MESO_CHUNK_MESH || c->type == MESO_CHUNK_SKEL || c->type == MESO_CHUNK_FRUS ||
                                c->type == MESO_CHUNK_FSEG || c->type == MESO_CHUNK_BALL ||
                                c->type == MESO_CHUNK_CELL || c->type == MESO_CHUNK_ANIM ||
-                               c->type == MESO_CHUNK_CMAP || c->type == MESO_CHUNK_LODS);
+                               c->type == MESO_CHUNK_CMAP || c->type == MESO_CHUNK_LODS ||
+                               c->type == MESO_CHUNK_PMSH || c->type == MESO_CHUNK_PRTS);
     const uint8_t* whole = NULL;
     uint8_t* owned = NULL;
     if (f->data) {
@@ -823,10 +839,11 @@ static void validate_chunk(meso_file* f, uint32_t i, uint8_t* buf, size_t buf_si
     } else if (known && c->encoding == MESO_ENCODING_RAW) {
         if (mesoi_check_contents(c, whole, (size_t)c->stored_size, ci, c->offset, &e) != MESO_OK)
             report(s, &e);
-    } else if (c->type == MESO_CHUNK_MESH && c->encoding == MESO_ENCODING_DRACO) {
+    } else if (mesoi_mesh_layout(c->type) && c->encoding == MESO_ENCODING_DRACO) {
         meso_result r = c->stored_size < MESO_MESH_HDR_SIZE
                             ? mesoi_file_error(&e, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_SIZE, c->offset, ci,
-                                               "chunk %u (MESH): Draco payload smaller than the 64-byte mesh header", i)
+                                               "chunk %u (%s): Draco payload smaller than the 64-byte mesh header", i,
+                                               cc)
                             : mesoi_check_mesh_header(whole, c->decoded_size, NULL, ci, c->offset, &e);
         if (r != MESO_OK) {
             report(s, &e);
@@ -885,6 +902,8 @@ static void validate_objects(meso_file* f, validate_state* s)
             mesoi_check_object(f, &recs[i], object_issue, s);
         if (!s->stop)
             mesoi_check_levels(f, recs, count, object_issue, s);
+        if (!s->stop)
+            mesoi_check_parts(f, recs, count, object_issue, s);
     }
     mesoi_file_free(&f->alloc, recs);
 }

@@ -555,6 +555,58 @@ void mesoi_check_levels(meso_file* f, const meso_object_record* recs, uint32_t c
     mesoi_file_free(&f->alloc, lods);
 }
 
+/* Each PRTS chunk against OBJT and its PMSH chunks (6501, FORMAT.md §7.11):
+ * its object is a mesh object in OBJT with one PRTS; every record has one
+ * PMSH at its (part, lod), every PMSH one record. The PMSH contents are
+ * checked as MESH chunks by the chunk pass. */
+void mesoi_check_parts(meso_file* f, const meso_object_record* recs, uint32_t count, meso_issue_fn fn, void* user)
+{
+    obj_check top = {f, 0, 0, fn, user, MESO_OK, 0};
+    for (uint32_t i = 0; i < f->chunk_count && !top.stop; i++) {
+        const meso_chunk_info* c = &f->chunks[i];
+        if (c->type == MESO_CHUNK_PMSH && meso_file_find(f, MESO_CHUNK_PRTS, c->object, UINT16_MAX) < 0)
+            ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PMSH): object %u has no PRTS to name this part", i,
+                  c->object);
+        if (c->type != MESO_CHUNK_PRTS)
+            continue;
+        const meso_object_record* rec = NULL;
+        for (uint32_t k = 0; k < count; k++)
+            if (recs[k].id == c->object)
+                rec = &recs[k];
+        if (!rec || rec->kind != MESO_OBJECT_MESH) {
+            ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): object %u is %s", i, c->object,
+                  rec ? "not a mesh object" : "not in OBJT");
+            continue;
+        }
+        if (meso_file_find(f, MESO_CHUNK_PRTS, c->object, UINT16_MAX) != (int32_t)i) {
+            ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): a second PRTS for object %u", i, c->object);
+            continue;
+        }
+        uint8_t* d = load(&top, (int32_t)i);
+        if (!d)
+            continue;
+        const uint32_t records = mesoi_ld32(d + MESO_PRTS_OFF_RECORDS);
+        uint32_t found = 0;
+        for (uint32_t r = 0; r < records && !top.stop; r++) {
+            meso_level_record lr;
+            meso_level_record_decode(d + MESO_PRTS_HDR_SIZE + (size_t)r * MESO_LODS_RECORD_SIZE, &lr);
+            const int32_t pi = mesoi_find_part(f, c->object, lr.object, lr.lod);
+            if (pi < 0)
+                ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): part %u, lod %u of object %u has no PMSH",
+                      i, lr.object, lr.lod, c->object);
+            found += pi >= 0;
+        }
+        uint32_t pmsh = 0;
+        for (uint32_t k = 0; k < f->chunk_count; k++)
+            pmsh += f->chunks[k].type == MESO_CHUNK_PMSH && f->chunks[k].object == c->object;
+        if (!top.stop && pmsh != found)
+            ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i,
+                  "object %u has %u PMSH chunks, but its PRTS names %u part levels (a PMSH without a record, or "
+                  "two at one part level)",
+                  c->object, pmsh, found);
+        mesoi_file_free(&f->alloc, d);
+    }
+}
 
 meso_result meso_file_check_object(meso_file* f, uint32_t object, meso_error* err)
 {

@@ -4,7 +4,7 @@
  * meso_writer_add checks each chunk with the reader's own rules
  * (file_validate.c), so a file the writer emits always opens and passes full
  * validation. Layout is a pure function of the chunks added: META, OBJT,
- * RPRT first (small, describe the rest), then every other chunk coarsest
+ * LODS, PRTS, RPRT first (small, describe the rest), then every other chunk coarsest
  * level first (lod descending), ties in insertion order. A prefix of the file
  * therefore already holds the coarse levels. No timestamps, no host data.
  */
@@ -23,7 +23,7 @@
 typedef struct wchunk {
     meso_chunk_info info;
     uint8_t* data;
-    uint32_t group; /* 0 META, 1 OBJT, 2 LODS, 3 RPRT, 4 everything else */
+    uint32_t group; /* 0 META, 1 OBJT, 2 LODS, 3 PRTS, 4 RPRT, 5 everything else */
     uint64_t seq;   /* insertion order */
 } wchunk;
 
@@ -69,8 +69,9 @@ static uint32_t group_of(uint32_t type)
     return type == MESO_CHUNK_META   ? 0u
            : type == MESO_CHUNK_OBJT ? 1u
            : type == MESO_CHUNK_LODS ? 2u
-           : type == MESO_CHUNK_RPRT ? 3u
-                                     : 4u;
+           : type == MESO_CHUNK_PRTS ? 3u
+           : type == MESO_CHUNK_RPRT ? 4u
+                                     : 5u;
 }
 
 /* File order: group, then lod descending, then insertion. */
@@ -125,10 +126,11 @@ meso_result meso_writer_add(meso_writer* w, const meso_chunk_desc* desc, const v
     if (r == MESO_OK && mesoi_known_type(c.type)) {
         if (c.encoding == MESO_ENCODING_RAW)
             r = mesoi_check_contents(&c, (const uint8_t*)data, size, ci, UINT64_MAX, err);
-        else if (c.type == MESO_CHUNK_MESH && size < MESO_MESH_HDR_SIZE)
+        else if (mesoi_mesh_layout(c.type) && size < MESO_MESH_HDR_SIZE)
             r = mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_MESH_SIZE, UINT64_MAX, ci,
-                                 "chunk %d (MESH): encoded payload is smaller than the 64-byte mesh header", (int)ci);
-        else if (c.type == MESO_CHUNK_MESH)
+                                 "chunk %d (MESH layout): encoded payload is smaller than the 64-byte mesh header",
+                                 (int)ci);
+        else if (mesoi_mesh_layout(c.type))
             r = mesoi_check_mesh_header((const uint8_t*)data, c.decoded_size, NULL, ci, UINT64_MAX, err);
     }
     if (r != MESO_OK)

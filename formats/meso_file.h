@@ -116,6 +116,8 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_CMAP MESO_FOURCC('C', 'M', 'A', 'P') /* how a shell's COLR maps to texture space (one record) */
 #define MESO_CHUNK_LODS MESO_FOURCC('L', 'O', 'D', 'S') /* levels of detail: error and bounds per object level (1.1) */
 #define MESO_CHUNK_VCOL MESO_FOURCC('V', 'C', 'O', 'L') /* a MESH's vertex appearance: sRGB albedo + occlusion, U8 x 4 per vertex (1.1) */
+#define MESO_CHUNK_PRTS MESO_FOURCC('P', 'R', 'T', 'S') /* a mesh object's parts: levels per part and neighbours (1.1, §7.11) */
+#define MESO_CHUNK_PMSH MESO_FOURCC('P', 'M', 'S', 'H') /* one part's mesh at one of its levels: MESH layout (1.1, §7.11) */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -483,6 +485,8 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_CMAP_VALUE 4912u          /* CMAP field out of range or reserved bytes not zero */
 #define MESO_ISSUE_LODS_SIZE 4921u           /* LODS size not a multiple of 48 */
 #define MESO_ISSUE_LODS_VALUE 4922u          /* LODS record out of order, out of range, or reserved bytes not zero */
+#define MESO_ISSUE_PRTS_SIZE 4931u           /* PRTS size does not match its header's counts */
+#define MESO_ISSUE_PRTS_VALUE 4932u          /* PRTS record or neighbour pair out of order or range, reserved not zero */
 #define MESO_ISSUE_OBJ_CHUNKS 6001u          /* an object lacks a chunk its kind requires */
 #define MESO_ISSUE_MESH_VCOL 6002u           /* VCOL count != the vertex count of its lod's MESH */
 #define MESO_ISSUE_SHELL_COUNT 6101u         /* SDIR/STHK count != MESH vertex count, or no triangles */
@@ -498,6 +502,7 @@ MESO_API void meso_output_abort(meso_output* out);
 #define MESO_ISSUE_FRUSTA_COLR 6205u         /* frusta COLR not one U8 x 4, W x H x 1 chunk */
 #define MESO_ISSUE_CELLS_COLOUR_GRID 6301u   /* cells TX3D (mesh colour grid) not one U8 x 4 chunk */
 #define MESO_ISSUE_LEVELS 6401u              /* an object's LODS levels do not fit its OBJT record or its chunks */
+#define MESO_ISSUE_PARTS 6501u               /* PRTS does not fit its object or its PMSH chunks */
 #define MESO_ISSUE_API_ARG 5001u
 #define MESO_ISSUE_API_BUFFER 5002u
 #define MESO_ISSUE_API_MEMORY 5003u
@@ -662,6 +667,27 @@ MESO_API int32_t meso_file_find_vertex_colours(const meso_file* f, uint32_t obje
  * MESO_ERR_NOT_FOUND when no OBJT record has this id. */
 MESO_API meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_info* out, uint32_t cap,
                                       uint32_t* count, meso_error* err);
+
+/* Parts (FORMAT.md §7.11): a mesh object may also be stored cut into
+ * parts, each with levels of its own (PMSH chunks, one per part and
+ * level), so that a reader can draw the near end of an object finer than
+ * the far end. One part level as a reader sees it: */
+typedef struct meso_part_level {
+    meso_level_record rec; /* rec.object = the part, 1..part_count; rec.lod its level; form NATIVE; error
+                              against the part's level 0, bounds of the level */
+    int32_t chunk;         /* its PMSH chunk (-1 when missing: the full tier refuses that) */
+    uint64_t bytes;        /* stored bytes of that chunk */
+    uint64_t prefix_bytes; /* the shortest prefix holding it, the header, TOC, META, OBJT, LODS and PRTS */
+} meso_part_level;
+
+/* The parts of `object`: reads and checks its PRTS chunk and writes up to
+ * `cap` part levels (by part, then lod; NULL with cap 0 only counts) and
+ * up to `edge_cap` neighbour pairs (2 part numbers each, a < b; NULL with
+ * edge_cap 0 only counts). *level_count, *part_count and *edge_count get
+ * the totals; all 0 for an object stored without parts. */
+MESO_API meso_result meso_file_parts(meso_file* f, uint32_t object, meso_part_level* out, uint32_t cap,
+                                     uint32_t* level_count, uint32_t* part_count, uint32_t* edges,
+                                     uint32_t edge_cap, uint32_t* edge_count, meso_error* err);
 
 /* The file's objects: reads and checks the OBJT chunk (CRC and records) and
  * writes up to `cap` records to `out` (NULL with cap 0 only counts); *count

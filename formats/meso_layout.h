@@ -107,6 +107,15 @@
 #define MESO_LODS_OFF_RESERVED1 40
 #define MESO_LODS_SIZE_RESERVED1 8
 
+/* PRTS chunk (FORMAT.md §7.11): a 16-byte header, then LODS-layout records
+ * (48 bytes; `object` holds the part number), then neighbour pairs. */
+#define MESO_PRTS_HDR_SIZE 16
+#define MESO_PRTS_OFF_PARTS 0
+#define MESO_PRTS_OFF_RECORDS 4
+#define MESO_PRTS_OFF_EDGES 8
+#define MESO_PRTS_OFF_RESERVED 12
+#define MESO_PRTS_EDGE_SIZE 8
+
 /* SKEL chunk: one 32-byte record per skeleton node. */
 #define MESO_SKEL_RECORD_SIZE 32
 #define MESO_SKEL_OFF_POSITION 0

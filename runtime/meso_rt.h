@@ -266,6 +266,17 @@ typedef struct meso_rt_levels_state {
                                  (reads that found their bytes not arrived yet are not counted) */
 } meso_rt_levels_state;
 MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object obj, meso_rt_levels_state* out);
+/* A levelled mesh object stored with parts (FORMAT.md §7.11) draws its
+ * level 0 part by part: each part at the coarsest of its own levels whose
+ * projected error is at most the pixel error, neighbouring parts within
+ * one level of each other (never a crack: the bake keeps part borders
+ * fixed at every level). Its levels state counts the parts' bytes too.
+ * This reports the level each part drew last (levels[part - 1], up to
+ * `cap`) and *part_count (0: the object has no parts, or they have not
+ * been read yet: its first draw near enough for level 0 reads them). Parts
+ * are not used under meso_rt_desc.stream_requests. */
+MESO_API meso_result meso_rt_parts_state_get(const meso_rt* rt, meso_rt_object obj, uint8_t* levels, uint32_t cap,
+                                             uint32_t* part_count);
 
 /* End of a frame, for the memory budget (meso_rt_desc.memory_budget):
  * adjusts the factor every draw's pixel error is multiplied by (x 1.25
@@ -461,6 +472,12 @@ typedef struct meso_rt_cells_draw {
     uint32_t environment; /* GL name of a GL_TEXTURE_CUBE_MAP the host owns (linear RGB), looked up
                              (level 0) with the world-space direction of rays that leave the object;
                              0: the built-in sky of runtime/reference/cell_reference.h [0] */
+    int footprint_rays;   /* far pixels, first hit, forward pass, MESO_FILTER_MIPMAP: 0 or 1 one ray a pixel;
+                             N = 2..4: a pixel across more than two voxels shades the mean of N x N rays
+                             across it (2 x 2 up to four voxels), which takes the far aliasing down (3:
+                             0.28 of one ray's error on test_rt_mips's torus) at a cost (3: 3.5x that object's frame time;
+                             bench_lod_scene's 1 px frame took 147 ms against 89, where the levels chosen
+                             still put several voxels in a pixel) [0] */
 } meso_rt_cells_draw;
 
 /* Depth conventions (meso_rt_draw_desc.depth, .clip_depth): where the near
@@ -472,12 +489,6 @@ typedef enum meso_depth_convention {
                                 the nearer fragment has the smaller depth (GL_LESS, GL_LEQUAL) */
     MESO_DEPTH_REVERSED      /* near at +1, far at 0 (or -1); the nearer fragment has the larger depth
                                 (GL_GREATER, GL_GEQUAL): reversed-Z */
-    int footprint_rays;   /* far pixels, first hit, forward pass, MESO_FILTER_MIPMAP: 0 or 1 one ray a pixel;
-                             N = 2..4: a pixel across more than two voxels shades the mean of N x N rays
-                             across it (2 x 2 up to four voxels), which takes the far aliasing down (3:
-                             0.28 of one ray's error on test_rt_mips's torus) at a cost (3: 3.5x that object's frame time;
-                             bench_lod_scene's 1 px frame took 147 ms against 89, where the levels chosen
-                             still put several voxels in a pixel) [0] */
 } meso_depth_convention;
 
 typedef enum meso_clip_depth {

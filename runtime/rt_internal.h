@@ -22,6 +22,8 @@ typedef struct mesoi_object {
     float bbox_min[3], bbox_max[3];
     struct mesoi_levels* levels; /* meso_rt_load_object_levels: the levels, each its own slot (rt_levels.c);
                                     such an object has no GL resources of its own */
+    struct mesoi_parts* parts;   /* the slot a parts pick hands out (rt_parts.c): its mesh draw draws the
+                                    parts that pick chose; no GL resources of its own */
 } mesoi_object;
 
 /* Every uniform any of the programs declares. Locations are looked up once,
@@ -385,6 +387,10 @@ void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components
 /* colours: also the VCOL at the MESH's lod, when there is one (a mesh or
  * stand-in draw; a cells object's base mesh takes none). */
 meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int colours, mesoi_object* o);
+/* The same from chunk `ci` (MESH layout: a MESH or a part's PMSH) with the
+ * VCOL chunk `vi` (-1: none); `object_id` names it in messages. */
+meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint32_t object_id, int32_t vi,
+                                    mesoi_object* o);
 meso_result mesoi_mesh_prepare(meso_rt* rt, meso_rt_pass pass); /* builds the pass's program */
 meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count);
@@ -437,7 +443,34 @@ typedef struct mesoi_levels {
     uint64_t want_frame;     /* the frame want_now/want_lower belong to */
     uint32_t want_now, want_lower; /* the finest level this frame's draws wanted, at the budget's factor and
                                       at the next lower one */
+    struct mesoi_parts* parts; /* a mesh object stored with parts (rt_parts.c), else NULL */
+    int parts_state;           /* 0 not read yet, 1 read (parts may still be NULL: none), 2 not to be used */
+    uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
 } mesoi_levels;
+/* rt_parts.c: a levelled mesh object's parts. load: its PRTS table (*out
+ * NULL: none); pick: each part's level for this draw, neighbours within one
+ * level, uploads (MESO_ERR_NOT_FOUND when some part has nothing to draw:
+ * draw level 0 instead); *out the slot whose mesh draw draws them (draw).
+ * oldest/evict: the budget's LRU over part levels; bytes: resident part
+ * bytes (and the last pick's wanted, and all read). */
+typedef struct mesoi_parts mesoi_parts;
+meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts** out);
+void mesoi_parts_free(meso_rt* rt, mesoi_parts* p);
+meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p,
+                             const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count, double tau,
+                             double height, meso_rt_object* out);
+meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_draw_desc* d,
+                             const meso_rt_instance* inst, uint32_t count);
+int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
+void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i);
+uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read);
+/* rt_levels.c: pixels `error` covers for bounds lo..hi drawn with `model`
+ * (the LOD rule, rt_levels.c); evict_one: the least recently used level or
+ * part level no draw of this frame used (not an object's coarsest); 0 when
+ * none. */
+double mesoi_projected_px(double error, const float lo[3], const float hi[3], const float* model,
+                          const meso_rt_draw_desc* d, double height);
+int mesoi_evict_one(meso_rt* rt);
 /* Upload level l now (reading the file, or the stream request being
  * uploaded, rt->prefetch); MESO_ERR_PENDING when its bytes have not arrived
  * (not remembered), another error is remembered in lv->failed. */

@@ -143,6 +143,7 @@ void mesoi_levels_release(meso_rt* rt, mesoi_object* o)
         return;
     o->levels = NULL;
     mesoi_stream_detach(rt, lv);
+    mesoi_parts_free(rt, lv->parts);
     for (uint32_t l = 0; l < lv->count; ++l)
         if (lv->slot[l].id) {
             meso_rt_release_object(rt, lv->slot[l]);
@@ -165,8 +166,8 @@ static int all_zero(const float* m, int n)
 
 /* Pixels that `error` (object units) covers for a level bounded by
  * [lo, hi] drawn with `model` (column-major, a similarity). */
-static double projected_px(double error, const float lo[3], const float hi[3], const float* model,
-                           const meso_rt_draw_desc* d, double height)
+double mesoi_projected_px(double error, const float lo[3], const float hi[3], const float* model,
+                          const meso_rt_draw_desc* d, double height)
 {
     if (error <= 0.0)
         return 0.0;
@@ -206,9 +207,9 @@ static uint32_t choose(const mesoi_levels* lv, const meso_rt_draw_desc* d, const
         double px = 0.0;
         if (inst)
             for (uint32_t i = 0; i < count && px <= tau; ++i)
-                px = fmax(px, projected_px(r->error, r->bbox_min, r->bbox_max, inst[i].model, d, height));
+                px = fmax(px, mesoi_projected_px(r->error, r->bbox_min, r->bbox_max, inst[i].model, d, height));
         else
-            px = projected_px(r->error, r->bbox_min, r->bbox_max, d->model, d, height);
+            px = mesoi_projected_px(r->error, r->bbox_min, r->bbox_max, d->model, d, height);
         if (px <= tau)
             return l;
     }
@@ -217,22 +218,37 @@ static uint32_t choose(const mesoi_levels* lv, const meso_rt_draw_desc* d, const
 
 /* >>budget ------------------------------------------------------------------ */
 
-/* Evict the least recently used level (any object's) that no draw of this
- * frame used and that is not its object's coarsest; 0 when there is none. */
-static int evict_one(meso_rt* rt)
+/* Evict the least recently used level or part level (any object's) that no
+ * draw of this frame used and that is not its object's coarsest; 0 when
+ * there is none. */
+int mesoi_evict_one(meso_rt* rt)
 {
     mesoi_levels* best = NULL;
     uint32_t best_l = 0;
+    int best_part = 0;
+    uint64_t oldest = UINT64_MAX;
     for (uint32_t i = 0; i < rt->object_capacity; ++i) {
         mesoi_levels* lv = rt->objects[i].live ? rt->objects[i].levels : NULL;
         for (uint32_t l = 0; lv && l + 1 < lv->count; ++l)
-            if (lv->slot[l].id && lv->used[l] != rt->frame + 1 && (!best || lv->used[l] < best->used[best_l])) {
+            if (lv->slot[l].id && lv->used[l] != rt->frame + 1 && (!best || lv->used[l] < oldest)) {
                 best = lv;
                 best_l = l;
+                best_part = 0;
+                oldest = lv->used[l];
             }
+        uint32_t which = 0;
+        if (lv && lv->parts && mesoi_parts_oldest(rt, lv->parts, &oldest, &which)) {
+            best = lv;
+            best_l = which;
+            best_part = 1;
+        }
     }
     if (!best)
         return 0;
+    if (best_part) {
+        mesoi_parts_evict(rt, best->parts, best_l);
+        return 1;
+    }
     meso_rt_release_object(rt, best->slot[best_l]);
     best->slot[best_l].id = 0;
     rt->bytes_resident -= best->info[best_l].bytes;
@@ -245,7 +261,7 @@ int mesoi_levels_make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l)
     if (!rt->budget)
         return 1;
     while (rt->bytes_resident + lv->info[l].bytes > rt->budget)
-        if (!evict_one(rt))
+        if (!mesoi_evict_one(rt))
             return 0;
     return 1;
 }
@@ -260,7 +276,10 @@ void meso_rt_frame_end(meso_rt* rt)
         if (!lv || lv->want_frame != rt->frame + 1)
             continue;
         const uint64_t coarsest = lv->info[lv->count - 1].bytes;
-        now += lv->info[lv->want_now].bytes + (lv->want_now + 1 < lv->count ? coarsest : 0);
+        uint64_t finest = lv->info[0].bytes; /* or the parts this frame drew instead */
+        if (lv->parts && lv->parts_frame == rt->frame + 1)
+            mesoi_parts_bytes(lv->parts, &finest, NULL);
+        now += (lv->want_now ? lv->info[lv->want_now].bytes : finest) + (lv->want_now + 1 < lv->count ? coarsest : 0);
         lower += lv->info[lv->want_lower].bytes + (lv->want_lower + 1 < lv->count ? coarsest : 0);
     }
     rt->bytes_wanted = now;
@@ -269,7 +288,7 @@ void meso_rt_frame_end(meso_rt* rt)
             rt->tau_scale = fmin(rt->tau_scale * 1.25, 1e6);
         else if (rt->tau_scale > 1.0 && lower <= rt->budget)
             rt->tau_scale = fmax(1.0, rt->tau_scale / 1.1);
-        while (rt->bytes_resident > rt->budget && evict_one(rt)) {
+        while (rt->bytes_resident > rt->budget && mesoi_evict_one(rt)) {
         }
     }
     rt->frame++;
@@ -338,6 +357,29 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         lv->want_now = want < lv->want_now ? want : lv->want_now;
         lv->want_lower = lower < lv->want_lower ? lower : lv->want_lower;
     }
+    /* Level 0 of a mesh object stored with parts: each part at its own
+     * level (rt_parts.c), when every part has one to draw. */
+    if (want == 0 && lv->rec.kind == MESO_OBJECT_MESH && !rt->stream_requests && lv->parts_state != 2) {
+        if (lv->parts_state == 0) {
+            const meso_result pr = mesoi_parts_load(rt, lv->file, &lv->rec, &lv->parts);
+            if (pr == MESO_ERR_OUT_OF_MEMORY)
+                return pr;
+            lv->parts_state = pr == MESO_OK ? 1 : pr == MESO_ERR_PENDING ? 0 : 2;
+        }
+        if (lv->parts) {
+            meso_rt_object ph;
+            const meso_result pr = mesoi_parts_pick(rt, lv->file, &lv->rec, lv->parts, d, inst, count,
+                                                    tau * rt->tau_scale, height, &ph);
+            if (pr == MESO_OK) {
+                lv->last_drawn = 0;
+                lv->parts_frame = rt->frame + 1;
+                *out = ph;
+                return MESO_OK;
+            }
+            if (pr == MESO_ERR_OUT_OF_MEMORY)
+                return pr;
+        }
+    }
     /* The level wanted, else the finest coarser one that can be had, else
      * the nearest finer one uploaded before. With stream requests, a level
      * not uploaded is requested and never read here. */
@@ -392,6 +434,11 @@ meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object h, meso_r
     out->level_count = lv->count;
     out->last_drawn = lv->last_drawn;
     out->bytes_read = lv->bytes_read;
+    if (lv->parts) {
+        uint64_t read = 0;
+        out->bytes_resident += mesoi_parts_bytes(lv->parts, NULL, &read);
+        out->bytes_read += read;
+    }
     for (uint32_t l = 0; l < lv->count; ++l)
         if (lv->slot[l].id) {
             if (l < 32)

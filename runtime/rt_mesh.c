@@ -50,6 +50,13 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_OBJECT_NOT_FOUND, "object %u has no MESH chunk", object_id);
         return MESO_ERR_NOT_FOUND;
     }
+    return mesoi_mesh_upload_chunk(rt, f, ci, object_id, colours ? meso_file_find_vertex_colours(f, object_id, rt->load_lod) : -1,
+                                   o);
+}
+
+meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint32_t object_id, int32_t vi,
+                                    mesoi_object* o)
+{
     void* data = NULL;
     size_t size = 0;
     meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
@@ -74,7 +81,6 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
      * mesh (a file not validated in full) is not drawn, and said. */
     void* vcol = NULL;
     size_t vcol_size = 0;
-    const int32_t vi = colours ? meso_file_find_vertex_colours(f, object_id, rt->load_lod) : -1;
     if (vi >= 0) {
         const meso_chunk_info* vc = meso_file_chunk(f, (uint32_t)vi);
         if (vc->dtype != MESO_DTYPE_U8 || (vc->components != 4 && vc->components != 1) ||
@@ -137,6 +143,8 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
 meso_result mesoi_mesh_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                             uint32_t count)
 {
+    if (o->parts)
+        return mesoi_parts_draw(rt, o->parts, d, inst, count);
     mesoi_draw ds;
     /* The G-buffer's normal faces the viewer and the hook takes the view
      * direction and point: both unproject the fragment (mesh_frag.glsl). */

@@ -317,3 +317,30 @@ uint8_t* sample_small_file(size_t* size)
     meso_writer_destroy(w);
     return buf;
 }
+
+/* A fan of `tris` triangles around the origin, with normals. */
+uint8_t* sample_fan_mesh(uint32_t tris, size_t* size)
+{
+    meso_mesh_layout l;
+    const uint32_t verts = tris + 2;
+    assert(meso_mesh_compute_layout(verts, 3 * tris, MESO_MESH_ATTR_POSITIONS | MESO_MESH_ATTR_NORMALS, &l) ==
+           MESO_OK);
+    uint8_t* m = (uint8_t*)calloc(1, (size_t)l.size);
+    assert(m);
+    meso_mesh_write_header(&l, m);
+    float* p = (float*)(m + l.positions_offset);
+    float* n = (float*)(m + l.normals_offset);
+    for (uint32_t v = 0; v < verts; v++) {
+        p[3 * v + 0] = v == 0 ? 0.0f : (float)(v - 1) / (float)tris;
+        p[3 * v + 1] = v == 0 ? 0.0f : 1.0f;
+        n[3 * v + 2] = 1.0f;
+    }
+    uint32_t* ix = (uint32_t*)(m + l.indices_offset);
+    for (uint32_t t = 0; t < tris; t++) {
+        ix[3 * t + 0] = 0;
+        ix[3 * t + 1] = t + 1;
+        ix[3 * t + 2] = t + 2;
+    }
+    *size = (size_t)l.size;
+    return m;
+}

@@ -27,6 +27,9 @@ void sample_add_all(meso_writer* w);
  * malloc'd buffer. */
 uint8_t* sample_file(size_t* size);
 uint8_t* sample_small_file(size_t* size);
+/* A MESH chunk (decoded layout): a fan of `tris` triangles around the
+ * origin in z = 0, with normals; malloc'd. */
+uint8_t* sample_fan_mesh(uint32_t tris, size_t* size);
 /* Serialise a writer into a malloc'd buffer. */
 uint8_t* writer_to_memory(meso_writer* w, size_t* size);
 

@@ -14,33 +14,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A fan of `tris` triangles around the origin, with normals. */
-static uint8_t* fan_mesh(uint32_t tris, size_t* size)
-{
-    meso_mesh_layout l;
-    const uint32_t verts = tris + 2;
-    assert(meso_mesh_compute_layout(verts, 3 * tris, MESO_MESH_ATTR_POSITIONS | MESO_MESH_ATTR_NORMALS, &l) ==
-           MESO_OK);
-    uint8_t* m = (uint8_t*)calloc(1, (size_t)l.size);
-    assert(m);
-    meso_mesh_write_header(&l, m);
-    float* p = (float*)(m + l.positions_offset);
-    float* n = (float*)(m + l.normals_offset);
-    for (uint32_t v = 0; v < verts; v++) {
-        p[3 * v + 0] = v == 0 ? 0.0f : (float)(v - 1) / (float)tris;
-        p[3 * v + 1] = v == 0 ? 0.0f : 1.0f;
-        n[3 * v + 2] = 1.0f;
-    }
-    uint32_t* ix = (uint32_t*)(m + l.indices_offset);
-    for (uint32_t t = 0; t < tris; t++) {
-        ix[3 * t + 0] = 0;
-        ix[3 * t + 1] = t + 1;
-        ix[3 * t + 2] = t + 2;
-    }
-    *size = (size_t)l.size;
-    return m;
-}
-
 static void add(meso_writer* w, uint32_t type, uint32_t object, uint16_t lod, const void* data, size_t size)
 {
     meso_chunk_desc d = {.type = type, .object = object, .lod = lod, .dtype = MESO_DTYPE_BYTES, .components = 1};
@@ -91,12 +64,12 @@ static uint8_t* make_file_vcol(const meso_level_record* recs, size_t n, const ui
     static const uint32_t tris[3] = {64, 16, 4};
     for (uint16_t lod = 0; lod < 3; lod++) {
         size_t ms;
-        uint8_t* m = fan_mesh(tris[lod], &ms);
+        uint8_t* m = sample_fan_mesh(tris[lod], &ms);
         add(w, MESO_CHUNK_MESH, 1, lod, m, ms);
         free(m);
     }
     size_t ms;
-    uint8_t* m = fan_mesh(8, &ms);
+    uint8_t* m = sample_fan_mesh(8, &ms);
     add(w, MESO_CHUNK_MESH, 2, 0, m, ms);
     free(m);
     if (vcol & VCOL_L1)

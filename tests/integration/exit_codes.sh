@@ -81,6 +81,8 @@ done
 row 1 "--draco-bits" "mesh --draco-bits 4294967310,10,12 (int overflow)" \
   "$bake" mesh -i "$mesh" -o "$tmp/out.meso" --draco-bits 4294967310,10,12
 row 1 "--draco-bits" "mesh --draco-bits 14,10 (two fields)" "$bake" mesh -i "$mesh" -o "$tmp/out.meso" --draco-bits 14,10
+row 1 "--parts expects" "mesh --parts 63 (parts below 64 triangles)" "$bake" mesh -i "$mesh" -o "$tmp/out.meso" --parts 63
+row 1 "--parts expects" "mesh --parts some (not a count)" "$bake" mesh -i "$mesh" -o "$tmp/out.meso" --parts some
 row 1 "--draco-bits" "mesh --draco-bits 14,10,12,1 (four fields)" \
   "$bake" mesh -i "$mesh" -o "$tmp/out.meso" --draco-bits 14,10,12,1
 row 1 "--thickness" "shell --thickness 1e999 (overflow)" "$bake" shell -i "$mesh" -o "$tmp/out.meso" --thickness 1e999

@@ -27,6 +27,12 @@ static const char* const usage_mesh =
     "                          1 = the finest only (no LODS chunk). Vertices split at uv or\n"
     "                          normal seams are welded for the simplifier and keep their own\n"
     "                          normals and uvs\n"
+    "      --parts auto|none|N the mesh also cut into parts, each with levels of its own, so a\n"
+    "                          reader can draw the near end finer than the far end (FORMAT.md\n"
+    "                          7.11): auto (default) parts of about 1024 triangles when there are\n"
+    "                          levels and at least 2048 triangles; N (64..): parts of about N\n"
+    "                          triangles; none. Part borders stay fixed at every level, so any\n"
+    "                          mix of part levels is closed; the file grows by about its level 0\n"
     "  -j, --threads N         threads for measuring the errors (default: all cores); the\n"
     "                          output does not depend on N\n"
     "Compression:\n"
@@ -106,6 +112,17 @@ int cmd_mesh(int argc, char** argv)
             else
                 return usage_error("--levels expects auto or a level count in 1..%d, got '%s'",
                                    MESO_BAKE_MESH_MAX_LEVELS, v);
+        } else if (!strcmp(a, "--parts") && has_val) {
+            long n;
+            const char* v = argv[++i];
+            if (!strcmp(v, "auto"))
+                o.parts = 0;
+            else if (!strcmp(v, "none"))
+                o.parts = -1;
+            else if (meso_bake_parse_long(v, 64, 1L << 30, &n))
+                o.parts = (int)n;
+            else
+                return usage_error("--parts expects auto, none or a triangle count of at least 64, got '%s'", v);
         } else if ((!strcmp(a, "-j") || !strcmp(a, "--threads")) && has_val) {
             long n;
             if (!meso_bake_parse_long(argv[++i], 1, 256, &n))
@@ -124,6 +141,7 @@ int cmd_mesh(int argc, char** argv)
             int known = !strcmp(a, "-i") || !strcmp(a, "--input") || !strcmp(a, "-o") || !strcmp(a, "--output") ||
                         !strcmp(a, "--name") || !strcmp(a, "--report") || !strcmp(a, "--draco-bits") ||
                         !strcmp(a, "--max-memory") || !strcmp(a, "--node") || !strcmp(a, "--levels") ||
+                        !strcmp(a, "--parts") ||
                         !strcmp(a, "-j") || !strcmp(a, "--threads");
             return usage_error(known ? "option '%s' needs a value" : "unrecognized option '%s'", a);
         } else {

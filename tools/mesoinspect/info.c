@@ -152,6 +152,33 @@ static meso_level_info* object_levels(info_state* s, uint32_t id, uint32_t* n)
     return lv;
 }
 
+/* The part levels of object `id` (FORMAT.md §7.11), by part then lod;
+ * NULL with *n = 0 for an object without parts, and with a warning when
+ * its PRTS chunk cannot be read. *parts and *pairs get the counts. */
+static meso_part_level* object_parts(info_state* s, uint32_t id, uint32_t* n, uint32_t* parts, uint32_t* pairs)
+{
+    *n = *parts = *pairs = 0;
+    meso_error err = {0};
+    uint32_t nl = 0, np = 0, ne = 0;
+    meso_part_level* pl = NULL;
+    meso_result r = meso_file_parts(s->f, id, NULL, 0, &nl, &np, NULL, 0, &ne, &err);
+    if (r == MESO_OK && nl) {
+        pl = calloc(nl, sizeof(*pl));
+        r = pl ? meso_file_parts(s->f, id, pl, nl, &nl, &np, NULL, 0, &ne, &err) : MESO_ERR_OUT_OF_MEMORY;
+    }
+    if (r != MESO_OK) {
+        char msg[400];
+        snprintf(msg, sizeof(msg), "parts of object %u: %s", id, err.message[0] ? err.message : meso_result_string(r));
+        warn(s, msg);
+        free(pl);
+        return NULL;
+    }
+    *n = nl;
+    *parts = np;
+    *pairs = ne;
+    return pl;
+}
+
 static const char* form_name(uint16_t form)
 {
     return form == MESO_LEVEL_NATIVE ? "native" : form == MESO_LEVEL_MESH ? "mesh" : "unknown";
@@ -334,6 +361,29 @@ static void print_text(info_state* s, const meso_object_record* objs, uint32_t n
         mi_table_print(&t, 2);
         mi_table_free(&t);
     }
+    for (uint32_t i = 0; i < nobj; ++i) {
+        uint32_t nl = 0, np = 0, ne = 0;
+        meso_part_level* pl = object_parts(s, objs[i].id, &nl, &np, &ne);
+        if (!pl)
+            continue;
+        /* One line per part: its levels' errors and bytes. */
+        printf("\nParts of object %u (FORMAT.md 7.11): %u parts, %u part levels, %u neighbour pairs\n", objs[i].id, np,
+               nl, ne);
+        for (uint32_t k = 0; k < nl;) {
+            uint32_t e = k;
+            while (e < nl && pl[e].rec.object == pl[k].rec.object)
+                ++e;
+            printf("  part %u: %u levels; error", pl[k].rec.object, e - k);
+            for (uint32_t j = k; j < e; ++j)
+                printf(" %.4g", (double)pl[j].rec.error);
+            printf("; bytes");
+            for (uint32_t j = k; j < e; ++j)
+                printf(" %llu", (unsigned long long)pl[j].bytes);
+            printf("\n");
+            k = e;
+        }
+        free(pl);
+    }
 
     printf("\nChunks (%u):\n", n);
     if (n) {
@@ -464,6 +514,27 @@ static cJSON* build_json(info_state* s, const meso_object_record* objs, uint32_t
             cJSON_AddItemToArray(ja, jl);
         }
         free(lv);
+        uint32_t np = 0, ne = 0;
+        meso_part_level* pl = object_parts(s, o->id, &nl, &np, &ne);
+        if (pl) {
+            cJSON* jp = cJSON_AddObjectToObject(jo, "parts");
+            cJSON_AddNumberToObject(jp, "count", np);
+            cJSON_AddNumberToObject(jp, "neighbour_pairs", ne);
+            cJSON* jl = cJSON_AddArrayToObject(jp, "levels");
+            for (uint32_t k = 0; k < nl; ++k) {
+                cJSON* e = cJSON_CreateObject();
+                cJSON_AddNumberToObject(e, "part", pl[k].rec.object);
+                cJSON_AddNumberToObject(e, "lod", pl[k].rec.lod);
+                cJSON_AddNumberToObject(e, "error", (double)pl[k].rec.error);
+                cJSON_AddNumberToObject(e, "bytes", (double)pl[k].bytes);
+                cJSON_AddNumberToObject(e, "prefix_bytes", (double)pl[k].prefix_bytes);
+                cJSON_AddNumberToObject(e, "chunk", pl[k].chunk);
+                cJSON_AddItemToArray(jl, e);
+            }
+            free(pl);
+        } else {
+            cJSON_AddNullToObject(jo, "parts");
+        }
         cJSON_AddItemToArray(oa, jo);
     }
 

@@ -440,6 +440,7 @@ const char* mi_issue_name(uint32_t code)
         {4901, "ANIM_SIZE"},         {4902, "ANIM_VALUE"},
         {4911, "CMAP_SIZE"},         {4912, "CMAP_VALUE"},
         {4921, "LODS_SIZE"},         {4922, "LODS_VALUE"},
+        {4931, "PRTS_SIZE"},         {4932, "PRTS_VALUE"},
         {5001, "API_ARG"},           {5002, "API_BUFFER"},
         {5003, "API_MEMORY"},        {5004, "IO_OPEN"},
         {5005, "IO_READ"},           {5006, "IO_MMAP"},
@@ -455,7 +456,7 @@ const char* mi_issue_name(uint32_t code)
         {6202, "FRUSTA_NODE"},       {6203, "FRUSTA_AXIS"},
         {6204, "FRUSTA_RELF"},       {6205, "FRUSTA_COLR"},
         {6301, "CELLS_COLOUR_GRID"},
-        {6401, "LEVELS"},
+        {6401, "LEVELS"},            {6501, "PARTS"},
     };
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); ++i)
         if (names[i].code == code)

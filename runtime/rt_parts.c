@@ -1,0 +1,299 @@
+/*
+ * rt_parts.c — a levelled mesh object drawn part by part (FORMAT.md §7.11,
+ * issue 14: "each part ... draws the coarsest level whose projected error
+ * is ≤ τ; neighbouring parts may differ by at most one level and never
+ * crack").
+ *
+ * Where the object's whole levels would draw level 0 (some of it is near),
+ * an object stored with parts draws each part at its own level instead, so
+ * the far end of a long object, or the far side of a near one, draws and
+ * holds less. How:
+ *
+ *  - each part's level is the coarsest whose error, projected at the
+ *    nearest point of that level's bounds (rt_levels.c mesoi_projected_px,
+ *    the whole levels' rule), covers at most the draw's pixel error, for
+ *    every instance drawn;
+ *  - then neighbours (PRTS pairs) are brought within one level of each
+ *    other by lowering the coarser (repeated until nothing changes: levels
+ *    only fall, so it ends). The bake makes any pair of levels meet edge to
+ *    edge (bake/mesh_parts.c), so this rule is the issue's, not what keeps
+ *    the surface closed;
+ *  - a part level not uploaded is uploaded now (under the memory budget,
+ *    evicting what this frame does not use, as whole levels are), else the
+ *    part draws the nearest uploaded coarser, else finer, level of its own;
+ *    when some part has none, the object draws its whole level 0 as
+ *    before. With stream requests (meso_rt_desc.stream_requests) parts are
+ *    not used: their uploads would need requests of their own.
+ *
+ * The pick hands out one slot (`parent`) whose mesh draw draws the parts
+ * this pick chose (mesoi_parts_draw), so every draw path (single,
+ * instanced, lists) takes parts through the same call it takes levels.
+ */
+#include "rt_internal.h"
+
+#include <string.h>
+
+typedef struct mesoi_parts {
+    uint32_t part_count, level_count, edge_count;
+    meso_part_level* lv;     /* [level_count], by part then lod */
+    uint32_t* first;         /* [part_count + 1]: part p's levels are lv[first[p] .. first[p + 1]) */
+    uint32_t* edges;         /* [2 edge_count]: part numbers, 1-based as in the file */
+    meso_rt_object* slot;    /* [level_count]: the uploaded part level, id 0 when not */
+    uint8_t* failed;         /* [level_count] */
+    uint64_t* used;          /* [level_count]: the frame a draw last used it */
+    uint32_t* want;          /* [part_count]: the level the last pick wanted */
+    meso_rt_object* chosen;  /* [part_count]: the slots the last pick drew */
+    uint8_t* drawn;          /* [part_count]: the level each drew */
+    meso_rt_object parent;   /* the slot picks hand out (kind MESH, no GL resources) */
+    uint64_t bytes_wanted;   /* the last pick's wanted part levels' bytes */
+    uint64_t bytes_read;
+} mesoi_parts;
+
+void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
+{
+    if (!p)
+        return;
+    for (uint32_t i = 0; p->slot && i < p->level_count; ++i)
+        if (p->slot[i].id) {
+            meso_rt_release_object(rt, p->slot[i]);
+            rt->bytes_resident -= p->lv[i].bytes;
+        }
+    mesoi_object* o = mesoi_lookup(rt, p->parent);
+    if (o)
+        o->parts = NULL;
+    meso_rt_release_object(rt, p->parent);
+    mesoi_rt_free(rt, p->lv);
+    mesoi_rt_free(rt, p->first);
+    mesoi_rt_free(rt, p->edges);
+    mesoi_rt_free(rt, p->slot);
+    mesoi_rt_free(rt, p->failed);
+    mesoi_rt_free(rt, p->used);
+    mesoi_rt_free(rt, p->want);
+    mesoi_rt_free(rt, p->chosen);
+    mesoi_rt_free(rt, p->drawn);
+    mesoi_rt_free(rt, p);
+}
+
+/* The object's parts, or NULL (none, or its table not readable: the whole
+ * levels draw it). MESO_ERR_PENDING when the table has not arrived. */
+meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts** out)
+{
+    *out = NULL;
+    uint32_t nl = 0, np = 0, ne = 0;
+    meso_error err;
+    meso_result r = meso_file_parts(f, rec->id, NULL, 0, &nl, &np, NULL, 0, &ne, &err);
+    if (r != MESO_OK || nl == 0) {
+        if (r != MESO_OK && r != MESO_ERR_PENDING)
+            mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                      "object %u: its parts cannot be read (%s); drawn by its whole levels", rec->id, err.message);
+        return r == MESO_ERR_PENDING ? r : MESO_OK;
+    }
+    mesoi_parts* p = mesoi_rt_alloc(rt, sizeof(*p));
+    if (!p)
+        return MESO_ERR_OUT_OF_MEMORY;
+    memset(p, 0, sizeof(*p));
+    p->part_count = np;
+    p->level_count = nl;
+    p->edge_count = ne;
+    p->lv = mesoi_rt_alloc(rt, sizeof(meso_part_level) * nl);
+    p->first = mesoi_rt_alloc(rt, sizeof(uint32_t) * (np + 1));
+    p->edges = mesoi_rt_alloc(rt, sizeof(uint32_t) * 2 * (ne ? ne : 1));
+    p->slot = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * nl);
+    p->failed = mesoi_rt_alloc(rt, nl);
+    p->used = mesoi_rt_alloc(rt, sizeof(uint64_t) * nl);
+    p->want = mesoi_rt_alloc(rt, sizeof(uint32_t) * np);
+    p->chosen = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * np);
+    p->drawn = mesoi_rt_alloc(rt, np);
+    r = p->lv && p->first && p->edges && p->slot && p->failed && p->used && p->want && p->chosen && p->drawn
+            ? MESO_OK
+            : MESO_ERR_OUT_OF_MEMORY;
+    if (r == MESO_OK) {
+        memset(p->slot, 0, sizeof(meso_rt_object) * nl);
+        memset(p->failed, 0, nl);
+        memset(p->used, 0, sizeof(uint64_t) * nl);
+        memset(p->drawn, 0, np);
+        r = meso_file_parts(f, rec->id, p->lv, nl, &nl, &np, p->edges, ne, &ne, &err);
+        if (r != MESO_OK && r != MESO_ERR_PENDING)
+            mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                      "object %u: its parts cannot be read (%s); drawn by its whole levels", rec->id, err.message);
+    }
+    /* Part p's levels: records are by part (1..), lods consecutive (the
+     * format's rules, checked by meso_file_parts). */
+    for (uint32_t i = 0, q = 0; r == MESO_OK && q <= np; ++q) {
+        while (i < nl && p->lv[i].rec.object < q + 1)
+            ++i;
+        p->first[q] = i;
+    }
+    if (r == MESO_OK)
+        r = mesoi_empty_slot(rt, rec, &p->parent);
+    if (r == MESO_OK) {
+        mesoi_object* o = mesoi_lookup(rt, p->parent);
+        o->kind = MESO_OBJECT_MESH;
+        o->parts = p;
+        *out = p;
+        return MESO_OK;
+    }
+    mesoi_parts_free(rt, p);
+    return r == MESO_ERR_PENDING ? r : (r == MESO_ERR_OUT_OF_MEMORY ? r : MESO_OK);
+}
+
+/* Upload part level i (its PMSH) into a slot of its own. */
+static meso_result upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i)
+{
+    if (p->slot[i].id)
+        return MESO_OK;
+    if (p->failed[i] || p->lv[i].chunk < 0)
+        return MESO_ERR_NOT_FOUND;
+    meso_rt_object h;
+    meso_result r = mesoi_empty_slot(rt, rec, &h);
+    if (r != MESO_OK)
+        return r;
+    mesoi_object* o = mesoi_lookup(rt, h);
+    o->kind = MESO_OBJECT_MESH;
+    memcpy(o->bbox_min, p->lv[i].rec.bbox_min, sizeof(o->bbox_min));
+    memcpy(o->bbox_max, p->lv[i].rec.bbox_max, sizeof(o->bbox_max));
+    r = mesoi_mesh_upload_chunk(rt, f, p->lv[i].chunk, rec->id, -1, o);
+    if (r == MESO_OK) {
+        p->slot[i] = h;
+        rt->bytes_resident += p->lv[i].bytes;
+        p->bytes_read += p->lv[i].bytes;
+        return MESO_OK;
+    }
+    meso_rt_release_object(rt, h);
+    if (r != MESO_ERR_PENDING) {
+        p->failed[i] = 1;
+        mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "object %u: part %u level %u could not be uploaded", rec->id, p->lv[i].rec.object,
+                  p->lv[i].rec.lod);
+    }
+    return r;
+}
+
+int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which)
+{
+    int found = 0;
+    for (uint32_t i = 0; i < p->level_count; ++i)
+        if (p->slot[i].id && p->used[i] != rt->frame + 1 && p->used[i] < *oldest) {
+            *oldest = p->used[i];
+            *which = i;
+            found = 1;
+        }
+    return found;
+}
+
+void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i)
+{
+    meso_rt_release_object(rt, p->slot[i]);
+    p->slot[i].id = 0;
+    rt->bytes_resident -= p->lv[i].bytes;
+    rt->evictions++;
+}
+
+meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p,
+                             const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count, double tau,
+                             double height, meso_rt_object* out)
+{
+    /* Each part's own level. */
+    for (uint32_t q = 0; q < p->part_count; ++q) {
+        const uint32_t a = p->first[q], b = p->first[q + 1];
+        uint32_t l = 0;
+        for (uint32_t k = b - a; k-- > 1;) {
+            const meso_level_record* r = &p->lv[a + k].rec;
+            double px = 0.0;
+            if (inst)
+                for (uint32_t i = 0; i < count && px <= tau; ++i)
+                    px = mesoi_projected_px(r->error, r->bbox_min, r->bbox_max, inst[i].model, d, height);
+            else
+                px = mesoi_projected_px(r->error, r->bbox_min, r->bbox_max, d->model, d, height);
+            if (px <= tau) {
+                l = k;
+                break;
+            }
+        }
+        p->want[q] = l;
+    }
+    /* Neighbours within one level: lower the coarser until nothing moves. */
+    for (int changed = 1; changed;) {
+        changed = 0;
+        for (uint32_t e = 0; e < p->edge_count; ++e) {
+            const uint32_t a = p->edges[2 * e] - 1, b = p->edges[2 * e + 1] - 1;
+            if (p->want[a] > p->want[b] + 1) {
+                p->want[a] = p->want[b] + 1;
+                changed = 1;
+            } else if (p->want[b] > p->want[a] + 1) {
+                p->want[b] = p->want[a] + 1;
+                changed = 1;
+            }
+        }
+    }
+    /* What each part can draw now. */
+    p->bytes_wanted = 0;
+    for (uint32_t q = 0; q < p->part_count; ++q) {
+        const uint32_t a = p->first[q], n = p->first[q + 1] - a, w = p->want[q];
+        p->bytes_wanted += p->lv[a + w].bytes;
+        int32_t got = -1;
+        for (uint32_t l = w; got < 0 && l < n; ++l) {
+            const uint32_t i = a + l;
+            if (!p->slot[i].id && !p->failed[i]) {
+                while (rt->budget && rt->bytes_resident + p->lv[i].bytes > rt->budget && mesoi_evict_one(rt)) {
+                }
+                if (!rt->budget || rt->bytes_resident + p->lv[i].bytes <= rt->budget) {
+                    const meso_result r = upload(rt, f, rec, p, i);
+                    if (r == MESO_ERR_OUT_OF_MEMORY)
+                        return r;
+                }
+            }
+            if (p->slot[i].id)
+                got = (int32_t)l;
+        }
+        for (uint32_t l = w; got < 0 && l-- > 0;)
+            if (p->slot[a + l].id)
+                got = (int32_t)l;
+        if (got < 0)
+            return MESO_ERR_NOT_FOUND; /* the whole level 0 instead */
+        p->chosen[q] = p->slot[a + (uint32_t)got];
+        p->drawn[q] = (uint8_t)(got > 255 ? 255 : got);
+        p->used[a + (uint32_t)got] = rt->frame + 1;
+    }
+    *out = p->parent;
+    return MESO_OK;
+}
+
+meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_draw_desc* d,
+                             const meso_rt_instance* inst, uint32_t count)
+{
+    for (uint32_t q = 0; q < p->part_count; ++q) {
+        mesoi_object* o = mesoi_lookup(rt, p->chosen[q]);
+        if (!o)
+            continue; /* evicted since the pick: a later frame picks it again */
+        const meso_result r = mesoi_mesh_draw(rt, o, d, inst, count);
+        if (r != MESO_OK)
+            return r;
+    }
+    return MESO_OK;
+}
+
+uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read)
+{
+    uint64_t b = 0;
+    for (uint32_t i = 0; i < p->level_count; ++i)
+        b += p->slot[i].id ? p->lv[i].bytes : 0;
+    if (wanted)
+        *wanted = p->bytes_wanted;
+    if (read)
+        *read = p->bytes_read;
+    return b;
+}
+
+meso_result meso_rt_parts_state_get(const meso_rt* rt, meso_rt_object h, uint8_t* levels, uint32_t cap,
+                                    uint32_t* part_count)
+{
+    const mesoi_object* o = mesoi_lookup(rt, h);
+    if (!o || !part_count || (!levels && cap))
+        return MESO_ERR_INVALID_ARG;
+    const mesoi_parts* p = o->levels ? o->levels->parts : NULL;
+    *part_count = p ? p->part_count : 0;
+    for (uint32_t q = 0; p && q < p->part_count && q < cap; ++q)
+        levels[q] = p->drawn[q];
+    return MESO_OK;
+}

@@ -1,0 +1,268 @@
+/* A mesh object drawn part by part (FORMAT.md §7.11, runtime/rt_parts.c,
+ * issue 14: "each part ... draws the coarsest level whose projected error
+ * is ≤ τ; neighbouring parts may differ by at most one level and never
+ * crack"), on llvmpipe. spot_uv.obj baked by meso_bake_mesh (its default
+ * parts), seen from close to its head, so that the head is near and the
+ * tail far:
+ *  - the object's parts are read and drawn, at more than one level, the
+ *    near end finer than the far end;
+ *  - every part's level keeps its error within the pixel error at that
+ *    level's nearest bound point (computed here from the bounds, a looser
+ *    distance than the runtime's bounding sphere: a bound it must meet);
+ *  - neighbouring parts (PRTS pairs) differ by at most one level;
+ *  - no crack: every pixel inside the finest draw's silhouette (all 8
+ *    neighbours covered) is covered by the parts draw too;
+ *  - it holds fewer bytes than the finest level (levels state), and the
+ *    finest draw (pixel error < 0) draws every part at level 0;
+ *  - instanced, the near instance decides: the parts draw at the finest
+ *    level either instance needs (the image equals the near one's alone
+ *    where the far one is off screen);
+ *  - a file without parts (--parts none) draws as before: no parts. */
+#include "test_util.h"
+
+#include <GL/glcorearb.h>
+#include <math.h>
+#include <string.h>
+
+#include "camera.h"
+#include "egl_context.h"
+#include "gl_api.h"
+#include "gl_fbo.h"
+#include "meso_bake.h"
+#include "meso_rt.h"
+
+enum { W = 160, H = 120 };
+#define TAU 2.0f /* pixels: where spot's part levels (0.5-1 % of its diagonal) separate at this size */
+
+static test_fbo fb;
+
+static uint8_t* bake_spot(int parts, size_t* size)
+{
+    meso_bake_mesh_options o = meso_bake_mesh_defaults();
+    o.input = test_data("spot_uv.obj");
+    o.parts = parts;
+    meso_bake_output* out = NULL;
+    meso_error err;
+    assert(meso_bake_mesh(&o, &out, NULL, &err) == MESO_OK);
+    *size = meso_bake_output_size(out);
+    uint8_t* data = malloc(*size);
+    assert(data && meso_bake_output_copy(out, data, *size, NULL) == MESO_OK);
+    meso_bake_output_free(out);
+    return data;
+}
+
+/* Close to one end of the long (z) axis, looking along it at the box's
+ * centre: that end is near, the other far. */
+static void view(const meso_object_record* rec, meso_rt_draw_desc* d, double eye[3])
+{
+    double c[3], diag = 0;
+    for (int k = 0; k < 3; ++k) {
+        c[k] = 0.5 * ((double)rec->bbox_min[k] + rec->bbox_max[k]);
+        diag += pow((double)rec->bbox_max[k] - rec->bbox_min[k], 2);
+    }
+    diag = sqrt(diag);
+    const double up[3] = {0, 1, 0};
+    eye[0] = c[0] + 0.05 * diag;
+    eye[1] = c[1] + 0.15 * diag;
+    eye[2] = rec->bbox_max[2] + 0.12 * diag;
+    meso_camera_look_at(d->view, eye, c, up);
+    meso_camera_perspective(d->proj, 50.0 * M_PI / 180.0, (double)W / H, 0.01, 100.0);
+}
+
+static float* draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
+{
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw(rt, obj, d) == MESO_OK);
+    float* depth = malloc(sizeof(float) * W * H);
+    assert(depth);
+    test_fbo_read(&fb, NULL, depth);
+    return depth;
+}
+
+/* Distance from `eye` to the nearest point of the box lo..hi. */
+static double box_distance(const double eye[3], const float lo[3], const float hi[3])
+{
+    double s = 0;
+    for (int k = 0; k < 3; ++k) {
+        const double q = eye[k] < lo[k] ? lo[k] - eye[k] : eye[k] > hi[k] ? eye[k] - hi[k] : 0.0;
+        s += q * q;
+    }
+    return sqrt(s);
+}
+
+static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_record* rec)
+{
+    uint32_t nl = 0, np = 0, ne = 0;
+    meso_error err;
+    assert(meso_file_parts(f, rec->id, NULL, 0, &nl, &np, NULL, 0, &ne, &err) == MESO_OK);
+    assert(np >= 2 && nl > np);
+    meso_part_level* pl = malloc(sizeof(meso_part_level) * nl);
+    uint32_t* edges = malloc(sizeof(uint32_t) * 2 * ne);
+    assert(pl && edges);
+    assert(meso_file_parts(f, rec->id, pl, nl, &nl, &np, edges, ne, &ne, &err) == MESO_OK);
+    uint32_t* first = calloc(np + 1, sizeof(uint32_t));
+    assert(first);
+    for (uint32_t i = 0; i < nl; ++i)
+        first[pl[i].rec.object]++;
+    for (uint32_t q = 1; q <= np; ++q)
+        first[q] += first[q - 1]; /* first[q]: the end of part q (1-based) = the start of part q + 1 */
+
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, rec->id, &obj) == MESO_OK);
+    meso_rt_draw_desc d = {0};
+    double eye[3];
+    view(rec, &d, eye);
+
+    /* The finest: every part at level 0. */
+    d.pixel_error = -1.0f;
+    float* fine = draw(rt, obj, &d);
+    uint8_t* lev = malloc(np);
+    uint32_t count = 0;
+    assert(lev && meso_rt_parts_state_get(rt, obj, lev, np, &count) == MESO_OK && count == np);
+    for (uint32_t q = 0; q < np; ++q)
+        assert(lev[q] == 0);
+    meso_rt_levels_state st;
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+    uint64_t finest = 0;
+    for (uint32_t i = 0; i < nl; ++i)
+        finest += pl[i].rec.lod == 0 ? pl[i].bytes : 0;
+
+    /* At TAU px. */
+    d.pixel_error = TAU;
+    float* one = draw(rt, obj, &d);
+    assert(meso_rt_parts_state_get(rt, obj, lev, np, &count) == MESO_OK && count == np);
+    uint32_t lo = 255, hi = 0;
+    double worst_px = 0, drawn_error = 0;
+    uint64_t bytes = 0;
+    const double focal = 0.5 * H / tan(25.0 * M_PI / 180.0);
+    for (uint32_t q = 0; q < np; ++q) {
+        const meso_part_level* L = &pl[first[q] + lev[q]];
+        assert(L->rec.object == q + 1 && L->rec.lod == lev[q]);
+        lo = lev[q] < lo ? lev[q] : lo;
+        hi = lev[q] > hi ? lev[q] : hi;
+        bytes += L->bytes;
+        const double dist = box_distance(eye, L->rec.bbox_min, L->rec.bbox_max);
+        const double px = L->rec.error * focal / dist;
+        worst_px = px > worst_px ? px : worst_px;
+        drawn_error = L->rec.error > drawn_error ? L->rec.error : drawn_error;
+        printf("  part %u: level %u of %u, error %.4g (level 1: %.4g), %.2f px at its nearest bound point %.3g away\n",
+               q + 1, lev[q], first[q + 1] - first[q], (double)L->rec.error, (double)pl[first[q] + 1].rec.error, px,
+               dist);
+    }
+    for (uint32_t e = 0; e < ne; ++e) {
+        const int a = lev[edges[2 * e] - 1], b = lev[edges[2 * e + 1] - 1];
+        assert(abs(a - b) <= 1);
+    }
+    printf("parts at %g px: %u parts at levels %u..%u; largest projected error %.2f px; %u neighbour pairs within one "
+           "level; bytes of the parts drawn %llu against %llu at level 0\n",
+           (double)TAU, np, lo, hi, worst_px, ne, (unsigned long long)bytes, (unsigned long long)finest);
+    assert(hi > lo);        /* near finer than far */
+    assert(worst_px <= TAU); /* the bound box is no nearer than the runtime's sphere */
+    assert(bytes < finest);
+
+    /* No crack: the finest silhouette's interior is covered, depths close. */
+    long interior = 0, holes = 0;
+    for (int y = 1; y < H - 1; ++y)
+        for (int x = 1; x < W - 1; ++x) {
+            int all = 1;
+            for (int j = -1; j <= 1; ++j)
+                for (int i = -1; i <= 1; ++i)
+                    all &= fine[(y + j) * W + x + i] < 1.0f;
+            if (!all)
+                continue;
+            ++interior;
+            if (one[y * W + x] >= 1.0f)
+                ++holes;
+        }
+    printf("  no crack: %ld pixels inside the finest silhouette, %ld not covered at %g px\n", interior, holes,
+           (double)TAU);
+    assert(interior > 1000 && holes == 0);
+
+    /* Instanced: a second instance far away off to the side changes
+     * nothing for the near one's parts. */
+    meso_rt_instance inst[2];
+    memset(inst, 0, sizeof inst);
+    for (int k = 0; k < 4; ++k)
+        inst[0].model[5 * k] = inst[1].model[5 * k] = 1.0f;
+    inst[1].model[12] = -1000.0f;
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw_instanced(rt, obj, &d, inst, 2) == MESO_OK);
+    float* both = malloc(sizeof(float) * W * H);
+    assert(both);
+    test_fbo_read(&fb, NULL, both);
+    uint8_t* lev2 = malloc(np);
+    assert(lev2 && meso_rt_parts_state_get(rt, obj, lev2, np, &count) == MESO_OK);
+    assert(memcmp(lev, lev2, np) == 0);
+    assert(memcmp(both, one, sizeof(float) * W * H) == 0);
+    printf("  instanced with a far instance: the same part levels and the same depth image\n");
+
+    meso_rt_release_object(rt, obj);
+    free(both);
+    free(lev2);
+    free(fine);
+    free(one);
+    free(lev);
+    free(first);
+    free(pl);
+    free(edges);
+}
+
+static void no_parts_as_before(meso_rt* rt)
+{
+    size_t size = 0;
+    uint8_t* data = bake_spot(-1, &size);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
+    uint32_t nl = 1, np = 1, ne = 1;
+    assert(meso_file_parts(f, 1, NULL, 0, &nl, &np, NULL, 0, &ne, NULL) == MESO_OK && nl == 0 && np == 0);
+    meso_object_record rec;
+    uint32_t n = 0;
+    assert(meso_file_objects(f, &rec, 1, &n, NULL) == MESO_OK && n == 1);
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    meso_rt_draw_desc d = {0};
+    double eye[3];
+    view(&rec, &d, eye);
+    d.pixel_error = TAU;
+    free(draw(rt, obj, &d));
+    uint32_t count = 1;
+    assert(meso_rt_parts_state_get(rt, obj, NULL, 0, &count) == MESO_OK && count == 0);
+    meso_rt_release_object(rt, obj);
+    meso_file_close(f);
+    free(data);
+    printf("without parts (parts -1): none read, drawn by whole levels\n");
+}
+
+int main(void)
+{
+    setvbuf(stdout, NULL, _IONBF, 0);
+    char why[256];
+    meso_egl* egl = test_egl_create(why, sizeof(why));
+    if (!egl) {
+        fprintf(stderr, "test_rt_parts: no EGL context: %s\n", why);
+        return 1;
+    }
+    assert(test_fbo_create(&fb, W, H));
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
+
+    size_t size = 0;
+    uint8_t* data = bake_spot(0, &size);
+    meso_file* f = NULL;
+    meso_error err;
+    assert(meso_file_open_memory(data, size, NULL, &f, &err) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_object_record rec;
+    uint32_t n = 0;
+    assert(meso_file_objects(f, &rec, 1, &n, NULL) == MESO_OK && n == 1);
+    parts_near_and_far(rt, f, &rec);
+    meso_file_close(f);
+    free(data);
+    no_parts_as_before(rt);
+
+    meso_rt_destroy(rt);
+    test_fbo_destroy(&fb);
+    meso_egl_destroy(egl);
+    printf("ok   test_rt_parts\n");
+    return 0;
+}
