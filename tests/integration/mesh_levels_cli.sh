@@ -9,7 +9,8 @@
 # §7.10), the text output has one line per level, --levels 1 writes no
 # LODS and one MESH, --levels N caps the count, Draco levels validate in
 # full, -j 1 and -j 2 give the same bytes, pack keeps the levels, bad
-# values exit 1.
+# values exit 1; a mesh's parts (FORMAT.md 7.11) against the chunk
+# listing, in preview --stats, --parts none, pack.
 set -u
 MB=$1
 MI=$2
@@ -141,6 +142,51 @@ for bad in 0 17 x -1; do
     expect_err "levels" "--levels $bad names the option"
 done
 [ ! -e "$T/bad.meso" ] && ok || fail "a refused command wrote its output"
+
+# Parts (FORMAT.md 7.11): spot_uv gets them by default; info lists each
+# part level with the bytes and prefix its PMSH chunk gives in the chunk
+# listing; preview --stats reports the level each part drew (all 0 at
+# pixel error 0, and no part coarser than at a larger pixel error, whose
+# resident bytes are no more); --parts none writes none; pack keeps them.
+run "$MB" mesh -i "$DATA/spot_uv.obj" -o "$T/s.meso"
+expect_rc 0 "bake spot_uv with parts"
+run "$MI" validate --full "$T/s.meso"
+expect_rc 0 "parts validate in full"
+run "$MI" info --format json "$T/s.meso"
+cp "$T/out" "$T/s.json"
+for tau in 0 16; do
+    run "$MI" preview "$T/s.meso" -o "$T/s$tau.png" --size 256x256 --zoom 3 --pixel-error $tau --stats "$T/st$tau.json"
+    expect_rc 0 "preview at pixel error $tau"
+done
+run python3 - "$T/s.json" "$T/st0.json" "$T/st16.json" <<'PY'
+import json, sys
+info = json.load(open(sys.argv[1])); s0 = json.load(open(sys.argv[2])); s16 = json.load(open(sys.argv[3]))
+def fail(msg): print(msg); sys.exit(1)
+parts = info["objects"][0]["parts"]
+if not parts or parts["count"] < 2: fail("spot_uv has no parts: %r" % parts)
+chunks = info["chunks"]
+head = max(c["offset"] + c["stored_size"] for c in chunks if c["type"] in ("META", "OBJT", "LODS", "PRTS"))
+for l in parts["levels"]:
+    m = [c for c in chunks if c["type"] == "PMSH" and c["lod"] == l["lod"] and c["dims"][0] == l["part"]]
+    if len(m) != 1: fail("part %d lod %d: %d PMSH chunks" % (l["part"], l["lod"], len(m)))
+    if l["chunk"] != m[0]["index"] or l["bytes"] != m[0]["stored_size"]: fail("part %d lod %d: chunk or bytes" % (l["part"], l["lod"]))
+    if l["prefix_bytes"] != max(head, m[0]["offset"] + m[0]["stored_size"]): fail("part %d lod %d: prefix" % (l["part"], l["lod"]))
+p0 = s0["objects"][0].get("part_levels_drawn"); p16 = s16["objects"][0].get("part_levels_drawn")
+if p0 is None or len(p0) != parts["count"] or any(p0): fail("pixel error 0: %r" % p0)
+if p16 is None or len(p16) != parts["count"]: fail("pixel error 16: %r" % p16)
+if s16["objects"][0]["bytes_resident"] > s0["objects"][0]["bytes_resident"]: fail("more bytes at 16 px")
+print("parts %d, levels drawn at 16 px %r" % (parts["count"], p16))
+PY
+expect_rc 0 "parts: info against the chunks, preview --stats part levels"
+run "$MB" mesh -i "$DATA/spot_uv.obj" -o "$T/sn.meso" --parts none
+run "$MI" info --format json "$T/sn.meso"
+grep -q '"parts":[[:space:]]*null' "$T/out" && ok || fail "--parts none still wrote parts"
+run "$MB" pack "$T/s.meso" "$T/t.meso" -o "$T/sp.meso"
+expect_rc 0 "pack a mesh with parts"
+run "$MI" validate --full "$T/sp.meso"
+expect_rc 0 "the packed file validates in full"
+run "$MI" info "$T/sp.meso"
+expect_out "Parts of object 1" "pack keeps the parts"
 
 echo "mesh_levels_cli: $checks checks, $failures failures"
 [ "$failures" -eq 0 ]

@@ -160,7 +160,8 @@ static const char* const usage_preview_levels =
     "                      whose chunks end later are not read (an object none of whose\n"
     "                      levels has arrived is left out, with a note on stderr)\n"
     "      --stats FILE    write what the draw cost as JSON: per object levels_drawn (its\n"
-    "                      lod), level_count and bytes; bytes_resident and bytes_read over\n"
+    "                      lod), level_count and bytes (a mesh drawn in parts: also\n"
+    "                      part_levels_drawn, each part's level); bytes_resident and bytes_read over\n"
     "                      all objects; steps_per_pixel and fragments_per_pixel (shader\n"
     "                      work per covered pixel of the rendered image, which is 2x2\n"
     "                      the PNG's; 0 where the context cannot count); gpu_ms (wall time\n"
@@ -429,7 +430,12 @@ done:
 static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const uint32_t* ids, int n, uint64_t steps,
                                 uint64_t fragments, int counted, uint64_t covered, double gpu_ms, uint64_t stream)
 {
-    size_t cap = 512 + (size_t)n * 160, len = 0;
+    size_t cap = 512 + (size_t)n * 192, len = 0;
+    for (int i = 0; i < n; ++i) { /* room for each part's level (FORMAT.md 7.11) */
+        uint32_t parts = 0;
+        meso_rt_parts_state_get(rt, objs[i], NULL, 0, &parts);
+        cap += 4 * (size_t)parts;
+    }
     char* s = malloc(cap);
     if (!s)
         return NULL;
@@ -442,9 +448,21 @@ static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const u
         read += ls.bytes_read;
         len += (size_t)snprintf(s + len, cap - len,
                                 "%s\n    {\"id\": %u, \"levels_drawn\": %d, \"level_count\": %u, "
-                                "\"bytes_resident\": %llu}",
+                                "\"bytes_resident\": %llu",
                                 i ? "," : "", ids[i], (int)ls.last_drawn, ls.level_count,
                                 (unsigned long long)ls.bytes_resident);
+        /* A mesh drawn in parts: the level each part drew (rt_parts.c). */
+        uint32_t parts = 0;
+        meso_rt_parts_state_get(rt, objs[i], NULL, 0, &parts);
+        uint8_t* pl = parts ? malloc(parts) : NULL;
+        if (pl && meso_rt_parts_state_get(rt, objs[i], pl, parts, &parts) == MESO_OK) {
+            len += (size_t)snprintf(s + len, cap - len, ", \"part_levels_drawn\": [");
+            for (uint32_t q = 0; q < parts; ++q)
+                len += (size_t)snprintf(s + len, cap - len, "%s%u", q ? "," : "", pl[q]);
+            len += (size_t)snprintf(s + len, cap - len, "]");
+        }
+        free(pl);
+        len += (size_t)snprintf(s + len, cap - len, "}");
     }
     const double per = covered ? 1.0 / (double)covered : 0.0;
     len += (size_t)snprintf(s + len, cap - len,
