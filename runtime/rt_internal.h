@@ -475,9 +475,9 @@ int mesoi_evict_one(meso_rt* rt);
  * uploaded, rt->prefetch); MESO_ERR_PENDING when its bytes have not arrived
  * (not remembered), another error is remembered in lv->failed. */
 meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l);
-/* Room for level l under the memory budget, evicting levels this frame
- * does not use; 0 when it cannot be made. */
-int mesoi_levels_make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l);
+/* Room for `bytes` more under the memory budget (a level or a part level),
+ * evicting levels this frame does not use; 0 when it cannot be made. */
+int mesoi_make_room(meso_rt* rt, uint64_t bytes);
 /* rt_levels.c: the level of a levelled object `o` the draw picks (uploaded
  * on first use); *out is `o` itself for a plain object. `o` may move (the
  * slot table can grow): use *out. */

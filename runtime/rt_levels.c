@@ -256,11 +256,11 @@ int mesoi_evict_one(meso_rt* rt)
     return 1;
 }
 
-int mesoi_levels_make_room(meso_rt* rt, const mesoi_levels* lv, uint32_t l)
+int mesoi_make_room(meso_rt* rt, uint64_t bytes)
 {
     if (!rt->budget)
         return 1;
-    while (rt->bytes_resident + lv->info[l].bytes > rt->budget)
+    while (rt->bytes_resident + bytes > rt->budget)
         if (!mesoi_evict_one(rt))
             return 0;
     return 1;
@@ -398,7 +398,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
             waiting = 1;
         } else if (lv->pending[l] == rt->frame + 1) {
             waiting = 1; /* asked this frame already: no eviction for it */
-        } else if (mesoi_levels_make_room(rt, lv, l)) {
+        } else if (mesoi_make_room(rt, lv->info[l].bytes)) {
             const meso_result r = mesoi_levels_upload(rt, lv, l);
             if (r == MESO_OK)
                 got = (int32_t)l;

@@ -235,9 +235,7 @@ meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record
         for (uint32_t l = w; got < 0 && l < n; ++l) {
             const uint32_t i = a + l;
             if (!p->slot[i].id && !p->failed[i]) {
-                while (rt->budget && rt->bytes_resident + p->lv[i].bytes > rt->budget && mesoi_evict_one(rt)) {
-                }
-                if (!rt->budget || rt->bytes_resident + p->lv[i].bytes <= rt->budget) {
+                if (mesoi_make_room(rt, p->lv[i].bytes)) {
                     const meso_result r = upload(rt, f, rec, p, i);
                     if (r == MESO_ERR_OUT_OF_MEMORY)
                         return r;

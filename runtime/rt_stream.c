@@ -274,7 +274,7 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
             const uint32_t l = q->level;
             /* The coarsest level always stays (meso_rt_desc.memory_budget):
              * it is uploaded whatever the budget, as a synchronous load does. */
-            const int room = lv->slot[l].id || l + 1 == lv->count || mesoi_levels_make_room(rt, lv, l);
+            const int room = lv->slot[l].id || l + 1 == lv->count || mesoi_make_room(rt, lv->info[l].bytes);
             /* No room under the budget: kept decoded, and tried again on
              * the next call, while the last frame's or this frame's draws
              * still want this level (or a finer one); dropped once they
