@@ -189,50 +189,61 @@ static meso_result neighbours(const meso_mesh* m, const uint32_t* part_of, meso_
 }
 
 /* >>border check: the edges of `pm` used an odd number of times (its
- * border, mod 2), as sorted pairs of position ids; ids index `pos`, the
- * sorted distinct positions (3 floats each) of the part's level 0. NULL on
- * a position not in `pos` (never: a level's vertices are level 0's). */
-typedef struct pos_key {
-    float p[3];
-} pos_key;
+ * border, mod 2), each as its two end positions (the lesser, by bytes,
+ * first), sorted by bytes. Positions are welded as everywhere else here,
+ * by meshopt_generateVertexRemap (bitwise equal positions are one vertex),
+ * and the edges are kept as positions so that two levels, whose vertex
+ * numbers differ, compare directly. */
+typedef struct edge_key {
+    float p[6];
+} edge_key;
 
-static int by_pos(const void* a, const void* b)
+static int by_edge(const void* a, const void* b)
 {
-    return memcmp(a, b, sizeof(pos_key));
+    return memcmp(a, b, sizeof(edge_key));
 }
 
-static uint64_t* border_of(const meso_mesh* pm, const pos_key* pos, size_t npos, size_t* count)
+static edge_key* border_of(const meso_mesh* pm, size_t* count)
 {
-    const size_t ne = 3 * (size_t)pm->triangle_count;
+    const size_t ne = 3 * (size_t)pm->triangle_count, nv = pm->vertex_count ? pm->vertex_count : 1;
+    uint32_t* remap = malloc(sizeof(uint32_t) * nv);
+    float* wpos = malloc(sizeof(float) * 3 * nv); /* a welded id's position */
     uint64_t* e = malloc(sizeof(uint64_t) * (ne ? ne : 1));
-    if (!e)
-        return NULL;
-    for (size_t c = 0; c < ne; ++c) {
-        uint64_t id[2];
-        for (int j = 0; j < 2; ++j) {
-            pos_key k;
-            memcpy(k.p, pm->positions + 3 * (size_t)pm->indices[j ? (c / 3) * 3 + (c % 3 + 1) % 3 : c], sizeof(k.p));
-            const pos_key* f = bsearch(&k, pos, npos, sizeof(pos_key), by_pos);
-            if (!f) {
-                free(e);
-                return NULL;
-            }
-            id[j] = (uint64_t)(f - pos);
-        }
-        e[c] = id[0] < id[1] ? id[0] << 32 | id[1] : id[1] << 32 | id[0];
-    }
-    qsort(e, ne, sizeof(uint64_t), by_u64);
+    edge_key* out = malloc(sizeof(edge_key) * (ne ? ne : 1));
     size_t n = 0;
-    for (size_t i = 0; i < ne;) {
-        size_t j = i;
-        while (j < ne && e[j] == e[i])
-            ++j;
-        if ((j - i) & 1)
-            e[n++] = e[i];
-        i = j;
+    if (remap && wpos && e && out) {
+        meshopt_generateVertexRemap(remap, NULL, pm->vertex_count, pm->positions, pm->vertex_count,
+                                    3 * sizeof(float));
+        for (uint32_t v = 0; v < pm->vertex_count; ++v)
+            memcpy(wpos + 3 * (size_t)remap[v], pm->positions + 3 * (size_t)v, 3 * sizeof(float));
+        for (size_t c = 0; c < ne; ++c) {
+            const uint64_t a = remap[pm->indices[c]], b = remap[pm->indices[(c / 3) * 3 + (c % 3 + 1) % 3]];
+            e[c] = a < b ? a << 32 | b : b << 32 | a;
+        }
+        qsort(e, ne, sizeof(uint64_t), by_u64);
+        for (size_t i = 0; i < ne;) {
+            size_t j = i;
+            while (j < ne && e[j] == e[i])
+                ++j;
+            if ((j - i) & 1) {
+                const float *pa = wpos + 3 * (size_t)(e[i] >> 32), *pb = wpos + 3 * (size_t)(e[i] & 0xffffffffu);
+                const int swap = memcmp(pa, pb, 3 * sizeof(float)) > 0;
+                memcpy(out[n].p, swap ? pb : pa, 3 * sizeof(float));
+                memcpy(out[n].p + 3, swap ? pa : pb, 3 * sizeof(float));
+                ++n;
+            }
+            i = j;
+        }
+        qsort(out, n, sizeof(edge_key), by_edge);
+    } else {
+        free(out);
+        out = NULL;
     }
+    free(remap);
+    free(wpos);
+    free(e);
     *count = n;
-    return e;
+    return out;
 }
 
 /* The number of levels of `P` whose border is level 0's: a level whose
@@ -242,29 +253,22 @@ static uint64_t* border_of(const meso_mesh* pm, const pos_key* pos, size_t npos,
  * levels meets its neighbours edge to edge. */
 static uint32_t levels_keeping_border(const meso_mesh_part* P, int* oom)
 {
-    const meso_mesh* m0 = &P->level[0].mesh;
-    pos_key* pos = malloc(sizeof(pos_key) * (m0->vertex_count ? m0->vertex_count : 1));
-    size_t npos = 0, n0 = 0;
-    uint64_t* b0 = NULL;
+    size_t n0 = 0;
+    edge_key* b0 = border_of(&P->level[0].mesh, &n0);
     uint32_t keep = 1;
-    if (pos) {
-        for (uint32_t v = 0; v < m0->vertex_count; ++v)
-            memcpy(pos[v].p, m0->positions + 3 * (size_t)v, sizeof(pos[v].p));
-        qsort(pos, m0->vertex_count, sizeof(pos_key), by_pos);
-        for (uint32_t v = 0; v < m0->vertex_count; ++v)
-            if (npos == 0 || memcmp(&pos[v], &pos[npos - 1], sizeof(pos_key)) != 0)
-                pos[npos++] = pos[v];
-        b0 = border_of(m0, pos, npos, &n0);
-    }
     for (uint32_t l = 1; b0 && l < P->level_count && keep == l; ++l) {
         size_t nl = 0;
-        uint64_t* bl = border_of(&P->level[l].mesh, pos, npos, &nl);
-        if (bl && nl == n0 && memcmp(bl, b0, sizeof(uint64_t) * n0) == 0)
+        edge_key* bl = border_of(&P->level[l].mesh, &nl);
+        if (!bl) {
+            free(b0);
+            *oom = 1;
+            return keep;
+        }
+        if (nl == n0 && memcmp(bl, b0, sizeof(edge_key) * n0) == 0)
             keep = l + 1;
         free(bl);
     }
-    *oom = !pos || !b0;
-    free(pos);
+    *oom = !b0;
     free(b0);
     return keep;
 }
