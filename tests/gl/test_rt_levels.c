@@ -35,6 +35,7 @@
 #include <string.h>
 #include <threads.h>
 
+#include "bake_bytes.h"
 #include "camera.h"
 #include "egl_context.h"
 #include "frustum_reference.h"
@@ -501,10 +502,7 @@ static uint8_t* bake_saguaro(const char* relief, int levels, size_t* size, doubl
     meso_bake_output* out = NULL;
     meso_error err;
     assert(meso_bake_frusta(&o, &out, NULL, &err) == MESO_OK);
-    *size = meso_bake_output_size(out);
-    uint8_t* data = malloc(*size);
-    assert(data && meso_bake_output_copy(out, data, *size, NULL) == MESO_OK);
-    meso_bake_output_free(out);
+    uint8_t* data = bake_bytes(out, size);
     meso_object_record rec;
     meso_file* f = NULL;
     uint32_t n = 0;

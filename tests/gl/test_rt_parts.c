@@ -24,6 +24,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "bake_bytes.h"
 #include "camera.h"
 #include "egl_context.h"
 #include "gl_api.h"
@@ -44,11 +45,7 @@ static uint8_t* bake_spot(int parts, size_t* size)
     meso_bake_output* out = NULL;
     meso_error err;
     assert(meso_bake_mesh(&o, &out, NULL, &err) == MESO_OK);
-    *size = meso_bake_output_size(out);
-    uint8_t* data = malloc(*size);
-    assert(data && meso_bake_output_copy(out, data, *size, NULL) == MESO_OK);
-    meso_bake_output_free(out);
-    return data;
+    return bake_bytes(out, size);
 }
 
 /* Close to one end of the long (z) axis, looking along it at the box's

@@ -33,6 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bake_bytes.h"
 #include "camera.h"
 #include "egl_context.h"
 #include "gl_api.h"
@@ -218,11 +219,7 @@ static uint8_t* bake(int kind, size_t* size)
         o.relief_color = colour;
         assert(meso_bake_frusta(&o, &out, NULL, &err) == MESO_OK);
     }
-    *size = meso_bake_output_size(out);
-    uint8_t* data = malloc(*size);
-    assert(data && meso_bake_output_copy(out, data, *size, NULL) == MESO_OK);
-    meso_bake_output_free(out);
-    return data;
+    return bake_bytes(out, size);
 }
 
 static void check_kind(meso_rt* rt, const char* name, const uint8_t* data, size_t size)
