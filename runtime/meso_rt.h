@@ -272,9 +272,11 @@ MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object 
  * one level of each other (never a crack: the bake keeps part borders
  * fixed at every level). Its levels state counts the parts' bytes too.
  * This reports the level each part drew last (levels[part - 1], up to
- * `cap`) and *part_count (0: the object has no parts, or they have not
- * been read yet: its first draw near enough for level 0 reads them). Parts
- * are not used under meso_rt_desc.stream_requests. */
+ * `cap`) and *part_count (0: the object has no parts; the parts table is
+ * read with the levels table, by meso_rt_load_object_levels). Under
+ * meso_rt_desc.stream_requests part levels are requested as levels are
+ * (>>streaming); until every part has a level uploaded the object draws
+ * its best whole level uploaded, and never asks for its whole level 0. */
 MESO_API meso_result meso_rt_parts_state_get(const meso_rt* rt, meso_rt_object obj, uint8_t* levels, uint32_t cap,
                                              uint32_t* part_count);
 
@@ -302,13 +304,14 @@ MESO_API void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* 
  * answers MESO_IO_PENDING for bytes it has not received; the level is then
  * asked for again on a later frame (a failure of any other kind is logged
  * once and not retried). meso_rt_load_object_levels succeeds once the
- * object's record and level table have arrived, and the object draws as
+ * object's record and level table (and a mesh object's parts table, which
+ * the writer puts next to it) have arrived, and the object draws as
  * soon as its coarsest level has: until then its draws draw nothing and
  * return MESO_OK (meso_rt_levels_state.resident_mask is 0).
  *
  * With meso_rt_desc.stream_requests = 1, no draw reads the file. A draw
- * that picks a level not uploaded yet files a request for it (one per
- * level) and draws the best uploaded level meanwhile. The host moves the
+ * that picks a level (or a part level) not uploaded yet files a request
+ * for it (one per level) and draws the best uploaded level meanwhile. The host moves the
  * requests through three steps each frame:
  *
  *   n = meso_rt_stream_take(rt, reqs, 16);          GL thread

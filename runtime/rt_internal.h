@@ -444,21 +444,41 @@ typedef struct mesoi_levels {
     uint32_t want_now, want_lower; /* the finest level this frame's draws wanted, at the budget's factor and
                                       at the next lower one */
     struct mesoi_parts* parts; /* a mesh object stored with parts (rt_parts.c), else NULL */
-    int parts_state;           /* 0 not read yet, 1 read (parts may still be NULL: none), 2 not to be used */
     uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
 } mesoi_levels;
-/* rt_parts.c: a levelled mesh object's parts. load: its PRTS table (*out
- * NULL: none); pick: each part's level for this draw, neighbours within one
- * level, uploads (MESO_ERR_NOT_FOUND when some part has nothing to draw:
- * draw level 0 instead); *out the slot whose mesh draw draws them (draw).
- * oldest/evict: the budget's LRU over part levels; bytes: resident part
- * bytes (and the last pick's wanted, and all read). */
-typedef struct mesoi_parts mesoi_parts;
+/* rt_parts.c: a levelled mesh object's parts (here for rt_stream.c, which
+ * files and uploads part levels as it does levels). */
+typedef struct mesoi_parts {
+    uint32_t part_count, level_count, edge_count;
+    meso_part_level* lv;     /* [level_count], by part then lod */
+    uint32_t* first;         /* [part_count + 1]: part p's levels are lv[first[p] .. first[p + 1]) */
+    uint32_t* edges;         /* [2 edge_count]: part numbers, 1-based as in the file */
+    meso_rt_object* slot;    /* [level_count]: the uploaded part level, id 0 when not */
+    uint8_t* failed;         /* [level_count] */
+    uint64_t* used;          /* [level_count]: the frame a draw last used it */
+    struct meso_rt_request** request; /* [level_count]: its stream request (rt_stream.c), NULL when none */
+    uint32_t* want;          /* [part_count]: the level the last pick wanted */
+    meso_rt_object* chosen;  /* [part_count]: the slots the last pick drew */
+    uint8_t* drawn;          /* [part_count]: the level each drew */
+    meso_rt_object parent;   /* the slot picks hand out (kind MESH, no GL resources) */
+    uint64_t bytes_wanted;   /* the last pick's wanted part levels' bytes */
+    uint64_t bytes_read;
+    uint64_t pick_frame;     /* the frame (rt->frame + 1) of the last pick */
+} mesoi_parts;
+/* load: its PRTS table (*out NULL: none); pick: each part's level for this
+ * draw, neighbours within one level, uploads or, with stream requests,
+ * requests (MESO_ERR_NOT_FOUND when some part has nothing to draw: draw
+ * a whole level instead; MESO_ERR_PENDING, streaming, when every such part
+ * waits for a request: draw the best whole level uploaded); *out
+ * the slot whose mesh draw draws them (draw). upload: part level i now
+ * (rt->prefetch as levels). oldest/evict: the budget's LRU over part
+ * levels; bytes: resident part bytes (and the last pick's wanted, and all
+ * read). */
 meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts** out);
 void mesoi_parts_free(meso_rt* rt, mesoi_parts* p);
-meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p,
-                             const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count, double tau,
-                             double height, meso_rt_object* out);
+meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count, double tau, double height, meso_rt_object* out);
+meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i);
 meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_draw_desc* d,
                              const meso_rt_instance* inst, uint32_t count);
 int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
@@ -491,10 +511,12 @@ uint32_t mesoi_levels_per_instance(meso_rt* rt, meso_rt_object h, const meso_rt_
                                    const meso_rt_instance* inst, uint32_t count, uint8_t* level);
 void mesoi_levels_release(meso_rt* rt, mesoi_object* o);
 /* rt_stream.c: file a request for level l (once); detach a released
- * object's requests; free every request (meso_rt_destroy); the chunk
+ * object's requests (its parts' too); free every request (meso_rt_destroy); the chunk
  * `ci` of the request being uploaded (rt->prefetch), handed over (the
  * caller frees it with mesoi_rt_free); NULL when it has none. */
 meso_result mesoi_stream_request(meso_rt* rt, mesoi_levels* lv, uint32_t l);
+/* The same for level i of lv->parts (its lv[i]). */
+meso_result mesoi_stream_request_part(meso_rt* rt, mesoi_levels* lv, uint32_t i);
 void mesoi_stream_detach(meso_rt* rt, mesoi_levels* lv);
 void mesoi_stream_destroy(meso_rt* rt);
 void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci);

@@ -114,6 +114,10 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         if ((r = meso_file_levels(f, object_id, lv->info, lv->count, &lv->count, &err)) != MESO_OK)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
     }
+    /* A mesh object's parts table (rt_parts.c), read with the levels
+     * table: no draw reads the file under stream requests. */
+    if (r == MESO_OK && lv->rec.kind == MESO_OBJECT_MESH)
+        r = mesoi_parts_load(rt, f, &lv->rec, &lv->parts);
     /* The coarsest level now, so that every draw has something to show; a
      * stream that has not delivered it yet shows the object once it has. */
     if (r == MESO_OK && rt->stream_requests)
@@ -126,6 +130,7 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
     if (r != MESO_OK) {
         if (lv->request)
             mesoi_stream_detach(rt, lv); /* the coarsest level's request, filed above */
+        mesoi_parts_free(rt, lv->parts);
         for (uint32_t l = 0; lv->slot && l < lv->count; ++l)
             meso_rt_release_object(rt, lv->slot[l]);
         levels_free(rt, lv);
@@ -359,37 +364,30 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     }
     /* Level 0 of a mesh object stored with parts: each part at its own
      * level (rt_parts.c), when every part has one to draw. */
-    if (want == 0 && lv->rec.kind == MESO_OBJECT_MESH && !rt->stream_requests && lv->parts_state != 2) {
-        if (lv->parts_state == 0) {
-            const meso_result pr = mesoi_parts_load(rt, lv->file, &lv->rec, &lv->parts);
-            if (pr == MESO_ERR_OUT_OF_MEMORY)
-                return pr;
-            lv->parts_state = pr == MESO_OK ? 1 : pr == MESO_ERR_PENDING ? 0 : 2;
+    int parts_pending = 0; /* streamed parts arriving: no whole level asked for meanwhile */
+    if (want == 0 && lv->parts) {
+        meso_rt_object ph;
+        const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height, &ph);
+        if (pr == MESO_OK) {
+            lv->last_drawn = 0;
+            lv->parts_frame = rt->frame + 1;
+            *out = ph;
+            return MESO_OK;
         }
-        if (lv->parts) {
-            meso_rt_object ph;
-            const meso_result pr = mesoi_parts_pick(rt, lv->file, &lv->rec, lv->parts, d, inst, count,
-                                                    tau * rt->tau_scale, height, &ph);
-            if (pr == MESO_OK) {
-                lv->last_drawn = 0;
-                lv->parts_frame = rt->frame + 1;
-                *out = ph;
-                return MESO_OK;
-            }
-            if (pr == MESO_ERR_OUT_OF_MEMORY)
-                return pr;
-        }
+        if (pr == MESO_ERR_OUT_OF_MEMORY)
+            return pr;
+        parts_pending = pr == MESO_ERR_PENDING;
     }
     /* The level wanted, else the finest coarser one that can be had, else
      * the nearest finer one uploaded before. With stream requests, a level
      * not uploaded is requested and never read here. */
     int32_t got = -1;
-    int waiting = 0; /* some level is still arriving */
+    int waiting = parts_pending; /* some level (or part level) is still arriving */
     for (uint32_t l = want; got < 0 && l < lv->count; ++l) {
         if (lv->slot[l].id) {
             got = (int32_t)l;
-        } else if (lv->failed[l]) {
-            continue;
+        } else if (lv->failed[l] || parts_pending) {
+            continue; /* parts arriving: whole levels only as uploaded */
         } else if (rt->stream_requests) {
             /* The finest level at or above the wanted one that can still
              * be had (the wanted one unless it failed). */

@@ -22,8 +22,11 @@
  *    evicting what this frame does not use, as whole levels are), else the
  *    part draws the nearest uploaded coarser, else finer, level of its own;
  *    when some part has none, the object draws its whole level 0 as
- *    before. With stream requests (meso_rt_desc.stream_requests) parts are
- *    not used: their uploads would need requests of their own.
+ *    before. With stream requests (meso_rt_desc.stream_requests) a part
+ *    level not uploaded is requested as a level is (rt_stream.c), one
+ *    request per part at a time; until every part has a level uploaded, the
+ *    object draws the best whole level uploaded, without asking for its
+ *    whole level 0 (which the parts replace).
  *
  * The pick hands out one slot (`parent`) whose mesh draw draws the parts
  * this pick chose (mesoi_parts_draw), so every draw path (single,
@@ -33,21 +36,6 @@
 
 #include <string.h>
 
-typedef struct mesoi_parts {
-    uint32_t part_count, level_count, edge_count;
-    meso_part_level* lv;     /* [level_count], by part then lod */
-    uint32_t* first;         /* [part_count + 1]: part p's levels are lv[first[p] .. first[p + 1]) */
-    uint32_t* edges;         /* [2 edge_count]: part numbers, 1-based as in the file */
-    meso_rt_object* slot;    /* [level_count]: the uploaded part level, id 0 when not */
-    uint8_t* failed;         /* [level_count] */
-    uint64_t* used;          /* [level_count]: the frame a draw last used it */
-    uint32_t* want;          /* [part_count]: the level the last pick wanted */
-    meso_rt_object* chosen;  /* [part_count]: the slots the last pick drew */
-    uint8_t* drawn;          /* [part_count]: the level each drew */
-    meso_rt_object parent;   /* the slot picks hand out (kind MESH, no GL resources) */
-    uint64_t bytes_wanted;   /* the last pick's wanted part levels' bytes */
-    uint64_t bytes_read;
-} mesoi_parts;
 
 void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
 {
@@ -68,6 +56,7 @@ void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
     mesoi_rt_free(rt, p->slot);
     mesoi_rt_free(rt, p->failed);
     mesoi_rt_free(rt, p->used);
+    mesoi_rt_free(rt, p->request);
     mesoi_rt_free(rt, p->want);
     mesoi_rt_free(rt, p->chosen);
     mesoi_rt_free(rt, p->drawn);
@@ -101,16 +90,18 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
     p->slot = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * nl);
     p->failed = mesoi_rt_alloc(rt, nl);
     p->used = mesoi_rt_alloc(rt, sizeof(uint64_t) * nl);
+    p->request = mesoi_rt_alloc(rt, sizeof(struct meso_rt_request*) * nl);
     p->want = mesoi_rt_alloc(rt, sizeof(uint32_t) * np);
     p->chosen = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * np);
     p->drawn = mesoi_rt_alloc(rt, np);
-    r = p->lv && p->first && p->edges && p->slot && p->failed && p->used && p->want && p->chosen && p->drawn
+    r = p->lv && p->first && p->edges && p->slot && p->failed && p->used && p->request && p->want && p->chosen && p->drawn
             ? MESO_OK
             : MESO_ERR_OUT_OF_MEMORY;
     if (r == MESO_OK) {
         memset(p->slot, 0, sizeof(meso_rt_object) * nl);
         memset(p->failed, 0, nl);
         memset(p->used, 0, sizeof(uint64_t) * nl);
+        memset(p->request, 0, sizeof(struct meso_rt_request*) * nl);
         memset(p->drawn, 0, np);
         r = meso_file_parts(f, rec->id, p->lv, nl, &nl, &np, p->edges, ne, &ne, &err);
         if (r != MESO_OK && r != MESO_ERR_PENDING)
@@ -138,7 +129,7 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
 }
 
 /* Upload part level i (its PMSH) into a slot of its own. */
-static meso_result upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i)
+meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i)
 {
     if (p->slot[i].id)
         return MESO_OK;
@@ -156,7 +147,8 @@ static meso_result upload(meso_rt* rt, meso_file* f, const meso_object_record* r
     if (r == MESO_OK) {
         p->slot[i] = h;
         rt->bytes_resident += p->lv[i].bytes;
-        p->bytes_read += p->lv[i].bytes;
+        if (!rt->prefetch)
+            p->bytes_read += p->lv[i].bytes; /* a request counts its own reads */
         return MESO_OK;
     }
     meso_rt_release_object(rt, h);
@@ -189,10 +181,11 @@ void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i)
     rt->evictions++;
 }
 
-meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p,
-                             const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count, double tau,
-                             double height, meso_rt_object* out)
+meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count, double tau, double height, meso_rt_object* out)
 {
+    mesoi_parts* p = lv->parts;
+    p->pick_frame = rt->frame + 1;
     /* Each part's own level. */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], b = p->first[q + 1];
@@ -226,17 +219,26 @@ meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record
             }
         }
     }
-    /* What each part can draw now. */
+    /* What each part can draw now: the wanted level, else the finest
+     * coarser one that can be had, else the nearest finer one uploaded.
+     * With stream requests, the finest of them that can still be had is
+     * requested (every part's, before any answer) and not read here. */
     p->bytes_wanted = 0;
+    meso_result missing = MESO_OK; /* MESO_ERR_PENDING: some part waits for its request; MESO_ERR_NOT_FOUND: cannot be had */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], n = p->first[q + 1] - a, w = p->want[q];
         p->bytes_wanted += p->lv[a + w].bytes;
         int32_t got = -1;
+        int requested = 0;
         for (uint32_t l = w; got < 0 && l < n; ++l) {
             const uint32_t i = a + l;
             if (!p->slot[i].id && !p->failed[i]) {
-                if (mesoi_make_room(rt, p->lv[i].bytes)) {
-                    const meso_result r = upload(rt, f, rec, p, i);
+                if (rt->stream_requests) {
+                    if (!requested && mesoi_stream_request_part(rt, lv, i) != MESO_OK)
+                        return MESO_ERR_OUT_OF_MEMORY;
+                    requested = 1;
+                } else if (mesoi_make_room(rt, p->lv[i].bytes)) {
+                    const meso_result r = mesoi_parts_upload(rt, lv->file, &lv->rec, p, i);
                     if (r == MESO_ERR_OUT_OF_MEMORY)
                         return r;
                 }
@@ -247,12 +249,20 @@ meso_result mesoi_parts_pick(meso_rt* rt, meso_file* f, const meso_object_record
         for (uint32_t l = w; got < 0 && l-- > 0;)
             if (p->slot[a + l].id)
                 got = (int32_t)l;
-        if (got < 0)
-            return MESO_ERR_NOT_FOUND; /* the whole level 0 instead */
+        if (got < 0) {
+            missing = missing != MESO_OK ? missing : MESO_ERR_PENDING;
+            if (!rt->stream_requests || !requested) {
+                missing = MESO_ERR_NOT_FOUND; /* not to be had (now, or streamed: at all) */
+                break;
+            }
+            continue;
+        }
         p->chosen[q] = p->slot[a + (uint32_t)got];
         p->drawn[q] = (uint8_t)(got > 255 ? 255 : got);
         p->used[a + (uint32_t)got] = rt->frame + 1;
     }
+    if (missing != MESO_OK)
+        return missing; /* a whole level instead */
     *out = p->parent;
     return MESO_OK;
 }

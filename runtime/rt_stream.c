@@ -36,13 +36,15 @@ enum { REQ_WAITING = 0, REQ_TAKEN, REQ_DECODED };
 struct meso_rt_request {
     struct meso_rt_request* next; /* rt->requests, oldest first */
     mesoi_levels* lv;             /* NULL once the object is released */
-    uint32_t level;
+    uint32_t level;               /* lv's level, or with `part` the level lv->parts->lv[level] */
+    int part;
     int state;
     /* What run needs, copied at take (run never touches the context). */
     meso_file* file;
     meso_allocator alloc;
     uint32_t object, kind;
     uint16_t lod, form;
+    int32_t part_chunk; /* a part level's PMSH */
     /* Run's results. */
     uint32_t count;                 /* chunks decoded */
     int32_t* chunk;                 /* [count] TOC indices */
@@ -80,6 +82,12 @@ static void req_clear(meso_rt_request* q)
     q->bytes = 0;
 }
 
+/* Where q's level keeps its request (q->lv set). */
+static meso_rt_request** req_slot(const meso_rt_request* q)
+{
+    return q->part ? &q->lv->parts->request[q->level] : &q->lv->request[q->level];
+}
+
 /* Unlink q from rt->requests, clear its level's pointer and free it. */
 static void req_destroy(meso_rt* rt, meso_rt_request* q)
 {
@@ -89,28 +97,44 @@ static void req_destroy(meso_rt* rt, meso_rt_request* q)
             break;
         }
     if (q->lv)
-        q->lv->request[q->level] = NULL;
+        *req_slot(q) = NULL;
     req_clear(q);
     mesoi_rt_free(rt, q);
 }
 
-meso_result mesoi_stream_request(meso_rt* rt, mesoi_levels* lv, uint32_t l)
+/* A new request, last in rt->requests, for level l (part level with
+ * `part`) of lv. */
+static meso_result req_file(meso_rt* rt, mesoi_levels* lv, uint32_t l, int part)
 {
-    if (lv->request[l] || lv->slot[l].id || lv->failed[l])
-        return MESO_OK;
     meso_rt_request* q = mesoi_rt_alloc(rt, sizeof *q);
     if (!q)
         return MESO_ERR_OUT_OF_MEMORY;
     memset(q, 0, sizeof *q);
     q->lv = lv;
     q->level = l;
+    q->part = part;
     q->state = REQ_WAITING;
     meso_rt_request** p = &rt->requests;
     while (*p)
         p = &(*p)->next;
     *p = q;
-    lv->request[l] = q;
+    *req_slot(q) = q;
     return MESO_OK;
+}
+
+meso_result mesoi_stream_request(meso_rt* rt, mesoi_levels* lv, uint32_t l)
+{
+    if (lv->request[l] || lv->slot[l].id || lv->failed[l])
+        return MESO_OK;
+    return req_file(rt, lv, l, 0);
+}
+
+meso_result mesoi_stream_request_part(meso_rt* rt, mesoi_levels* lv, uint32_t i)
+{
+    const mesoi_parts* p = lv->parts;
+    if (p->request[i] || p->slot[i].id || p->failed[i])
+        return MESO_OK;
+    return req_file(rt, lv, i, 1);
 }
 
 void mesoi_stream_detach(meso_rt* rt, mesoi_levels* lv)
@@ -119,7 +143,7 @@ void mesoi_stream_detach(meso_rt* rt, mesoi_levels* lv)
         next = q->next;
         if (q->lv != lv)
             continue;
-        lv->request[q->level] = NULL;
+        *req_slot(q) = NULL;
         q->lv = NULL;
         if (q->state != REQ_TAKEN) /* the host does not hold it: free it now */
             req_destroy(rt, q);
@@ -151,12 +175,14 @@ uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
         if (q->state != REQ_WAITING || !q->lv)
             continue;
         const mesoi_levels* lv = q->lv;
+        const meso_level_record* rec = q->part ? &lv->parts->lv[q->level].rec : &lv->info[q->level].rec;
         q->file = lv->file;
         q->alloc = rt->alloc;
         q->object = lv->rec.id;
-        q->form = lv->info[q->level].rec.form;
-        q->lod = lv->info[q->level].rec.lod;
+        q->form = q->part ? (uint16_t)MESO_LEVEL_MESH : rec->form;
+        q->lod = rec->lod;
         q->kind = q->form == MESO_LEVEL_MESH ? (uint32_t)MESO_OBJECT_MESH : lv->rec.kind;
+        q->part_chunk = q->part ? lv->parts->lv[q->level].chunk : -1;
         q->result = MESO_OK;
         q->state = REQ_TAKEN;
         out[n++] = q;
@@ -170,8 +196,10 @@ uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
  * come from the cells check) — the chunks meso_file_levels counts. */
 static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint32_t i)
 {
-    if (c->object != q->object)
-        return 0;
+    if (q->part) /* a part level is its one PMSH (rt_parts.c upload) */
+        return (int32_t)i == q->part_chunk;
+    if (c->object != q->object || c->type == MESO_CHUNK_PMSH || c->type == MESO_CHUNK_PRTS)
+        return 0; /* a whole level draws no part's chunks (§7.11) */
     if (c->type == MESO_CHUNK_VCOL) /* a mesh's or stand-in's vertex colours, at its MESH's own lod */
         return q->kind == MESO_OBJECT_MESH && meso_file_find_vertex_colours(q->file, q->object, q->lod) == (int32_t)i;
     if (q->form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH)
@@ -247,20 +275,51 @@ void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n)
             continue;
         }
         if (q->result != MESO_ERR_PENDING) /* as a synchronous read that found its bytes not arrived */
-            q->lv->bytes_read += q->bytes;
+            *(q->part ? &q->lv->parts->bytes_read : &q->lv->bytes_read) += q->bytes;
         if (q->result == MESO_OK && (q->count || q->cells_checked)) {
             q->state = REQ_DECODED;
         } else if (q->result == MESO_OK || q->result == MESO_ERR_PENDING) {
             req_clear(q); /* not run, or not arrived: taken again later */
             q->state = REQ_WAITING;
         } else {
-            q->lv->failed[q->level] = 1;
-            mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
-                      "object %u: level %u could not be read (%s); drawing the nearest level uploaded", q->object,
-                      q->level, meso_result_string(q->result));
+            if (q->part) {
+                q->lv->parts->failed[q->level] = 1;
+                mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                          "object %u: part %u level %u could not be read (%s); drawing the nearest level uploaded",
+                          q->object, q->lv->parts->lv[q->level].rec.object, q->lod, meso_result_string(q->result));
+            } else {
+                q->lv->failed[q->level] = 1;
+                mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                          "object %u: level %u could not be read (%s); drawing the nearest level uploaded", q->object,
+                          q->level, meso_result_string(q->result));
+            }
             req_destroy(rt, q);
         }
     }
+}
+
+/* A decoded part level's upload (as a level's, below); its bytes, 0 when
+ * not uploaded. Frees q unless it is kept for the next call. */
+static uint64_t upload_part(meso_rt* rt, meso_rt_request* q)
+{
+    mesoi_levels* lv = q->lv;
+    mesoi_parts* p = lv->parts;
+    const uint32_t i = q->level, part = p->lv[i].rec.object - 1;
+    const int room = p->slot[i].id || mesoi_make_room(rt, p->lv[i].bytes);
+    if (!room && p->pick_frame >= rt->frame && p->want[part] <= p->lv[i].rec.lod)
+        return 0; /* still wanted: tried again on the next call */
+    uint64_t done = 0;
+    if (room && !p->slot[i].id) {
+        rt->prefetch = q;
+        const meso_result r = mesoi_parts_upload(rt, lv->file, &lv->rec, p, i);
+        rt->prefetch = NULL;
+        if (r == MESO_OK) {
+            done = p->lv[i].bytes;
+            rt->stream_uploads++;
+        }
+    }
+    req_destroy(rt, q);
+    return done;
 }
 
 uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
@@ -269,7 +328,9 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
     meso_rt_request* q = rt ? rt->requests : NULL;
     while (q && (max_bytes == 0 || done < max_bytes)) {
         meso_rt_request* next = q->next;
-        if (q->state == REQ_DECODED) {
+        if (q->state == REQ_DECODED && q->part) {
+            done += upload_part(rt, q);
+        } else if (q->state == REQ_DECODED) {
             mesoi_levels* lv = q->lv;
             const uint32_t l = q->level;
             /* The coarsest level always stays (meso_rt_desc.memory_budget):

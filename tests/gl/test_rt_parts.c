@@ -17,6 +17,8 @@
  *  - instanced, the near instance decides: the parts draw at the finest
  *    level either instance needs (the image equals the near one's alone
  *    where the far one is off screen);
+ *  - streamed (stream requests), the part levels are requested and
+ *    uploaded as levels are, and settle on the synchronous image;
  *  - a file without parts (--parts none) draws as before: no parts. */
 #include "test_util.h"
 
@@ -204,6 +206,119 @@ static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_reco
     free(edges);
 }
 
+/* Under stream requests (meso_rt_desc.stream_requests): no draw reads the
+ * file; part levels are requested, run, given back and uploaded as levels
+ * are, the object draws its best whole level uploaded until every part has
+ * one, it never asks for its whole level 0, and once the requests settle
+ * it draws the part levels, and the depth image, of a synchronous
+ * context bit for bit. With every level of part 1 damaged (`broken`: a
+ * byte of each PMSH flipped, so its CRC fails), its requests fail one by
+ * one and the object then asks for, and draws, its whole level 0, as a
+ * synchronous context does. */
+static void parts_streamed(const uint8_t* bytes, size_t size, int broken)
+{
+    uint8_t* data = malloc(size);
+    assert(data);
+    memcpy(data, bytes, size);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &f, NULL) == MESO_OK);
+    meso_object_record recs[1];
+    const meso_object_record* rec = recs;
+    uint32_t n = 0;
+    assert(meso_file_objects(f, recs, 1, &n, NULL) == MESO_OK && n == 1);
+    int damaged = 0;
+    for (uint32_t i = 0; broken && i < meso_file_chunk_count(f); ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        if (c->type == MESO_CHUNK_PMSH && c->dims[0] == 1) {
+            data[c->offset + c->stored_size / 2] ^= 0x40;
+            ++damaged;
+        }
+    }
+    assert(!broken || damaged >= 2);
+    meso_rt_draw_desc d = {0};
+    double eye[3];
+    view(rec, &d, eye);
+    d.pixel_error = TAU;
+
+    meso_rt* sync = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &sync) == MESO_OK);
+    meso_rt_object so;
+    assert(meso_rt_load_object_levels(sync, f, rec->id, &so) == MESO_OK);
+    float* want = draw(sync, so, &d);
+    uint32_t np = 0;
+    assert(meso_rt_parts_state_get(sync, so, NULL, 0, &np) == MESO_OK && np >= 2);
+    uint8_t* want_lev = malloc(np);
+    uint8_t* lev = malloc(np);
+    assert(want_lev && lev && meso_rt_parts_state_get(sync, so, want_lev, np, &np) == MESO_OK);
+
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) ==
+           MESO_OK);
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, rec->id, &obj) == MESO_OK);
+    assert(meso_rt_parts_state_get(rt, obj, lev, np, &n) == MESO_OK && n == np); /* read with the levels */
+    int frames = 0, part_uploads = 0;
+    meso_rt_levels_state st;
+    for (;; ++frames) {
+        assert(frames < 40);
+        meso_rt_levels_state before;
+        assert(meso_rt_levels_state_get(rt, obj, &before) == MESO_OK);
+        free(draw(rt, obj, &d));
+        assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        assert(st.bytes_read == before.bytes_read); /* the draw read nothing */
+        assert(broken || !(st.resident_mask & 1u)); /* never the whole level 0 */
+        /* One request a frame, the oldest (the coarsest level, filed by
+         * the load): drawn alone while the parts arrive. */
+        if (frames == 0)
+            assert(st.last_drawn == -1);
+        else if (frames < (int)np)
+            assert(st.last_drawn == (int32_t)st.level_count - 1);
+        meso_rt_frame_end(rt);
+        meso_rt_request* reqs[1];
+        const uint32_t taken = meso_rt_stream_take(rt, reqs, 1);
+        for (uint32_t i = 0; i < taken; ++i)
+            assert(meso_rt_stream_run(reqs[i]) == MESO_OK || broken);
+        meso_rt_stream_give(rt, reqs, taken);
+        meso_rt_stream_state ss;
+        meso_rt_stream_upload(rt, 0);
+        meso_rt_stream_state_get(rt, &ss);
+        if (taken == 0 && ss.waiting == 0 && ss.decoded == 0)
+            break;
+        part_uploads += (int)taken;
+    }
+    float* got = draw(rt, obj, &d);
+    assert(memcmp(got, want, sizeof(float) * W * H) == 0);
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+    if (broken) {
+        meso_rt_levels_state ss;
+        assert(meso_rt_levels_state_get(sync, so, &ss) == MESO_OK && ss.last_drawn == 0 && (ss.resident_mask & 1u));
+        assert(st.last_drawn == 0 && (st.resident_mask & 1u));
+        printf("streamed with part 1's %d levels damaged: %d frames of requests (%d taken), then the whole level 0, "
+               "the depth image of a synchronous context bit for bit\n",
+               damaged, frames, part_uploads);
+    } else {
+        assert(meso_rt_parts_state_get(rt, obj, lev, np, &n) == MESO_OK && n == np);
+        assert(memcmp(lev, want_lev, np) == 0);
+        assert(!(st.resident_mask & 1u));
+        assert(st.bytes_read == st.bytes_resident); /* each request read its level's chunks, no more */
+        printf("streamed, one request a frame: the coarsest whole level from frame 1, %d frames of requests (%d "
+               "taken), then the part levels and the depth image of a synchronous context bit for bit; no draw read "
+               "the file, the whole level 0 never uploaded\n",
+               frames, part_uploads);
+    }
+
+    meso_rt_release_object(rt, obj);
+    meso_rt_destroy(rt);
+    meso_rt_release_object(sync, so);
+    meso_rt_destroy(sync);
+    free(want);
+    free(got);
+    free(want_lev);
+    free(lev);
+    meso_file_close(f);
+    free(data);
+}
+
 static void no_parts_as_before(meso_rt* rt)
 {
     size_t size = 0;
@@ -254,6 +369,8 @@ int main(void)
     assert(meso_file_objects(f, &rec, 1, &n, NULL) == MESO_OK && n == 1);
     parts_near_and_far(rt, f, &rec);
     meso_file_close(f);
+    parts_streamed(data, size, 0);
+    parts_streamed(data, size, 1);
     free(data);
     no_parts_as_before(rt);
 
