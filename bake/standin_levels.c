@@ -60,55 +60,68 @@ static void base_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t,
                          b[2] * shows[4 * (size_t)ix[2] + k]);
 }
 
-meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso_mesh* base, double spacing,
-                                            const mesoi_appearance* a, int threads, meso_error* err)
+meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, const meso_mesh* const* meshes,
+                                  uint32_t count, double spacing, int components, int threads, uint8_t** out,
+                                  meso_error* err)
 {
-    uint32_t most = base->vertex_count;
-    const int nc = lv->vcol_components = a->occlusion_only ? 1 : 4;
-    for (uint32_t S = 0; S < lv->count; ++S) {
-        const meso_mesh* m = S == 0 ? base : &lv->chain[S - 1].mesh;
-        if (!m->vertex_count || !m->positions || !m->indices)
-            continue; /* a kept chain level that could not be read back: no colours */
-        most = m->vertex_count > most ? m->vertex_count : most;
-        if (!(lv->vcol[S] = malloc((size_t)nc * m->vertex_count)))
-            return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+    uint32_t most = 1;
+    for (uint32_t k = 0; k < count; ++k) {
+        out[k] = NULL;
+        most = meshes[k]->vertex_count > most ? meshes[k]->vertex_count : most;
     }
-    float* shows = malloc(sizeof(float) * 4 * (size_t)base->vertex_count);
     float* level = malloc(sizeof(float) * 4 * (size_t)most);
-    double* xyz = malloc(sizeof(double) * 3 * (size_t)base->vertex_count);
-    if (!shows || !level || !xyz) {
-        free(shows);
+    double* xyz = malloc(sizeof(double) * 3 * ((size_t)from->vertex_count + 1));
+    if (!level || !xyz) {
         free(level);
         free(xyz);
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
     }
-    meso_result r = mesoi_vertex_appearance(base, spacing, a, NULL, threads, shows, err);
-    if (r == MESO_OK)
-        mesoi_appearance_encode(shows, base->vertex_count, nc, lv->vcol[0]);
-    int built = 0;
+    for (size_t k = 0; k < 3 * (size_t)from->vertex_count; ++k) /* a grid over `from` in double */
+        xyz[k] = from->positions[k];
+    double lo[3], hi[3];
+    meso_mesh_bounds(from, lo, hi);
     mesoi_tri_grid g;
-    if (r == MESO_OK && lv->count > 1) { /* the simplified levels: a grid over the base mesh in double */
-        for (size_t k = 0; k < 3 * (size_t)base->vertex_count; ++k)
-            xyz[k] = base->positions[k];
-        double lo[3], hi[3];
-        meso_mesh_bounds(base, lo, hi);
-        r = mesoi_tri_grid_build(xyz, base->indices, base->triangle_count, lo, hi, &g, err);
-        built = r == MESO_OK; /* a failed build has freed g */
-    }
-    const void* ctx[2] = {base, shows};
+    meso_result r = mesoi_tri_grid_build(xyz, from->indices, from->triangle_count, lo, hi, &g, err);
+    const int built = r == MESO_OK; /* a failed build has freed g */
+    const void* ctx[2] = {from, shows};
     const mesoi_appearance from_base = {.at = base_at, .ctx = ctx, .subdivisions = 8};
-    for (uint32_t S = 1; r == MESO_OK && S < lv->count; ++S) {
-        const meso_mesh* m = &lv->chain[S - 1].mesh;
-        if (!lv->vcol[S])
-            continue;
-        if ((r = mesoi_vertex_appearance(m, spacing, &from_base, &g, threads, level, err)) == MESO_OK)
-            mesoi_appearance_encode(level, m->vertex_count, nc, lv->vcol[S]);
+    for (uint32_t k = 0; r == MESO_OK && k < count; ++k) {
+        const meso_mesh* m = meshes[k];
+        if (!m->vertex_count || !m->positions || !m->indices)
+            continue; /* a kept chain level that could not be read back: no colours */
+        if (!(out[k] = malloc((size_t)components * m->vertex_count)))
+            r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+        else if ((r = mesoi_vertex_appearance(m, spacing, &from_base, &g, threads, level, err)) == MESO_OK)
+            mesoi_appearance_encode(level, m->vertex_count, components, out[k]);
     }
     if (built)
         mesoi_tri_grid_free(&g);
-    free(shows);
     free(level);
     free(xyz);
+    if (r != MESO_OK)
+        for (uint32_t k = 0; k < count; ++k) {
+            free(out[k]);
+            out[k] = NULL;
+        }
+    return r;
+}
+
+meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso_mesh* base, double spacing,
+                                            const mesoi_appearance* a, int threads, meso_error* err)
+{
+    const int nc = lv->vcol_components = a->occlusion_only ? 1 : 4;
+    lv->shows = malloc(sizeof(float) * 4 * ((size_t)base->vertex_count + 1));
+    if (!lv->shows || !(lv->vcol[0] = malloc((size_t)nc * base->vertex_count + 1)))
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+    meso_result r = mesoi_vertex_appearance(base, spacing, a, NULL, threads, lv->shows, err);
+    if (r == MESO_OK)
+        mesoi_appearance_encode(lv->shows, base->vertex_count, nc, lv->vcol[0]);
+    /* The simplified levels: at the nearest point of the base mesh. */
+    const meso_mesh* chain[MESOI_STANDIN_MAX_LEVELS];
+    for (uint32_t S = 1; S < lv->count; ++S)
+        chain[S - 1] = &lv->chain[S - 1].mesh;
+    if (r == MESO_OK && lv->count > 1)
+        r = mesoi_standin_colours(base, lv->shows, chain, lv->count - 1, spacing, nc, threads, lv->vcol + 1, err);
     return r;
 }
 
@@ -201,5 +214,6 @@ void mesoi_standin_levels_free(mesoi_standin_levels* lv)
         free(lv->chunk[k].data);
         free(lv->vcol[k]);
     }
+    free(lv->shows);
     memset(lv, 0, sizeof *lv);
 }

@@ -74,6 +74,7 @@ typedef struct mesoi_standin_levels {
      * (mesoi_standin_levels_appearance). */
     uint8_t* vcol[MESOI_STANDIN_MAX_LEVELS];
     int vcol_components;
+    float* shows;            /* what level 0 shows over each base vertex (RGBA, linear), or NULL */
 } mesoi_standin_levels;
 
 /* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base
@@ -99,6 +100,14 @@ meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso
  * 2 MESOI_STANDIN_MAX_LEVELS + 1). `lv` keeps the chunks' bytes. */
 size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* base, const mesoi_chunk* base_chunk,
                                    const float l0_min[3], const float l0_max[3], mesoi_chunk* chunks, cJSON* rep);
+
+/* Vertex colours of meshes near `from` (a stand-in with `shows`, RGBA
+ * linear per vertex): at each vertex of meshes[k], what `from` shows at
+ * the nearest point, sampled as the simplified levels' are; out[k] gets
+ * `components` bytes per vertex (malloc'd, as VCOL stores them). */
+meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, const meso_mesh* const* meshes,
+                                  uint32_t count, double spacing, int components, int threads, uint8_t** out,
+                                  meso_error* err);
 
 void mesoi_standin_levels_free(mesoi_standin_levels* lv);
 
