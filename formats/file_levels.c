@@ -143,7 +143,8 @@ static void level_extent(const meso_file* f, uint32_t object, uint32_t kind, uin
         if (c->object == 0 && (c->type == MESO_CHUNK_META || c->type == MESO_CHUNK_OBJT || c->type == MESO_CHUNK_LODS))
             end = stored_end(c) > end ? stored_end(c) : end;
         const int plain_mesh = form == MESO_LEVEL_MESH || kind == MESO_OBJECT_MESH; /* draws MESH as a mesh */
-        if (c->object != object || c->type == MESO_CHUNK_PMSH || c->type == MESO_CHUNK_PRTS || /* §7.11 */ (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH && c->type != MESO_CHUNK_VCOL) ||
+        if (c->object != object || mesoi_part_chunk(c->type) || /* §7.11 */
+            (form == MESO_LEVEL_MESH && c->type != MESO_CHUNK_MESH && c->type != MESO_CHUNK_VCOL) ||
             (form == MESO_LEVEL_NATIVE && kind == MESO_OBJECT_FRUSTA && c->type == MESO_CHUNK_MESH) ||
             (!plain_mesh && c->type == MESO_CHUNK_VCOL))
             continue;
@@ -268,12 +269,25 @@ meso_result mesoi_check_prts(const uint8_t* d, size_t n, int32_t chunk, uint64_t
         return mesoi_file_error(err, MESO_ERR_CORRUPT, MESO_ISSUE_PRTS_VALUE, base, chunk,
                                 "chunk %d (PRTS): %s (%u parts, %u records)", (int)chunk, why, parts, records);
     meso_level_record prev = {0}, r;
+    uint64_t next = 0; /* where the next part's triangles start in the list */
     for (uint32_t i = 0; i < records; i++) {
         const uint8_t* p = d + MESO_PRTS_HDR_SIZE + (size_t)i * MESO_LODS_RECORD_SIZE;
         meso_level_record_decode(p, &r);
-        why = record_problem(p, &r, i ? &prev : NULL);
-        if (!why && r.form != MESO_LEVEL_NATIVE)
-            why = "a part level that is not native";
+        /* A lod-0 record may name a range of triangles in bytes 40..47
+         * (a shell part's prisms); the rest are the LODS rules. */
+        uint8_t q[MESO_LODS_RECORD_SIZE];
+        memcpy(q, p, sizeof q);
+        if (r.lod == 0)
+            memset(q + MESO_LODS_OFF_RESERVED1, 0, MESO_LODS_SIZE_RESERVED1);
+        why = record_problem(q, &r, i ? &prev : NULL);
+        const uint32_t first = mesoi_ld32(p + MESO_PRTS_OFF_FIRST_TRIANGLE),
+                       count = mesoi_ld32(p + MESO_PRTS_OFF_TRIANGLE_COUNT);
+        if (!why && r.lod == 0 && r.form != MESO_LEVEL_NATIVE)
+            why = "a part's lod 0 that is not native";
+        else if (!why && r.lod == 0 && (first || count) && (first != next || count == 0))
+            why = "its triangles do not follow the previous part's in the list";
+        else if (!why && r.lod == 0 && i > 0 && (count == 0) != (next == 0))
+            why = "some parts name triangles and some do not";
         else if (!why && (i == 0 ? r.object != 1 : r.object != prev.object && r.object != prev.object + 1))
             why = "parts not numbered 1, 2, ... in order";
         else if (!why && (r.object > parts || (i + 1 == records && r.object != parts)))
@@ -283,6 +297,8 @@ meso_result mesoi_check_prts(const uint8_t* d, size_t n, int32_t chunk, uint64_t
                                     base == UINT64_MAX ? UINT64_MAX : base + MESO_PRTS_HDR_SIZE + i * 48ull, chunk,
                                     "chunk %d (PRTS): record %u (part %u, lod %u): %s", (int)chunk, i, r.object,
                                     r.lod, why);
+        if (r.lod == 0)
+            next = first + (uint64_t)count;
         prev = r;
     }
     const uint8_t* e = d + MESO_PRTS_HDR_SIZE + (size_t)records * MESO_LODS_RECORD_SIZE;
@@ -303,6 +319,16 @@ int32_t mesoi_find_part(const meso_file* f, uint32_t object, uint32_t part, uint
     for (uint32_t i = 0; f && i < f->chunk_count; i++) {
         const meso_chunk_info* c = &f->chunks[i];
         if (c->type == MESO_CHUNK_PMSH && c->object == object && c->lod == lod && c->dims[0] == part)
+            return (int32_t)i;
+    }
+    return -1;
+}
+
+int32_t mesoi_find_part_colours(const meso_file* f, uint32_t object, uint32_t part, uint16_t lod)
+{
+    for (uint32_t i = 0; f && i < f->chunk_count; i++) {
+        const meso_chunk_info* c = &f->chunks[i];
+        if (c->type == MESO_CHUNK_PVCL && c->object == object && c->lod == lod && c->dims[0] == part)
             return (int32_t)i;
     }
     return -1;
@@ -338,11 +364,18 @@ meso_result meso_file_parts(meso_file* f, uint32_t object, meso_part_level* out,
                 head = stored_end(h) > head ? stored_end(h) : head;
         }
         for (uint32_t i = 0; i < records && i < cap; i++) {
-            meso_level_record_decode(d + MESO_PRTS_HDR_SIZE + (size_t)i * MESO_LODS_RECORD_SIZE, &out[i].rec);
-            out[i].chunk = mesoi_find_part(f, object, out[i].rec.object, out[i].rec.lod);
+            const uint8_t* p = d + MESO_PRTS_HDR_SIZE + (size_t)i * MESO_LODS_RECORD_SIZE;
+            meso_level_record_decode(p, &out[i].rec);
+            out[i].first_triangle = out[i].rec.lod == 0 ? mesoi_ld32(p + MESO_PRTS_OFF_FIRST_TRIANGLE) : 0;
+            out[i].triangle_count = out[i].rec.lod == 0 ? mesoi_ld32(p + MESO_PRTS_OFF_TRIANGLE_COUNT) : 0;
+            out[i].chunk = out[i].triangle_count ? meso_file_find(f, MESO_CHUNK_PTRI, object, 0)
+                                                 : mesoi_find_part(f, object, out[i].rec.object, out[i].rec.lod);
+            out[i].colours = mesoi_find_part_colours(f, object, out[i].rec.object, out[i].rec.lod);
             const meso_chunk_info* m = out[i].chunk >= 0 ? &f->chunks[out[i].chunk] : NULL;
-            out[i].bytes = m ? m->stored_size : 0;
-            const uint64_t end = m && stored_end(m) > head ? stored_end(m) : head;
+            const meso_chunk_info* v = out[i].colours >= 0 ? &f->chunks[out[i].colours] : NULL;
+            out[i].bytes = (m ? m->stored_size : 0) + (v ? v->stored_size : 0);
+            uint64_t end = m && stored_end(m) > head ? stored_end(m) : head;
+            end = v && stored_end(v) > end ? stored_end(v) : end;
             out[i].prefix_bytes = end < f->file_size ? end : f->file_size;
         }
         const uint8_t* e = d + MESO_PRTS_HDR_SIZE + (size_t)records * MESO_LODS_RECORD_SIZE;
@@ -354,4 +387,37 @@ meso_result meso_file_parts(meso_file* f, uint32_t object, meso_part_level* out,
     }
     mesoi_file_free(&f->alloc, d);
     return r;
+}
+
+meso_result meso_file_part_triangles(meso_file* f, uint32_t object, uint32_t* out, uint32_t cap, uint32_t* count,
+                                     meso_error* err)
+{
+    mesoi_file_error_clear(err);
+    if (!f || !count || (!out && cap))
+        return mesoi_file_error(err, MESO_ERR_INVALID_ARG, MESO_ISSUE_API_ARG, UINT64_MAX, -1,
+                                "meso_file_part_triangles: NULL file or count, or NULL array with a capacity");
+    *count = 0;
+    const int32_t ti = meso_file_find(f, MESO_CHUNK_PTRI, object, 0);
+    if (ti < 0)
+        return MESO_OK;
+    const meso_chunk_info* c = &f->chunks[ti];
+    const uint32_t n = c->dims[0]; /* U32 x 1, dims n x 1 x 1: the type rules */
+    if (cap >= n) {
+        meso_result r = meso_file_read_chunk(f, (uint32_t)ti, out, sizeof(uint32_t) * (size_t)n, err);
+        if (r != MESO_OK)
+            return r;
+    } else if (cap) {
+        uint32_t* all = (uint32_t*)mesoi_file_alloc(&f->alloc, sizeof(uint32_t) * (size_t)n);
+        if (!all)
+            return mesoi_file_error(err, MESO_ERR_OUT_OF_MEMORY, MESO_ISSUE_API_MEMORY, UINT64_MAX, ti,
+                                    "chunk %d (PTRI): out of memory", (int)ti);
+        meso_result r = meso_file_read_chunk(f, (uint32_t)ti, all, sizeof(uint32_t) * (size_t)n, err);
+        if (r == MESO_OK)
+            memcpy(out, all, sizeof(uint32_t) * cap);
+        mesoi_file_free(&f->alloc, all);
+        if (r != MESO_OK)
+            return r;
+    }
+    *count = n;
+    return MESO_OK;
 }

@@ -58,7 +58,9 @@ int mesoi_known_type(uint32_t type)
     case MESO_CHUNK_RELF:
     case MESO_CHUNK_VCOL:
     case MESO_CHUNK_PRTS:
-    case MESO_CHUNK_PMSH: return 1;
+    case MESO_CHUNK_PMSH:
+    case MESO_CHUNK_PVCL:
+    case MESO_CHUNK_PTRI: return 1;
     default: return 0;
     }
 }
@@ -239,6 +241,14 @@ meso_result mesoi_check_type_rules(const meso_chunk_info* c, int32_t chunk, meso
     case MESO_CHUNK_VCOL:
         if (c->dtype != MESO_DTYPE_U8 || (c->components != 4 && c->components != 1) || !flat)
             return elem_error(c, chunk, err, "U8 x 4 or U8 x 1, dims N x 1 x 1");
+        return MESO_OK;
+    case MESO_CHUNK_PTRI:
+        if (c->dtype != MESO_DTYPE_U32 || c->components != 1 || !flat || c->object == 0 || c->lod != 0)
+            return elem_error(c, chunk, err, "U32 x 1, dims T x 1 x 1, an OBJT object, lod 0");
+        return MESO_OK;
+    case MESO_CHUNK_PVCL: /* as PMSH: dims[0] names the part; components bytes per vertex */
+        if (c->dtype != MESO_DTYPE_BYTES || (c->components != 4 && c->components != 1) || !flat || c->object == 0)
+            return elem_error(c, chunk, err, "BYTES x 4 or BYTES x 1, dims part x 1 x 1, an OBJT object");
         return MESO_OK;
     default: return MESO_OK;
     }

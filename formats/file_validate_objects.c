@@ -556,9 +556,13 @@ void mesoi_check_levels(meso_file* f, const meso_object_record* recs, uint32_t c
 }
 
 /* Each PRTS chunk against OBJT and its PMSH chunks (6501, FORMAT.md §7.11):
- * its object is a mesh object in OBJT with one PRTS; every record has one
- * PMSH at its (part, lod), every PMSH one record. The PMSH contents are
- * checked as MESH chunks by the chunk pass. */
+ * its object is a mesh or shell object in OBJT with one PRTS; a mesh
+ * object's records are native, each with one PMSH at its (part, lod), and
+ * it has no PTRI; a shell's PTRI lists each triangle of its level-0 MESH
+ * once, its parts' lod 0 are native, without a PMSH, naming all of that
+ * list, and its lods 1.. mesh stand-ins, each with one PMSH. Every PMSH has one
+ * record. The PMSH contents are checked as MESH chunks by the chunk pass;
+ * the ranges by the content check. */
 void mesoi_check_parts(meso_file* f, const meso_object_record* recs, uint32_t count, meso_issue_fn fn, void* user)
 {
     obj_check top = {f, 0, 0, fn, user, MESO_OK, 0};
@@ -567,35 +571,95 @@ void mesoi_check_parts(meso_file* f, const meso_object_record* recs, uint32_t co
         if (c->type == MESO_CHUNK_PMSH && meso_file_find(f, MESO_CHUNK_PRTS, c->object, UINT16_MAX) < 0)
             ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PMSH): object %u has no PRTS to name this part", i,
                   c->object);
+        if (c->type == MESO_CHUNK_PVCL) { /* one per PMSH at most, one colour per vertex of it */
+            const int32_t mi = mesoi_find_part(f, c->object, c->dims[0], c->lod);
+            meso_mesh_layout l;
+            if (mi < 0)
+                ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PVCL): object %u has no PMSH for part %u, lod %u",
+                      i, c->object, c->dims[0], (unsigned)c->lod);
+            else if (mesoi_find_part_colours(f, c->object, c->dims[0], c->lod) != (int32_t)i)
+                ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PVCL): a second PVCL for part %u, lod %u", i,
+                      c->dims[0], (unsigned)c->lod);
+            else if (mesh_header(&top, mi, &l) && (uint64_t)l.vertex_count * c->components != c->decoded_size)
+                ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i,
+                      "chunk %u (PVCL): %llu bytes of %u per vertex for part %u, lod %u, whose PMSH has %u vertices",
+                      i, (unsigned long long)c->decoded_size, (unsigned)c->components, c->dims[0], (unsigned)c->lod,
+                      l.vertex_count);
+        }
         if (c->type != MESO_CHUNK_PRTS)
             continue;
         const meso_object_record* rec = NULL;
         for (uint32_t k = 0; k < count; k++)
             if (recs[k].id == c->object)
                 rec = &recs[k];
-        if (!rec || rec->kind != MESO_OBJECT_MESH) {
+        if (!rec || (rec->kind != MESO_OBJECT_MESH && rec->kind != MESO_OBJECT_SHELL)) {
             ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): object %u is %s", i, c->object,
-                  rec ? "not a mesh object" : "not in OBJT");
+                  rec ? "neither a mesh nor a shell object" : "not in OBJT");
             continue;
         }
         if (meso_file_find(f, MESO_CHUNK_PRTS, c->object, UINT16_MAX) != (int32_t)i) {
             ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): a second PRTS for object %u", i, c->object);
             continue;
         }
+        const int shell = rec->kind == MESO_OBJECT_SHELL;
+        meso_mesh_layout l = {0};
+        const int32_t mi = shell ? meso_file_find_level(f, MESO_CHUNK_MESH, c->object, 0) : -1;
+        if (shell && (mi < 0 || !mesh_header(&top, mi, &l)))
+            continue; /* the shell's own rules say what is wrong with its MESH */
         uint8_t* d = load(&top, (int32_t)i);
         if (!d)
             continue;
         const uint32_t records = mesoi_ld32(d + MESO_PRTS_OFF_RECORDS);
         uint32_t found = 0;
+        const int32_t ti = meso_file_find(f, MESO_CHUNK_PTRI, c->object, 0);
+        const uint32_t tris = ti >= 0 ? f->chunks[ti].dims[0] : 0;
+        if (!shell && ti >= 0)
+            ISSUE(&top, MESO_ISSUE_PARTS, ti, "chunk %d (PTRI): a triangle list on mesh object %u", (int)ti,
+                  c->object);
+        if (shell && tris != l.index_count / 3)
+            ISSUE(&top, MESO_ISSUE_PARTS, ti >= 0 ? ti : (int32_t)i,
+                  "object %u: its parts list %u triangles (PTRI), its level-0 MESH has %u", c->object, tris,
+                  l.index_count / 3);
+        uint8_t* seen = shell && !top.stop && ti >= 0 && rules_ok(&top, ti) ? mesoi_file_alloc(&f->alloc, tris + 1u)
+                                                                            : NULL;
+        uint8_t* list = seen ? load(&top, ti) : NULL;
+        if (list) {
+            memset(seen, 0, tris);
+            for (uint32_t k = 0; k < tris && !top.stop; k++) {
+                const uint32_t v = mesoi_ld32(list + 4 * (size_t)k);
+                if (v >= tris || seen[v]++)
+                    ISSUE(&top, MESO_ISSUE_PARTS, ti, "chunk %d (PTRI) of shell %u: entry %u (%u) is %s", (int)ti,
+                          c->object, k, v, v >= tris ? "not a triangle of its MESH" : "listed twice");
+            }
+        }
+        mesoi_file_free(&f->alloc, list);
+        mesoi_file_free(&f->alloc, seen);
+        uint64_t end = 0; /* where the last part's triangles end in the list */
         for (uint32_t r = 0; r < records && !top.stop; r++) {
+            const uint8_t* p = d + MESO_PRTS_HDR_SIZE + (size_t)r * MESO_LODS_RECORD_SIZE;
             meso_level_record lr;
-            meso_level_record_decode(d + MESO_PRTS_HDR_SIZE + (size_t)r * MESO_LODS_RECORD_SIZE, &lr);
+            meso_level_record_decode(p, &lr);
             const int32_t pi = mesoi_find_part(f, c->object, lr.object, lr.lod);
-            if (pi < 0)
-                ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): part %u, lod %u of object %u has no PMSH",
-                      i, lr.object, lr.lod, c->object);
+            const int prisms = shell && lr.lod == 0; /* drawn by the shell's native levels: no PMSH */
+            if (prisms)
+                end = mesoi_ld32(p + MESO_PRTS_OFF_FIRST_TRIANGLE) + (uint64_t)mesoi_ld32(p + MESO_PRTS_OFF_TRIANGLE_COUNT);
+            const char* why = NULL;
+            if (!shell && lr.form != MESO_LEVEL_NATIVE)
+                why = "is not native (a mesh object's part levels are)";
+            else if (shell && lr.lod > 0 && lr.form != MESO_LEVEL_MESH)
+                why = "is not a mesh stand-in (a shell part's lods 1.. are)";
+            else if (prisms && pi >= 0)
+                why = "has a PMSH (a shell part's lod 0 is its prisms)";
+            else if (!prisms && pi < 0)
+                why = "has no PMSH";
+            if (why)
+                ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): part %u, lod %u of object %u %s", i,
+                      lr.object, lr.lod, c->object, why);
             found += pi >= 0;
         }
+        if (shell && !top.stop && end != tris)
+            ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PRTS): the parts of shell %u hold %llu of its %u prisms",
+                  i, c->object, (unsigned long long)end, tris);
         uint32_t pmsh = 0;
         for (uint32_t k = 0; k < f->chunk_count; k++)
             pmsh += f->chunks[k].type == MESO_CHUNK_PMSH && f->chunks[k].object == c->object;

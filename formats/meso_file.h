@@ -116,8 +116,10 @@ typedef struct meso_allocator {
 #define MESO_CHUNK_CMAP MESO_FOURCC('C', 'M', 'A', 'P') /* how a shell's COLR maps to texture space (one record) */
 #define MESO_CHUNK_LODS MESO_FOURCC('L', 'O', 'D', 'S') /* levels of detail: error and bounds per object level (1.1) */
 #define MESO_CHUNK_VCOL MESO_FOURCC('V', 'C', 'O', 'L') /* a MESH's vertex appearance: sRGB albedo + occlusion, U8 x 4 per vertex (1.1) */
-#define MESO_CHUNK_PRTS MESO_FOURCC('P', 'R', 'T', 'S') /* a mesh object's parts: levels per part and neighbours (1.1, §7.11) */
+#define MESO_CHUNK_PRTS MESO_FOURCC('P', 'R', 'T', 'S') /* a mesh or shell object's parts: levels per part and neighbours (1.1, §7.11) */
 #define MESO_CHUNK_PMSH MESO_FOURCC('P', 'M', 'S', 'H') /* one part's mesh at one of its levels: MESH layout (1.1, §7.11) */
+#define MESO_CHUNK_PTRI MESO_FOURCC('P', 'T', 'R', 'I') /* a shell's parts' prisms: its MESH triangles part after part, U32 x 1, dims T x 1 x 1, lod 0 (1.1, §7.11) */
+#define MESO_CHUNK_PVCL MESO_FOURCC('P', 'V', 'C', 'L') /* a PMSH's vertex appearance, as VCOL: BYTES x 1 or 4 per vertex, dims part x 1 x 1 (1.1, §7.11) */
 
 /* Chunk flags (TOC entry). Unknown bits must be zero in format 1.0. */
 #define MESO_CHUNK_FLAG_REQUIRED 0x1u /* a reader that does not know the type must refuse the file */
@@ -673,11 +675,18 @@ MESO_API meso_result meso_file_levels(meso_file* f, uint32_t object, meso_level_
  * level), so that a reader can draw the near end of an object finer than
  * the far end. One part level as a reader sees it: */
 typedef struct meso_part_level {
-    meso_level_record rec; /* rec.object = the part, 1..part_count; rec.lod its level; form NATIVE; error
-                              against the part's level 0, bounds of the level */
-    int32_t chunk;         /* its PMSH chunk (-1 when missing: the full tier refuses that) */
-    uint64_t bytes;        /* stored bytes of that chunk */
-    uint64_t prefix_bytes; /* the shortest prefix holding it, the header, TOC, META, OBJT, LODS and PRTS */
+    meso_level_record rec;   /* rec.object = the part, 1..part_count; rec.lod its level; error against the
+                                part's level 0, bounds of the level. A mesh object's part levels are form
+                                NATIVE; a shell's lod 0 is NATIVE (its prisms, drawn by the shell's native
+                                levels) and its lods 1.. form MESH (a stand-in of the part) */
+    uint32_t first_triangle; /* a shell part's lod 0: its prisms are the level-0 MESH triangles the PTRI */
+    uint32_t triangle_count; /*   chunk holds at first_triangle .. + triangle_count - 1
+                                  (meso_file_part_triangles); 0, 0 otherwise */
+    int32_t chunk;           /* its PMSH chunk (-1 when missing: the full tier refuses that); a shell part's
+                                lod 0: the object's PTRI chunk */
+    int32_t colours;         /* its PVCL chunk (vertex colours of that PMSH), -1 when it has none */
+    uint64_t bytes;          /* stored bytes of those chunks (0 for a shell part's lod 0) */
+    uint64_t prefix_bytes;   /* the shortest prefix holding it, the header, TOC, META, OBJT, LODS and PRTS */
 } meso_part_level;
 
 /* The parts of `object`: reads and checks its PRTS chunk and writes up to
@@ -688,6 +697,12 @@ typedef struct meso_part_level {
 MESO_API meso_result meso_file_parts(meso_file* f, uint32_t object, meso_part_level* out, uint32_t cap,
                                      uint32_t* level_count, uint32_t* part_count, uint32_t* edges,
                                      uint32_t edge_cap, uint32_t* edge_count, meso_error* err);
+/* A shell's parts' triangle list, its PTRI chunk (the level-0 MESH
+ * triangle of each prism, part after part; meso_part_level.first_triangle
+ * indexes it): up to `cap` entries (NULL with cap 0 only counts), *count
+ * the total (0 for a mesh object's parts, or an object without parts). */
+MESO_API meso_result meso_file_part_triangles(meso_file* f, uint32_t object, uint32_t* out, uint32_t cap,
+                                              uint32_t* count, meso_error* err);
 
 /* The file's objects: reads and checks the OBJT chunk (CRC and records) and
  * writes up to `cap` records to `out` (NULL with cap 0 only counts); *count

@@ -115,6 +115,10 @@
 #define MESO_PRTS_OFF_EDGES 8
 #define MESO_PRTS_OFF_RESERVED 12
 #define MESO_PRTS_EDGE_SIZE 8
+/* A shell part's lod-0 record: its prisms, a range of the PTRI chunk's
+ * triangle list, in the LODS layout's reserved bytes 40..47. */
+#define MESO_PRTS_OFF_FIRST_TRIANGLE 40
+#define MESO_PRTS_OFF_TRIANGLE_COUNT 44
 
 /* SKEL chunk: one 32-byte record per skeleton node. */
 #define MESO_SKEL_RECORD_SIZE 32

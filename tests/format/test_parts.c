@@ -53,6 +53,8 @@ static void encode_prts(uint8_t* buf, const meso_level_record* r, uint32_t parts
 
 /* `skip`: a part level (index into recs) written without its PMSH; `kind`
  * of the object. */
+static const meso_level_record* table = recs; /* the PRTS records make_file writes */
+
 static uint8_t* make_file(int skip, uint32_t kind, size_t* size)
 {
     static const char meta[] = "{\"tool\":\"test_parts\"}";
@@ -77,7 +79,7 @@ static uint8_t* make_file(int skip, uint32_t kind, size_t* size)
     }
     uint8_t buf[256];
     assert(prts_size() <= sizeof buf);
-    encode_prts(buf, recs, 2, 1, 2);
+    encode_prts(buf, table, 2, 1, 2);
     add(w, MESO_CHUNK_PRTS, 1, 0, 1, buf, prts_size());
     uint8_t* out = writer_to_memory(w, size);
     meso_writer_destroy(w);
@@ -187,9 +189,15 @@ static void broken_parts_are_refused(void)
     encode_prts(buf, r, 2, 1, 2);
     expect_prts_issue(buf, MESO_ISSUE_PRTS_VALUE, "lods not consecutive");
     memcpy(r, recs, sizeof r);
-    r[1].form = MESO_LEVEL_MESH;
+    r[0].form = MESO_LEVEL_MESH;
     encode_prts(buf, r, 2, 1, 2);
-    expect_prts_issue(buf, MESO_ISSUE_PRTS_VALUE, "a stand-in part level");
+    expect_prts_issue(buf, MESO_ISSUE_PRTS_VALUE, "a part's lod 0 that is a stand-in");
+    encode_prts(buf, recs, 2, 1, 2);
+    put32(buf + MESO_PRTS_HDR_SIZE + MESO_PRTS_OFF_FIRST_TRIANGLE, 5);
+    expect_prts_issue(buf, MESO_ISSUE_PRTS_VALUE, "a first triangle without a count");
+    encode_prts(buf, recs, 2, 1, 2);
+    put32(buf + MESO_PRTS_HDR_SIZE + MESO_LODS_RECORD_SIZE + MESO_PRTS_OFF_TRIANGLE_COUNT, 5);
+    expect_prts_issue(buf, MESO_ISSUE_PRTS_VALUE, "triangles named at lod 1");
     encode_prts(buf, recs, 2, 2, 1);
     expect_prts_issue(buf, MESO_ISSUE_PRTS_VALUE, "a neighbour pair not a < b");
     encode_prts(buf, recs, 2, 1, 3);
@@ -208,6 +216,15 @@ static void broken_parts_are_refused(void)
     uint8_t* file = make_file(2, MESO_OBJECT_MESH, &size);
     uint32_t got = validate_issue(file, size);
     printf("  a part level without its PMSH: issue %u\n", got);
+    assert(got == MESO_ISSUE_PARTS);
+    free(file);
+    memcpy(r, recs, sizeof r);
+    r[1].form = MESO_LEVEL_MESH; /* a shell part's form, on a mesh object */
+    table = r;
+    file = make_file(-1, MESO_OBJECT_MESH, &size);
+    table = recs;
+    got = validate_issue(file, size);
+    printf("  a mesh object's part level that is a stand-in: issue %u\n", got);
     assert(got == MESO_ISSUE_PARTS);
     free(file);
     file = make_file(-1, MESO_OBJECT_SHELL, &size);
