@@ -35,6 +35,7 @@
 #include "shell_regrow.h"
 #include "shell_update.h"
 #include "shell_validate.h"
+#include "shell_parts.h"
 #include "standin_levels.h"
 #include "volume_levels.h"
 #include "surface_distance.h"
@@ -1103,6 +1104,8 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     float *pos_out = NULL, *normals_out = NULL, *sdir_out = NULL, *thick = NULL;
     meso_mesh_chunk chunk = {0}, mid_chunk = {0};
     mesoi_standin_levels standins = {0};
+    mesoi_shell_parts parts = {0};
+    mesoi_chunk* all = NULL;
     meso_mesh base, mid_mesh;
     mesoi_chunk mid;
     float* mid_pos = NULL;
@@ -1297,13 +1300,56 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                 cJSON_AddStringToObject(l1, "surface", "mid");
                 cJSON_AddNumberToObject(rep, "standin_chain_base_error", (double)mesoi_f32_up(s->e0));
             }
+            /* The shell in parts (shell_parts.c): prisms near, stand-in patches far. */
+            if (r == MESO_OK && a->parts > 0 && a->parts < 64)
+                r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
+                                   "parts of %d triangles: at least 64 (or 0 = auto, -1 = none)", a->parts);
+            if (r == MESO_OK && a->parts >= 0 && MESO_HAVE_MESHOPTIMIZER) {
+                const double tp = meso_seconds();
+                const mesoi_shell_parts_input pin = {
+                    .standin = standins.standin_mesh ? standins.standin_mesh : &base,
+                    .standin_error = standins.e0,
+                    .base = &base,
+                    .sdir = sdir_out ? sdir_out : sdir,
+                    .layers = sdir_layers,
+                    .shows = standins.shows,
+                    .vcol_components = standins.vcol_components,
+                    .colour_spacing = 0.25 * meso_mesh_mean_edge(&base),
+                    .object = 1,
+                    .part_triangles = a->parts > 0 ? (uint32_t)a->parts : 0,
+                    .threads = s->run.common.threads};
+                r = mesoi_shell_parts_build(&pin, &parts, err);
+                if (r == MESO_OK && parts.count) {
+                    s->rep->parts = parts.count;
+                    s->rep->part_levels = parts.records;
+                    s->rep->part_bytes = parts.bytes;
+                    cJSON* jp = cJSON_AddObjectToObject(rep, "parts");
+                    cJSON_AddNumberToObject(jp, "count", parts.count);
+                    cJSON_AddNumberToObject(jp, "levels", parts.records);
+                    cJSON_AddNumberToObject(jp, "neighbour_pairs", parts.edges);
+                    cJSON_AddNumberToObject(jp, "bytes", (double)parts.bytes);
+                    mesoi_run_stage(&s->run, "parts", 0.99, 0.99, "%u parts, %u part levels, %zu bytes (%.0f ms)",
+                                    parts.count, parts.records, parts.bytes, 1e3 * (meso_seconds() - tp));
+                }
+            }
+        }
+        if (r == MESO_OK && parts.chunk_count) {
+            all = malloc(sizeof(mesoi_chunk) * (n + parts.chunk_count));
+            if (!all)
+                r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "shell parts: out of memory");
+            else {
+                memcpy(all, chunks, sizeof(mesoi_chunk) * n);
+                memcpy(all + n, parts.chunks, sizeof(mesoi_chunk) * parts.chunk_count);
+            }
         }
         if (r == MESO_OK)
-            r = mesoi_output_build(meta, rep, &rec, chunks, n, out, err);
+            r = mesoi_output_build(meta, rep, &rec, all ? all : chunks, all ? n + parts.chunk_count : n, out, err);
     }
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     mesoi_standin_levels_free(&standins);
+    mesoi_shell_parts_free(&parts);
+    free(all);
     free(chunk.data);
     free(mid_chunk.data);
     free(mid_pos);

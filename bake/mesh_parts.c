@@ -58,6 +58,7 @@ void meso_mesh_parts_free(meso_mesh_parts* p)
     }
     free(p->part);
     free(p->edges);
+    free(p->part_of);
     memset(p, 0, sizeof(*p));
 }
 
@@ -355,7 +356,7 @@ static meso_result build(const meso_mesh* m, const meso_mesh_parts_options* o, m
     }
     free(centroid);
     free(tris);
-    free(part_of);
+    out->part_of = part_of;
     free(corners);
     free(keys);
     if (r == MESO_ERR_OUT_OF_MEMORY)

@@ -39,6 +39,8 @@ typedef struct meso_mesh_parts {
     meso_mesh_part* part;
     uint32_t edge_count; /* pairs of parts that share a vertex position */
     uint32_t* edges;     /* 2 * edge_count, a < b, ascending */
+    uint32_t* part_of;   /* [the input's triangle count]: each triangle's part (0-based); a part's level 0
+                            holds its triangles in the input's order */
 } meso_mesh_parts;
 
 /* Cut `m` into parts and simplify each with its border locked. A mesh of

@@ -464,6 +464,13 @@ typedef struct meso_bake_shell_options {
      * only; N >= 3: the base mesh, then native levels, then simplified
      * ones; at most MESO_BAKE_SHELL_MAX_LEVELS). */
     int levels;
+    /* The shell also cut into parts (FORMAT.md §7.11, bake/shell_parts.c),
+     * so a reader can draw the near end as prisms and the far end as its
+     * stand-in: each part's prisms, then its patch of the first stand-in
+     * and that patch's own simplifications. 0 = auto (parts of about 1024
+     * triangles, when there are stand-ins and at least 2048 triangles), N
+     * > 0 = parts of about N triangles (at least 64), -1 = none. */
+    int parts;
 } meso_bake_shell_options;
 
 #define MESO_BAKE_SHELL_MAX_LEVELS 9 /* in all: level 0, native levels, the base mesh, simplified meshes */
@@ -531,6 +538,9 @@ typedef struct meso_bake_shell_report {
      * built for the recomputed region only (lp_distance.h >>regions). 0 means every evaluation took
      * the whole tree's path, so the directors have the bits a full re-bake's field gives them. */
     uint64_t update_field_unsplit;
+    uint32_t parts;       /* parts written (0: none) */
+    uint32_t part_levels; /* part levels written, each part's prisms included */
+    size_t part_bytes;    /* stored PRTS, PMSH and PVCL payload */
 } meso_bake_shell_report;
 
 /* The CLI's defaults (thickness_rel 0.05, p 3, theta 0.5, angle_tol 5,

@@ -137,6 +137,22 @@ int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad
     return 1;
 }
 
+int parts_option(const char* value, int* parts, int* code)
+{
+    long n;
+    if (!strcmp(value, "auto"))
+        *parts = 0;
+    else if (!strcmp(value, "none"))
+        *parts = -1;
+    else if (meso_bake_parse_long(value, 64, 1L << 30, &n))
+        *parts = (int)n;
+    else {
+        *code = usage_error("--parts expects auto, none or a triangle count of at least 64, got '%s'", value);
+        return 0;
+    }
+    return 1;
+}
+
 static meso_bake_common* node_slot; /* where --node goes (cli_bake_common) */
 
 void cli_bake_common(meso_bake_common* c)

@@ -82,6 +82,9 @@ int path_option(const char* opt, const char* value, const char** in, const char*
  * `value` parsed into *budget, or *bad set to the usage error's exit code
  * when it does not parse; else 0. */
 int memory_option(const char* opt, const char* value, uint64_t* budget, int* bad);
+/* --parts auto|none|N (mesh, shell) into *parts (0, -1, N); 0 after a
+ * usage error (its exit code in *code). */
+int parts_option(const char* value, int* parts, int* code);
 /* The start of every valued option of shell, frusta and cells: 0 after a
  * usage error's exit code in *code (unknown option, missing value); else 1,
  * with *code 0, and *handled 1 when `opt` was a path (-i, -o, --report),

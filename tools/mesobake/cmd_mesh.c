@@ -113,16 +113,9 @@ int cmd_mesh(int argc, char** argv)
                 return usage_error("--levels expects auto or a level count in 1..%d, got '%s'",
                                    MESO_BAKE_MESH_MAX_LEVELS, v);
         } else if (!strcmp(a, "--parts") && has_val) {
-            long n;
-            const char* v = argv[++i];
-            if (!strcmp(v, "auto"))
-                o.parts = 0;
-            else if (!strcmp(v, "none"))
-                o.parts = -1;
-            else if (meso_bake_parse_long(v, 64, 1L << 30, &n))
-                o.parts = (int)n;
-            else
-                return usage_error("--parts expects auto, none or a triangle count of at least 64, got '%s'", v);
+            int code;
+            if (!parts_option(argv[++i], &o.parts, &code))
+                return code;
         } else if ((!strcmp(a, "-j") || !strcmp(a, "--threads")) && has_val) {
             long n;
             if (!meso_bake_parse_long(argv[++i], 1, 256, &n))

@@ -121,6 +121,13 @@ static const char* const usage_shell_end =
     "                          each vertex (VCOL). N (1..9): at\n"
     "                          most N levels; 1 = level 0 only (no LODS chunk), 2 = the base mesh\n"
     "                          only, N >= 3: the base mesh, then native levels, then simplified ones\n"
+    "      --parts auto|none|N the shell also cut into parts (FORMAT.md 7.11), so a reader can\n"
+    "                          draw the near end as prisms and the far end as stand-in patches:\n"
+    "                          each part's prisms, then its patch of the first stand-in and the\n"
+    "                          patch's simplifications (their borders fixed, so patches meet edge\n"
+    "                          to edge), with colours as the stand-ins'. auto (default): parts of\n"
+    "                          about 1024 triangles when there are stand-ins and at least 2048\n"
+    "                          triangles; N (64..): parts of about N triangles; none\n"
     "Reporting:\n"
     "      --report FILE       the bake report as JSON (also stored in the file, without timings)\n"
     MEMORY_OPTION_HELP
@@ -227,7 +234,7 @@ static int parse_args(int argc, char** argv, shell_args* a)
         static const char* const valued[] = {"-i", "--input", "-o", "--output", "--report", "--max-memory", "--thickness",
             "--thickness-rel", "--kind", "--directors", "--p", "--theta", "--angle-tol", "-j", "--threads",
             "--smooth", "--texture", "--color", "--tiling", "--dist-res", "--dist-type", "--time", "--frames", "--fps",
-            "--update", "--levels"};
+            "--update", "--levels", "--parts"};
         int handled, code;
         if (!bake_option(s, v, valued, sizeof valued / sizeof valued[0], &o->input, &a->out, &a->report,
                          &o->common.max_memory, &handled, &code))
@@ -249,7 +256,10 @@ static int parse_args(int argc, char** argv, shell_args* a)
                 return usage_error("--levels expects auto or a level count in 1..%u, got '%s'",
                                    MESO_BAKE_SHELL_MAX_LEVELS, v);
         }
-        else if (!strcmp(s, "--color"))
+        else if (!strcmp(s, "--parts")) {
+            if (!parts_option(v, &o->parts, &code))
+                return code;
+        } else if (!strcmp(s, "--color"))
             o->color = v;
         else if (!strcmp(s, "--time")) {
             char* end = NULL;
