@@ -270,7 +270,13 @@ MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object 
  * level 0 part by part: each part at the coarsest of its own levels whose
  * projected error is at most the pixel error, neighbouring parts within
  * one level of each other (never a crack: the bake keeps part borders
- * fixed at every level). Its levels state counts the parts' bytes too.
+ * fixed at every level). A levelled shell stored with parts does the same
+ * where it draws a native level, smooth or curved, in a context that can
+ * reject hull fragments (meso_rt_shell_draw.no_hull_reject says which;
+ * the knob itself does not matter here): a part at lod 0
+ * draws its prisms with that level, a coarser one its stand-in patch (a
+ * mesh), which meets the prisms within its error. Its levels state counts
+ * the parts' bytes too.
  * This reports the level each part drew last (levels[part - 1], up to
  * `cap`) and *part_count (0: the object has no parts; the parts table is
  * read with the levels table, by meso_rt_load_object_levels). Under

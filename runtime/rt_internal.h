@@ -141,6 +141,12 @@ typedef struct mesoi_shell {
     GLuint order_buf, order_tex; /* the sorted copy (R32UI texture buffer); 0 without hull rejection */
     int32_t sort_cell;
     int order_stale;
+    /* Set by a parts draw (rt_parts.c) for one draw: only these prisms
+     * (base triangles), sorted into order_buf as the whole set is;
+     * sorted_key: the subset order_buf holds (0 the whole set). */
+    const uint32_t* subset;
+    uint32_t subset_count;
+    uint64_t subset_key, sorted_key;
 } mesoi_shell;
 
 enum {
@@ -464,6 +470,16 @@ typedef struct mesoi_parts {
     uint64_t bytes_wanted;   /* the last pick's wanted part levels' bytes */
     uint64_t bytes_read;
     uint64_t pick_frame;     /* the frame (rt->frame + 1) of the last pick */
+    /* A shell's parts: each part's lod 0 is its prisms, drawn by the
+     * shell's native level `native` (the whole levels' pick), a subset of
+     * its prisms: the PTRI list (read once, as lod 0's "upload"). */
+    int shell;
+    uint32_t* tri;           /* the PTRI list, tri_count entries; NULL before it is read */
+    uint32_t tri_count;
+    meso_rt_object native;
+    uint32_t* subset;        /* [tri_count]: the prisms the last pick draws (subset_count), by part */
+    uint32_t subset_count;
+    uint64_t subset_key;     /* which parts they are (changes re-sort the prisms) */
 } mesoi_parts;
 /* load: its PRTS table (*out NULL: none); pick: each part's level for this
  * draw, neighbours within one level, uploads or, with stream requests,
@@ -477,13 +493,17 @@ typedef struct mesoi_parts {
 meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts** out);
 void mesoi_parts_free(meso_rt* rt, mesoi_parts* p);
 meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
-                             uint32_t count, double tau, double height, meso_rt_object* out);
+                             uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out);
 meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i);
 meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_draw_desc* d,
                              const meso_rt_instance* inst, uint32_t count);
 int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
 void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i);
 uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read);
+/* Whether the last pick drew some part coarser than its lod 0, and every
+ * part at the level it wanted (a shell whose parts are still arriving
+ * draws its whole native level, which is finer). */
+int mesoi_parts_coarse(const mesoi_parts* p);
 /* rt_levels.c: pixels `error` covers for bounds lo..hi drawn with `model`
  * (the LOD rule, rt_levels.c); evict_one: the least recently used level or
  * part level no draw of this frame used (not an object's coarsest); 0 when

@@ -116,7 +116,7 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
     }
     /* A mesh object's parts table (rt_parts.c), read with the levels
      * table: no draw reads the file under stream requests. */
-    if (r == MESO_OK && lv->rec.kind == MESO_OBJECT_MESH)
+    if (r == MESO_OK && (lv->rec.kind == MESO_OBJECT_MESH || lv->rec.kind == MESO_OBJECT_SHELL))
         r = mesoi_parts_load(rt, f, &lv->rec, &lv->parts);
     /* The coarsest level now, so that every draw has something to show; a
      * stream that has not delivered it yet shows the object once it has. */
@@ -281,10 +281,13 @@ void meso_rt_frame_end(meso_rt* rt)
         if (!lv || lv->want_frame != rt->frame + 1)
             continue;
         const uint64_t coarsest = lv->info[lv->count - 1].bytes;
-        uint64_t finest = lv->info[0].bytes; /* or the parts this frame drew instead */
-        if (lv->parts && lv->parts_frame == rt->frame + 1)
-            mesoi_parts_bytes(lv->parts, &finest, NULL);
-        now += (lv->want_now ? lv->info[lv->want_now].bytes : finest) + (lv->want_now + 1 < lv->count ? coarsest : 0);
+        uint64_t wanted = lv->info[lv->want_now].bytes; /* or the parts this frame drew instead (a shell's
+                                                           prisms draw with its native level) */
+        if (lv->parts && lv->parts_frame == rt->frame + 1) {
+            mesoi_parts_bytes(lv->parts, &wanted, NULL);
+            wanted += lv->parts->shell ? lv->info[lv->want_now].bytes : 0;
+        }
+        now += wanted + (lv->want_now + 1 < lv->count ? coarsest : 0);
         lower += lv->info[lv->want_lower].bytes + (lv->want_lower + 1 < lv->count ? coarsest : 0);
     }
     rt->bytes_wanted = now;
@@ -365,9 +368,10 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     /* Level 0 of a mesh object stored with parts: each part at its own
      * level (rt_parts.c), when every part has one to draw. */
     int parts_pending = 0; /* streamed parts arriving: no whole level asked for meanwhile */
-    if (want == 0 && lv->parts) {
+    if (want == 0 && lv->parts && !lv->parts->shell) {
         meso_rt_object ph;
-        const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height, &ph);
+        const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height,
+                                                (meso_rt_object){0}, &ph);
         if (pr == MESO_OK) {
             lv->last_drawn = 0;
             lv->parts_frame = rt->frame + 1;
@@ -413,6 +417,24 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     lv->last_drawn = got;
     lv->used[got] = rt->frame + 1;
     *out = lv->slot[got];
+    /* A shell drawing a native level, stored with parts: each part its
+     * prisms (with this level) or its stand-in patch (rt_parts.c), where
+     * some part is far enough for its patch. Smooth and curved shells only:
+     * the prisms of a subset are drawn in the order the whole set is
+     * sorted in, which tetra and segment do not use (their ties on shared
+     * faces keep the mesh's order), and only where there is a sorted copy
+     * to draw them from (rt->hull_reject_ok). */
+    if (lv->parts && lv->parts->shell && lv->info[got].rec.form == MESO_LEVEL_NATIVE && rt->hull_reject_ok &&
+        (d->shell.technique == MESO_SHELL_SMOOTH || d->shell.technique == MESO_SHELL_CURVED)) {
+        meso_rt_object ph;
+        const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height, *out, &ph);
+        if (pr == MESO_ERR_OUT_OF_MEMORY)
+            return pr;
+        if (pr == MESO_OK && mesoi_parts_coarse(lv->parts)) {
+            lv->parts_frame = rt->frame + 1;
+            *out = ph;
+        }
+    }
     return MESO_OK;
 }
 

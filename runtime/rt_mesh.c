@@ -83,8 +83,13 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
     size_t vcol_size = 0;
     if (vi >= 0) {
         const meso_chunk_info* vc = meso_file_chunk(f, (uint32_t)vi);
-        if (vc->dtype != MESO_DTYPE_U8 || (vc->components != 4 && vc->components != 1) ||
-            vc->dims[0] != mv.layout.vertex_count || vc->dims[1] != 1 || vc->dims[2] != 1) {
+        const int fits = (vc->components == 4 || vc->components == 1) &&
+                         (vc->type == MESO_CHUNK_PVCL /* a part's (§7.11): BYTES, dims[0] the part */
+                              ? vc->dtype == MESO_DTYPE_BYTES &&
+                                    vc->decoded_size == (uint64_t)mv.layout.vertex_count * vc->components
+                              : vc->dtype == MESO_DTYPE_U8 && vc->dims[0] == mv.layout.vertex_count &&
+                                    vc->dims[1] == 1 && vc->dims[2] == 1);
+        if (!fits) {
             mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
                       "object %u: VCOL (chunk %d) is not U8 x 4 or x 1 for each of the MESH's %u vertices; drawn "
                       "without it",

@@ -46,6 +46,8 @@ void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
             meso_rt_release_object(rt, p->slot[i]);
             rt->bytes_resident -= p->lv[i].bytes;
         }
+    if (p->tri)
+        rt->bytes_resident -= p->lv[p->first[0]].bytes;
     mesoi_object* o = mesoi_lookup(rt, p->parent);
     if (o)
         o->parts = NULL;
@@ -60,6 +62,8 @@ void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
     mesoi_rt_free(rt, p->want);
     mesoi_rt_free(rt, p->chosen);
     mesoi_rt_free(rt, p->drawn);
+    mesoi_rt_free(rt, p->tri);
+    mesoi_rt_free(rt, p->subset);
     mesoi_rt_free(rt, p);
 }
 
@@ -117,9 +121,14 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
     }
     if (r == MESO_OK)
         r = mesoi_empty_slot(rt, rec, &p->parent);
+    p->shell = rec->kind == MESO_OBJECT_SHELL;
+    if (r == MESO_OK && p->shell) {
+        p->subset = mesoi_rt_alloc(rt, sizeof(uint32_t) * (nl ? nl : 1)); /* grown when the list is read */
+        r = p->subset ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    }
     if (r == MESO_OK) {
         mesoi_object* o = mesoi_lookup(rt, p->parent);
-        o->kind = MESO_OBJECT_MESH;
+        o->kind = rec->kind; /* its draw (mesh or shell) draws the parts */
         o->parts = p;
         *out = p;
         return MESO_OK;
@@ -128,11 +137,59 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
     return r == MESO_ERR_PENDING ? r : (r == MESO_ERR_OUT_OF_MEMORY ? r : MESO_OK);
 }
 
-/* Upload part level i (its PMSH) into a slot of its own. */
+/* A shell part's lod 0, its prisms. */
+static int prisms(const mesoi_parts* p, uint32_t i) { return p->shell && p->lv[i].rec.lod == 0; }
+
+/* Whether part level i can be drawn: uploaded, or (prisms) the list read. */
+static int have(const mesoi_parts* p, uint32_t i) { return prisms(p, i) ? p->tri != NULL : p->slot[i].id != 0; }
+
+/* A shell's prisms: its PTRI list, read once for every part (counted at
+ * the first part's lod 0); a list that does not fit the shell marks every
+ * part's prisms failed. */
+static meso_result read_prisms(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p)
+{
+    const uint32_t i0 = p->first[0];
+    void* data = NULL;
+    size_t size = 0;
+    meso_result r = mesoi_read_whole(rt, f, p->lv[i0].chunk, &data, &size);
+    uint32_t* grown = r == MESO_OK ? mesoi_rt_alloc(rt, size ? size : 1) : NULL;
+    if (r == MESO_OK && !grown)
+        r = MESO_ERR_OUT_OF_MEMORY;
+    const uint32_t n = (uint32_t)(size / sizeof(uint32_t));
+    for (uint32_t q = 0; r == MESO_OK && q < p->part_count; ++q) {
+        const meso_part_level* L = &p->lv[p->first[q]];
+        if ((uint64_t)L->first_triangle + L->triangle_count > n)
+            r = MESO_ERR_CORRUPT;
+    }
+    if (r == MESO_OK) {
+        p->tri = data;
+        p->tri_count = n;
+        mesoi_rt_free(rt, p->subset);
+        p->subset = grown;
+        rt->bytes_resident += p->lv[i0].bytes;
+        if (!rt->prefetch)
+            p->bytes_read += p->lv[i0].bytes;
+        return MESO_OK;
+    }
+    mesoi_rt_free(rt, data);
+    mesoi_rt_free(rt, grown);
+    if (r != MESO_ERR_PENDING && r != MESO_ERR_OUT_OF_MEMORY) {
+        for (uint32_t q = 0; q < p->part_count; ++q)
+            p->failed[p->first[q]] = 1;
+        mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "object %u: its parts' prisms (PTRI) could not be read; drawn by its whole levels", rec->id);
+    }
+    return r;
+}
+
+/* Upload part level i (its PMSH) into a slot of its own; a shell part's
+ * lod 0, its prisms: the PTRI list. */
 meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i)
 {
-    if (p->slot[i].id)
+    if (have(p, i))
         return MESO_OK;
+    if (prisms(p, i))
+        return p->failed[i] ? MESO_ERR_NOT_FOUND : read_prisms(rt, f, rec, p);
     if (p->failed[i] || p->lv[i].chunk < 0)
         return MESO_ERR_NOT_FOUND;
     meso_rt_object h;
@@ -143,7 +200,7 @@ meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_reco
     o->kind = MESO_OBJECT_MESH;
     memcpy(o->bbox_min, p->lv[i].rec.bbox_min, sizeof(o->bbox_min));
     memcpy(o->bbox_max, p->lv[i].rec.bbox_max, sizeof(o->bbox_max));
-    r = mesoi_mesh_upload_chunk(rt, f, p->lv[i].chunk, rec->id, -1, o);
+    r = mesoi_mesh_upload_chunk(rt, f, p->lv[i].chunk, rec->id, p->lv[i].colours, o);
     if (r == MESO_OK) {
         p->slot[i] = h;
         rt->bytes_resident += p->lv[i].bytes;
@@ -182,10 +239,11 @@ void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i)
 }
 
 meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
-                             uint32_t count, double tau, double height, meso_rt_object* out)
+                             uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out)
 {
     mesoi_parts* p = lv->parts;
     p->pick_frame = rt->frame + 1;
+    p->native = native;
     /* Each part's own level. */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], b = p->first[q + 1];
@@ -219,6 +277,16 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
             }
         }
     }
+    /* A shell none of whose parts is far enough for its patch draws its
+     * whole native level: nothing to read or upload. */
+    int any = !p->shell;
+    for (uint32_t q = 0; !any && q < p->part_count; ++q)
+        any = p->want[q] != 0;
+    if (!any) {
+        memset(p->drawn, 0, p->part_count);
+        p->bytes_wanted = 0;
+        return MESO_OK;
+    }
     /* What each part can draw now: the wanted level, else the finest
      * coarser one that can be had, else the nearest finer one uploaded.
      * With stream requests, the finest of them that can still be had is
@@ -227,14 +295,14 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
     meso_result missing = MESO_OK; /* MESO_ERR_PENDING: some part waits for its request; MESO_ERR_NOT_FOUND: cannot be had */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], n = p->first[q + 1] - a, w = p->want[q];
-        p->bytes_wanted += p->lv[a + w].bytes;
+        p->bytes_wanted += prisms(p, a + w) ? 0 : p->lv[a + w].bytes;
         int32_t got = -1;
         int requested = 0;
         for (uint32_t l = w; got < 0 && l < n; ++l) {
             const uint32_t i = a + l;
-            if (!p->slot[i].id && !p->failed[i]) {
-                if (rt->stream_requests) {
-                    if (!requested && mesoi_stream_request_part(rt, lv, i) != MESO_OK)
+            if (!have(p, i) && !p->failed[i]) {
+                if (rt->stream_requests) { /* every part's prisms: one request, for the list */
+                    if (!requested && mesoi_stream_request_part(rt, lv, prisms(p, i) ? p->first[0] : i) != MESO_OK)
                         return MESO_ERR_OUT_OF_MEMORY;
                     requested = 1;
                 } else if (mesoi_make_room(rt, p->lv[i].bytes)) {
@@ -243,11 +311,11 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
                         return r;
                 }
             }
-            if (p->slot[i].id)
+            if (have(p, i))
                 got = (int32_t)l;
         }
         for (uint32_t l = w; got < 0 && l-- > 0;)
-            if (p->slot[a + l].id)
+            if (have(p, a + l))
                 got = (int32_t)l;
         if (got < 0) {
             missing = missing != MESO_OK ? missing : MESO_ERR_PENDING;
@@ -257,10 +325,15 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
             }
             continue;
         }
-        p->chosen[q] = p->slot[a + (uint32_t)got];
+        p->chosen[q] = prisms(p, a + (uint32_t)got) ? native : p->slot[a + (uint32_t)got];
         p->drawn[q] = (uint8_t)(got > 255 ? 255 : got);
         p->used[a + (uint32_t)got] = rt->frame + 1;
     }
+    for (uint32_t q = 0; p->shell && q < p->part_count; ++q)
+        if (p->want[q] == 0) { /* the list, once */
+            p->bytes_wanted += p->lv[p->first[0]].bytes;
+            break;
+        }
     if (missing != MESO_OK)
         return missing; /* a whole level instead */
     *out = p->parent;
@@ -270,7 +343,19 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
 meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_draw_desc* d,
                              const meso_rt_instance* inst, uint32_t count)
 {
+    /* The stand-in patches (meshes) first, then a shell's prisms in one
+     * draw: its stats are the draw's. */
+    mesoi_parts* w = (mesoi_parts*)p; /* the subset is scratch of the parts */
+    w->subset_count = 0;
+    uint64_t key = 1469598103934665603ull; /* FNV-1a over the parts drawn as prisms */
     for (uint32_t q = 0; q < p->part_count; ++q) {
+        if (p->shell && p->drawn[q] == 0) {
+            const meso_part_level* L = &p->lv[p->first[q]];
+            memcpy(w->subset + w->subset_count, p->tri + L->first_triangle, sizeof(uint32_t) * L->triangle_count);
+            w->subset_count += L->triangle_count;
+            key = (key ^ q) * 1099511628211ull;
+            continue;
+        }
         mesoi_object* o = mesoi_lookup(rt, p->chosen[q]);
         if (!o)
             continue; /* evicted since the pick: a later frame picks it again */
@@ -278,12 +363,31 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
         if (r != MESO_OK)
             return r;
     }
-    return MESO_OK;
+    mesoi_object* n = w->subset_count ? mesoi_lookup(rt, p->native) : NULL;
+    if (!n || !n->shell)
+        return MESO_OK;
+    n->shell->subset = w->subset;
+    n->shell->subset_count = w->subset_count;
+    n->shell->subset_key = key;
+    const meso_result r = mesoi_shell_draw(rt, n, d, inst, count);
+    n->shell->subset = NULL;
+    return r;
+}
+
+int mesoi_parts_coarse(const mesoi_parts* p)
+{
+    int coarse = 0;
+    for (uint32_t q = 0; q < p->part_count; ++q) {
+        if (p->drawn[q] != p->want[q])
+            return 0; /* still arriving (a shell's prisms: their list) */
+        coarse |= p->drawn[q] != 0;
+    }
+    return coarse;
 }
 
 uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read)
 {
-    uint64_t b = 0;
+    uint64_t b = p->tri ? p->lv[p->first[0]].bytes : 0; /* a shell's prisms: the list, once */
     for (uint32_t i = 0; i < p->level_count; ++i)
         b += p->slot[i].id ? p->lv[i].bytes : 0;
     if (wanted)

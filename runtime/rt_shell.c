@@ -734,9 +734,10 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
 {
     float axis[3];
     const int32_t cell = axis_cell(view_axis, axis);
-    if (!s->order_stale && cell == s->sort_cell)
+    const uint64_t key = s->subset ? s->subset_key : 0;
+    if (!s->order_stale && cell == s->sort_cell && key == s->sorted_key)
         return MESO_OK;
-    const uint32_t n = s->triangle_count, nv = s->vertex_count;
+    const uint32_t n = s->subset ? s->subset_count : s->triangle_count, nv = s->vertex_count;
     prism_key* keys = mesoi_rt_alloc(rt, sizeof(prism_key) * n);
     uint32_t* sorted = mesoi_rt_alloc(rt, sizeof(uint32_t) * 3 * (size_t)n);
     if (!keys || !sorted) {
@@ -744,7 +745,8 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
         mesoi_rt_free(rt, sorted);
         return MESO_ERR_OUT_OF_MEMORY;
     }
-    for (uint32_t t = 0; t < n; ++t) {
+    for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t t = s->subset ? s->subset[i] : i;
         double k = 0.0;
         for (int c = 0; c < 3; ++c) { /* bottom + top of each corner (fill_vertex_texels) */
             const size_t v = s->indices[3 * (size_t)t + (size_t)c];
@@ -753,8 +755,8 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
             for (int j = 0; j < 3; ++j)
                 k += axis[j] * (2.0 * p[j] + d0[j] + (d1 ? d1[j] : 0.0));
         }
-        keys[t].key = (float)k;
-        keys[t].tri = t;
+        keys[i].key = (float)k;
+        keys[i].tri = t;
     }
     qsort(keys, n, sizeof(prism_key), by_key);
     for (uint32_t t = 0; t < n; ++t)
@@ -770,6 +772,7 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
     mesoi_rt_free(rt, keys);
     mesoi_rt_free(rt, sorted);
     s->sort_cell = cell;
+    s->sorted_key = key;
     s->order_stale = 0;
     return MESO_OK;
 }
@@ -801,6 +804,8 @@ static void hit_image_begin(meso_rt* rt, const mesoi_draw* ds, GLuint height_tex
 meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count)
 {
+    if (o->parts) /* a levelled shell's parts (rt_parts.c): prisms near, stand-in patches far */
+        return mesoi_parts_draw(rt, o->parts, d, inst, count);
     const mesoi_shell* s = o->shell;
     const meso_rt_shell_draw* k = &d->shell;
     if (d->stats)
@@ -850,20 +855,25 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
                                                s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, s->color_tex, inst_tex};
     mesoi_draw_begin(rt, &ds, prog, 1, inst ? SHELL_UNIT_COUNT + 1 : SHELL_UNIT_COUNT, unit_target, bind);
     const GLint* u = prog->loc;
-    float axis[3];
+    float axis[3] = {0.0f, 0.0f, 1.0f};
     const int reject = rt->hull_reject_ok && !k->no_hull_reject && ds.viewport[2] > 0 && ds.viewport[3] > 0 &&
                        nearer_wins(&ds) && depth_axis(&ds, inst ? inst[0].model : ds.model, axis);
     mesoi_image_unit prev_image;
-    if (reject) {
-        if (ds.restore)
-            mesoi_image_save(rt, &prev_image);
-        if (k->technique == MESO_SHELL_SMOOTH || k->technique == MESO_SHELL_CURVED) {
-            r = order_prisms(rt, o->shell, &ds, axis);
-            gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_INDEX);
-            gl->BindTexture(GL_TEXTURE_BUFFER, s->order_tex);
-        }
-        hit_image_begin(rt, &ds, bind[SHELL_UNIT_HEIGHT]);
+    if (reject && ds.restore)
+        mesoi_image_save(rt, &prev_image);
+    /* A subset of the prisms (a parts draw) is drawn from order_buf too,
+     * sorted as the whole set is (the parts pick only asks where there is
+     * an order_buf). */
+    if ((reject && (k->technique == MESO_SHELL_SMOOTH || k->technique == MESO_SHELL_CURVED)) ||
+        (s->subset && s->order_tex)) {
+        if (!reject)
+            depth_axis(&ds, inst ? inst[0].model : ds.model, axis);
+        r = order_prisms(rt, o->shell, &ds, axis);
+        gl->ActiveTexture(GL_TEXTURE0 + SHELL_UNIT_INDEX);
+        gl->BindTexture(GL_TEXTURE_BUFFER, s->order_tex);
     }
+    if (reject)
+        hit_image_begin(rt, &ds, bind[SHELL_UNIT_HEIGHT]);
     gl->Uniform1i(u[MESOI_U_hull_reject], reject);
     gl->Uniform1f(u[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(u[MESOI_U_tex_kind], s->tex_kind);
@@ -880,9 +890,10 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
      * quarter texel: finer than the texture's own detail. */
     gl->Uniform1f(u[MESOI_U_min_step], max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
     const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
+    const GLsizei prisms = (GLsizei)(s->subset && s->order_tex ? s->subset_count : s->triangle_count);
     if (!inst) {
         if (r == MESO_OK)
-            gl->DrawArrays(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count);
+            gl->DrawArrays(GL_TRIANGLES, 0, per * prisms);
         const meso_result e = mesoi_draw_end(rt, &ds, d->stats, "shell");
         if (reject && ds.restore)
             mesoi_image_restore(rt, &prev_image);
@@ -902,7 +913,7 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
         }
         gl->Uniform1i(u[MESOI_U_instance_base], (GLint)groups[g].first);
         if (r == MESO_OK)
-            gl->DrawArraysInstanced(GL_TRIANGLES, 0, per * (GLsizei)s->triangle_count, (GLsizei)groups[g].count);
+            gl->DrawArraysInstanced(GL_TRIANGLES, 0, per * prisms, (GLsizei)groups[g].count);
     }
     mesoi_rt_free(rt, order);
     mesoi_rt_free(rt, groups);

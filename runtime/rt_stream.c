@@ -44,7 +44,7 @@ struct meso_rt_request {
     meso_allocator alloc;
     uint32_t object, kind;
     uint16_t lod, form;
-    int32_t part_chunk; /* a part level's PMSH */
+    int32_t part_chunk, part_colours; /* a part level's PMSH and PVCL (a shell's prisms: its PTRI) */
     /* Run's results. */
     uint32_t count;                 /* chunks decoded */
     int32_t* chunk;                 /* [count] TOC indices */
@@ -183,6 +183,7 @@ uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
         q->lod = rec->lod;
         q->kind = q->form == MESO_LEVEL_MESH ? (uint32_t)MESO_OBJECT_MESH : lv->rec.kind;
         q->part_chunk = q->part ? lv->parts->lv[q->level].chunk : -1;
+        q->part_colours = q->part ? lv->parts->lv[q->level].colours : -1;
         q->result = MESO_OK;
         q->state = REQ_TAKEN;
         out[n++] = q;
@@ -196,9 +197,9 @@ uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
  * come from the cells check) — the chunks meso_file_levels counts. */
 static int level_reads(const meso_rt_request* q, const meso_chunk_info* c, uint32_t i)
 {
-    if (q->part) /* a part level is its one PMSH (rt_parts.c upload) */
-        return (int32_t)i == q->part_chunk;
-    if (c->object != q->object || c->type == MESO_CHUNK_PMSH || c->type == MESO_CHUNK_PRTS)
+    if (q->part) /* a part level is its PMSH and PVCL, a shell's prisms its PTRI (rt_parts.c upload) */
+        return (int32_t)i == q->part_chunk || (int32_t)i == q->part_colours;
+    if (c->object != q->object || mesoi_part_chunk(c->type))
         return 0; /* a whole level draws no part's chunks (§7.11) */
     if (c->type == MESO_CHUNK_VCOL) /* a mesh's or stand-in's vertex colours, at its MESH's own lod */
         return q->kind == MESO_OBJECT_MESH && meso_file_find_vertex_colours(q->file, q->object, q->lod) == (int32_t)i;

@@ -31,6 +31,7 @@
 #include "egl_context.h"
 #include "gl_api.h"
 #include "gl_fbo.h"
+#include "near_end_view.h"
 #include "meso_bake.h"
 #include "meso_rt.h"
 
@@ -50,22 +51,9 @@ static uint8_t* bake_spot(int parts, size_t* size)
     return bake_bytes(out, size);
 }
 
-/* Close to one end of the long (z) axis, looking along it at the box's
- * centre: that end is near, the other far. */
 static void view(const meso_object_record* rec, meso_rt_draw_desc* d, double eye[3])
 {
-    double c[3], diag = 0;
-    for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * ((double)rec->bbox_min[k] + rec->bbox_max[k]);
-        diag += pow((double)rec->bbox_max[k] - rec->bbox_min[k], 2);
-    }
-    diag = sqrt(diag);
-    const double up[3] = {0, 1, 0};
-    eye[0] = c[0] + 0.05 * diag;
-    eye[1] = c[1] + 0.15 * diag;
-    eye[2] = rec->bbox_max[2] + 0.12 * diag;
-    meso_camera_look_at(d->view, eye, c, up);
-    meso_camera_perspective(d->proj, 50.0 * M_PI / 180.0, (double)W / H, 0.01, 100.0);
+    near_end_view(rec, 50.0, (double)W / H, d, eye);
 }
 
 static float* draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
@@ -76,17 +64,6 @@ static float* draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
     assert(depth);
     test_fbo_read(&fb, NULL, depth);
     return depth;
-}
-
-/* Distance from `eye` to the nearest point of the box lo..hi. */
-static double box_distance(const double eye[3], const float lo[3], const float hi[3])
-{
-    double s = 0;
-    for (int k = 0; k < 3; ++k) {
-        const double q = eye[k] < lo[k] ? lo[k] - eye[k] : eye[k] > hi[k] ? eye[k] - hi[k] : 0.0;
-        s += q * q;
-    }
-    return sqrt(s);
 }
 
 static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_record* rec)

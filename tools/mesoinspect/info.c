@@ -373,7 +373,11 @@ static void print_text(info_state* s, const meso_object_record* objs, uint32_t n
             uint32_t e = k;
             while (e < nl && pl[e].rec.object == pl[k].rec.object)
                 ++e;
-            printf("  part %u: %u levels; error", pl[k].rec.object, e - k);
+            printf("  part %u: %u levels", pl[k].rec.object, e - k);
+            if (pl[k].triangle_count) /* a shell's: lod 0 its prisms, lods 1.. stand-in patches */
+                printf(" (lod 0: %u prisms, list entries %u..%u; then stand-in patches)", pl[k].triangle_count,
+                       pl[k].first_triangle, pl[k].first_triangle + pl[k].triangle_count - 1);
+            printf("; error");
             for (uint32_t j = k; j < e; ++j)
                 printf(" %.4g", (double)pl[j].rec.error);
             printf("; bytes");
@@ -529,6 +533,13 @@ static cJSON* build_json(info_state* s, const meso_object_record* objs, uint32_t
                 cJSON_AddNumberToObject(e, "bytes", (double)pl[k].bytes);
                 cJSON_AddNumberToObject(e, "prefix_bytes", (double)pl[k].prefix_bytes);
                 cJSON_AddNumberToObject(e, "chunk", pl[k].chunk);
+                cJSON_AddStringToObject(e, "form", pl[k].rec.form == MESO_LEVEL_MESH ? "mesh" : "native");
+                if (pl[k].triangle_count) { /* a shell part's prisms: PTRI entries */
+                    cJSON_AddNumberToObject(e, "first_triangle", pl[k].first_triangle);
+                    cJSON_AddNumberToObject(e, "triangle_count", pl[k].triangle_count);
+                }
+                if (pl[k].colours >= 0)
+                    cJSON_AddNumberToObject(e, "colours_chunk", pl[k].colours);
                 cJSON_AddItemToArray(jl, e);
             }
             free(pl);

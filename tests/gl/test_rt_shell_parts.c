@@ -1,0 +1,310 @@
+/* A shell drawn part by part (FORMAT.md §7.11, bake/shell_parts.c,
+ * runtime/rt_parts.c; issue 14: "each part, where a kind has parts, e.g.
+ * shell patches, so a long object near the camera is fine near and coarse
+ * far"), on llvmpipe. spot_uv.obj with a bricks:64 height field, baked by
+ * meso_bake_shell (its default parts), seen from close to its head:
+ *  - the file validates in full, its parts' prisms list every base
+ *    triangle once;
+ *  - at TAU px some parts draw their prisms and some their stand-in
+ *    patch, the near end as prisms; every part's level keeps its error
+ *    within the pixel error at that level's nearest bound point;
+ *    neighbours within one level;
+ *  - the surface drawn is the finest draw's within the largest error
+ *    drawn: every pixel farther than that error (in pixels, rounded up)
+ *    from the finest draw's silhouette is covered (no hole), and its view
+ *    distance is within 1.5 times that error (in object units) of the
+ *    finest draw's at some pixel that near (an edge moved by the error);
+ *    where the parts draw prisms, the depth is the whole shell's exactly
+ *    (counted: most of the image);
+ *  - streamed (stream requests, one a frame), it settles on the synchronous
+ *    context's part levels and depth image, bit for bit, having read no
+ *    more than it holds;
+ *  - a damaged prism list (PTRI: an entry listed twice, CRCs fixed) is
+ *    refused by the full check (6501), and a triangle-count mismatch of a
+ *    part's colours (PVCL) too.
+ * With an output directory (argv[1]) it writes the two images there. */
+#include "test_util.h"
+
+#include <GL/glcorearb.h>
+#include <math.h>
+#include <string.h>
+
+#include "bake_bytes.h"
+#include "camera.h"
+#include "egl_context.h"
+#include "gl_api.h"
+#include "gl_fbo.h"
+#include "near_end_view.h"
+#include "meso_bake.h"
+#include "meso_layout.h"
+#include "meso_rt.h"
+#include "png_io.h"
+#include "sample.h"
+
+enum { W = 200, H = 150 };
+#define TAU 4.0f
+#define FOV 50.0
+
+static test_fbo fb;
+
+static void view(const meso_object_record* rec, meso_rt_draw_desc* d, double eye[3])
+{
+    near_end_view(rec, FOV, (double)W / H, d, eye);
+    d->light_dir[0] = 0.3f, d->light_dir[1] = 0.8f, d->light_dir[2] = 0.5f;
+}
+
+static void draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d, uint8_t* rgba, float* depth)
+{
+    test_fbo_clear(&fb, 0, 0, 0);
+    assert(meso_rt_draw(rt, obj, d) == MESO_OK);
+    test_fbo_read(&fb, rgba, depth);
+}
+
+/* View distance of a depth-buffer value (the perspective above). */
+static double view_distance(float z)
+{
+    const double n = 0.01, f = 100.0, ndc = 2.0 * z - 1.0;
+    return 2.0 * n * f / (f + n - ndc * (f - n));
+}
+
+/* The stream: one request a frame (taken, run, given back, uploaded)
+ * until none is left; then the draw's depth image and part levels. */
+static void streamed_settles(meso_file* f, const meso_rt_draw_desc* d, const float* want, const uint8_t* want_lev,
+                             uint32_t np)
+{
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) ==
+           MESO_OK);
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    float* got = malloc(sizeof(float) * W * H);
+    uint8_t* lev = malloc(np);
+    assert(got && lev);
+    int frames = 0;
+    for (;; ++frames) {
+        assert(frames < 60);
+        draw(rt, obj, d, NULL, got);
+        meso_rt_frame_end(rt);
+        meso_rt_request* reqs[1];
+        const uint32_t taken = meso_rt_stream_take(rt, reqs, 1);
+        for (uint32_t i = 0; i < taken; ++i)
+            assert(meso_rt_stream_run(reqs[i]) == MESO_OK);
+        meso_rt_stream_give(rt, reqs, taken);
+        meso_rt_stream_upload(rt, 0);
+        meso_rt_stream_state ss;
+        meso_rt_stream_state_get(rt, &ss);
+        if (taken == 0 && ss.waiting == 0 && ss.decoded == 0)
+            break;
+    }
+    draw(rt, obj, d, NULL, got);
+    uint32_t n = 0;
+    assert(meso_rt_parts_state_get(rt, obj, lev, np, &n) == MESO_OK && n == np);
+    meso_rt_levels_state st;
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+    assert(memcmp(lev, want_lev, np) == 0);
+    assert(memcmp(got, want, sizeof(float) * W * H) == 0);
+    assert(st.bytes_read == st.bytes_resident);
+    printf("streamed, one request a frame: %d frames, then the synchronous part levels and depth image bit for bit "
+           "(%llu bytes read, all held)\n",
+           frames, (unsigned long long)st.bytes_read);
+    meso_rt_release_object(rt, obj);
+    meso_rt_destroy(rt);
+    free(got);
+    free(lev);
+}
+
+/* `file` with the first chunk of `type` changed by `edit` (its payload p,
+ * n bytes, and its TOC entry), CRCs fixed: the full check's issue. */
+static uint32_t damaged_issue(const uint8_t* file, size_t size, uint32_t type,
+                              void (*edit)(uint8_t* p, uint64_t n, uint8_t* entry))
+{
+    uint8_t* copy = malloc(size);
+    assert(copy);
+    memcpy(copy, file, size);
+    int done = 0;
+    for (uint32_t i = 0; i < get32(copy + MESO_HDR_OFF_CHUNK_COUNT); i++) {
+        uint8_t* ent = copy + 64 + (size_t)i * 64;
+        if (get32(ent + MESO_TOC_OFF_TYPE) == type && !done) {
+            edit(copy + get64(ent + MESO_TOC_OFF_OFFSET), get64(ent + MESO_TOC_OFF_STORED_SIZE), ent);
+            fix_payload_crc(copy, i);
+            done = 1;
+        }
+    }
+    assert(done);
+    fix_crcs(copy);
+    meso_error e;
+    const meso_result r = open_and_validate(copy, size, &e);
+    free(copy);
+    return r == MESO_OK ? 0u : e.code;
+}
+
+static void twice(uint8_t* p, uint64_t n, uint8_t* entry)
+{
+    (void)entry;
+    assert(n >= 8);
+    memcpy(p + 4, p, 4); /* entry 1 = entry 0 */
+}
+
+static void other_components(uint8_t* p, uint64_t n, uint8_t* entry)
+{
+    (void)p;
+    (void)n;
+    const uint32_t c = entry[MESO_TOC_OFF_COMPONENTS];
+    put16(entry + MESO_TOC_OFF_COMPONENTS, (uint16_t)(c == 4 ? 1 : 4)); /* as many bytes, other vertices */
+}
+
+int main(int argc, char** argv)
+{
+    setvbuf(stdout, NULL, _IONBF, 0);
+    char why[256];
+    meso_egl* egl = test_egl_create(why, sizeof(why));
+    if (!egl) {
+        fprintf(stderr, "test_rt_shell_parts: no EGL context: %s\n", why);
+        return 1;
+    }
+    assert(test_fbo_create(&fb, W, H));
+    meso_rt* rt = NULL;
+    assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
+
+    meso_bake_shell_options o = meso_bake_shell_defaults();
+    o.input = test_data("spot_uv.obj");
+    o.texture = "bricks:64";
+    o.thickness_rel = 0.02;
+    meso_bake_output* out = NULL;
+    meso_error err;
+    assert(meso_bake_shell(&o, &out, NULL, &err) == MESO_OK);
+    size_t size = 0;
+    uint8_t* data = bake_bytes(out, &size);
+    meso_file* f = NULL;
+    assert(meso_file_open_memory(data, size, NULL, &f, &err) == MESO_OK);
+    assert(meso_file_validate(f, MESO_CHECK_FULL, NULL, NULL) == MESO_OK);
+    meso_object_record rec;
+    uint32_t n = 0;
+    assert(meso_file_objects(f, &rec, 1, &n, NULL) == MESO_OK && n == 1);
+    uint32_t nl = 0, np = 0, ne = 0, nt = 0;
+    assert(meso_file_parts(f, 1, NULL, 0, &nl, &np, NULL, 0, &ne, &err) == MESO_OK && np >= 2);
+    meso_part_level* pl = malloc(sizeof(meso_part_level) * nl);
+    uint32_t* edges = malloc(sizeof(uint32_t) * 2 * ne);
+    assert(pl && edges && meso_file_parts(f, 1, pl, nl, &nl, &np, edges, ne, &ne, &err) == MESO_OK);
+    assert(meso_file_part_triangles(f, 1, NULL, 0, &nt, &err) == MESO_OK && nt > 0);
+    uint32_t* first = calloc(np + 1, sizeof(uint32_t));
+    assert(first);
+    for (uint32_t i = 0; i < nl; ++i)
+        first[pl[i].rec.object]++;
+    for (uint32_t q = 1; q <= np; ++q)
+        first[q] += first[q - 1];
+    printf("spot_uv shell: %u parts, %u part levels, %u prisms listed\n", np, nl, nt);
+
+    meso_rt_object obj;
+    assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
+    meso_rt_draw_desc d = {0};
+    double eye[3];
+    view(&rec, &d, eye);
+    uint8_t* fine_rgba = malloc((size_t)4 * W * H);
+    uint8_t* part_rgba = malloc((size_t)4 * W * H);
+    float* fine = malloc(sizeof(float) * W * H);
+    float* part = malloc(sizeof(float) * W * H);
+    uint8_t* lev = malloc(np);
+    assert(fine_rgba && part_rgba && fine && part && lev);
+
+    d.pixel_error = -1.0f; /* the finest: level 0, no parts */
+    draw(rt, obj, &d, fine_rgba, fine);
+    meso_rt_levels_state st;
+    assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK && st.last_drawn == 0);
+
+    d.pixel_error = TAU;
+    draw(rt, obj, &d, part_rgba, part);
+    assert(meso_rt_parts_state_get(rt, obj, lev, np, &n) == MESO_OK && n == np);
+    const double focal = 0.5 * H / tan(0.5 * FOV * M_PI / 180.0);
+    uint32_t prisms = 0, coarse = 0;
+    double worst_px = 0, worst_error = 0;
+    for (uint32_t q = 0; q < np; ++q) {
+        const meso_part_level* L = &pl[first[q] + lev[q]];
+        assert(L->rec.object == q + 1 && L->rec.lod == lev[q]);
+        prisms += lev[q] == 0;
+        coarse += lev[q] > 0;
+        const double dist = box_distance(eye, L->rec.bbox_min, L->rec.bbox_max);
+        const double px = L->rec.error * focal / dist;
+        worst_px = fmax(worst_px, px);
+        worst_error = fmax(worst_error, L->rec.error);
+        printf("  part %u: lod %u (%s), error %.4g, %.2f px at its nearest bound point %.3g away\n", q + 1, lev[q],
+               lev[q] ? "stand-in patch" : "prisms", (double)L->rec.error, px, dist);
+    }
+    for (uint32_t e = 0; e < ne; ++e)
+        assert(abs((int)lev[edges[2 * e] - 1] - (int)lev[edges[2 * e + 1] - 1]) <= 1);
+    assert(prisms >= 1 && coarse >= 1);
+    assert(worst_px <= TAU);
+
+    if (argc > 1) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/shell_parts_fine.png", argv[1]);
+        assert(meso_png_write_rgba8(path, fine_rgba, W, H, 1, why, sizeof why) == 0);
+        snprintf(path, sizeof path, "%s/shell_parts_tau.png", argv[1]);
+        assert(meso_png_write_rgba8(path, part_rgba, W, H, 1, why, sizeof why) == 0);
+    }
+
+    /* Interior: farther than the largest projected error (rounded up) from
+     * the finest draw's silhouette, where a stand-in patch, up to its
+     * error inside the shell's surface, may leave the silhouette early. */
+    const int r = (int)ceil(worst_px);
+    long interior = 0, holes = 0, same = 0, within = 0, beyond = 0;
+    for (int y = r; y < H - r; ++y)
+        for (int x = r; x < W - r; ++x) {
+            int all = 1;
+            for (int j = -r; j <= r; ++j)
+                for (int i = -r; i <= r; ++i)
+                    all &= fine[(y + j) * W + x + i] < 1.0f;
+            if (!all)
+                continue;
+            ++interior;
+            const size_t p = (size_t)y * W + (size_t)x;
+            if (part[p] >= 1.0f) {
+                ++holes;
+                continue;
+            }
+            /* The surface drawn is within the error of the finest's, in
+             * depth and, where it moves an edge in front of another
+             * surface, by up to r pixels: the nearest match in depth
+             * among the finest's pixels within r. */
+            double dz = INFINITY;
+            for (int j = -r; j <= r; ++j)
+                for (int i = -r; i <= r; ++i)
+                    dz = fmin(dz, fabs(view_distance(part[p]) - view_distance(fine[(y + j) * W + x + i])));
+            same += part[p] == fine[p];
+            within += dz <= worst_error * 1.5; /* along a ray, a surface within e can be further: grazing */
+            beyond += dz > worst_error * 1.5;
+        }
+    printf("at %g px: %u parts as prisms, %u as stand-in patches; largest projected error %.2f px\n"
+           "  %ld interior pixels: %ld the finest's depth exactly, %ld within 1.5x the largest error drawn (%.4g) of "
+           "the finest's within %d px, %ld beyond, %ld holes\n",
+           (double)TAU, prisms, coarse, worst_px, interior, same, within, (double)worst_error, r, beyond, holes);
+    assert(interior > 5000 && holes == 0);
+    assert(same > interior / 10);
+    assert(beyond == 0);
+
+    streamed_settles(f, &d, part, lev, np);
+
+    uint32_t issue = damaged_issue(data, size, MESO_CHUNK_PTRI, twice);
+    printf("a prism list with an entry twice: issue %u\n", issue);
+    assert(issue == MESO_ISSUE_PARTS);
+    issue = damaged_issue(data, size, MESO_CHUNK_PVCL, other_components);
+    printf("a part's colours for another vertex count: issue %u\n", issue);
+    assert(issue == MESO_ISSUE_PARTS);
+
+    meso_rt_release_object(rt, obj);
+    meso_file_close(f);
+    free(data);
+    free(pl);
+    free(edges);
+    free(first);
+    free(fine_rgba);
+    free(part_rgba);
+    free(fine);
+    free(part);
+    free(lev);
+    meso_rt_destroy(rt);
+    test_fbo_destroy(&fb);
+    meso_egl_destroy(egl);
+    puts("ok   test_rt_shell_parts");
+    return 0;
+}
