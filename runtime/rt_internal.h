@@ -143,9 +143,11 @@ typedef struct mesoi_shell {
     int order_stale;
     /* Set by a parts draw (rt_parts.c) for one draw: only these prisms
      * (base triangles), sorted into order_buf as the whole set is;
-     * sorted_key: the subset order_buf holds (0 the whole set). */
+     * sorted_key: the subset order_buf holds (0 the whole set), of
+     * sorted_count prisms (a subset's entries that are not triangles of
+     * this shell, from a file not checked in full, are left out). */
     const uint32_t* subset;
-    uint32_t subset_count;
+    uint32_t subset_count, sorted_count;
     uint64_t subset_key, sorted_key;
 } mesoi_shell;
 

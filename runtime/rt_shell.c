@@ -745,8 +745,11 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
         mesoi_rt_free(rt, sorted);
         return MESO_ERR_OUT_OF_MEMORY;
     }
+    uint32_t m = 0; /* prisms kept */
     for (uint32_t i = 0; i < n; ++i) {
         const uint32_t t = s->subset ? s->subset[i] : i;
+        if (t >= s->triangle_count || m == s->triangle_count) /* order_buf holds each prism once */
+            continue;
         double k = 0.0;
         for (int c = 0; c < 3; ++c) { /* bottom + top of each corner (fill_vertex_texels) */
             const size_t v = s->indices[3 * (size_t)t + (size_t)c];
@@ -755,24 +758,25 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
             for (int j = 0; j < 3; ++j)
                 k += axis[j] * (2.0 * p[j] + d0[j] + (d1 ? d1[j] : 0.0));
         }
-        keys[i].key = (float)k;
-        keys[i].tri = t;
+        keys[m].key = (float)k;
+        keys[m++].tri = t;
     }
-    qsort(keys, n, sizeof(prism_key), by_key);
-    for (uint32_t t = 0; t < n; ++t)
+    qsort(keys, m, sizeof(prism_key), by_key);
+    for (uint32_t t = 0; t < m; ++t)
         memcpy(sorted + 3 * (size_t)t, s->indices + 3 * (size_t)keys[t].tri, 3 * sizeof(uint32_t));
     mesoi_gl* gl = &rt->gl;
     GLint prev = 0;
     if (ds->restore)
         gl->GetIntegerv(GL_TEXTURE_BUFFER_BINDING, &prev);
     gl->BindBuffer(GL_TEXTURE_BUFFER, s->order_buf);
-    gl->BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)(sizeof(uint32_t) * 3 * (size_t)n), sorted);
+    gl->BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)(sizeof(uint32_t) * 3 * (size_t)m), sorted);
     if (ds->restore)
         gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)prev);
     mesoi_rt_free(rt, keys);
     mesoi_rt_free(rt, sorted);
     s->sort_cell = cell;
     s->sorted_key = key;
+    s->sorted_count = m;
     s->order_stale = 0;
     return MESO_OK;
 }
@@ -890,7 +894,7 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
      * quarter texel: finer than the texture's own detail. */
     gl->Uniform1f(u[MESOI_U_min_step], max_tex > 1.0f ? 0.25f / max_tex : 1.0f / 1024);
     const GLsizei per = k->technique == MESO_SHELL_TETRA ? 36 : 24;
-    const GLsizei prisms = (GLsizei)(s->subset && s->order_tex ? s->subset_count : s->triangle_count);
+    const GLsizei prisms = (GLsizei)(s->subset && s->order_tex ? s->sorted_count : s->triangle_count);
     if (!inst) {
         if (r == MESO_OK)
             gl->DrawArrays(GL_TRIANGLES, 0, per * prisms);

@@ -21,7 +21,8 @@
  *    more than it holds;
  *  - a damaged prism list (PTRI: an entry listed twice, CRCs fixed) is
  *    refused by the full check (6501), and a triangle-count mismatch of a
- *    part's colours (PVCL) too.
+ *    part's colours (PVCL) too; not checked in full, an entry naming no
+ *    triangle is left out of the draw (no crash).
  * With an output directory (argv[1]) it writes the two images there. */
 #include "test_util.h"
 
@@ -114,9 +115,8 @@ static void streamed_settles(meso_file* f, const meso_rt_draw_desc* d, const flo
 }
 
 /* `file` with the first chunk of `type` changed by `edit` (its payload p,
- * n bytes, and its TOC entry), CRCs fixed: the full check's issue. */
-static uint32_t damaged_issue(const uint8_t* file, size_t size, uint32_t type,
-                              void (*edit)(uint8_t* p, uint64_t n, uint8_t* entry))
+ * n bytes, and its TOC entry), CRCs fixed. */
+static uint8_t* damaged(const uint8_t* file, size_t size, uint32_t type, void (*edit)(uint8_t* p, uint64_t n, uint8_t* entry))
 {
     uint8_t* copy = malloc(size);
     assert(copy);
@@ -132,6 +132,14 @@ static uint32_t damaged_issue(const uint8_t* file, size_t size, uint32_t type,
     }
     assert(done);
     fix_crcs(copy);
+    return copy;
+}
+
+/* Its full check's issue. */
+static uint32_t damaged_issue(const uint8_t* file, size_t size, uint32_t type,
+                              void (*edit)(uint8_t* p, uint64_t n, uint8_t* entry))
+{
+    uint8_t* copy = damaged(file, size, type, edit);
     meso_error e;
     const meso_result r = open_and_validate(copy, size, &e);
     free(copy);
@@ -143,6 +151,13 @@ static void twice(uint8_t* p, uint64_t n, uint8_t* entry)
     (void)entry;
     assert(n >= 8);
     memcpy(p + 4, p, 4); /* entry 1 = entry 0 */
+}
+
+static void far_off(uint8_t* p, uint64_t n, uint8_t* entry)
+{
+    (void)entry;
+    assert(n >= 4);
+    put32(p + n - 4, 0xFFFFFFF0u); /* the last part's last prism (a near part): not a triangle of any shell */
 }
 
 static void other_components(uint8_t* p, uint64_t n, uint8_t* entry)
@@ -290,6 +305,29 @@ int main(int argc, char** argv)
     issue = damaged_issue(data, size, MESO_CHUNK_PVCL, other_components);
     printf("a part's colours for another vertex count: issue %u\n", issue);
     assert(issue == MESO_ISSUE_PARTS);
+
+    /* Not checked in full, a list naming a triangle the shell has not is
+     * drawn without it: no crash, and every other pixel as before. */
+    {
+        uint8_t* bad = damaged(data, size, MESO_CHUNK_PTRI, far_off);
+        meso_file* bf = NULL;
+        assert(meso_file_open_memory(bad, size, NULL, &bf, NULL) == MESO_OK);
+        meso_rt_object bo;
+        assert(meso_rt_load_object_levels(rt, bf, 1, &bo) == MESO_OK);
+        float* bd = malloc(sizeof(float) * W * H);
+        assert(bd);
+        draw(rt, bo, &d, NULL, bd);
+        long differ = 0;
+        for (size_t p = 0; p < (size_t)W * H; ++p)
+            differ += bd[p] != part[p];
+        printf("a prism list naming triangle 0xFFFFFFF0, not checked in full: drawn without it, %ld pixels differ\n",
+               differ);
+        assert(differ * 20 < (long)W * H);
+        meso_rt_release_object(rt, bo);
+        meso_file_close(bf);
+        free(bd);
+        free(bad);
+    }
 
     meso_rt_release_object(rt, obj);
     meso_file_close(f);
