@@ -25,10 +25,10 @@
  *  - Part lod 1 is the stand-in's patch (its error the stand-in's), lods
  *    2.. its simplifications (the stand-in's error plus their own distance
  *    to the patch, the triangle inequality, as the whole stand-in chain's).
- *    Each has a PMSH and, when the stand-ins have vertex colours, a PVCL:
- *    what the stand-in shows at each vertex's nearest point (as the whole
- *    chain's colours), so a part drawn as a mesh shades as the whole
- *    stand-in would.
+ *    Each has a PMSH and, when the stand-ins have vertex colours, a PVCL,
+ *    so a part drawn as a mesh shades as the whole stand-in would: lod 1
+ *    the stand-in's own colours, lods 2.. what the stand-in shows near
+ *    each vertex, sampled as the whole chain's are (patch_colours).
  *  - Where a part drawn as prisms meets one drawn as its stand-in patch,
  *    the two surfaces meet along the patch border within the stand-in's
  *    error (the prisms' side faces are closed, and the patch ends on
@@ -39,6 +39,7 @@
 #include "shell_parts.h"
 
 #include "meso_layout.h"
+#include "standin_appearance.h"
 #include "standin_levels.h"
 
 #include <math.h>
@@ -88,6 +89,113 @@ static void prism_bounds(const mesoi_shell_parts_input* in, const uint32_t* list
         }
 }
 
+/* Part p's patch levels from l on, joined into one mesh (positions,
+ * normals where every patch has them, indices): the vertices of part p's
+ * level come at voff[p] (UINT32_MAX: no such level). */
+static meso_result joined_level(const meso_mesh_parts* P, uint32_t l, meso_mesh* out, uint32_t* voff)
+{
+    memset(out, 0, sizeof(*out));
+    size_t nv = 0, nt = 0;
+    int normals = 1;
+    for (uint32_t p = 0; p < P->count; ++p) {
+        voff[p] = UINT32_MAX;
+        if (l >= P->part[p].level_count)
+            continue;
+        const meso_mesh* m = &P->part[p].level[l].mesh;
+        voff[p] = (uint32_t)nv;
+        nv += m->vertex_count;
+        nt += m->triangle_count;
+        normals &= m->normals != NULL;
+    }
+    if (nv > UINT32_MAX || nt > UINT32_MAX / 3)
+        return MESO_ERR_OUT_OF_MEMORY;
+    out->vertex_count = (uint32_t)nv;
+    out->triangle_count = (uint32_t)nt;
+    out->positions = malloc(sizeof(float) * 3 * (nv ? nv : 1));
+    out->normals = normals ? malloc(sizeof(float) * 3 * (nv ? nv : 1)) : NULL;
+    out->indices = malloc(sizeof(uint32_t) * 3 * (nt ? nt : 1));
+    if (!out->positions || (normals && !out->normals) || !out->indices) {
+        meso_mesh_free(out);
+        return MESO_ERR_OUT_OF_MEMORY;
+    }
+    size_t t0 = 0;
+    for (uint32_t p = 0; p < P->count; ++p) {
+        if (voff[p] == UINT32_MAX)
+            continue;
+        const meso_mesh* m = &P->part[p].level[l].mesh;
+        memcpy(out->positions + 3 * (size_t)voff[p], m->positions, sizeof(float) * 3 * m->vertex_count);
+        if (normals)
+            memcpy(out->normals + 3 * (size_t)voff[p], m->normals, sizeof(float) * 3 * m->vertex_count);
+        for (size_t i = 0; i < 3 * (size_t)m->triangle_count; ++i)
+            out->indices[3 * t0 + i] = m->indices[i] + voff[p];
+        t0 += m->triangle_count;
+    }
+    return MESO_OK;
+}
+
+/* The patches' vertex colours, pvcl[k] for part p's level l at k = the
+ * levels of parts before p, plus l. A level-0 patch is the stand-in's own
+ * triangles, so its vertices take the stand-in's colours as they are
+ * (corner by corner: patch triangle i is list[first[p] + i]). A simplified
+ * level is sampled from the stand-in as the whole chain's are, all parts'
+ * patches of that level as one mesh: the sample budget is the level's, as
+ * for the whole stand-in (not each patch's, 8x the samples), and a border
+ * vertex pools both sides' samples, so neighbouring patches agree on its
+ * colour. */
+static meso_result patch_colours(const mesoi_shell_parts_input* in, const meso_mesh_parts* P, const uint32_t* list,
+                                 const uint32_t* first, uint8_t** pvcl, meso_error* err)
+{
+    const int nc = in->vcol_components;
+    uint32_t* kbase = malloc(sizeof(uint32_t) * (P->count + 1));
+    uint32_t* voff = malloc(sizeof(uint32_t) * (P->count + 1));
+    uint32_t levels = 0, most_v = 1;
+    if (kbase)
+        for (uint32_t p = 0, k = 0; p < P->count; k += P->part[p].level_count, ++p) {
+            kbase[p] = k;
+            levels = P->part[p].level_count > levels ? P->part[p].level_count : levels;
+            most_v = P->part[p].level[0].mesh.vertex_count > most_v ? P->part[p].level[0].mesh.vertex_count : most_v;
+        }
+    float* shows = malloc(sizeof(float) * 4 * (size_t)most_v);
+    meso_result r = kbase && voff && shows ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
+    for (uint32_t p = 0; r == MESO_OK && p < P->count; ++p) {
+        const meso_mesh* m = &P->part[p].level[0].mesh;
+        for (uint32_t i = 0; i < m->triangle_count; ++i)
+            for (int c = 0; c < 3; ++c)
+                memcpy(shows + 4 * (size_t)m->indices[3 * (size_t)i + (size_t)c],
+                       in->shows + 4 * (size_t)in->standin->indices[3 * (size_t)list[first[p] + i] + (size_t)c],
+                       4 * sizeof(float));
+        if (!(pvcl[kbase[p]] = malloc((size_t)nc * (m->vertex_count ? m->vertex_count : 1))))
+            r = MESO_ERR_OUT_OF_MEMORY;
+        else
+            mesoi_appearance_encode(shows, m->vertex_count, nc, pvcl[kbase[p]]);
+    }
+    for (uint32_t l = 1; r == MESO_OK && l < levels; ++l) {
+        meso_mesh joined;
+        if ((r = joined_level(P, l, &joined, voff)) != MESO_OK)
+            break;
+        const meso_mesh* one = &joined;
+        uint8_t* vcol = NULL;
+        r = mesoi_standin_colours(in->standin, in->shows, &one, 1, in->colour_spacing, nc, in->threads, &vcol, err);
+        for (uint32_t p = 0; r == MESO_OK && p < P->count; ++p) {
+            if (voff[p] == UINT32_MAX)
+                continue;
+            const size_t bytes = (size_t)nc * P->part[p].level[l].mesh.vertex_count;
+            if (!(pvcl[kbase[p] + l] = malloc(bytes ? bytes : 1)))
+                r = MESO_ERR_OUT_OF_MEMORY;
+            else
+                memcpy(pvcl[kbase[p] + l], vcol + (size_t)nc * voff[p], bytes);
+        }
+        free(vcol);
+        meso_mesh_free(&joined);
+    }
+    free(shows);
+    free(voff);
+    free(kbase);
+    if (r == MESO_ERR_OUT_OF_MEMORY)
+        return meso_bake_fail(err, r, 0, "shell parts: out of memory");
+    return r;
+}
+
 meso_result mesoi_shell_parts_build(const mesoi_shell_parts_input* in, mesoi_shell_parts* out, meso_error* err)
 {
     memset(out, 0, sizeof(*out));
@@ -114,8 +222,7 @@ meso_result mesoi_shell_parts_build(const mesoi_shell_parts_input* in, mesoi_she
     out->chunks = calloc(2 + 2 * (size_t)nm, sizeof(mesoi_chunk));
     uint32_t* first = calloc(np + 1, sizeof(uint32_t));
     uint32_t* list = out->list = malloc(sizeof(uint32_t) * (nt ? nt : 1));
-    const meso_mesh** meshes = malloc(sizeof(meso_mesh*) * nm);
-    if (!out->prts || !out->pmsh || !out->pvcl || !out->chunks || !first || !list || !meshes)
+    if (!out->prts || !out->pmsh || !out->pvcl || !out->chunks || !first || !list)
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "shell parts: out of memory");
     /* The triangle list: part after part, each in the base mesh's order. */
     if (r == MESO_OK) {
@@ -132,13 +239,8 @@ meso_result mesoi_shell_parts_build(const mesoi_shell_parts_input* in, mesoi_she
             list[at[P.part_of[t]]++] = t;
         free(at);
     }
-    /* The stand-in patches' colours. */
-    for (uint32_t p = 0, k = 0; r == MESO_OK && p < np; ++p)
-        for (uint32_t l = 0; l < P.part[p].level_count; ++l)
-            meshes[k++] = &P.part[p].level[l].mesh;
     if (r == MESO_OK && in->shows)
-        r = mesoi_standin_colours(in->standin, in->shows, meshes, nm, in->colour_spacing, in->vcol_components,
-                                  in->threads, out->pvcl, err);
+        r = patch_colours(in, &P, list, first, out->pvcl, err);
     /* Records, PMSH and PVCL chunks. */
     uint8_t* rec = out->prts + MESO_PRTS_HDR_SIZE;
     size_t n = 0;
@@ -198,7 +300,6 @@ meso_result mesoi_shell_parts_build(const mesoi_shell_parts_input* in, mesoi_she
         out->chunk_count = n;
     }
     free(first);
-    free(meshes);
     meso_mesh_parts_free(&P);
     if (r != MESO_OK)
         mesoi_shell_parts_free(out);

@@ -5,6 +5,9 @@
  * meso_bake_shell (its default parts), seen from close to its head:
  *  - the file validates in full, its parts' prisms list every base
  *    triangle once;
+ *  - a lod-1 patch (the first stand-in's own triangles) shows the whole
+ *    first stand-in's colours, and at every lod neighbouring patches give
+ *    the vertices they share one colour (no seam at a part border);
  *  - at TAU px some parts draw their prisms and some their stand-in
  *    patch, the near end as prisms; every part's level keeps its error
  *    within the pixel error at that level's nearest bound point;
@@ -168,6 +171,100 @@ static void other_components(uint8_t* p, uint64_t n, uint8_t* entry)
     put16(entry + MESO_TOC_OFF_COMPONENTS, (uint16_t)(c == 4 ? 1 : 4)); /* as many bytes, other vertices */
 }
 
+/* A vertex's key (position and normal bits) and its colour bytes. */
+typedef struct vkey {
+    float key[6];
+    uint8_t c[4];
+    uint32_t part;
+} vkey;
+
+static int vkey_cmp(const void* a, const void* b)
+{
+    return memcmp(((const vkey*)a)->key, ((const vkey*)b)->key, sizeof(float) * 6);
+}
+
+/* Appends chunk i (a MESH or PMSH) with its colours (chunk ci) as keys. */
+static size_t add_keys(meso_file* f, uint32_t i, uint32_t ci, uint32_t part, vkey** keys, size_t n)
+{
+    const meso_chunk_info* c = meso_file_chunk(f, i);
+    const meso_chunk_info* cc = meso_file_chunk(f, ci);
+    uint32_t* mesh = malloc((size_t)c->decoded_size + 4);
+    uint8_t* col = malloc((size_t)cc->decoded_size + 1);
+    assert(mesh && col && meso_file_read_chunk(f, i, mesh, (size_t)c->decoded_size, NULL) == MESO_OK &&
+           meso_file_read_chunk(f, ci, col, (size_t)cc->decoded_size, NULL) == MESO_OK);
+    meso_mesh_view mv;
+    assert(meso_mesh_parse(mesh, (size_t)c->decoded_size, &mv, NULL) == MESO_OK && mv.normals);
+    const uint32_t nv = mv.layout.vertex_count, comp = cc->components;
+    assert(cc->decoded_size == (uint64_t)comp * nv);
+    *keys = realloc(*keys, sizeof(vkey) * (n + nv));
+    assert(*keys);
+    for (uint32_t v = 0; v < nv; ++v) {
+        vkey* k = &(*keys)[n + v];
+        memset(k, 0, sizeof *k);
+        memcpy(k->key, mv.positions + 3 * (size_t)v, sizeof(float) * 3);
+        memcpy(k->key + 3, mv.normals + 3 * (size_t)v, sizeof(float) * 3);
+        memcpy(k->c, col + (size_t)comp * v, comp);
+        k->part = part;
+    }
+    free(mesh);
+    free(col);
+    return n + nv;
+}
+
+/* The chunk of `type` for (object 1, lod, dims[0] = part; 0: any), or -1. */
+static int64_t chunk_of(meso_file* f, uint32_t type, uint16_t lod, uint32_t part)
+{
+    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        if (c->type == type && c->object == 1 && c->lod == lod && (!part || c->dims[0] == part))
+            return i;
+    }
+    return -1;
+}
+
+/* The patches' colours: at lod 1 (the first stand-in's own triangles) each
+ * patch vertex shows what the whole first stand-in's vertex with the same
+ * position and normal shows; at every lod, a vertex two patches share
+ * (their border) has one colour in both. Returns the border vertices
+ * compared. */
+static size_t patch_colours_agree(meso_file* f, uint32_t np, const meso_part_level* pl, uint32_t nl)
+{
+    vkey* whole = NULL;
+    const int64_t wm = chunk_of(f, MESO_CHUNK_MESH, 1, 0), wc = chunk_of(f, MESO_CHUNK_VCOL, 1, 0);
+    assert(wm >= 0 && wc >= 0);
+    const size_t nw = add_keys(f, (uint32_t)wm, (uint32_t)wc, 0, &whole, 0);
+    qsort(whole, nw, sizeof(vkey), vkey_cmp);
+    size_t borders = 0, lod1 = 0;
+    for (uint16_t lod = 1;; ++lod) {
+        vkey* keys = NULL;
+        size_t n = 0;
+        for (uint32_t i = 0; i < nl; ++i)
+            if (pl[i].rec.lod == lod && pl[i].colours >= 0)
+                n = add_keys(f, (uint32_t)pl[i].chunk, (uint32_t)pl[i].colours, pl[i].rec.object, &keys, n);
+        if (!n)
+            break;
+        qsort(keys, n, sizeof(vkey), vkey_cmp);
+        for (size_t a = 0; a < n; ++a) {
+            if (lod == 1) {
+                const vkey* w = bsearch(&keys[a], whole, nw, sizeof(vkey), vkey_cmp);
+                assert(w && memcmp(w->c, keys[a].c, 4) == 0);
+                ++lod1;
+            }
+            if (a > 0 && vkey_cmp(&keys[a - 1], &keys[a]) == 0 && keys[a - 1].part != keys[a].part) {
+                assert(memcmp(keys[a - 1].c, keys[a].c, 4) == 0);
+                ++borders;
+            }
+        }
+        free(keys);
+    }
+    free(whole);
+    printf("patch colours: %zu lod-1 vertices show the whole stand-in's colour, %zu shared border vertices "
+           "agree (%u parts)\n",
+           lod1, borders, np);
+    assert(lod1 > 0 && borders > 0);
+    return borders;
+}
+
 int main(int argc, char** argv)
 {
     setvbuf(stdout, NULL, _IONBF, 0);
@@ -209,6 +306,7 @@ int main(int argc, char** argv)
     for (uint32_t q = 1; q <= np; ++q)
         first[q] += first[q - 1];
     printf("spot_uv shell: %u parts, %u part levels, %u prisms listed\n", np, nl, nt);
+    patch_colours_agree(f, np, pl, nl);
 
     meso_rt_object obj;
     assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
