@@ -7,8 +7,9 @@
  * ".NAME.tmp.XXXXXX" file next to the target (never the target itself);
  * this test removes those.
  *
- * MESO_ATOMIC_MB (default 200) sets the size of the file written while the
- * writer is being killed. */
+ * MESO_ATOMIC_MB (default 64) sets the size of the file written while the
+ * writer is being killed; the kill moments scale with it (they were chosen
+ * for 200 MB, where a write takes about 0.5 s here). */
 #undef NDEBUG
 #include "meso_file.h"
 #include "sample.h"
@@ -197,7 +198,7 @@ static meso_writer* big_writer(size_t mb, uint32_t seed)
 static void killed_writer_leaves_old_or_new_never_partial(void)
 {
     const char* env = getenv("MESO_ATOMIC_MB");
-    size_t mb = env ? (size_t)atoi(env) : 200;
+    size_t mb = env ? (size_t)atoi(env) : 64;
     if (mb < 4)
         mb = 4;
     char target[512], old_ref[512], new_ref[512];
@@ -215,10 +216,12 @@ static void killed_writer_leaves_old_or_new_never_partial(void)
     validate_path(new_ref);
     assert(!files_equal(old_ref, new_ref));
 
-    /* Kill at increasing delays: early (old file), mid-write, after renames. */
-    static const int delays_ms[] = {0, 5, 40, 150, 400, 900, 1500, 2500};
+    /* Kill at increasing delays: early (old file), mid-write, after renames
+     * (for 200 MB; scaled to the size written). */
+    static const int delays_200mb_ms[] = {0, 5, 40, 150, 400, 900, 1500, 2500};
     int saw_old = 0, saw_new = 0;
-    for (size_t k = 0; k < sizeof delays_ms / sizeof delays_ms[0]; k++) {
+    for (size_t k = 0; k < sizeof delays_200mb_ms / sizeof delays_200mb_ms[0]; k++) {
+        const long delay_ms = (long)((double)delays_200mb_ms[k] * (double)mb / 200.0);
         int fds[2];
         assert(pipe(fds) == 0);
         pid_t pid = fork();
@@ -237,7 +240,7 @@ static void killed_writer_leaves_old_or_new_never_partial(void)
         char ready;
         assert(read(fds[0], &ready, 1) == 1);
         close(fds[0]);
-        struct timespec ts = {delays_ms[k] / 1000, (long)(delays_ms[k] % 1000) * 1000000L};
+        struct timespec ts = {delay_ms / 1000, (delay_ms % 1000) * 1000000L};
         nanosleep(&ts, NULL);
         assert(kill(pid, SIGKILL) == 0);
         int status;
@@ -245,7 +248,7 @@ static void killed_writer_leaves_old_or_new_never_partial(void)
         assert(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
         int is_old = files_equal(target, old_ref), is_new = !is_old && files_equal(target, new_ref);
         if (!is_old && !is_new)
-            fprintf(stderr, "after a kill at %d ms the target is neither the old nor the new file\n", delays_ms[k]);
+            fprintf(stderr, "after a kill at %ld ms the target is neither the old nor the new file\n", delay_ms);
         assert(is_old || is_new);
         validate_path(target);
         saw_old += is_old;
