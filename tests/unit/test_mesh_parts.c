@@ -165,23 +165,37 @@ static void check_same_edges(const char* what, const tri_soup* ref, const tri_so
 
 /* ---- distances ----------------------------------------------------------- */
 
-static double dist_to_mesh(const double p[3], const meso_mesh* m)
+/* The distance from p to m, or some distance <= floor when it is <= floor
+ * (the triangle *hint first, then every one; *hint gets the nearest). */
+static double dist_to_mesh_above(const double p[3], const meso_mesh* m, double floor, uint32_t* hint)
 {
     double best = INFINITY;
-    for (uint32_t t = 0; t < m->triangle_count; ++t) {
+    for (uint32_t k = 0; k <= m->triangle_count; ++k) {
+        const uint32_t t = k == 0 ? *hint : k - 1;
+        if (t >= m->triangle_count || (k > 0 && t == *hint))
+            continue;
         const uint32_t* i = m->indices + 3 * (size_t)t;
-        best = fmin(best, point_triangle(p, m->positions + 3 * (size_t)i[0], m->positions + 3 * (size_t)i[1],
-                                         m->positions + 3 * (size_t)i[2]));
+        const double d = point_triangle(p, m->positions + 3 * (size_t)i[0], m->positions + 3 * (size_t)i[1],
+                                        m->positions + 3 * (size_t)i[2]);
+        if (d < best) {
+            best = d;
+            *hint = t;
+            if (best <= floor)
+                break;
+        }
     }
     return best;
 }
 
 /* Largest distance from points of a (on a 6 x 6 barycentric grid in every
- * triangle, corners and edges included) to b. */
+ * triangle, corners and edges included) to b: exact, by every triangle of
+ * b, except that a point's search ends once it is no farther than the
+ * largest found so far (it cannot raise the largest). */
 static double one_way(const meso_mesh* a, const meso_mesh* b)
 {
     enum { G = 6 };
     double worst = 0;
+    uint32_t hint = 0;
     for (uint32_t t = 0; t < a->triangle_count; ++t) {
         const float* v[3];
         for (int c = 0; c < 3; ++c)
@@ -192,7 +206,7 @@ static double one_way(const meso_mesh* a, const meso_mesh* b)
                 double p[3];
                 for (int k = 0; k < 3; ++k)
                     p[k] = v[0][k] + s * ((double)v[1][k] - v[0][k]) + u * ((double)v[2][k] - v[0][k]);
-                worst = fmax(worst, dist_to_mesh(p, b));
+                worst = fmax(worst, dist_to_mesh_above(p, b, worst, &hint));
             }
     }
     return worst;
