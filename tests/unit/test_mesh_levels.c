@@ -86,17 +86,29 @@ static double tri_dist(const double p[3], const double* v[3])
     return d2 < d ? (d3 < d2 ? d3 : d2) : (d3 < d ? d3 : d);
 }
 
-static double mesh_dist(const double p[3], const meso_mesh* m)
+/* The distance from p to m, or some distance <= floor when it is <= floor:
+ * the triangle *hint first (it gets the nearest), then every one. A point
+ * no farther than the largest distance found so far cannot raise it, so
+ * its search ends there: the largest stays exact. */
+static double mesh_dist_above(const double p[3], const meso_mesh* m, double floor, uint32_t* hint)
 {
     double best = INFINITY;
-    for (uint32_t f = 0; f < m->triangle_count; ++f) {
+    for (uint32_t k = 0; k <= m->triangle_count; ++k) {
+        const uint32_t f = k == 0 ? *hint : k - 1;
+        if (f >= m->triangle_count || (k > 0 && f == *hint))
+            continue;
         double c[3][3];
         const double* v[3] = {c[0], c[1], c[2]};
         for (int j = 0; j < 3; ++j)
-            for (int k = 0; k < 3; ++k)
-                c[j][k] = m->positions[3 * (size_t)m->indices[3 * (size_t)f + (size_t)j] + (size_t)k];
+            for (int q = 0; q < 3; ++q)
+                c[j][q] = m->positions[3 * (size_t)m->indices[3 * (size_t)f + (size_t)j] + (size_t)q];
         const double d = tri_dist(p, v);
-        best = d < best ? d : best;
+        if (d < best) {
+            best = d;
+            *hint = f;
+            if (best <= floor)
+                break;
+        }
     }
     return best;
 }
@@ -112,10 +124,11 @@ static double tri_area(const meso_mesh* m, uint32_t f)
 static double brute_one_way(const meso_mesh* a, const meso_mesh* b, int count, uint64_t* rng)
 {
     double worst = 0;
+    uint32_t hint = 0;
     for (uint32_t v = 0; v < a->vertex_count; ++v) {
         const double p[3] = {a->positions[3 * (size_t)v], a->positions[3 * (size_t)v + 1],
                              a->positions[3 * (size_t)v + 2]};
-        const double d = mesh_dist(p, b);
+        const double d = mesh_dist_above(p, b, worst, &hint);
         worst = d > worst ? d : worst;
     }
     double* cdf = malloc(sizeof(double) * a->triangle_count);
@@ -143,7 +156,7 @@ static double brute_one_way(const meso_mesh* a, const meso_mesh* b, int count, u
             const double v2 = a->positions[3 * (size_t)a->indices[3 * (size_t)lo + 2] + (size_t)k];
             p[k] = v0 + s * (v1 - v0) + t * (v2 - v0);
         }
-        const double d = mesh_dist(p, b);
+        const double d = mesh_dist_above(p, b, worst, &hint);
         worst = d > worst ? d : worst;
     }
     free(cdf);
@@ -394,6 +407,7 @@ static void parallel_planes_known_answer(void)
 static double brute_scheme(const meso_mesh* a, const meso_mesh* b, double spacing, double* radius)
 {
     double worst = 0;
+    uint32_t hint = 0;
     for (uint32_t f = 0; f < a->triangle_count; ++f) {
         double v[3][3], longest = 0;
         for (int j = 0; j < 3; ++j)
@@ -412,7 +426,7 @@ static double brute_scheme(const meso_mesh* a, const meso_mesh* b, double spacin
                 double p[3];
                 for (int k = 0; k < 3; ++k)
                     p[k] = v[0][k] + (double)i / n * (v[1][k] - v[0][k]) + (double)j / n * (v[2][k] - v[0][k]);
-                const double d = mesh_dist(p, b);
+                const double d = mesh_dist_above(p, b, worst, &hint);
                 worst = d > worst ? d : worst;
             }
     }
