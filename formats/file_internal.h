@@ -170,11 +170,10 @@ void mesoi_check_levels(meso_file* f, const meso_object_record* recs, uint32_t c
 void mesoi_check_parts(meso_file* f, const meso_object_record* recs, uint32_t count, meso_issue_fn fn, void* user);
 /* LODS contents (file_levels.c, issues 4921, 4922). */
 meso_result mesoi_check_lods(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err);
-/* PRTS content (FORMAT.md §7.11), and the PMSH (PVCL) chunk of `object`'s
- * part `part` at `lod` (-1 if none). */
+/* PRTS content (FORMAT.md §7.11), and the chunk of `type` (PMSH or PVCL)
+ * of `object`'s part `part` at `lod` (-1 if none). */
 meso_result mesoi_check_prts(const uint8_t* d, size_t n, int32_t chunk, uint64_t base, meso_error* err);
-int32_t mesoi_find_part(const meso_file* f, uint32_t object, uint32_t part, uint16_t lod);
-int32_t mesoi_find_part_colours(const meso_file* f, uint32_t object, uint32_t part, uint16_t lod);
+int32_t mesoi_find_part(const meso_file* f, uint32_t type, uint32_t object, uint32_t part, uint16_t lod);
 /* The chunk types of an object's parts (§7.11): no whole level draws them. */
 static inline int mesoi_part_chunk(uint32_t type)
 {

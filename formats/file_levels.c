@@ -314,21 +314,11 @@ meso_result mesoi_check_prts(const uint8_t* d, size_t n, int32_t chunk, uint64_t
     return MESO_OK;
 }
 
-int32_t mesoi_find_part(const meso_file* f, uint32_t object, uint32_t part, uint16_t lod)
+int32_t mesoi_find_part(const meso_file* f, uint32_t type, uint32_t object, uint32_t part, uint16_t lod)
 {
     for (uint32_t i = 0; f && i < f->chunk_count; i++) {
         const meso_chunk_info* c = &f->chunks[i];
-        if (c->type == MESO_CHUNK_PMSH && c->object == object && c->lod == lod && c->dims[0] == part)
-            return (int32_t)i;
-    }
-    return -1;
-}
-
-int32_t mesoi_find_part_colours(const meso_file* f, uint32_t object, uint32_t part, uint16_t lod)
-{
-    for (uint32_t i = 0; f && i < f->chunk_count; i++) {
-        const meso_chunk_info* c = &f->chunks[i];
-        if (c->type == MESO_CHUNK_PVCL && c->object == object && c->lod == lod && c->dims[0] == part)
+        if (c->type == type && c->object == object && c->lod == lod && c->dims[0] == part)
             return (int32_t)i;
     }
     return -1;
@@ -368,9 +358,11 @@ meso_result meso_file_parts(meso_file* f, uint32_t object, meso_part_level* out,
             meso_level_record_decode(p, &out[i].rec);
             out[i].first_triangle = out[i].rec.lod == 0 ? mesoi_ld32(p + MESO_PRTS_OFF_FIRST_TRIANGLE) : 0;
             out[i].triangle_count = out[i].rec.lod == 0 ? mesoi_ld32(p + MESO_PRTS_OFF_TRIANGLE_COUNT) : 0;
+            const uint32_t part = out[i].rec.object;
+            const uint16_t lod = out[i].rec.lod;
             out[i].chunk = out[i].triangle_count ? meso_file_find(f, MESO_CHUNK_PTRI, object, 0)
-                                                 : mesoi_find_part(f, object, out[i].rec.object, out[i].rec.lod);
-            out[i].colours = mesoi_find_part_colours(f, object, out[i].rec.object, out[i].rec.lod);
+                                                 : mesoi_find_part(f, MESO_CHUNK_PMSH, object, part, lod);
+            out[i].colours = mesoi_find_part(f, MESO_CHUNK_PVCL, object, part, lod);
             const meso_chunk_info* m = out[i].chunk >= 0 ? &f->chunks[out[i].chunk] : NULL;
             const meso_chunk_info* v = out[i].colours >= 0 ? &f->chunks[out[i].colours] : NULL;
             out[i].bytes = (m ? m->stored_size : 0) + (v ? v->stored_size : 0);

@@ -572,12 +572,12 @@ void mesoi_check_parts(meso_file* f, const meso_object_record* recs, uint32_t co
             ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PMSH): object %u has no PRTS to name this part", i,
                   c->object);
         if (c->type == MESO_CHUNK_PVCL) { /* one per PMSH at most, one colour per vertex of it */
-            const int32_t mi = mesoi_find_part(f, c->object, c->dims[0], c->lod);
+            const int32_t mi = mesoi_find_part(f, MESO_CHUNK_PMSH, c->object, c->dims[0], c->lod);
             meso_mesh_layout l;
             if (mi < 0)
                 ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PVCL): object %u has no PMSH for part %u, lod %u",
                       i, c->object, c->dims[0], (unsigned)c->lod);
-            else if (mesoi_find_part_colours(f, c->object, c->dims[0], c->lod) != (int32_t)i)
+            else if (mesoi_find_part(f, MESO_CHUNK_PVCL, c->object, c->dims[0], c->lod) != (int32_t)i)
                 ISSUE(&top, MESO_ISSUE_PARTS, (int32_t)i, "chunk %u (PVCL): a second PVCL for part %u, lod %u", i,
                       c->dims[0], (unsigned)c->lod);
             else if (mesh_header(&top, mi, &l) && (uint64_t)l.vertex_count * c->components != c->decoded_size)
@@ -639,7 +639,7 @@ void mesoi_check_parts(meso_file* f, const meso_object_record* recs, uint32_t co
             const uint8_t* p = d + MESO_PRTS_HDR_SIZE + (size_t)r * MESO_LODS_RECORD_SIZE;
             meso_level_record lr;
             meso_level_record_decode(p, &lr);
-            const int32_t pi = mesoi_find_part(f, c->object, lr.object, lr.lod);
+            const int32_t pi = mesoi_find_part(f, MESO_CHUNK_PMSH, c->object, lr.object, lr.lod);
             const int prisms = shell && lr.lod == 0; /* drawn by the shell's native levels: no PMSH */
             if (prisms)
                 end = mesoi_ld32(p + MESO_PRTS_OFF_FIRST_TRIANGLE) + (uint64_t)mesoi_ld32(p + MESO_PRTS_OFF_TRIANGLE_COUNT);
