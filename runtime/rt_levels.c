@@ -114,7 +114,7 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         if ((r = meso_file_levels(f, object_id, lv->info, lv->count, &lv->count, &err)) != MESO_OK)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
     }
-    /* A mesh object's parts table (rt_parts.c), read with the levels
+    /* A mesh or shell object's parts table (rt_parts.c), read with the levels
      * table: no draw reads the file under stream requests. */
     if (r == MESO_OK && (lv->rec.kind == MESO_OBJECT_MESH || lv->rec.kind == MESO_OBJECT_SHELL))
         r = mesoi_parts_load(rt, f, &lv->rec, &lv->parts);

@@ -238,6 +238,27 @@ void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i)
     rt->evictions++;
 }
 
+/* A shell's prisms the parts drawn at lod 0 hold (the PTRI ranges, part
+ * after part) and their key (FNV-1a over the parts), rebuilt only when
+ * the parts change: instanced and repeated draws copy nothing. */
+static void prism_subset(mesoi_parts* p)
+{
+    uint64_t key = 1469598103934665603ull;
+    for (uint32_t q = 0; q < p->part_count; ++q)
+        if (p->drawn[q] == 0)
+            key = (key ^ q) * 1099511628211ull;
+    if (key == p->subset_key)
+        return;
+    p->subset_key = key;
+    p->subset_count = 0;
+    for (uint32_t q = 0; q < p->part_count; ++q)
+        if (p->drawn[q] == 0) {
+            const meso_part_level* L = &p->lv[p->first[q]];
+            memcpy(p->subset + p->subset_count, p->tri + L->first_triangle, sizeof(uint32_t) * L->triangle_count);
+            p->subset_count += L->triangle_count;
+        }
+}
+
 meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out)
 {
@@ -336,6 +357,8 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
         }
     if (missing != MESO_OK)
         return missing; /* a whole level instead */
+    if (p->shell)
+        prism_subset(p);
     *out = p->parent;
     return MESO_OK;
 }
@@ -345,17 +368,9 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
 {
     /* The stand-in patches (meshes) first, then a shell's prisms in one
      * draw: its stats are the draw's. */
-    mesoi_parts* w = (mesoi_parts*)p; /* the subset is scratch of the parts */
-    w->subset_count = 0;
-    uint64_t key = 1469598103934665603ull; /* FNV-1a over the parts drawn as prisms */
     for (uint32_t q = 0; q < p->part_count; ++q) {
-        if (p->shell && p->drawn[q] == 0) {
-            const meso_part_level* L = &p->lv[p->first[q]];
-            memcpy(w->subset + w->subset_count, p->tri + L->first_triangle, sizeof(uint32_t) * L->triangle_count);
-            w->subset_count += L->triangle_count;
-            key = (key ^ q) * 1099511628211ull;
-            continue;
-        }
+        if (p->shell && p->drawn[q] == 0)
+            continue; /* prisms: the subset below */
         mesoi_object* o = mesoi_lookup(rt, p->chosen[q]);
         if (!o)
             continue; /* evicted since the pick: a later frame picks it again */
@@ -363,12 +378,12 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
         if (r != MESO_OK)
             return r;
     }
-    mesoi_object* n = w->subset_count ? mesoi_lookup(rt, p->native) : NULL;
+    mesoi_object* n = p->subset_count ? mesoi_lookup(rt, p->native) : NULL;
     if (!n || !n->shell)
         return MESO_OK;
-    n->shell->subset = w->subset;
-    n->shell->subset_count = w->subset_count;
-    n->shell->subset_key = key;
+    n->shell->subset = p->subset;
+    n->shell->subset_count = p->subset_count;
+    n->shell->subset_key = p->subset_key;
     const meso_result r = mesoi_shell_draw(rt, n, d, inst, count);
     n->shell->subset = NULL;
     return r;
