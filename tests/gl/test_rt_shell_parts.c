@@ -19,6 +19,8 @@
  *    finest draw's at some pixel that near (an edge moved by the error);
  *    where the parts draw prisms, the depth is the whole shell's exactly
  *    (counted: most of the image);
+ *  - instanced with a far instance off screen, the near one draws the
+ *    same part levels and depth image bit for bit;
  *  - streamed (stream requests, one a frame), it settles on the synchronous
  *    context's part levels and depth image, bit for bit, having read no
  *    more than it holds;
@@ -394,6 +396,32 @@ int main(int argc, char** argv)
     assert(interior > 5000 && holes == 0);
     assert(same > interior / 10);
     assert(beyond == 0);
+
+    /* Instanced, with a second instance far off to the side (its own,
+     * coarser, level group): the near one draws the same part levels and
+     * the same depth image, bit for bit. */
+    {
+        meso_rt_instance inst[2];
+        memset(inst, 0, sizeof inst);
+        for (int k = 0; k < 16; ++k)
+            assert(d.model[k] == 0.0f); /* the view's model: the identity */
+        for (int k = 0; k < 4; ++k)
+            inst[0].model[5 * k] = inst[1].model[5 * k] = 1.0f;
+        inst[1].model[12] = -1000.0f;
+        test_fbo_clear(&fb, 0, 0, 0);
+        assert(meso_rt_draw_instanced(rt, obj, &d, inst, 2) == MESO_OK);
+        float* both = malloc(sizeof(float) * W * H);
+        uint8_t* lev2 = malloc(np);
+        assert(both && lev2);
+        test_fbo_read(&fb, NULL, both);
+        uint32_t m = 0;
+        assert(meso_rt_parts_state_get(rt, obj, lev2, np, &m) == MESO_OK && m == np);
+        assert(memcmp(lev, lev2, np) == 0);
+        assert(memcmp(both, part, sizeof(float) * W * H) == 0);
+        printf("instanced with a far instance: the same part levels and the same depth image\n");
+        free(both);
+        free(lev2);
+    }
 
     streamed_settles(f, &d, part, lev, np);
 
