@@ -21,6 +21,8 @@
 
 const char* mesoi_base_name(const char* path)
 {
+    if (!path)
+        return "(memory)"; /* a host's mesh in memory (the options' `mesh`), as META names it */
     const char* s = strrchr(path, '/');
     return s ? s + 1 : path;
 }

@@ -405,6 +405,13 @@ static uint32_t same_chunks_but_provenance(meso_bake_output* a, meso_bake_output
     return compared;
 }
 
+/* Keeps the last warning's text (a char[512] as `user`). */
+static void warning_text(void* user, const meso_bake_progress* p)
+{
+    if (p->event == MESO_BAKE_EVENT_WARNING && p->message)
+        snprintf((char*)user, 512, "%s", p->message);
+}
+
 /* A host's mesh in memory bakes to the same chunks as the file it came from,
  * for every command that takes a mesh; and a broken one is refused as a
  * broken file is, with a code naming "(memory)". */
@@ -439,6 +446,24 @@ static void memory_meshes_bake_as_files(void)
     meso_bake_output_free(from_memory);
     so.input = DATA("spot_uv.obj"); /* both at once is an argument error */
     assert(meso_bake_shell(&so, &from_memory, NULL, &err) == MESO_ERR_INVALID_ARG && !from_memory);
+    meso_mesh_free(&m);
+    /* Without uvs (projected onto a plane, with a warning naming the
+     * input: "(memory)"; it once named a NULL path and crashed). */
+    assert(meso_bake_load_mesh(DATA("sphere.obj"), NULL, &m, NULL, &err) == MESO_OK && !m.uvs);
+    so = meso_bake_shell_defaults();
+    so.input = DATA("sphere.obj");
+    so.texture = "bricks:16";
+    assert(QUIET("shell file, no uvs", meso_bake_shell(&so, &from_file, NULL, &err)) == MESO_OK);
+    so.input = NULL;
+    so.mesh = &m;
+    char said[512] = "";
+    so.common.progress = warning_text;
+    so.common.user = said;
+    assert(QUIET("shell memory, no uvs", meso_bake_shell(&so, &from_memory, NULL, &err)) == MESO_OK);
+    assert(strncmp(said, "(memory) has no texture coordinates", 35) == 0);
+    assert(same_chunks_but_provenance(from_memory, from_file) >= 6);
+    meso_bake_output_free(from_file);
+    meso_bake_output_free(from_memory);
     meso_mesh_free(&m);
 
     assert(meso_bake_load_mesh(DATA("torus.obj"), NULL, &m, NULL, &err) == MESO_OK);
