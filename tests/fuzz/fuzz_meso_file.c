@@ -1,7 +1,9 @@
 /*
  * fuzz_meso_file.c — libFuzzer target for the .meso reader (formats/), its
  * validator and the chunk decoders (MESH, OBJT, Draco through the bake's
- * decoder). Pattern: parse -> validate -> read every chunk -> free.
+ * decoder), and the level, part and prism-list tables (meso_file_levels,
+ * meso_file_parts, meso_file_part_triangles). Pattern: parse -> validate ->
+ * read every chunk and every object's tables -> free.
  *
  * How to run (STYLE.md §9):
  *
@@ -239,6 +241,47 @@ static void read_chunks(meso_file* f, size_t input_size, int have_view)
     }
 }
 
+/* The level, part and prism-list tables of every object (FORMAT.md §7.10,
+ * §7.11): whatever the bytes, each call returns a result and stays within
+ * the arrays it is given (counted first, then read into arrays of exactly
+ * that size, so ASan sees any write past them). */
+static void read_tables(meso_file* f)
+{
+    enum { MOST = 64 };
+    meso_object_record recs[MOST];
+    uint32_t n = 0;
+    if (meso_file_objects(f, recs, MOST, &n, NULL) != MESO_OK)
+        return;
+    for (uint32_t i = 0; i < n && i < MOST; ++i) {
+        const uint32_t id = recs[i].id;
+        uint32_t count = 0;
+        if (meso_file_levels(f, id, NULL, 0, &count, NULL) == MESO_OK && count > 0 && count <= 4096) {
+            meso_level_info* lv = malloc(sizeof(meso_level_info) * count);
+            assert(lv);
+            uint32_t again = 0;
+            (void)meso_file_levels(f, id, lv, count, &again, NULL);
+            free(lv);
+        }
+        uint32_t nl = 0, np = 0, ne = 0;
+        if (meso_file_parts(f, id, NULL, 0, &nl, &np, NULL, 0, &ne, NULL) == MESO_OK && nl <= 65536 &&
+            ne <= 65536) {
+            meso_part_level* pl = malloc(sizeof(meso_part_level) * (nl ? nl : 1));
+            uint32_t* edges = malloc(sizeof(uint32_t) * 2 * (ne ? ne : 1));
+            assert(pl && edges);
+            (void)meso_file_parts(f, id, pl, nl, &nl, &np, edges, ne, &ne, NULL);
+            free(pl);
+            free(edges);
+        }
+        uint32_t nt = 0;
+        if (meso_file_part_triangles(f, id, NULL, 0, &nt, NULL) == MESO_OK && nt > 0 && nt <= (1u << 20)) {
+            uint32_t* tri = malloc(sizeof(uint32_t) * nt);
+            assert(tri);
+            (void)meso_file_part_triangles(f, id, tri, nt, &nt, NULL);
+            free(tri);
+        }
+    }
+}
+
 /* Open over memory and over the io callback, validate FULL, read every chunk.
  * `d` is an exactly-sized heap block. */
 static void run_one(const uint8_t* d, size_t size, const meso_decoder* dec, int strict)
@@ -271,6 +314,7 @@ static void run_one(const uint8_t* d, size_t size, const meso_decoder* dec, int 
         valid_mem = meso_file_validate(f, MESO_CHECK_FULL, first_issue, &first);
         assert(valid_mem == first.result);
         read_chunks(f, size, 1);
+        read_tables(f);
         meso_file_close(f);
     } else {
         assert(f == NULL && err.result == open_mem && err.code != MESO_ISSUE_NONE);

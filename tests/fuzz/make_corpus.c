@@ -10,10 +10,12 @@
  * larger TOC entries, unknown types/encodings/dtypes) are laid out by hand
  * here, and a few damaged variants seed the error paths. Deterministic.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "bake_bytes.h"
 #include "frusta_chunks.h"
 #include "frustum_model.h"
 #include "meso_file.h"
@@ -341,7 +343,10 @@ static void every_kind(void)
     add(w, MESO_CHUNK_FRUS, 0, 3, 0, 0, 0, MESO_DTYPE_BYTES, 1, 2, 1, 1, frus, sizeof frus);
     size_t n;
     uint8_t* d = finish(w, &n);
-    save_expect("every_kind.meso", d, n, MESO_OK, MESO_OK);
+    /* Every chunk kind in one file, not a whole object of each kind: it
+     * seeds the chunk readers, and the full check's object rules (FORMAT.md
+     * §9, 6xxx: a shell without its MESH, ...) refuse it. */
+    save_expect("every_kind.meso", d, n, MESO_OK, MESO_ERR_CORRUPT);
 
     /* Damaged variants of the same file, each seeding one error path. */
     uint8_t* v = malloc(n);
@@ -427,15 +432,16 @@ static void hand_made(void)
     size_t n;
     uint8_t* d;
 
-    /* Format 1.1 with 72-byte TOC entries, an unknown optional chunk type,
-     * an unknown encoding and an unknown dtype: readable, those chunks not. */
+    /* A newer minor than this reader's, with 72-byte TOC entries, an
+     * unknown optional chunk type, an unknown encoding and an unknown dtype:
+     * readable, those chunks not. */
     raw_chunk c[4] = {
         raw(MESO_CHUNK_META, 0, MESO_ENCODING_RAW, MESO_DTYPE_BYTES, 1, 1, meta, sizeof meta - 1, sizeof meta - 1),
         raw(MESO_FOURCC('X', 'T', 'R', 'A'), 0, MESO_ENCODING_RAW, MESO_DTYPE_U8, 1, 80, blob, 80, 80),
         raw(MESO_FOURCC('Z', 'S', 'T', 'D'), 0, 7, MESO_DTYPE_BYTES, 1, 1, blob, 40, 4096),
         raw(MESO_FOURCC('H', 'A', 'L', 'F'), 0, MESO_ENCODING_RAW, 12, 1, 1, blob, 16, 16),
     };
-    d = layout(c, 4, 1, 72, &n);
+    d = layout(c, 4, MESO_FORMAT_MINOR + 1, 72, &n);
     save_expect("newer_minor_72b_entries.meso", d, n, MESO_OK, MESO_OK);
     free(d);
 
@@ -536,6 +542,86 @@ static void frusta(void)
     meso_skeleton_free(&sk);
 }
 
+/* A closed UV sphere of radius 1 in memory: `nu` around, `nv` bands (the
+ * poles single vertices), normals = positions, counter-clockwise seen from
+ * outside. Free with free() of positions, normals and indices. */
+static meso_mesh uv_sphere(uint32_t nu, uint32_t nv)
+{
+    const uint32_t nvert = nu * (nv - 1) + 2, ntri = 2 * nu * (nv - 1);
+    meso_mesh m = {nvert, ntri, malloc(sizeof(float) * 3 * nvert), malloc(sizeof(float) * 3 * nvert), NULL,
+                   malloc(sizeof(uint32_t) * 3 * ntri), NULL};
+    assert(m.positions && m.normals && m.indices);
+    for (uint32_t j = 1; j < nv; ++j)
+        for (uint32_t i = 0; i < nu; ++i) {
+            const double th = M_PI * j / nv, ph = 2 * M_PI * i / nu;
+            float* p = m.positions + 3 * (size_t)(1 + (j - 1) * nu + i);
+            p[0] = (float)(sin(th) * cos(ph)), p[1] = (float)(sin(th) * sin(ph)), p[2] = (float)cos(th);
+        }
+    float* top = m.positions;
+    float* bottom = m.positions + 3 * (size_t)(nvert - 1);
+    top[0] = top[1] = bottom[0] = bottom[1] = 0.0f;
+    top[2] = 1.0f, bottom[2] = -1.0f;
+    memcpy(m.normals, m.positions, sizeof(float) * 3 * nvert);
+    uint32_t* t = m.indices;
+    for (uint32_t i = 0; i < nu; ++i) { /* the caps */
+        const uint32_t a = 1 + i, b = 1 + (i + 1) % nu;
+        *t++ = 0, *t++ = a, *t++ = b;
+        const uint32_t c = 1 + (nv - 2) * nu + i, d = 1 + (nv - 2) * nu + (i + 1) % nu;
+        *t++ = nvert - 1, *t++ = d, *t++ = c;
+    }
+    for (uint32_t j = 1; j + 1 < nv; ++j) /* the bands */
+        for (uint32_t i = 0; i < nu; ++i) {
+            const uint32_t a = 1 + (j - 1) * nu + i, b = 1 + (j - 1) * nu + (i + 1) % nu;
+            const uint32_t c = a + nu, d = b + nu;
+            *t++ = a, *t++ = c, *t++ = d;
+            *t++ = a, *t++ = d, *t++ = b;
+        }
+    return m;
+}
+
+/* Levels and parts (FORMAT.md §7.10, §7.11): spheres of 360 and 224
+ * triangles baked by the library as a mesh and as a shell (bricks:8), each with three
+ * levels and cut into parts of about 64 triangles, so the LODS, PRTS,
+ * PTRI, PMSH, PVCL and VCOL readers get seeds of their own (each under the
+ * session's -max_len of 64 KB). */
+static void levels(void)
+{
+    meso_mesh finer = uv_sphere(20, 10), sphere = uv_sphere(16, 8);
+    meso_error err;
+    meso_bake_mesh_options mo = meso_bake_mesh_defaults();
+    mo.mesh = &finer; /* 360 triangles: a mesh under 256 gets no coarser level, hence no parts */
+    mo.levels = 3;
+    mo.parts = 64;
+    meso_bake_output* out = NULL;
+    if (meso_bake_mesh(&mo, &out, NULL, &err) != MESO_OK) {
+        fprintf(stderr, "make_corpus: %s\n", err.message);
+        exit(1);
+    }
+    size_t n;
+    uint8_t* d = bake_bytes(out, &n);
+    assert(n <= 65536);
+    save_expect("sphere_levels_parts.meso", d, n, MESO_OK, MESO_OK);
+    free(d);
+    meso_bake_shell_options so = meso_bake_shell_defaults();
+    so.mesh = &sphere;
+    so.texture = "bricks:8";
+    so.levels = 3;
+    so.parts = 64;
+    if (meso_bake_shell(&so, &out, NULL, &err) != MESO_OK) {
+        fprintf(stderr, "make_corpus: %s\n", err.message);
+        exit(1);
+    }
+    d = bake_bytes(out, &n);
+    assert(n <= 65536);
+    save_expect("sphere_shell_parts.meso", d, n, MESO_OK, MESO_OK);
+    free(d);
+    for (meso_mesh* m = &finer; m; m = m == &finer ? &sphere : NULL) {
+        free(m->positions);
+        free(m->normals);
+        free(m->indices);
+    }
+}
+
 int main(int argc, char** argv)
 {
     if (argc != 2) {
@@ -548,5 +634,6 @@ int main(int argc, char** argv)
     meshes();
     hand_made();
     frusta();
+    levels();
     return 0;
 }
