@@ -24,6 +24,9 @@
  * Output: one CSV (section, setting, metric, value). 320 x 240 pixels.
  * With PNG: the scene at 1 px beside the level each pixel's object drew
  * (white the finest, then blue, green, yellow, orange, magenta, violet).
+ * With MESO_BENCH_OBJECTS=T in the environment it prints, instead, each
+ * object's distance, level drawn and resident bytes at pixel error T
+ * (what a setting's bytes are made of) and writes only the stream rows.
  * usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR [PNG] */
 #include <math.h>
 #include <stdio.h>
@@ -347,6 +350,31 @@ static void bench_setting(float tau, const char* name, const double* ms, int cou
     scene_free(&s);
 }
 
+/* MESO_BENCH_OBJECTS=T: each object's file, distance, level drawn and
+ * bytes at pixel error T (after a few frames), to stdout; what a setting's
+ * bytes and time are made of. */
+static void objects_at(float tau)
+{
+    scene s;
+    scene_load(&s);
+    for (int i = 0; i < 4; ++i)
+        scene_draw(&s, tau, NULL);
+    uint64_t total = 0;
+    printf("object  file     distance  lod  resident_bytes\n");
+    for (int k = 0; k < N; ++k) {
+        int fi;
+        float model[16];
+        place(k, model, &fi);
+        meso_rt_levels_state ls;
+        meso_rt_levels_state_get(s.rt, s.obj[k], &ls);
+        total += ls.bytes_resident;
+        printf("%6d  %-7s  %8.2f  %3d  %14llu\n", k, files[fi].name, 2.0 * pow(100.0, k / (double)(N - 1)),
+               ls.last_drawn, (unsigned long long)ls.bytes_resident);
+    }
+    printf("total %llu bytes at %g px\n", (unsigned long long)total, (double)tau);
+    scene_free(&s);
+}
+
 int main(int argc, char** argv)
 {
     if (argc != 5 && argc != 6) {
@@ -377,6 +405,11 @@ int main(int argc, char** argv)
         row("stream", files[i].name, "first_image_bytes", (double)li[last].prefix_bytes);
         row("stream", files[i].name, "first_image_share",
             (double)li[last].prefix_bytes / (double)meso_file_size(opened[i]));
+    }
+    const char* objects = getenv("MESO_BENCH_OBJECTS");
+    if (objects) {
+        objects_at((float)atof(objects));
+        return 0;
     }
     render_reference();
     /* Rounds over all settings, so that a slow spell of the machine
