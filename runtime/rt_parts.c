@@ -166,6 +166,7 @@ static meso_result read_prisms(meso_rt* rt, meso_file* f, const meso_object_reco
         p->tri_count = n;
         mesoi_rt_free(rt, p->subset);
         p->subset = grown;
+        p->subset_key = 0; /* holds nothing yet: the next pick fills it */
         rt->bytes_resident += p->lv[i0].bytes;
         if (!rt->prefetch)
             p->bytes_read += p->lv[i0].bytes;
