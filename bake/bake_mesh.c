@@ -36,9 +36,6 @@ static meso_result write_parts(mesoi_bake_run* run, const meso_mesh* m, const me
                                const meso_draco_options* dopt, meso_writer* w, meso_bake_mesh_report* rp,
                                cJSON** jout, meso_error* err)
 {
-    if (o->parts > 0 && o->parts < 64)
-        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "parts of %d triangles: at least 64 (or 0 = auto, -1 = none)",
-                              o->parts);
     meso_mesh_parts P;
     const meso_mesh_parts_options po = {.part_triangles = o->parts > 0 ? (uint32_t)o->parts : 0,
                                         .max_levels = o->levels,
@@ -146,6 +143,11 @@ meso_result meso_bake_mesh(const meso_bake_mesh_options* o, meso_bake_output** o
         meso_mesh_free(&m);
         return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "levels %d: 0 (auto) or 1..%d", want,
                               MESO_BAKE_MESH_MAX_LEVELS);
+    }
+    if (o->parts < -1 || (o->parts > 0 && o->parts < 64)) { /* before the levels' work */
+        meso_mesh_free(&m);
+        return meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0, "parts of %d triangles: at least 64 (or 0 = auto, -1 = none)",
+                              o->parts);
     }
     meso_mesh_level* lv = NULL;
     uint32_t nlv = 0;

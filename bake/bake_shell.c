@@ -75,6 +75,8 @@ static meso_result normalise(const meso_bake_shell_options* o, meso_bake_shell_o
                       : !(a->angle_tol_deg > 0 && a->angle_tol_deg <= 90)         ? "angle_tol_deg must be in (0, 90]"
                       : a->smooth < 0 || a->smooth > 1000                         ? "smooth must be in 0..1000"
                       : a->levels < 0 || a->levels > MESO_BAKE_SHELL_MAX_LEVELS    ? "levels must be in 0..9"
+                      : a->parts < -1 || (a->parts > 0 && a->parts < 64)
+                          ? "parts must be 0 (auto), -1 (none) or a triangle count of at least 64"
                       : !(a->tiling[0] > 0 && a->tiling[0] <= 1e6 && a->tiling[1] > 0 && a->tiling[1] <= 1e6)
                           ? "tiling must be in (0, 1e6]"
                       : a->dist_dtype != MESO_DTYPE_U8 && a->dist_dtype != MESO_DTYPE_U16 &&
@@ -1301,9 +1303,6 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                 cJSON_AddNumberToObject(rep, "standin_chain_base_error", (double)mesoi_f32_up(s->e0));
             }
             /* The shell in parts (shell_parts.c): prisms near, stand-in patches far. */
-            if (r == MESO_OK && a->parts > 0 && a->parts < 64)
-                r = meso_bake_fail(err, MESO_ERR_INVALID_ARG, 0,
-                                   "parts of %d triangles: at least 64 (or 0 = auto, -1 = none)", a->parts);
             if (r == MESO_OK && a->parts >= 0 && MESO_HAVE_MESHOPTIMIZER) {
                 const double tp = meso_seconds();
                 const mesoi_shell_parts_input pin = {

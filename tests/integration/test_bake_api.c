@@ -549,6 +549,17 @@ static void malformed_inputs_are_errors(void)
     so.texture = NULL;
     so.p = 40; /* out of range: an argument error, not a crash */
     assert(meso_bake_shell(&so, &out, NULL, &err) == MESO_ERR_INVALID_ARG);
+    so.p = 0;
+    so.parts = 63; /* parts below 64 triangles: refused with the options, before any work */
+    memset(&err, 0, sizeof err);
+    assert(meso_bake_shell(&so, &out, NULL, &err) == MESO_ERR_INVALID_ARG && !out && strstr(err.message, "parts"));
+    so.parts = 0;
+    mo = meso_bake_mesh_defaults();
+    mo.input = DATA("sphere.obj");
+    mo.parts = 63;
+    memset(&err, 0, sizeof err);
+    assert(QUIET("mesh parts 63", meso_bake_mesh(&mo, &out, NULL, &err)) == MESO_ERR_INVALID_ARG && !out &&
+           strstr(err.message, "parts"));
 
     meso_mesh mesh;
     r = QUIET("missing file", meso_bake_load_mesh(DATA("nonexistent.obj"), NULL, &mesh, NULL, &err));
