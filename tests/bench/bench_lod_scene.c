@@ -154,12 +154,19 @@ static void scene_load(scene* s)
     }
 }
 
-static void scene_draw(scene* s, float tau, meso_rt_draw_stats* sum)
+/* The scene's draw description at pixel error tau (the model is each object's). */
+static meso_rt_draw_desc scene_desc(float tau)
 {
     meso_rt_draw_desc d = {0};
     camera(&d);
     d.pixel_error = tau;
     d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
+    return d;
+}
+
+static void scene_draw(scene* s, float tau, meso_rt_draw_stats* sum)
+{
+    meso_rt_draw_desc d = scene_desc(tau);
     test_fbo_clear(&fbo, 0.18f, 0.20f, 0.24f);
     meso_rt_draw_stats st;
     for (int k = 0; k < N; ++k) {
@@ -364,10 +371,7 @@ static void objects_at(float tau)
     /* Each object's draw timed alone (glFinish either side), in scene
      * order so the depth buffer holds the nearer objects, REPEAT frames. */
     static double ms[N][REPEAT];
-    meso_rt_draw_desc d = {0};
-    camera(&d);
-    d.pixel_error = tau;
-    d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
+    meso_rt_draw_desc d = scene_desc(tau);
     for (int r = 0; r < REPEAT; ++r) {
         test_fbo_clear(&fbo, 0.18f, 0.20f, 0.24f);
         for (int k = 0; k < N; ++k) {
