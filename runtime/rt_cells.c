@@ -6,7 +6,9 @@
  * they are measured against runtime/reference/cell_reference.h).
  *
  * GL layout, everything as stored (no re-encoding):
- *   unit 0  TILE  3D texture R16UI / R32UI, R^3 (nearest)
+ *   unit 0  TILE  3D texture R16UI / R32UI, R^3 (nearest); the split ids as
+ *                 stored, with each voxel's skip radius packed above them
+ *                 where they leave room (rt_cells_skip.c)
  *   unit 1  MEMB  texture buffer R32UI over the sparse words (classes, rank,
  *                 records: the shader finds a MIXED tile's record with the
  *                 rank word plus a popcount, as FORMAT.md describes)
@@ -30,12 +32,16 @@
  *    mesh, and a ray there may still reach INSIDE cells with no further
  *    entry. meso walks on instead; OUTSIDE tiles are crossed in one step,
  *    so what it costs is the walk through the intersected band.
+ *  - Inside a MIXED tile the walk leaves, in one step, the largest cube
+ *    around its voxel that holds one split cell (rt_cells_skip.c): the
+ *    answer is the voxel walk's, the steps fewer.
  *  - The file is checked as meso_file_check_cells does before anything is
  *    uploaded, so the shaders never index past their data; TILE and MEMB
  *    are uploaded from the check's own copies (read once).
  */
 #include "file_internal.h"
 #include "mat4_inverse.h"
+#include "rt_cells_skip.h"
 #include "rt_internal.h"
 #include "shaders_embedded.h"
 
@@ -48,6 +54,7 @@ typedef struct mesoi_cells {
     uint32_t class_words, record_words; /* ceil(T / 16), W */
     float origin[3], voxel;
     int map_full;
+    int id_bits; /* TILE's values: split id in the low id_bits, skip radius above; 0 ids only */
     GLuint tile_tex, memb_buf, memb_tex, nrmm_tex, colr_tex, grid_tex;
     GLint grid[3]; /* TX3D colour grid dims; 0 without one */
 } mesoi_cells;
@@ -181,8 +188,9 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     /* The check reads TILE and MEMB anyway; they are uploaded from its copies. */
     uint8_t *tile = NULL, *memb = NULL;
     meso_error err;
-    meso_result r = mesoi_stream_take_cells(rt, &tile, &memb) ? MESO_OK /* checked off the GL thread */
-                                                                 : mesoi_file_check_cells_keep(f, id, rt->load_lod, &tile, &memb, &err);
+    int id_bits = 0;
+    const int streamed = mesoi_stream_take_cells(rt, &tile, &memb, &id_bits); /* checked off the GL thread */
+    meso_result r = streamed ? MESO_OK : mesoi_file_check_cells_keep(f, id, rt->load_lod, &tile, &memb, &err);
     if (r != MESO_OK) {
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
         return r;
@@ -211,6 +219,7 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         c->map_full = 1; /* is there empty space in the map? */
         for (size_t v = 0; v < n && c->map_full; ++v)
             c->map_full = wide ? mesoi_ld32(tile + 4 * v) != 0 : mesoi_ld16(tile + 2 * v) != 0;
+        c->id_bits = streamed ? id_bits : mesoi_cells_skip_level(f, id, rt->load_lod, tile, &rt->alloc);
         r = upload_3d(rt, tc, tile, wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER,
                       wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT, &c->tile_tex);
         if (r == MESO_OK) {
@@ -401,6 +410,7 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1i(u[MESOI_U_class_words], (GLint)c->class_words);
     gl->Uniform1i(u[MESOI_U_words], (GLint)c->record_words);
     gl->Uniform1i(u[MESOI_U_map_full], c->map_full);
+    gl->Uniform1i(u[MESOI_U_id_bits], c->id_bits);
     gl->Uniform1i(u[MESOI_U_from_near], from_near);
     gl->Uniform1i(u[MESOI_U_mode], (GLint)k->mode);
     gl->Uniform1i(u[MESOI_U_bounces], k->bounces);

@@ -37,7 +37,7 @@ typedef struct mesoi_object {
     X(segment_steps) X(fixed_step) X(min_step) X(slices) X(slice_axis) X(prism_count) /* shell, slices */                \
     X(has_color) X(color_scale) X(hull_reject)                         /* shell colour, hull rejection */  \
     X(relief_size) X(relief_steps) X(color_size) X(ball_color)          /* frusta */                        \
-    X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(from_near)  \
+    X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(id_bits) X(from_near)  \
     X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) X(footprint_rays) /* cells */                              \
     X(instanced) X(instance_base)                                      /* instance.glsl */
 
@@ -544,7 +544,7 @@ void mesoi_stream_destroy(meso_rt* rt);
 void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci);
 /* The CELLS check the request being uploaded ran (its TILE and MEMB copies,
  * the file's allocator's); 0 when there is none. */
-int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb);
+int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb, int* id_bits);
 
 /* meso_rt.c */
 void* mesoi_rt_alloc(meso_rt* rt, size_t size);

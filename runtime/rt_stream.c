@@ -7,7 +7,8 @@
  * level uploaded. A request moves WAITING -> TAKEN (meso_rt_stream_take, GL
  * thread) -> run (any thread: reads, CRC checks and decodes every chunk the
  * level draws into memory, and for a CELLS level the whole
- * meso_file_check_cells, whose TILE and MEMB copies it keeps) -> given back
+ * meso_file_check_cells, whose TILE and MEMB copies it keeps, and the tile
+ * map's skip radii, rt_cells_skip.c) -> given back
  * (GL thread): DECODED, or WAITING again when its bytes had not arrived, or
  * freed with its level marked failed -> uploaded (meso_rt_stream_upload, GL
  * thread, oldest first, up to a byte budget per call).
@@ -27,6 +28,7 @@
  * on destroy, so taken ones must come back first (meso_rt.h says so).
  */
 #include "file_internal.h"
+#include "rt_cells_skip.h"
 #include "rt_internal.h"
 
 #include <string.h>
@@ -51,6 +53,7 @@ struct meso_rt_request {
     void** data;                    /* [count] decoded bytes (alloc); NULL once handed over */
     uint8_t *tile, *memb;           /* CELLS: the check's copies (the file's allocator) */
     int cells_checked;
+    int id_bits;                    /* CELLS: tile's skip radii (rt_cells_skip.h), 0 none */
     uint64_t bytes;                 /* stored bytes read */
     meso_result result;
 };
@@ -78,7 +81,7 @@ static void req_clear(meso_rt_request* q)
         mesoi_file_free(&q->file->alloc, q->memb);
     }
     q->tile = q->memb = NULL;
-    q->cells_checked = 0;
+    q->cells_checked = q->id_bits = 0;
     q->bytes = 0;
 }
 
@@ -256,6 +259,8 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
     if (r == MESO_OK && q->kind == MESO_OBJECT_CELLS) {
         r = mesoi_file_check_cells_keep(f, q->object, q->lod, &q->tile, &q->memb, &err);
         q->cells_checked = r == MESO_OK;
+        if (q->cells_checked) /* the radii too are worked out off the GL thread */
+            q->id_bits = mesoi_cells_skip_level(f, q->object, q->lod, q->tile, &q->alloc);
     }
     if (r != MESO_OK) {
         const uint64_t bytes = q->bytes; /* bytes read count, failed or not */
@@ -379,13 +384,14 @@ void meso_rt_stream_state_get(const meso_rt* rt, meso_rt_stream_state* out)
 }
 
 /* The cells check a CELLS request ran, handed to the loader (rt_cells.c). */
-int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb)
+int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb, int* id_bits)
 {
     meso_rt_request* q = rt->prefetch;
     if (!q || !q->cells_checked)
         return 0;
     *tile = q->tile;
     *memb = q->memb;
+    *id_bits = q->id_bits;
     q->tile = q->memb = NULL;
     q->cells_checked = 0;
     return 1;

@@ -14,7 +14,9 @@
 //
 // Searches: exact voxel traversal (Amanatides-Woo, lowest axis first on
 // ties) over the grid's voxels with whole-tile skipping (OUTSIDE tiles when
-// looking for solid, INSIDE tiles of a full map when looking for empty),
+// looking for solid, INSIDE tiles of a full map when looking for empty)
+// and, inside other tiles, whole-cube skipping (u_id_bits > 0: the largest
+// cube of one split cell around the voxel, runtime/rt_cells_skip.c),
 // or with u_step > 0 the thesis's linear search plus bisection
 // (Algorithm 3.1), which can step over thin cells at grazing angles.
 // The environment is the host's cube map when it passes one, else the
@@ -40,6 +42,7 @@ uniform int u_res;          // R
 uniform int u_class_words;  // ceil(T / 16)
 uniform int u_words;        // W, words per MEMB record
 uniform int u_map_full;     // 1: no empty voxel in the tile map
+uniform int u_id_bits;      // > 0: u_tile holds the split id in these bits, the skip radius above
 uniform int u_from_near;    // 1: back-face fragments start at the near plane (camera inside the grid)
 uniform int u_mode;         // 0 first hit, 1 reflection, 2 refraction
 uniform int u_bounces;
@@ -87,10 +90,15 @@ bool outside_grid(ivec3 v)
     return any(lessThan(v, ivec3(0))) || any(greaterThanEqual(v, u_tiles * u_res));
 }
 
+uint g_radius = 0u; // the skip radius of the voxel solid_in_tile last looked at
+
 // SOLID (cell_reference.h) for a voxel inside the grid, in tile g_tile.
 bool solid_in_tile(ivec3 v)
 {
     uint s = texelFetch(u_tile, v - g_tile * u_res, 0).r;
+    g_radius = u_id_bits > 0 ? s >> uint(u_id_bits) : 0u;
+    if (u_id_bits > 0)
+        s &= (1u << uint(u_id_bits)) - 1u;
     if (s == 0u || g_cls == 0)
         return false;
     if (g_cls == 1)
@@ -158,8 +166,24 @@ bool search_exact(vec3 o, vec3 u, ivec3 start, float s_max, bool want_solid, out
         }
         enter_tile(v / u_res);
         bool skip = want_solid ? g_cls == 0 : (g_cls == 1 && u_map_full == 1);
-        if (skip) {
-            ivec3 lo = g_tile * u_res, hi = lo + u_res;
+        ivec3 lo = g_tile * u_res, hi = lo + u_res;
+        if (!skip) {
+            // enter_tile above set g_tile
+            bool state = solid_in_tile(v);
+            if (!first && state == want_solid) {
+                h.s = h.s_lo = s;
+                h.vox = v;
+                return true;
+            }
+            // The cube of v's split cell, all in v's state; else one voxel.
+            // (A search may start in a voxel of the state it wants: that one
+            // is stepped out of, as the walk does.)
+            skip = g_radius > 0u && state != want_solid;
+            lo = v - int(g_radius);
+            hi = v + int(g_radius) + 1;
+        }
+        first = false;
+        if (skip) { // leave the box [lo, hi) where the voxel walk would
             vec3 te;
             for (int a = 0; a < 3; ++a)
                 te[a] = inv[a] == 0.0 ? 1e30 : (float(stp[a] > 0 ? hi[a] : lo[a]) - g0[a]) * inv[a];
@@ -174,15 +198,8 @@ bool search_exact(vec3 o, vec3 u, ivec3 start, float s_max, bool want_solid, out
             h.axis = a;
             v = nv;
             tn = vec3(axis_t(g0, inv, stp, v, 0), axis_t(g0, inv, stp, v, 1), axis_t(g0, inv, stp, v, 2));
-            first = false;
             continue;
         }
-        if (!first && solid_in_tile(v) == want_solid) { // enter_tile above set g_tile
-            h.s = h.s_lo = s;
-            h.vox = v;
-            return true;
-        }
-        first = false;
         int a = argmin3(tn);
         s = tn[a];
         if (s > s_max)

@@ -39,6 +39,7 @@
 #include "gl_log.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
+#include "rt_cells_skip.h"
 #include "prefix_io.h"
 #include "shell_scene.h"
 
@@ -506,6 +507,72 @@ static void test_reflection_refraction(ctx* c)
     unload(c, &l);
 }
 
+/* The walk leaves each cube of one split cell in a step (rt_cells_skip.c):
+ * the same images as the voxel-by-voxel walk, in fewer steps, for first
+ * hits, reflections and refractions. The hit distances come from the cube's
+ * faces instead of the walk's running sums, so depth may differ in its
+ * last bits. */
+static void test_cube_skip(ctx* c)
+{
+    static const char* files[2] = {"voronoi_rr", "spheres_rr"};
+    const meso_rt_draw_desc knobs[3] = {
+        {.cells = {.mode = MESO_CELLS_FIRST_HIT}},
+        {.cells = {.mode = MESO_CELLS_REFLECT, .bounces = 2}},
+        {.cells = {.mode = MESO_CELLS_REFRACT, .bounces = 2, .ior = 1.33f}},
+    };
+    const size_t n = (size_t)W * H;
+    uint8_t* rgba = malloc(3 * n * 4); /* the walk's images, one per mode */
+    float* depth = malloc(3 * n * sizeof(float));
+    CHECK(rgba && depth);
+    for (int fi = 0; fi < 2; ++fi) {
+        char path[256];
+        snprintf(path, sizeof path, "%s/%s.meso", c->dir, files[fi]);
+        meso_rt_draw_stats st[2][3];
+        for (int on = 0; on <= 1; ++on) {
+            mesoi_cells_skipping = on;
+            loaded l = load(c, path);
+            mesoi_cells_skipping = 1;
+            const camera cam = view_box(&l, dirs[fi], 0.6);
+            for (int k = 0; k < 3; ++k) {
+                meso_rt_draw_desc d = knobs[k];
+                camera_matrices(&cam, d.view, d.proj);
+                memset(&st[on][k], 0, sizeof st[on][k]);
+                d.stats = &st[on][k];
+                test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
+                CHECK_MSG(meso_rt_draw(c->rt, l.obj, &d) == MESO_OK, "%s", c->log.message);
+                test_fbo_read(&c->fbo, c->rgba, c->depth);
+                if (!on) {
+                    memcpy(rgba + (size_t)k * n * 4, c->rgba, n * 4);
+                    memcpy(depth + (size_t)k * n, c->depth, n * sizeof(float));
+                    continue;
+                }
+                size_t colour = 0;
+                double dz = 0.0;
+                for (size_t i = 0; i < n; ++i) {
+                    colour += memcmp(rgba + ((size_t)k * n + i) * 4, c->rgba + 4 * i, 4) != 0;
+                    dz = fmax(dz, fabs((double)depth[(size_t)k * n + i] - c->depth[i]));
+                }
+                const meso_rt_draw_stats* a = &st[0][k];
+                const meso_rt_draw_stats* b = &st[1][k];
+                printf("cube_skip %s mode %d: %zu pixels of another colour, depth within %.2g; steps/fragment %.1f -> "
+                       "%.1f\n",
+                       files[fi], k, colour, dz, a->fragments ? (double)a->steps / (double)a->fragments : 0.0,
+                       b->fragments ? (double)b->steps / (double)b->fragments : 0.0);
+                CHECK_MSG(colour <= n / 10000, "%s mode %d: %zu pixels differ with the cubes skipped", files[fi], k,
+                          colour);
+                CHECK_MSG(dz <= 1e-5, "%s mode %d: depth differs by %g with the cubes skipped", files[fi], k, dz);
+                CHECK(a->fragments == b->fragments && a->hits == b->hits);
+                CHECK_MSG(!a->supported || b->steps < a->steps * 9 / 10,
+                          "%s mode %d: skipping the cubes should save a tenth of the steps: %llu -> %llu", files[fi],
+                          k, (unsigned long long)a->steps, (unsigned long long)b->steps);
+            }
+            unload(c, &l);
+        }
+    }
+    free(rgba);
+    free(depth);
+}
+
 /* The host's own environment: a cube map with one colour per face, seen
  * by reflected and refracted rays; the reference looks the same faces up.
  * The host's own cube map binding on unit 4 comes back after the draw. */
@@ -879,6 +946,7 @@ int main(int argc, char** argv)
     test_colour_grid(&c);
     test_prefixes(&c);
     test_reflection_refraction(&c);
+    test_cube_skip(&c);
     test_environment(&c);
     test_camera_inside(&c);
     test_near_plane_in_front(&c);
