@@ -25,8 +25,9 @@
  * With PNG: the scene at 1 px beside the level each pixel's object drew
  * (white the finest, then blue, green, yellow, orange, magenta, violet).
  * With MESO_BENCH_OBJECTS=T in the environment it prints, instead, each
- * object's distance, level drawn, resident bytes and draw time (alone,
- * median of 5) at pixel error T (what a setting's bytes and time are made
+ * object's distance, level drawn, resident bytes, draw time (alone,
+ * median of 5) and ray-casting fragments and steps per fragment (one
+ * counted frame; 0 where not counted: meshes) at pixel error T (what a setting's bytes and time are made
  * of) and writes only the stream rows.
  * usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR [PNG] */
 #include <math.h>
@@ -385,9 +386,20 @@ static void objects_at(float tau)
         }
         meso_rt_frame_end(s.rt);
     }
+    /* One more frame, counted (untimed): each draw's fragments and steps. */
+    static meso_rt_draw_stats st[N];
+    test_fbo_clear(&fbo, 0.18f, 0.20f, 0.24f);
+    for (int k = 0; k < N; ++k) {
+        memcpy(d.model, s.model[k], sizeof d.model);
+        d.stats = &st[k];
+        if (meso_rt_draw(s.rt, s.obj[k], &d) != MESO_OK)
+            die("draw");
+    }
+    d.stats = NULL;
+    meso_rt_frame_end(s.rt);
     uint64_t total = 0;
     double total_ms = 0.0;
-    printf("object  file     distance  lod  resident_bytes  ms\n");
+    printf("object  file     distance  lod  resident_bytes      ms  fragments  steps/fragment\n");
     for (int k = 0; k < N; ++k) {
         int fi;
         float model[16];
@@ -397,8 +409,10 @@ static void objects_at(float tau)
         total += ls.bytes_resident;
         qsort(ms[k], REPEAT, sizeof(double), cmp_double);
         total_ms += ms[k][REPEAT / 2];
-        printf("%6d  %-7s  %8.2f  %3d  %14llu  %6.2f\n", k, files[fi].name, 2.0 * pow(100.0, k / (double)(N - 1)),
-               ls.last_drawn, (unsigned long long)ls.bytes_resident, ms[k][REPEAT / 2]);
+        printf("%6d  %-7s  %8.2f  %3d  %14llu  %6.2f  %9llu  %14.1f\n", k, files[fi].name,
+               2.0 * pow(100.0, k / (double)(N - 1)), ls.last_drawn, (unsigned long long)ls.bytes_resident,
+               ms[k][REPEAT / 2], (unsigned long long)st[k].fragments,
+               st[k].fragments ? (double)st[k].steps / (double)st[k].fragments : 0.0);
     }
     printf("total %llu bytes, %.1f ms (medians of %d, summed) at %g px\n", (unsigned long long)total, total_ms, REPEAT,
            (double)tau);
