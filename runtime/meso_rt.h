@@ -260,7 +260,8 @@ MESO_API meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* file, ui
 typedef struct meso_rt_levels_state {
     uint32_t level_count;
     uint32_t resident_mask;   /* bit L: level L is uploaded (levels >= 32 are not reported) */
-    int32_t last_drawn;       /* lod of the last draw, -1 before the first */
+    int32_t last_drawn;       /* lod of the last draw, -1 before the first (drawn in parts: the finest
+                                 part level drawn) */
     uint64_t bytes_resident;  /* sum of the uploaded levels' chunk bytes (meso_level_info.bytes) */
     uint64_t bytes_read;      /* every byte read from the file for this object, uploads that failed included
                                  (reads that found their bytes not arrived yet are not counted) */
@@ -275,8 +276,10 @@ MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object 
  * reject hull fragments (meso_rt_shell_draw.no_hull_reject says which;
  * the knob itself does not matter here): a part at lod 0
  * draws its prisms with that level, a coarser one its stand-in patch (a
- * mesh), which meets the prisms within its error. Its levels state counts
- * the parts' bytes too.
+ * mesh), which meets the prisms within its error. Where the whole object
+ * would draw a coarser level (a shell: or where every part wants its
+ * patch), the parts draw instead when their own levels hold fewer bytes
+ * than that level. Its levels state counts the parts' bytes too.
  * This reports the level each part drew last (levels[part - 1], up to
  * `cap`) and *part_count (0: the object has no parts; the parts table is
  * read with the levels table, by meso_rt_load_object_levels). Under

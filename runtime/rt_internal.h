@@ -453,6 +453,7 @@ typedef struct mesoi_levels {
                                       at the next lower one */
     struct mesoi_parts* parts; /* a mesh object stored with parts (rt_parts.c), else NULL */
     uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
+    int parts_native;          /* they drew with the whole native level (a shell's prisms) */
 } mesoi_levels;
 /* rt_parts.c: a levelled mesh object's parts (here for rt_stream.c, which
  * files and uploads part levels as it does levels). */
@@ -493,6 +494,13 @@ typedef struct mesoi_parts {
  * levels; bytes: resident part bytes (and the last pick's wanted, and all
  * read). */
 meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts** out);
+/* want: the levels a pick would want (p->want; nothing read or uploaded)
+ * and their bytes; *prisms_wanted 1 when some shell part wants its
+ * prisms (their list counted once). all_patches: no part drawn at its
+ * prisms (the last pick). */
+uint64_t mesoi_parts_want(mesoi_parts* p, const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count,
+                          double tau, double height, int* prisms_wanted);
+int mesoi_parts_all_patches(const mesoi_parts* p);
 void mesoi_parts_free(meso_rt* rt, mesoi_parts* p);
 meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                              uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out);

@@ -285,7 +285,7 @@ void meso_rt_frame_end(meso_rt* rt)
                                                            prisms draw with its native level) */
         if (lv->parts && lv->parts_frame == rt->frame + 1) {
             mesoi_parts_bytes(lv->parts, &wanted, NULL);
-            wanted += lv->parts->shell ? lv->info[lv->want_now].bytes : 0;
+            wanted += lv->parts_native ? lv->info[lv->want_now].bytes : 0;
         }
         now += wanted + (lv->want_now + 1 < lv->count ? coarsest : 0);
         lower += lv->info[lv->want_lower].bytes + (lv->want_lower + 1 < lv->count ? coarsest : 0);
@@ -375,12 +375,39 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         if (pr == MESO_OK) {
             lv->last_drawn = 0;
             lv->parts_frame = rt->frame + 1;
+            lv->parts_native = 0;
             *out = ph;
             return MESO_OK;
         }
         if (pr == MESO_ERR_OUT_OF_MEMORY)
             return pr;
         parts_pending = pr == MESO_ERR_PENDING;
+    }
+    /* Coarser than level 0, or a shell none of whose parts wants its
+     * prisms: the parts instead where their own levels hold fewer bytes
+     * than the whole level (rt_parts.c), no native level needed. */
+    if (lv->parts && (want > 0 || lv->parts->shell)) {
+        int prisms_wanted = 0;
+        const uint64_t bytes =
+            mesoi_parts_want(lv->parts, d, inst, count, tau * rt->tau_scale, height, &prisms_wanted);
+        if (!prisms_wanted && bytes < lv->info[want].bytes) {
+            meso_rt_object ph;
+            const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height,
+                                                    (meso_rt_object){0}, &ph);
+            if (pr == MESO_ERR_OUT_OF_MEMORY)
+                return pr;
+            if (pr == MESO_OK && mesoi_parts_all_patches(lv->parts)) {
+                uint32_t finest = UINT32_MAX;
+                for (uint32_t q = 0; q < lv->parts->part_count; ++q)
+                    finest = lv->parts->drawn[q] < finest ? lv->parts->drawn[q] : finest;
+                lv->last_drawn = finest;
+                lv->parts_frame = rt->frame + 1;
+                lv->parts_native = 0;
+                *out = ph;
+                return MESO_OK;
+            }
+            parts_pending |= pr == MESO_ERR_PENDING;
+        }
     }
     /* The level wanted, else the finest coarser one that can be had, else
      * the nearest finer one uploaded before. With stream requests, a level
@@ -432,6 +459,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
             return pr;
         if (pr == MESO_OK && mesoi_parts_coarse(lv->parts)) {
             lv->parts_frame = rt->frame + 1;
+            lv->parts_native = 1;
             *out = ph;
         }
     }

@@ -7,7 +7,14 @@
  * Where the object's whole levels would draw level 0 (some of it is near),
  * an object stored with parts draws each part at its own level instead, so
  * the far end of a long object, or the far side of a near one, draws and
- * holds less. How:
+ * holds less. Where they would draw a coarser level L, the parts draw
+ * instead when their own levels hold fewer bytes than L does: a
+ * mid-distance object's far side is coarser still, while a far object
+ * keeps its one small coarsest level (a part's coarsest is larger than its
+ * share of the object's). A shell's parts draw so, at any L, when every
+ * one of them wants its stand-in patch: then its native level is not
+ * needed (where some part wants its prisms, they draw with the native
+ * level, below). How:
  *
  *  - each part's level is the coarsest whose error, projected at the
  *    nearest point of that level's bounds (rt_levels.c mesoi_projected_px,
@@ -260,12 +267,9 @@ static void prism_subset(mesoi_parts* p)
         }
 }
 
-meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
-                             uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out)
+uint64_t mesoi_parts_want(mesoi_parts* p, const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count,
+                          double tau, double height, int* prisms_wanted)
 {
-    mesoi_parts* p = lv->parts;
-    p->pick_frame = rt->frame + 1;
-    p->native = native;
     /* Each part's own level. */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], b = p->first[q + 1];
@@ -299,6 +303,24 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_d
             }
         }
     }
+    uint64_t bytes = 0;
+    *prisms_wanted = 0;
+    for (uint32_t q = 0; q < p->part_count; ++q) {
+        const uint32_t i = p->first[q] + p->want[q];
+        *prisms_wanted |= prisms(p, i);
+        bytes += prisms(p, i) ? 0 : p->lv[i].bytes;
+    }
+    return bytes + (*prisms_wanted ? p->lv[p->first[0]].bytes : 0);
+}
+
+meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
+                             uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out)
+{
+    mesoi_parts* p = lv->parts;
+    p->pick_frame = rt->frame + 1;
+    p->native = native;
+    int prisms_wanted = 0;
+    mesoi_parts_want(p, d, inst, count, tau, height, &prisms_wanted);
     /* A shell none of whose parts is far enough for its patch draws its
      * whole native level: nothing to read or upload. */
     int any = !p->shell;
@@ -388,6 +410,14 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
     const meso_result r = mesoi_shell_draw(rt, n, d, inst, count);
     n->shell->subset = NULL;
     return r;
+}
+
+int mesoi_parts_all_patches(const mesoi_parts* p)
+{
+    for (uint32_t q = 0; q < p->part_count; ++q)
+        if (prisms(p, p->first[q] + p->drawn[q]))
+            return 0;
+    return 1;
 }
 
 int mesoi_parts_coarse(const mesoi_parts* p)

@@ -19,6 +19,9 @@
  *    where the far one is off screen);
  *  - streamed (stream requests), the part levels are requested and
  *    uploaded as levels are, and settle on the synchronous image;
+ *  - where the whole object would draw a coarser level (larger pixel
+ *    errors), the parts draw instead when they hold fewer bytes, and
+ *    never hold more than the whole level;
  *  - a file without parts (--parts none) draws as before: no parts. */
 #include "test_util.h"
 
@@ -36,6 +39,10 @@
 #include "meso_rt.h"
 
 enum { W = 160, H = 120 };
+#define PC_W W
+#define PC_H H
+#define PC_FOV 50.0
+#include "parts_checks.h"
 #define TAU 2.0f /* pixels: where spot's part levels (0.5-1 % of its diagonal) separate at this size */
 
 static test_fbo fb;
@@ -53,7 +60,7 @@ static uint8_t* bake_spot(int parts, size_t* size)
 
 static void view(const meso_object_record* rec, meso_rt_draw_desc* d, double eye[3])
 {
-    near_end_view(rec, 50.0, (double)W / H, d, eye);
+    near_end_view(rec, PC_FOV, (double)W / H, d, eye);
 }
 
 static float* draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
@@ -68,21 +75,9 @@ static float* draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
 
 static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_record* rec)
 {
-    uint32_t nl = 0, np = 0, ne = 0;
-    meso_error err;
-    assert(meso_file_parts(f, rec->id, NULL, 0, &nl, &np, NULL, 0, &ne, &err) == MESO_OK);
-    assert(np >= 2 && nl > np);
-    meso_part_level* pl = malloc(sizeof(meso_part_level) * nl);
-    uint32_t* edges = malloc(sizeof(uint32_t) * 2 * ne);
-    assert(pl && edges);
-    assert(meso_file_parts(f, rec->id, pl, nl, &nl, &np, edges, ne, &ne, &err) == MESO_OK);
-    uint32_t* first = calloc(np + 1, sizeof(uint32_t));
-    assert(first);
-    for (uint32_t i = 0; i < nl; ++i)
-        first[pl[i].rec.object]++;
-    for (uint32_t q = 1; q <= np; ++q)
-        first[q] += first[q - 1]; /* first[q]: the end of part q (1-based) = the start of part q + 1 */
-
+    parts_table pt = parts_table_read(f, rec->id);
+    const meso_part_level* pl = pt.pl;
+    const uint32_t np = pt.np, nl = pt.nl;
     meso_rt_object obj;
     assert(meso_rt_load_object_levels(rt, f, rec->id, &obj) == MESO_OK);
     meso_rt_draw_desc d = {0};
@@ -106,53 +101,13 @@ static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_reco
     /* At TAU px. */
     d.pixel_error = TAU;
     float* one = draw(rt, obj, &d);
-    assert(meso_rt_parts_state_get(rt, obj, lev, np, &count) == MESO_OK && count == np);
     uint32_t lo = 255, hi = 0;
-    double worst_px = 0, drawn_error = 0;
-    uint64_t bytes = 0;
-    const double focal = 0.5 * H / tan(25.0 * M_PI / 180.0);
-    for (uint32_t q = 0; q < np; ++q) {
-        const meso_part_level* L = &pl[first[q] + lev[q]];
-        assert(L->rec.object == q + 1 && L->rec.lod == lev[q]);
-        lo = lev[q] < lo ? lev[q] : lo;
-        hi = lev[q] > hi ? lev[q] : hi;
-        bytes += L->bytes;
-        const double dist = box_distance(eye, L->rec.bbox_min, L->rec.bbox_max);
-        const double px = L->rec.error * focal / dist;
-        worst_px = px > worst_px ? px : worst_px;
-        drawn_error = L->rec.error > drawn_error ? L->rec.error : drawn_error;
-        printf("  part %u: level %u of %u, error %.4g (level 1: %.4g), %.2f px at its nearest bound point %.3g away\n",
-               q + 1, lev[q], first[q + 1] - first[q], (double)L->rec.error, (double)pl[first[q] + 1].rec.error, px,
-               dist);
-    }
-    for (uint32_t e = 0; e < ne; ++e) {
-        const int a = lev[edges[2 * e] - 1], b = lev[edges[2 * e + 1] - 1];
-        assert(abs(a - b) <= 1);
-    }
-    printf("parts at %g px: %u parts at levels %u..%u; largest projected error %.2f px; %u neighbour pairs within one "
-           "level; bytes of the parts drawn %llu against %llu at level 0\n",
-           (double)TAU, np, lo, hi, worst_px, ne, (unsigned long long)bytes, (unsigned long long)finest);
-    assert(hi > lo);        /* near finer than far */
-    assert(worst_px <= TAU); /* the bound box is no nearer than the runtime's sphere */
+    const uint64_t bytes = check_part_levels(rt, obj, &pt, eye, TAU, lev, &lo, &hi);
+    printf("  bytes of the parts drawn %llu against %llu at level 0\n", (unsigned long long)bytes,
+           (unsigned long long)finest);
+    assert(hi > lo); /* near finer than far */
     assert(bytes < finest);
-
-    /* No crack: the finest silhouette's interior is covered, depths close. */
-    long interior = 0, holes = 0;
-    for (int y = 1; y < H - 1; ++y)
-        for (int x = 1; x < W - 1; ++x) {
-            int all = 1;
-            for (int j = -1; j <= 1; ++j)
-                for (int i = -1; i <= 1; ++i)
-                    all &= fine[(y + j) * W + x + i] < 1.0f;
-            if (!all)
-                continue;
-            ++interior;
-            if (one[y * W + x] >= 1.0f)
-                ++holes;
-        }
-    printf("  no crack: %ld pixels inside the finest silhouette, %ld not covered at %g px\n", interior, holes,
-           (double)TAU);
-    assert(interior > 1000 && holes == 0);
+    check_no_crack(fine, one, 1, TAU);
 
     /* Instanced: a second instance far away off to the side changes
      * nothing for the near one's parts. */
@@ -178,9 +133,7 @@ static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_reco
     free(fine);
     free(one);
     free(lev);
-    free(first);
-    free(pl);
-    free(edges);
+    parts_table_free(&pt);
 }
 
 /* Under stream requests (meso_rt_desc.stream_requests): no draw reads the
@@ -348,6 +301,11 @@ int main(void)
     meso_file_close(f);
     parts_streamed(data, size, 0);
     parts_streamed(data, size, 1);
+    size_t none_size = 0;
+    uint8_t* none = bake_spot(-1, &none_size);
+    static const float taus[] = {1.0f, 2.5f, 3.0f, 6.0f}; /* whole levels 0, 1, 2, 4 */
+    parts_coarser_than_level_0(data, size, none, none_size, taus, 4, view, draw);
+    free(none);
     free(data);
     no_parts_as_before(rt);
 

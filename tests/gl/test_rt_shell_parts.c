@@ -50,6 +50,10 @@
 enum { W = 200, H = 150 };
 #define TAU 4.0f
 #define FOV 50.0
+#define PC_W W
+#define PC_H H
+#define PC_FOV FOV
+#include "parts_checks.h"
 
 static test_fbo fb;
 
@@ -64,6 +68,14 @@ static void draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d, ui
     test_fbo_clear(&fb, 0, 0, 0);
     assert(meso_rt_draw(rt, obj, d) == MESO_OK);
     test_fbo_read(&fb, rgba, depth);
+}
+
+static float* draw_depth(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc* d)
+{
+    float* depth = malloc(sizeof(float) * W * H);
+    assert(depth);
+    draw(rt, obj, d, NULL, depth);
+    return depth;
 }
 
 /* View distance of a depth-buffer value (the perspective above). */
@@ -454,6 +466,16 @@ int main(int argc, char** argv)
         free(bd);
         free(bad);
     }
+
+    /* Farther off, where the whole shell draws a stand-in level: its parts'
+     * patches instead where they hold fewer bytes (parts_checks.h). */
+    o.parts = -1;
+    assert(meso_bake_shell(&o, &out, NULL, &err) == MESO_OK);
+    size_t none_size = 0;
+    uint8_t* none = bake_bytes(out, &none_size);
+    static const float taus[] = {1.0f, 2.0f, 4.0f, 8.0f, 16.0f};
+    parts_coarser_than_level_0(data, size, none, none_size, taus, sizeof taus / sizeof taus[0], view, draw_depth);
+    free(none);
 
     meso_rt_release_object(rt, obj);
     meso_file_close(f);
