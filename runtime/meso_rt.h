@@ -460,7 +460,9 @@ typedef struct meso_rt_shell_draw {
 typedef struct meso_rt_frusta_draw {
     int relief_steps;    /* uniform samples per relief march, over the ray's part inside the relief layer
                             before (and, leaving it, after) the solid core; more catches thinner bumps at
-                            grazing angles [64] */
+                            grazing angles [64]. A native level whose relief map is narrower than level
+                            0's takes as many per texel: relief_steps x its width / level 0's, rounded
+                            up, at least 8 (or relief_steps, if fewer) */
     int bisection_steps; /* refinement steps once the surface is bracketed [4] */
 } meso_rt_frusta_draw;
 

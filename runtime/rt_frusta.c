@@ -67,6 +67,7 @@ typedef struct mesoi_frusta {
     meso_frustum_ball_rec* slot_balls; /* slots 1.., ball_count each */
     GLuint prim_buf, prim_tex, relief_tex, color_tex;
     int relief_w, relief_h;         /* 0 without RELF */
+    int relief_w0;                  /* level 0's RELF width (this level's at level 0) */
     int color_w, color_h;           /* 0 without COLR */
     float ball_color[3];            /* COLR's mean linear colour (balls) */
     uint32_t boxed;                 /* frusta whose bound fell back to a box (last build) */
@@ -544,6 +545,8 @@ meso_result mesoi_frusta_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_obje
         } else {
             s->relief_w = (int)c->dims[0];
             s->relief_h = (int)c->dims[1];
+            const int32_t r0 = meso_file_find(f, MESO_CHUNK_RELF, id, 0);
+            s->relief_w0 = r0 >= 0 ? (int)meso_file_chunk(f, (uint32_t)r0)->dims[0] : s->relief_w;
         }
     }
     const GLint prev_tex_buffer = mesoi_upload_begin(rt);
@@ -834,7 +837,14 @@ meso_result mesoi_frusta_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
     const GLint csize[2] = {s->color_w, s->color_h};
     gl->Uniform2iv(prog->loc[MESOI_U_color_size], 1, csize);
     gl->Uniform3fv(prog->loc[MESOI_U_ball_color], 1, s->ball_color);
-    gl->Uniform1i(prog->loc[MESOI_U_relief_steps], k->relief_steps > 0 ? k->relief_steps : 64);
+    /* A native level's coarser relief map takes as many samples per texel
+     * as level 0's (meso_rt_frusta_draw.relief_steps). */
+    int steps = k->relief_steps > 0 ? k->relief_steps : 64;
+    if (s->relief_w > 0 && s->relief_w0 > s->relief_w) {
+        const int64_t scaled = ((int64_t)steps * s->relief_w + s->relief_w0 - 1) / s->relief_w0;
+        steps = scaled > 8 ? (int)scaled : (steps < 8 ? steps : 8);
+    }
+    gl->Uniform1i(prog->loc[MESOI_U_relief_steps], steps);
     gl->Uniform1i(prog->loc[MESOI_U_bisect_steps], k->bisection_steps > 0 ? k->bisection_steps : 4);
     const GLsizei vertices = 36 * (GLsizei)(s->count + s->ball_count);
     if (inst)

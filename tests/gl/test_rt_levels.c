@@ -566,7 +566,8 @@ static void frusta_standin_far_away(meso_rt* rt)
  * the file cut at level L's prefix_bytes draws level L (the finest that
  * has arrived), and its depth image is the exact reference's level L
  * (runtime/reference, its own RELF), much nearer to it than to the
- * reference's level 0: libmeso draws the level's own relief. */
+ * reference's level 0: libmeso draws the level's own relief, marching it
+ * as many samples per texel as level 0 (fewer steps per fragment). */
 static void frusta_native_levels(meso_rt* rt)
 {
     size_t size = 0;
@@ -589,6 +590,18 @@ static void frusta_native_levels(meso_rt* rt)
     meso_ref_frusta r0;
     meso_ref_image i0;
     assert(meso_ref_frusta_load(wf, 1, &r0, NULL) == MESO_OK && meso_ref_frusta_render(&r0, &v, &i0) == MESO_OK);
+    /* Steps per fragment at level 0 (the whole file), against which each
+     * coarser relief's march, as many samples per texel, takes fewer. */
+    meso_rt_draw_stats s0 = {0};
+    {
+        meso_rt_object obj;
+        assert(meso_rt_load_object_levels(rt, wf, 1, &obj) == MESO_OK);
+        meso_rt_draw_desc d0 = d;
+        d0.stats = &s0;
+        free(draw_depth(rt, obj, &d0));
+        meso_rt_release_object(rt, obj);
+    }
+    const double steps0 = s0.fragments ? (double)s0.steps / (double)s0.fragments : 0.0;
     for (uint32_t L = 1; L < n && li[L].rec.form == MESO_LEVEL_NATIVE; ++L) {
         prefix_io p = {data, li[L].prefix_bytes};
         const meso_io io = {.read_fn = prefix_read, .size = (uint64_t)size, .user = &p};
@@ -596,9 +609,13 @@ static void frusta_native_levels(meso_rt* rt)
         assert(meso_file_open_io(&io, NULL, &f, NULL) == MESO_OK);
         meso_rt_object obj;
         assert(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
-        float* depth = draw_depth(rt, obj, &d);
+        meso_rt_draw_stats sl = {0};
+        meso_rt_draw_desc dl = d;
+        dl.stats = &sl;
+        float* depth = draw_depth(rt, obj, &dl);
         meso_rt_levels_state st;
         assert(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK && st.last_drawn == (int)L);
+        const double steps = sl.fragments ? (double)sl.steps / (double)sl.fragments : 0.0;
         meso_ref_frusta rl;
         meso_ref_image il;
         assert(meso_ref_frusta_load_level(wf, 1, (uint16_t)L, &rl, NULL) == MESO_OK &&
@@ -616,11 +633,14 @@ static void frusta_native_levels(meso_rt* rt)
             }
         }
         printf("  frusta native level %u from its %llu-byte prefix: %d px, %d differ in coverage from the "
-               "reference's level %u; mean depth difference %.3g to it, %.3g to level 0's\n",
-               L, (unsigned long long)li[L].prefix_bytes, covered, mismatch, L, to_l / both, to_0 / both);
+               "reference's level %u; mean depth difference %.3g to it, %.3g to level 0's; %.1f steps per "
+               "fragment (level 0: %.1f)\n",
+               L, (unsigned long long)li[L].prefix_bytes, covered, mismatch, L, to_l / both, to_0 / both, steps,
+               steps0);
         fflush(stdout);
         assert(covered > W * H / 20 && mismatch <= covered / 50 + 4);
         assert(to_l < 0.5 * to_0);
+        assert(!sl.supported || steps < (L == 1 ? 0.8 : 0.6) * steps0);
         free(depth);
         meso_ref_image_free(&il);
         meso_ref_frusta_free(&rl);
