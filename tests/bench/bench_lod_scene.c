@@ -21,7 +21,8 @@
  * Plus, per file, the bytes a stream must deliver before every object of
  * it can draw (its objects' coarsest prefix_bytes) against its size.
  *
- * Output: one CSV (section, setting, metric, value). 320 x 240 pixels.
+ * Output: one CSV (section, setting, metric, value). 320 x 240 pixels, on
+ * one llvmpipe render thread (LP_NUM_THREADS=1 unless set: see main).
  * With PNG: the scene at 1 px beside the level each pixel's object drew
  * (white the finest, then blue, green, yellow, orange, magenta, violet).
  * With MESO_BENCH_OBJECTS=T in the environment it prints, instead, each
@@ -427,6 +428,14 @@ int main(int argc, char** argv)
     }
     work = argv[4];
     png_path = argc == 6 ? argv[5] : NULL;
+    /* One llvmpipe render thread, unless told otherwise: with the default
+     * two beside the application thread (which runs llvmpipe's vertex
+     * work) on this machine's two cores, the finest setting's frame (1.4 M
+     * shell hull vertices) took either about 230 or about 340-440 ms from
+     * run to run of the same binary, while its draws timed alone summed to
+     * 255-268 ms; with one it took 496-525 ms in every run. */
+    if (!getenv("LP_NUM_THREADS"))
+        setenv("LP_NUM_THREADS", "1", 1);
     char why[256];
     meso_egl* egl = meso_egl_create(why, sizeof why);
     if (!egl)
