@@ -216,10 +216,11 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         const meso_chunk_info* tc = meso_file_chunk(f, (uint32_t)ci[1]);
         const int wide = tc->dtype == MESO_DTYPE_U32;
         const size_t n = (size_t)tc->dims[0] * tc->dims[1] * tc->dims[2];
+        c->id_bits = streamed ? id_bits : mesoi_cells_skip_level(f, id, rt->load_lod, tile, &rt->alloc);
+        const uint32_t ids = c->id_bits ? (1u << c->id_bits) - 1u : UINT32_MAX; /* the radii above them */
         c->map_full = 1; /* is there empty space in the map? */
         for (size_t v = 0; v < n && c->map_full; ++v)
-            c->map_full = wide ? mesoi_ld32(tile + 4 * v) != 0 : mesoi_ld16(tile + 2 * v) != 0;
-        c->id_bits = streamed ? id_bits : mesoi_cells_skip_level(f, id, rt->load_lod, tile, &rt->alloc);
+            c->map_full = ((wide ? mesoi_ld32(tile + 4 * v) : mesoi_ld16(tile + 2 * v)) & ids) != 0;
         r = upload_3d(rt, tc, tile, wide ? GL_R32UI : GL_R16UI, GL_RED_INTEGER,
                       wide ? GL_UNSIGNED_INT : GL_UNSIGNED_SHORT, &c->tile_tex);
         if (r == MESO_OK) {
