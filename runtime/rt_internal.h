@@ -484,8 +484,9 @@ typedef struct mesoi_parts {
     uint32_t subset_count;
     uint64_t subset_key;     /* which parts they are (changes re-sort the prisms) */
 } mesoi_parts;
-/* load: its PRTS table (*out NULL: none); pick: each part's level for this
- * draw, neighbours within one level, uploads or, with stream requests,
+/* load: its PRTS table (*out NULL: none); pick: the levels the last
+ * mesoi_parts_want chose (each part's for this draw, neighbours within
+ * one level), uploads or, with stream requests,
  * requests (MESO_ERR_NOT_FOUND when some part has nothing to draw: draw
  * a whole level instead; MESO_ERR_PENDING, streaming, when every such part
  * waits for a request: draw the best whole level uploaded); *out
@@ -494,16 +495,16 @@ typedef struct mesoi_parts {
  * levels; bytes: resident part bytes (and the last pick's wanted, and all
  * read). */
 meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts** out);
-/* want: the levels a pick would want (p->want; nothing read or uploaded)
- * and their bytes; *prisms_wanted 1 when some shell part wants its
- * prisms (their list counted once). all_patches: no part drawn at its
- * prisms (the last pick). */
+/* want: each part's level for this draw into p->want (nothing read or
+ * uploaded), and their bytes; *prisms_wanted 1 when some shell part wants
+ * its prisms (their list counted once). A pick draws what the last want
+ * chose. finest_patch: the finest level the last pick drew, -1 when some
+ * part drew its prisms. */
 uint64_t mesoi_parts_want(mesoi_parts* p, const meso_rt_draw_desc* d, const meso_rt_instance* inst, uint32_t count,
                           double tau, double height, int* prisms_wanted);
-int mesoi_parts_all_patches(const mesoi_parts* p);
+int mesoi_parts_finest_patch(const mesoi_parts* p);
 void mesoi_parts_free(meso_rt* rt, mesoi_parts* p);
-meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
-                             uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out);
+meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object native, meso_rt_object* out);
 meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_record* rec, mesoi_parts* p, uint32_t i);
 meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_draw_desc* d,
                              const meso_rt_instance* inst, uint32_t count);

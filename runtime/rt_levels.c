@@ -365,13 +365,17 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         lv->want_now = want < lv->want_now ? want : lv->want_now;
         lv->want_lower = lower < lv->want_lower ? lower : lv->want_lower;
     }
+    /* Stored with parts: the level each part wants for this draw, once
+     * (every pick below draws from it). */
+    int prisms_wanted = 0;
+    const uint64_t parts_bytes =
+        lv->parts ? mesoi_parts_want(lv->parts, d, inst, count, tau * rt->tau_scale, height, &prisms_wanted) : 0;
     /* Level 0 of a mesh object stored with parts: each part at its own
      * level (rt_parts.c), when every part has one to draw. */
     int parts_pending = 0; /* streamed parts arriving: no whole level asked for meanwhile */
     if (want == 0 && lv->parts && !lv->parts->shell) {
         meso_rt_object ph;
-        const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height,
-                                                (meso_rt_object){0}, &ph);
+        const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
         if (pr == MESO_OK) {
             lv->last_drawn = 0;
             lv->parts_frame = rt->frame + 1;
@@ -386,28 +390,20 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     /* Coarser than level 0, or a shell none of whose parts wants its
      * prisms: the parts instead where their own levels hold fewer bytes
      * than the whole level (rt_parts.c), no native level needed. */
-    if (lv->parts && (want > 0 || lv->parts->shell)) {
-        int prisms_wanted = 0;
-        const uint64_t bytes =
-            mesoi_parts_want(lv->parts, d, inst, count, tau * rt->tau_scale, height, &prisms_wanted);
-        if (!prisms_wanted && bytes < lv->info[want].bytes) {
-            meso_rt_object ph;
-            const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height,
-                                                    (meso_rt_object){0}, &ph);
-            if (pr == MESO_ERR_OUT_OF_MEMORY)
-                return pr;
-            if (pr == MESO_OK && mesoi_parts_all_patches(lv->parts)) {
-                uint32_t finest = UINT32_MAX;
-                for (uint32_t q = 0; q < lv->parts->part_count; ++q)
-                    finest = lv->parts->drawn[q] < finest ? lv->parts->drawn[q] : finest;
-                lv->last_drawn = finest;
-                lv->parts_frame = rt->frame + 1;
-                lv->parts_native = 0;
-                *out = ph;
-                return MESO_OK;
-            }
-            parts_pending |= pr == MESO_ERR_PENDING;
+    if (lv->parts && (want > 0 || lv->parts->shell) && !prisms_wanted && parts_bytes < lv->info[want].bytes) {
+        meso_rt_object ph;
+        const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
+        if (pr == MESO_ERR_OUT_OF_MEMORY)
+            return pr;
+        const int finest = pr == MESO_OK ? mesoi_parts_finest_patch(lv->parts) : -1;
+        if (finest >= 0) {
+            lv->last_drawn = finest;
+            lv->parts_frame = rt->frame + 1;
+            lv->parts_native = 0;
+            *out = ph;
+            return MESO_OK;
         }
+        parts_pending |= pr == MESO_ERR_PENDING;
     }
     /* The level wanted, else the finest coarser one that can be had, else
      * the nearest finer one uploaded before. With stream requests, a level
@@ -454,7 +450,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     if (lv->parts && lv->parts->shell && lv->info[got].rec.form == MESO_LEVEL_NATIVE && rt->hull_reject_ok &&
         (d->shell.technique == MESO_SHELL_SMOOTH || d->shell.technique == MESO_SHELL_CURVED)) {
         meso_rt_object ph;
-        const meso_result pr = mesoi_parts_pick(rt, lv, d, inst, count, tau * rt->tau_scale, height, *out, &ph);
+        const meso_result pr = mesoi_parts_pick(rt, lv, *out, &ph);
         if (pr == MESO_ERR_OUT_OF_MEMORY)
             return pr;
         if (pr == MESO_OK && mesoi_parts_coarse(lv->parts)) {

@@ -313,16 +313,14 @@ uint64_t mesoi_parts_want(mesoi_parts* p, const meso_rt_draw_desc* d, const meso
     return bytes + (*prisms_wanted ? p->lv[p->first[0]].bytes : 0);
 }
 
-meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
-                             uint32_t count, double tau, double height, meso_rt_object native, meso_rt_object* out)
+meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object native, meso_rt_object* out)
 {
     mesoi_parts* p = lv->parts;
     p->pick_frame = rt->frame + 1;
     p->native = native;
-    int prisms_wanted = 0;
-    mesoi_parts_want(p, d, inst, count, tau, height, &prisms_wanted);
-    /* A shell none of whose parts is far enough for its patch draws its
-     * whole native level: nothing to read or upload. */
+    /* p->want: mesoi_parts_want's, for this draw. A shell none of whose
+     * parts is far enough for its patch draws its whole native level:
+     * nothing to read or upload. */
     int any = !p->shell;
     for (uint32_t q = 0; !any && q < p->part_count; ++q)
         any = p->want[q] != 0;
@@ -412,12 +410,15 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
     return r;
 }
 
-int mesoi_parts_all_patches(const mesoi_parts* p)
+int mesoi_parts_finest_patch(const mesoi_parts* p)
 {
-    for (uint32_t q = 0; q < p->part_count; ++q)
+    int finest = INT32_MAX;
+    for (uint32_t q = 0; q < p->part_count; ++q) {
         if (prisms(p, p->first[q] + p->drawn[q]))
-            return 0;
-    return 1;
+            return -1;
+        finest = p->drawn[q] < finest ? p->drawn[q] : finest;
+    }
+    return finest;
 }
 
 int mesoi_parts_coarse(const mesoi_parts* p)
