@@ -51,30 +51,39 @@ static inline void parts_table_free(parts_table* t)
     free(t->first);
 }
 
+/* What check_part_levels found. */
+typedef struct parts_drawn {
+    uint32_t lo, hi;    /* the range of the part levels drawn */
+    uint32_t at_0;      /* parts at level 0 (a shell's: its prisms) */
+    uint64_t bytes;     /* of the part levels drawn */
+    double worst_px;    /* the largest error projected at its level's nearest bound point */
+    double worst_error; /* the largest stated error drawn (object units) */
+} parts_drawn;
+
 /* The part levels the last draw of obj drew (into lev, np of them):
  * each part's stated error within tau pixels at its level's nearest bound
  * point (a looser distance than the runtime's bounding sphere: a bound it
- * must meet), neighbours (PRTS pairs) within one level. Returns the bytes
- * of the part levels drawn; *lo, *hi the levels' range. */
-static inline uint64_t check_part_levels(meso_rt* rt, meso_rt_object obj, const parts_table* t, const double eye[3],
-                                         double tau, uint8_t* lev, uint32_t* lo, uint32_t* hi)
+ * must meet), neighbours (PRTS pairs) within one level. */
+static inline parts_drawn check_part_levels(meso_rt* rt, meso_rt_object obj, const parts_table* t,
+                                            const double eye[3], double tau, uint8_t* lev)
 {
     const meso_part_level* pl = t->pl;
     const uint32_t *first = t->first, *edges = t->edges, np = t->np, ne = t->ne;
     uint32_t count = 0;
     assert(meso_rt_parts_state_get(rt, obj, lev, np, &count) == MESO_OK && count == np);
-    double worst_px = 0;
-    uint64_t bytes = 0;
+    parts_drawn r = {.lo = UINT32_MAX};
     const double focal = 0.5 * PC_H / tan(0.5 * PC_FOV * M_PI / 180.0);
     for (uint32_t q = 0; q < np; ++q) {
         const meso_part_level* L = &pl[first[q] + lev[q]];
         assert(L->rec.object == q + 1 && L->rec.lod == lev[q]);
-        *lo = lev[q] < *lo ? lev[q] : *lo;
-        *hi = lev[q] > *hi ? lev[q] : *hi;
-        bytes += L->bytes;
+        r.lo = lev[q] < r.lo ? lev[q] : r.lo;
+        r.hi = lev[q] > r.hi ? lev[q] : r.hi;
+        r.at_0 += lev[q] == 0;
+        r.bytes += L->bytes;
         const double dist = box_distance(eye, L->rec.bbox_min, L->rec.bbox_max);
         const double px = L->rec.error * focal / dist;
-        worst_px = px > worst_px ? px : worst_px;
+        r.worst_px = px > r.worst_px ? px : r.worst_px;
+        r.worst_error = L->rec.error > r.worst_error ? L->rec.error : r.worst_error;
         printf("  part %u: level %u of %u, error %.4g (level 1: %.4g), %.2f px at its nearest bound point %.3g away\n",
                q + 1, lev[q], first[q + 1] - first[q], (double)L->rec.error, (double)pl[first[q] + 1].rec.error, px,
                dist);
@@ -85,9 +94,9 @@ static inline uint64_t check_part_levels(meso_rt* rt, meso_rt_object obj, const 
     }
     printf("parts at %g px: %u parts at levels %u..%u; largest projected error %.2f px; %u neighbour pairs within one "
            "level\n",
-           tau, np, *lo, *hi, worst_px, ne);
-    assert(worst_px <= tau);
-    return bytes;
+           tau, np, r.lo, r.hi, r.worst_px, ne);
+    assert(r.worst_px <= tau);
+    return r;
 }
 
 /* No crack: every pixel of `ref`'s silhouette with all pixels within
@@ -142,7 +151,7 @@ static inline void parts_coarser_than_level_0(const uint8_t* with, size_t with_s
     for (size_t t = 0; t < tau_count; ++t) {
         meso_rt_levels_state st[2];
         float* depth[2];
-        uint32_t lo = 255, hi = 0; /* the part levels drawn, if the parts drew */
+        parts_drawn pd = {.lo = UINT32_MAX}; /* the part levels drawn, if the parts drew */
         for (int k = 1; k >= 0; --k) { /* without parts first */
             meso_rt* rt = NULL;
             assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
@@ -162,13 +171,13 @@ static inline void parts_coarser_than_level_0(const uint8_t* with, size_t with_s
             depth[k] = draw(rt, obj, &d);
             assert(meso_rt_levels_state_get(rt, obj, &st[k]) == MESO_OK);
             if (k == 0 && st[0].bytes_resident != st[1].bytes_resident) /* the parts drew: their levels */
-                check_part_levels(rt, obj, &pt, eye, taus[t], lev, &lo, &hi);
+                pd = check_part_levels(rt, obj, &pt, eye, taus[t], lev);
             meso_rt_release_object(rt, obj);
             meso_rt_destroy(rt);
         }
         printf("at %g px: without parts level %u, %llu bytes resident; with parts %llu\n", (double)taus[t],
                st[1].last_drawn, (unsigned long long)st[1].bytes_resident, (unsigned long long)st[0].bytes_resident);
-        if (st[1].last_drawn >= 1 || (lo >= 1 && lo != 255)) {
+        if (st[1].last_drawn >= 1 || (pd.lo >= 1 && pd.lo != UINT32_MAX)) {
             assert(st[0].bytes_resident <= st[1].bytes_resident);
             if (st[0].bytes_resident < st[1].bytes_resident)
                 check_no_crack(depth[1], depth[0], (int)ceil(taus[t]), taus[t]);

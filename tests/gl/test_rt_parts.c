@@ -101,12 +101,11 @@ static void parts_near_and_far(meso_rt* rt, meso_file* f, const meso_object_reco
     /* At TAU px. */
     d.pixel_error = TAU;
     float* one = draw(rt, obj, &d);
-    uint32_t lo = 255, hi = 0;
-    const uint64_t bytes = check_part_levels(rt, obj, &pt, eye, TAU, lev, &lo, &hi);
-    printf("  bytes of the parts drawn %llu against %llu at level 0\n", (unsigned long long)bytes,
+    const parts_drawn pd = check_part_levels(rt, obj, &pt, eye, TAU, lev);
+    printf("  bytes of the parts drawn %llu against %llu at level 0\n", (unsigned long long)pd.bytes,
            (unsigned long long)finest);
-    assert(hi > lo); /* near finer than far */
-    assert(bytes < finest);
+    assert(pd.hi > pd.lo); /* near finer than far */
+    assert(pd.bytes < finest);
     check_no_crack(fine, one, 1, TAU);
 
     /* Instanced: a second instance far away off to the side changes

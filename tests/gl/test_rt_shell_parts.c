@@ -307,18 +307,11 @@ int main(int argc, char** argv)
     meso_object_record rec;
     uint32_t n = 0;
     assert(meso_file_objects(f, &rec, 1, &n, NULL) == MESO_OK && n == 1);
-    uint32_t nl = 0, np = 0, ne = 0, nt = 0;
-    assert(meso_file_parts(f, 1, NULL, 0, &nl, &np, NULL, 0, &ne, &err) == MESO_OK && np >= 2);
-    meso_part_level* pl = malloc(sizeof(meso_part_level) * nl);
-    uint32_t* edges = malloc(sizeof(uint32_t) * 2 * ne);
-    assert(pl && edges && meso_file_parts(f, 1, pl, nl, &nl, &np, edges, ne, &ne, &err) == MESO_OK);
+    parts_table pt = parts_table_read(f, 1);
+    const meso_part_level* pl = pt.pl;
+    const uint32_t np = pt.np, nl = pt.nl;
+    uint32_t nt = 0;
     assert(meso_file_part_triangles(f, 1, NULL, 0, &nt, &err) == MESO_OK && nt > 0);
-    uint32_t* first = calloc(np + 1, sizeof(uint32_t));
-    assert(first);
-    for (uint32_t i = 0; i < nl; ++i)
-        first[pl[i].rec.object]++;
-    for (uint32_t q = 1; q <= np; ++q)
-        first[q] += first[q - 1];
     printf("spot_uv shell: %u parts, %u part levels, %u prisms listed\n", np, nl, nt);
     patch_colours_agree(f, np, pl, nl);
 
@@ -341,26 +334,10 @@ int main(int argc, char** argv)
 
     d.pixel_error = TAU;
     draw(rt, obj, &d, part_rgba, part);
-    assert(meso_rt_parts_state_get(rt, obj, lev, np, &n) == MESO_OK && n == np);
-    const double focal = 0.5 * H / tan(0.5 * FOV * M_PI / 180.0);
-    uint32_t prisms = 0, coarse = 0;
-    double worst_px = 0, worst_error = 0;
-    for (uint32_t q = 0; q < np; ++q) {
-        const meso_part_level* L = &pl[first[q] + lev[q]];
-        assert(L->rec.object == q + 1 && L->rec.lod == lev[q]);
-        prisms += lev[q] == 0;
-        coarse += lev[q] > 0;
-        const double dist = box_distance(eye, L->rec.bbox_min, L->rec.bbox_max);
-        const double px = L->rec.error * focal / dist;
-        worst_px = fmax(worst_px, px);
-        worst_error = fmax(worst_error, L->rec.error);
-        printf("  part %u: lod %u (%s), error %.4g, %.2f px at its nearest bound point %.3g away\n", q + 1, lev[q],
-               lev[q] ? "stand-in patch" : "prisms", (double)L->rec.error, px, dist);
-    }
-    for (uint32_t e = 0; e < ne; ++e)
-        assert(abs((int)lev[edges[2 * e] - 1] - (int)lev[edges[2 * e + 1] - 1]) <= 1);
+    const parts_drawn pd = check_part_levels(rt, obj, &pt, eye, TAU, lev); /* level 0: prisms, else patches */
+    const uint32_t prisms = pd.at_0, coarse = np - pd.at_0;
+    const double worst_px = pd.worst_px, worst_error = pd.worst_error;
     assert(prisms >= 1 && coarse >= 1);
-    assert(worst_px <= TAU);
 
     if (argc > 1) {
         char path[512];
@@ -480,9 +457,7 @@ int main(int argc, char** argv)
     meso_rt_release_object(rt, obj);
     meso_file_close(f);
     free(data);
-    free(pl);
-    free(edges);
-    free(first);
+    parts_table_free(&pt);
     free(fine_rgba);
     free(part_rgba);
     free(fine);
