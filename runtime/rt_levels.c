@@ -7,12 +7,18 @@
  *
  * The projected error follows meshoptimizer's cluster-LOD demo and 3D
  * Tiles (../shared/notes/lod-anchors.md): a level's object-space error e,
- * scaled by the model and view matrices (similarities: one scale each), at
- * the distance d from the eye to the nearest point of the level's bounding
- * sphere, covers e / d · proj[1][1] · H / 2 pixels of a viewport H pixels
- * high (perspective: proj[1][1] = cot(fovy / 2)); an orthographic
- * projection (proj[3][3] = 1) has no distance term: e · proj[1][1] · H / 2.
- * The eye inside a level's sphere (d <= 0) makes its error unbounded, so a
+ * at the distance d from the eye to the nearest point of the level's
+ * bounding box, covers e / d · proj[1][1] · H / 2 pixels of a viewport H
+ * pixels high (perspective: proj[1][1] = cot(fovy / 2); the model and view
+ * matrices are similarities, whose scales multiply e and d alike); an
+ * orthographic projection (proj[3][3] = 1) has no distance term:
+ * e · s · proj[1][1] · H / 2, s the two scales. The box, not the bounding
+ * sphere the demo and 3D Tiles use: every point the level draws lies in
+ * it, so the bound holds as well, and its nearest point is up to a
+ * half-diagonal farther (obj 12 of bench_lod_scene, a cells object 4.8
+ * sizes away, drew its 377 KB level 0 at 1 px by the sphere's 1.04 px;
+ * by the box its level 1 is within the pixel).
+ * The eye inside a level's box (d = 0) makes its error unbounded, so a
  * level is never coarser than the object the camera is in allows. Since
  * the pixel count depends on H, a smaller window picks coarser levels for
  * the same view, as it should (the 3D Tiles bug in the notes is the
@@ -170,34 +176,41 @@ static int all_zero(const float* m, int n)
 }
 
 /* Pixels that `error` (object units) covers for a level bounded by
- * [lo, hi] drawn with `model` (column-major, a similarity). */
+ * [lo, hi] drawn with `model` (column-major, a similarity): error / d ·
+ * focal, d the distance in object units from the eye to the nearest point
+ * of the box (model and view scale the error and the distance alike, so
+ * they cancel). A similarity x -> A x + t with A = s R has the inverse
+ * y -> A^T (y - t) / s^2, which takes the eye (the view's origin) back to
+ * object space without a general inverse. */
 double mesoi_projected_px(double error, const float lo[3], const float hi[3], const float* model,
                           const meso_rt_draw_desc* d, double height)
 {
     if (error <= 0.0)
         return 0.0;
     const float* m = all_zero(model, 16) ? identity : model;
-    double c[3], half = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * ((double)lo[k] + hi[k]);
-        half += 0.25 * ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
-    }
-    double w[3], e[3];
-    for (int r = 0; r < 3; ++r)
-        w[r] = m[r] * c[0] + m[4 + r] * c[1] + m[8 + r] * c[2] + m[12 + r];
-    for (int r = 0; r < 3; ++r)
-        e[r] = d->view[r] * w[0] + d->view[4 + r] * w[1] + d->view[8 + r] * w[2] + d->view[12 + r];
-    const double sm = sqrt((double)m[0] * m[0] + (double)m[1] * m[1] + (double)m[2] * m[2]);
-    const double sv = sqrt((double)d->view[0] * d->view[0] + (double)d->view[1] * d->view[1] +
-                           (double)d->view[2] * d->view[2]);
-    const double scale = sm * sv;
+    const float* v = d->view;
+    const double sm2 = (double)m[0] * m[0] + (double)m[1] * m[1] + (double)m[2] * m[2];
+    const double sv2 = (double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2];
     const double focal = fabs((double)d->proj[5]) * 0.5 * height;
     if (d->proj[15] != 0.0f) /* orthographic */
-        return error * scale * focal;
-    const double dist = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) - sqrt(half) * scale;
-    if (!(dist > 0.0))
+        return error * sqrt(sm2 * sv2) * focal;
+    if (!(sm2 > 0.0) || !(sv2 > 0.0))
         return INFINITY;
-    return error * scale * focal / dist;
+    double w[3], o[3]; /* the eye in world space, then in object space */
+    for (int r = 0; r < 3; ++r)
+        w[r] = -((double)v[4 * r] * v[12] + (double)v[4 * r + 1] * v[13] + (double)v[4 * r + 2] * v[14]) / sv2;
+    for (int r = 0; r < 3; ++r)
+        o[r] = ((double)m[4 * r] * (w[0] - m[12]) + (double)m[4 * r + 1] * (w[1] - m[13]) +
+                (double)m[4 * r + 2] * (w[2] - m[14])) /
+               sm2;
+    double dist2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double g = fmax(fmax((double)lo[k] - o[k], o[k] - (double)hi[k]), 0.0);
+        dist2 += g * g;
+    }
+    if (!(dist2 > 0.0))
+        return INFINITY;
+    return error * focal / sqrt(dist2);
 }
 
 /* The coarsest level whose projected error is at most `tau` pixels (for

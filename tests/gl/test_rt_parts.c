@@ -7,8 +7,8 @@
  *  - the object's parts are read and drawn, at more than one level, the
  *    near end finer than the far end;
  *  - every part's level keeps its error within the pixel error at that
- *    level's nearest bound point (computed here from the bounds, a looser
- *    distance than the runtime's bounding sphere: a bound it must meet);
+ *    level's nearest bound point (computed here from the bounds and the
+ *    eye in doubles; the runtime picks by the same distance);
  *  - neighbouring parts (PRTS pairs) differ by at most one level;
  *  - no crack: every pixel inside the finest draw's silhouette (all 8
  *    neighbours covered) is covered by the parts draw too;
@@ -302,7 +302,7 @@ int main(void)
     parts_streamed(data, size, 1);
     size_t none_size = 0;
     uint8_t* none = bake_spot(-1, &none_size);
-    static const float taus[] = {1.0f, 2.5f, 3.0f, 6.0f}; /* whole levels 0, 1, 2, 4 */
+    static const float taus[] = {1.0f, 2.0f, 3.0f, 6.0f}; /* whole levels 0, 1, 2, 4 */
     parts_coarser_than_level_0(data, size, none, none_size, taus, 4, view, draw);
     free(none);
     free(data);
