@@ -280,12 +280,18 @@ MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object 
  * would draw a coarser level (a shell: or where every part wants its
  * patch), the parts draw instead when their own levels hold fewer bytes
  * than that level. Its levels state counts the parts' bytes too.
- * This reports the level each part drew last (levels[part - 1], up to
- * `cap`) and *part_count (0: the object has no parts; the parts table is
- * read with the levels table, by meso_rt_load_object_levels). Under
+ * This reports the level each part drew in the object's last draw
+ * (levels[part - 1], up to `cap`; MESO_RT_PART_NOT_DRAWN for every part
+ * when that draw drew a whole level, or before the first draw) and
+ * *part_count (0: the object has no parts; the parts table is read with
+ * the levels table, by meso_rt_load_object_levels). A whole level draws
+ * instead of parts that had to fall back to coarser levels than they
+ * wanted (streamed, still arriving) where it has a smaller error than the
+ * worst of them. Under
  * meso_rt_desc.stream_requests part levels are requested as levels are
  * (>>streaming); until every part has a level uploaded the object draws
  * its best whole level uploaded, and never asks for its whole level 0. */
+#define MESO_RT_PART_NOT_DRAWN 255
 MESO_API meso_result meso_rt_parts_state_get(const meso_rt* rt, meso_rt_object obj, uint8_t* levels, uint32_t cap,
                                              uint32_t* part_count);
 

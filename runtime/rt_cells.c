@@ -192,7 +192,8 @@ meso_result mesoi_cells_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
     const int streamed = mesoi_stream_take_cells(rt, &tile, &memb, &id_bits); /* checked off the GL thread */
     meso_result r = streamed ? MESO_OK : mesoi_file_check_cells_keep(f, id, rt->load_lod, &tile, &memb, &err);
     if (r != MESO_OK) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
+        if (r != MESO_ERR_PENDING) /* not arrived yet is not an error */
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "cells %u: %s", id, err.message);
         return r;
     }
     static const uint32_t types[5] = {MESO_CHUNK_CELL, MESO_CHUNK_TILE, MESO_CHUNK_MEMB, MESO_CHUNK_NRMM,

@@ -170,6 +170,7 @@ meso_result meso_rt_draw(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc*
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_INVALID_ARGUMENT, "meso_rt_draw: stale handle or NULL desc");
         return MESO_ERR_INVALID_ARG;
     }
+    mesoi_levels_draw_begin(rt, h);
     meso_result r = mesoi_levels_pick(rt, h, d, NULL, 0, &h);
     if (r != MESO_OK || h.id == 0)
         return r; /* h.id 0: no level has arrived yet */
@@ -186,6 +187,7 @@ meso_result meso_rt_draw_instanced(meso_rt* rt, meso_rt_object h, const meso_rt_
                       "meso_rt_draw_instanced: stale handle, NULL desc, NULL instances or count 0 (%u)", count);
         return MESO_ERR_INVALID_ARG;
     }
+    mesoi_levels_draw_begin(rt, h);
     /* Per-instance levels: each instance draws the level it would draw
      * alone, one instanced call per level, finest first (so the nearest
      * instances fill the depth buffer before the far ones are shaded). */
@@ -367,6 +369,8 @@ meso_result meso_rt_draw_list(meso_rt* rt, const meso_rt_draw_item* items, uint3
     /* Levels are picked (and uploaded) once the whole list is known to be
      * valid; the key sorts by what is drawn. */
     meso_result result = MESO_OK;
+    for (uint32_t i = 0; i < count; ++i)
+        mesoi_levels_draw_begin(rt, items[i].object);
     for (uint32_t i = 0; i < count; ++i) {
         meso_rt_draw_desc d;
         item_desc(&items[i], common, &d);

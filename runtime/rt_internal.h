@@ -454,6 +454,7 @@ typedef struct mesoi_levels {
     struct mesoi_parts* parts; /* a mesh object stored with parts (rt_parts.c), else NULL */
     uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
     int parts_native;          /* they drew with the whole native level (a shell's prisms) */
+    int parts_last;            /* the last pick drew parts (meso_rt_parts_state_get) */
 } mesoi_levels;
 /* rt_parts.c: a levelled mesh object's parts (here for rt_stream.c, which
  * files and uploads part levels as it does levels). */
@@ -511,6 +512,10 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
 int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
 void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i);
 uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read);
+/* Where the last pick drew some part coarser than it wanted (its level
+ * not uploaded: still arriving, or no room), the largest stated error of
+ * the part levels it drew; else -1. */
+double mesoi_parts_fallback_error(const mesoi_parts* p);
 /* Whether the last pick drew some part coarser than its lod 0, and every
  * part at the level it wanted (a shell whose parts are still arriving
  * draws its whole native level, which is finer). */
@@ -529,6 +534,9 @@ meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l);
 /* Room for `bytes` more under the memory budget (a level or a part level),
  * evicting levels this frame does not use; 0 when it cannot be made. */
 int mesoi_make_room(meso_rt* rt, uint64_t bytes);
+/* A public draw call of h begins: what its picks draw in parts is
+ * reported from here on (meso_rt_parts_state_get). */
+void mesoi_levels_draw_begin(meso_rt* rt, meso_rt_object h);
 /* rt_levels.c: the level of a levelled object `o` the draw picks (uploaded
  * on first use); *out is `o` itself for a plain object. `o` may move (the
  * slot table can grow): use *out. */

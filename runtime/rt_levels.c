@@ -357,6 +357,27 @@ uint32_t mesoi_levels_per_instance(meso_rt* rt, meso_rt_object h, const meso_rt_
     return distinct;
 }
 
+/* The finest whole level whose stated error is below `error`, uploaded,
+ * or (no stream requests) uploaded now; -1 when there is none. */
+static int32_t whole_finer_than(meso_rt* rt, mesoi_levels* lv, double error)
+{
+    for (uint32_t l = 0; l < lv->count && (double)lv->info[l].rec.error < error; ++l) {
+        if (lv->slot[l].id)
+            return (int32_t)l;
+        if (!rt->stream_requests && !lv->failed[l] && mesoi_make_room(rt, lv->info[l].bytes) &&
+            mesoi_levels_upload(rt, lv, l) == MESO_OK)
+            return (int32_t)l;
+    }
+    return -1;
+}
+
+void mesoi_levels_draw_begin(meso_rt* rt, meso_rt_object h)
+{
+    mesoi_object* o = mesoi_lookup(rt, h);
+    if (o && o->levels)
+        o->levels->parts_last = 0;
+}
+
 meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                               uint32_t count, meso_rt_object* out)
 {
@@ -384,14 +405,27 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     const uint64_t parts_bytes =
         lv->parts ? mesoi_parts_want(lv->parts, d, inst, count, tau * rt->tau_scale, height, &prisms_wanted) : 0;
     /* Level 0 of a mesh object stored with parts: each part at its own
-     * level (rt_parts.c), when every part has one to draw. */
+     * level (rt_parts.c), when every part has one to draw. Where some part
+     * had to draw coarser than it wanted (its level still arriving), a
+     * whole level with a smaller error than the worst part drawn, if one
+     * is there, draws instead: a prefix of the file holds whole levels
+     * before the parts' finer ones. */
     int parts_pending = 0; /* streamed parts arriving: no whole level asked for meanwhile */
     if (want == 0 && lv->parts && !lv->parts->shell) {
         meso_rt_object ph;
         const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
+        const double fallback = pr == MESO_OK ? mesoi_parts_fallback_error(lv->parts) : -1.0;
+        const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, fallback) : -1;
+        if (whole >= 0) {
+            lv->last_drawn = whole;
+            lv->used[whole] = rt->frame + 1;
+            *out = lv->slot[whole];
+            return MESO_OK;
+        }
         if (pr == MESO_OK) {
-            lv->last_drawn = 0;
+            lv->last_drawn = mesoi_parts_finest_patch(lv->parts);
             lv->parts_frame = rt->frame + 1;
+            lv->parts_last = 1;
             lv->parts_native = 0;
             *out = ph;
             return MESO_OK;
@@ -412,6 +446,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         if (finest >= 0) {
             lv->last_drawn = finest;
             lv->parts_frame = rt->frame + 1;
+            lv->parts_last = 1;
             lv->parts_native = 0;
             *out = ph;
             return MESO_OK;
@@ -468,6 +503,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
             return pr;
         if (pr == MESO_OK && mesoi_parts_coarse(lv->parts)) {
             lv->parts_frame = rt->frame + 1;
+            lv->parts_last = 1;
             lv->parts_native = 1;
             *out = ph;
         }

@@ -41,6 +41,7 @@
  */
 #include "rt_internal.h"
 
+#include <math.h>
 #include <string.h>
 
 
@@ -421,6 +422,17 @@ int mesoi_parts_finest_patch(const mesoi_parts* p)
     return finest;
 }
 
+double mesoi_parts_fallback_error(const mesoi_parts* p)
+{
+    int fell_back = 0;
+    double worst = 0.0;
+    for (uint32_t q = 0; q < p->part_count; ++q) {
+        fell_back |= p->drawn[q] > p->want[q];
+        worst = fmax(worst, (double)p->lv[p->first[q] + p->drawn[q]].rec.error);
+    }
+    return fell_back ? worst : -1.0;
+}
+
 int mesoi_parts_coarse(const mesoi_parts* p)
 {
     int coarse = 0;
@@ -453,6 +465,6 @@ meso_result meso_rt_parts_state_get(const meso_rt* rt, meso_rt_object h, uint8_t
     const mesoi_parts* p = o->levels ? o->levels->parts : NULL;
     *part_count = p ? p->part_count : 0;
     for (uint32_t q = 0; p && q < p->part_count && q < cap; ++q)
-        levels[q] = p->drawn[q];
+        levels[q] = o->levels->parts_last ? p->drawn[q] : MESO_RT_PART_NOT_DRAWN;
     return MESO_OK;
 }

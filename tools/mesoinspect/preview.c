@@ -160,8 +160,9 @@ static const char* const usage_preview_levels =
     "                      whose chunks end later are not read (an object none of whose\n"
     "                      levels has arrived is left out, with a note on stderr)\n"
     "      --stats FILE    write what the draw cost as JSON: per object levels_drawn (its\n"
-    "                      lod), level_count and bytes (a mesh drawn in parts: also\n"
-    "                      part_levels_drawn, each part's level); bytes_resident and bytes_read over\n"
+    "                      lod; drawn in parts, the finest part's), level_count and bytes\n"
+    "                      (drawn in parts: also part_levels_drawn, each part's level);\n"
+    "                      bytes_resident and bytes_read over\n"
     "                      all objects; steps_per_pixel and fragments_per_pixel (shader\n"
     "                      work per covered pixel of the rendered image, which is 2x2\n"
     "                      the PNG's; 0 where the context cannot count); gpu_ms (wall time\n"
@@ -451,11 +452,13 @@ static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const u
                                 "\"bytes_resident\": %llu",
                                 i ? "," : "", ids[i], (int)ls.last_drawn, ls.level_count,
                                 (unsigned long long)ls.bytes_resident);
-        /* A mesh drawn in parts: the level each part drew (rt_parts.c). */
+        /* Drawn in parts: the level each part drew (rt_parts.c); not
+         * where the draw drew a whole level. */
         uint32_t parts = 0;
         meso_rt_parts_state_get(rt, objs[i], NULL, 0, &parts);
         uint8_t* pl = parts ? malloc(parts) : NULL;
-        if (pl && meso_rt_parts_state_get(rt, objs[i], pl, parts, &parts) == MESO_OK) {
+        if (pl && meso_rt_parts_state_get(rt, objs[i], pl, parts, &parts) == MESO_OK &&
+            pl[0] != MESO_RT_PART_NOT_DRAWN) {
             len += (size_t)snprintf(s + len, cap - len, ", \"part_levels_drawn\": [");
             for (uint32_t q = 0; q < parts; ++q)
                 len += (size_t)snprintf(s + len, cap - len, "%s%u", q ? "," : "", pl[q]);

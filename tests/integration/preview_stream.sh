@@ -1,0 +1,84 @@
+#!/bin/sh
+# preview_stream.sh MESOBAKE MESOINSPECT DATA_DIR
+#
+# Every prefix at a level boundary draws (issue 14, Deliver 5), through
+# `mesoinspect preview --stream-bytes N --stats` (Deliver 4): one file of
+# each kind baked from the bundled data (a mesh and a shell stored with
+# parts, cells, frusta). For each level L, the first prefix_bytes of L
+# (mesoinspect info --format json; FORMAT.md §7.10) are fed to preview at
+# --pixel-error 0 (the finest level that has arrived, everywhere):
+#  - it exits 0, says nothing on stderr (bytes not arrived yet are not an
+#    error) and covers pixels;
+#  - the stats name the level drawn: L itself when a whole level drew;
+#    drawn in parts (a mesh whose parts' finer levels come later in the
+#    file), every part's drawn level has an error no larger than L's (else
+#    the whole level L, which has arrived, is the better picture);
+#  - it read no more than had arrived, and its stats carry bytes_resident,
+#    bytes_read, steps_per_pixel, gpu_ms and stream_bytes = N;
+# and one byte less than the coarsest level's prefix draws nothing (exit 5).
+set -u
+MB=$1
+MI=$2
+DATA=$3
+. "$(dirname "$0")/check_lib.sh"
+
+bake() { # NAME ARGS...: bakes $T/NAME.meso, 77 when this build cannot
+    name=$1
+    shift
+    run "$MB" "$@" -o "$T/$name.meso"
+    if [ "$rc" -eq 5 ]; then
+        echo "SKIP: mesobake cannot bake $name in this build" >&2
+        exit 77
+    fi
+    expect_rc 0 "bake $name"
+}
+bake mesh mesh -i "$DATA/spot_uv.obj"
+bake shell shell -i "$DATA/spot_uv.obj" --texture bricks:64 --thickness-rel 0.02
+bake cells cells -i "$DATA/spot_low_resolution.obj"
+bake frusta frusta -i "$DATA/saguaro.skel" --relief bricks:64
+
+for name in mesh shell cells frusta; do
+    run "$MI" info --format json "$T/$name.meso"
+    expect_rc 0 "$name: info --format json"
+    cp "$T/out" "$T/$name.json"
+    prefixes=$(python3 -c 'import json, sys; print(" ".join("%d:%d" % (l["lod"], l["prefix_bytes"]) for l in json.load(open(sys.argv[1]))["objects"][0]["levels"]))' "$T/$name.json")
+    [ -n "$prefixes" ] || fail "$name: no levels listed"
+    coarsest=
+    for lp in $prefixes; do
+        lod=${lp%%:*}
+        n=${lp#*:}
+        coarsest=$n
+        run "$MI" preview "$T/$name.meso" -o "$T/p.png" --size 96x96 --pixel-error 0 --stream-bytes "$n" \
+            --stats "$T/s.json"
+        expect_rc 0 "$name: the first $n bytes (level $lod) draw"
+        [ -s "$T/err" ] && fail "$name: the first $n bytes: stderr is not empty"
+        run python3 - "$T/$name.json" "$T/s.json" "$lod" "$n" <<'PY'
+import json, sys
+info = json.load(open(sys.argv[1])); st = json.load(open(sys.argv[2]))
+L, n = int(sys.argv[3]), int(sys.argv[4])
+o = info["objects"][0]
+err = {l["lod"]: l["error"] for l in o["levels"]}
+def fail(msg): print(msg); sys.exit(1)
+for k in ("bytes_resident", "bytes_read", "steps_per_pixel", "gpu_ms", "stream_bytes", "covered_pixels"):
+    if k not in st: fail("stats lack " + k)
+if st["stream_bytes"] != n: fail("stream_bytes %d, not %d" % (st["stream_bytes"], n))
+if st["bytes_read"] > n: fail("read %d bytes of the %d that had arrived" % (st["bytes_read"], n))
+if st["covered_pixels"] <= 0: fail("nothing drawn")
+s = st["objects"][0]
+if "part_levels_drawn" in s:
+    perr = {(p["part"], p["lod"]): p["error"] for p in o["parts"]["levels"]}
+    worst = max(perr[(q + 1, lv)] for q, lv in enumerate(s["part_levels_drawn"]))
+    if worst > err[L]: fail("parts drawn with error %g where the whole level %d (%g) has arrived" % (worst, L, err[L]))
+    if s["levels_drawn"] != min(s["part_levels_drawn"]): fail("levels_drawn is not the finest part's level")
+elif s["levels_drawn"] != L:
+    fail("level %d drawn, not %d" % (s["levels_drawn"], L))
+print("ok")
+PY
+        expect_rc 0 "$name: the first $n bytes: $(cat "$T/out")"
+    done
+    run "$MI" preview "$T/$name.meso" -o "$T/p.png" --size 96x96 --stream-bytes $((coarsest - 1))
+    expect_rc 5 "$name: one byte short of the coarsest level draws nothing"
+done
+
+echo "preview_stream: $checks checks, $failures failures"
+[ "$failures" -eq 0 ]
