@@ -5,6 +5,7 @@
  *   mesoview [FILE.meso] [--size WxH] [--frames N] [--screenshot OUT.png]
  *            [--technique smooth|curved|tetra|segment|slices] [--slices N]
  *            [--slice-interp none|normal|texcoord] [--slice-axis view|levels] [--error-px E] [--animate]
+ *            [--keys KEYS] [--print-title]
  *
  * Mouse: drag to orbit, scroll to zoom. Keys: Esc quits, S saves a
  * screenshot (mesoview.png); 1-5 pick the shell technique (5: slices,
@@ -59,6 +60,10 @@ static const char* const usage =
     "  --animate           start with the animation on (shells twist and play stored texture\n"
     "                      frames, frusta sway)\n"
     "  --cells MODE        cells: first (default), reflect or refract\n"
+    "  --keys KEYS         press these keys, one a frame from the second frame on (the\n"
+    "                      keys below, as typed: 'PPO' doubles the pixel error twice, then\n"
+    "                      halves it), for scripted runs and tests\n"
+    "  --print-title       print the window title to stdout each time it changes\n"
     "  -h, --help          this help;  --version  the version\n"
     "\n"
     "Mouse: drag to orbit, scroll to zoom.  Keys: Esc quit, S save mesoview.png,\n"
@@ -125,10 +130,13 @@ static void on_key(GLFWwindow* w, int key, int scancode, int action, int mods)
         d->cells.bounces = (d->cells.bounces + 1) % 4;
     else if (key == GLFW_KEY_L)
         d->cells.step = d->cells.step > 0.0f ? 0.0f : 8.0f;
-    else if (key == GLFW_KEY_O) /* below 1/8 px: the finest levels (< 0) */
-        d->pixel_error = d->pixel_error < 0.0f ? -1.0f : d->pixel_error > 0.125f ? d->pixel_error * 0.5f : -1.0f;
-    else if (key == GLFW_KEY_P)
-        d->pixel_error = d->pixel_error < 0.0f ? 0.125f : fminf(d->pixel_error * 2.0f, 64.0f);
+    else if (key == GLFW_KEY_O) { /* below 1/8 px: the finest levels (< 0); 0 is libmeso's default, 1 px */
+        const float t = d->pixel_error == 0.0f ? 1.0f : d->pixel_error;
+        d->pixel_error = t < 0.0f ? -1.0f : t > 0.125f ? t * 0.5f : -1.0f;
+    } else if (key == GLFW_KEY_P) {
+        const float t = d->pixel_error == 0.0f ? 1.0f : d->pixel_error;
+        d->pixel_error = t < 0.0f ? 0.125f : fminf(t * 2.0f, 64.0f);
+    }
     else
         return;
     k->changed = 1;
@@ -348,7 +356,8 @@ int main(int argc, char** argv)
     knobs kn = {.d = {.shell = {.error_px = 1.0f, .max_steps = 256, .bisection_steps = 4, .slices = 16},
                       .frusta = {.relief_steps = 64, .bisection_steps = 4},
                       .cells = {.bounces = 1, .bisection_steps = 4}}};
-    const char *file = NULL, *shot = NULL;
+    const char *file = NULL, *shot = NULL, *keys = "";
+    int print_title = 0;
     for (int i = 1; i < argc; ++i) {
         const char* a = argv[i];
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -422,6 +431,16 @@ int main(int argc, char** argv)
             }
         } else if (!strcmp(a, "--animate")) {
             kn.animate = 1;
+        } else if (!strcmp(a, "--keys") && i + 1 < argc) {
+            keys = argv[++i];
+            for (const char* c = keys; *c; ++c) /* GLFW's printable key codes are their ASCII capitals */
+                if (!strchr("12345IX,.[]-=BDAMNLOP", *c)) {
+                    fprintf(stderr, "mesoview error: --keys: '%c' is not one of 1-5 I X , . [ ] - = B D A M N L O P\n",
+                            *c);
+                    return 1;
+                }
+        } else if (!strcmp(a, "--print-title")) {
+            print_title = 1;
         } else if (a[0] == '-') {
             fprintf(stderr, "mesoview error: unrecognized option '%s'\nSee 'mesoview --help'.\n", a);
             return 1;
@@ -534,6 +553,8 @@ int main(int argc, char** argv)
         gl.Viewport(0, 0, fw, fh);
         gl.ClearColor(0.18f, 0.20f, 0.24f, 1.0f);
         gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        if (frame > 0 && *keys) /* --keys: one a frame, through the keyboard's own handler */
+            on_key(win, *keys++, 0, GLFW_PRESS, 0);
         if (nobj > 0 && fw > 0 && fh > 0) {
             const double fovy = 35.0 * M_PI / 180.0, dist = cam.zoom * radius / sin(fovy / 2) * 1.05;
             meso_rt_draw_desc d = kn.d;
@@ -599,6 +620,8 @@ int main(int argc, char** argv)
                 snprintf(title + strlen(title), sizeof(title) - strlen(title), "  %.1f steps/fragment",
                          (double)stats.steps / (double)stats.fragments);
             glfwSetWindowTitle(win, title);
+            if (print_title && (frame == 0 || kn.changed))
+                printf("%s\n", title);
             kn.changed = 0;
         }
         const int last = frames > 0 && frame + 1 >= frames;
