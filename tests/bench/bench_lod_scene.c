@@ -10,6 +10,11 @@
  *   ms         wall time of one frame of the 64 draws, glFinish before and
  *              after: the median of 15 frames, 5 in each of 3 rounds over
  *              all the settings (one round's frames, in a fresh context);
+ *   ms_alone   the same frames with each draw timed alone (glFinish either
+ *              side) and summed: the draws' own cost, without llvmpipe's
+ *              overlap of one draw's vertex work with the last one's
+ *              rasterisation, which moves the whole frame's time between
+ *              builds that draw the same (README);
  *   steps_px   shader steps per covered pixel (one counted frame, untimed;
  *              0 where the context cannot count; meshes count none);
  *   resident   file bytes of the uploaded levels (meso_rt_budget_state);
@@ -284,9 +289,35 @@ static void write_picture(scene* s, float tau, const uint8_t* img, const float* 
     free(alone);
 }
 
+/* One frame at `tau` with each draw timed alone (glFinish either side), in
+ * scene order so the depth buffer holds the nearer objects: object k's ms
+ * into out[k * stride]; returns their sum. */
+static double frame_alone(scene* s, float tau, double* out, int stride)
+{
+    meso_rt_draw_desc d = scene_desc(tau);
+    test_fbo_clear(&fbo, 0.18f, 0.20f, 0.24f);
+    double sum = 0.0;
+    for (int k = 0; k < N; ++k) {
+        memcpy(d.model, s->model[k], sizeof d.model);
+        fbo.Finish();
+        const double t0 = meso_seconds();
+        if (meso_rt_draw(s->rt, s->obj[k], &d) != MESO_OK)
+            die("draw");
+        fbo.Finish();
+        const double ms = 1e3 * (meso_seconds() - t0);
+        if (out)
+            out[(size_t)k * (size_t)stride] = ms;
+        sum += ms;
+    }
+    meso_rt_frame_end(s->rt);
+    return sum;
+}
+
 /* FRAMES frames' ms at `tau`, in a fresh context after 3
- * warm-up frames (the levels are read and uploaded in the first). */
-static void time_setting(float tau, double ms[FRAMES])
+ * warm-up frames (the levels are read and uploaded in the first); then
+ * FRAMES more with each draw timed alone (glFinish either side), summed
+ * over the frame (alone[]). */
+static void time_setting(float tau, double ms[FRAMES], double alone[FRAMES])
 {
     scene s;
     scene_load(&s);
@@ -299,13 +330,15 @@ static void time_setting(float tau, double ms[FRAMES])
         fbo.Finish();
         ms[i] = 1e3 * (meso_seconds() - t0);
     }
+    for (int i = 0; i < FRAMES; ++i)
+        alone[i] = frame_alone(&s, tau, NULL, 0);
     scene_free(&s);
 }
 
 /* Every metric but ms (the same in every run: the levels a setting picks
  * and the image do not depend on time) and ms, the median of the timed
  * frames of every round. */
-static void bench_setting(float tau, const char* name, const double* ms, int count)
+static void bench_setting(float tau, const char* name, const double* ms, const double* alone, int count)
 {
     scene s;
     scene_load(&s);
@@ -344,6 +377,7 @@ static void bench_setting(float tau, const char* name, const double* ms, int cou
         level_sum += ls.last_drawn;
     }
     row("scene", name, "ms", ms[count / 2]);
+    row("scene", name, "ms_alone", alone[count / 2]);
     row("scene", name, "steps_px", sum.supported && covered ? (double)sum.steps / (double)covered : 0.0);
     row("scene", name, "frags_px", sum.supported && covered ? (double)sum.fragments / (double)covered : 0.0);
     row("scene", name, "resident", (double)bs.bytes_resident);
@@ -370,23 +404,11 @@ static void objects_at(float tau)
     scene_load(&s);
     for (int i = 0; i < 4; ++i)
         scene_draw(&s, tau, NULL);
-    /* Each object's draw timed alone (glFinish either side), in scene
-     * order so the depth buffer holds the nearer objects, REPEAT frames. */
+    /* Each object's draw timed alone, REPEAT frames. */
     static double ms[N][REPEAT];
+    for (int r = 0; r < REPEAT; ++r)
+        frame_alone(&s, tau, &ms[0][r], REPEAT);
     meso_rt_draw_desc d = scene_desc(tau);
-    for (int r = 0; r < REPEAT; ++r) {
-        test_fbo_clear(&fbo, 0.18f, 0.20f, 0.24f);
-        for (int k = 0; k < N; ++k) {
-            memcpy(d.model, s.model[k], sizeof d.model);
-            fbo.Finish();
-            const double t0 = meso_seconds();
-            if (meso_rt_draw(s.rt, s.obj[k], &d) != MESO_OK)
-                die("draw");
-            fbo.Finish();
-            ms[k][r] = 1e3 * (meso_seconds() - t0);
-        }
-        meso_rt_frame_end(s.rt);
-    }
     /* One more frame, counted (untimed): each draw's fragments and steps. */
     static meso_rt_draw_stats st[N];
     test_fbo_clear(&fbo, 0.18f, 0.20f, 0.24f);
@@ -470,13 +492,14 @@ int main(int argc, char** argv)
      * setting alike rather than on one. */
     static const float taus[SETTINGS] = {-1.0f, 0.5f, 1.0f, 2.0f, 4.0f, 8.0f, 16.0f};
     static const char* const names[SETTINGS] = {"finest", "0.5", "1", "2", "4", "8", "16"};
-    static double ms[SETTINGS][ROUNDS * FRAMES];
+    static double ms[SETTINGS][ROUNDS * FRAMES], alone[SETTINGS][ROUNDS * FRAMES];
     for (int round = 0; round < ROUNDS; ++round)
         for (int i = 0; i < SETTINGS; ++i)
-            time_setting(taus[i], ms[i] + round * FRAMES);
+            time_setting(taus[i], ms[i] + round * FRAMES, alone[i] + round * FRAMES);
     for (int i = 0; i < SETTINGS; ++i) {
         qsort(ms[i], ROUNDS * FRAMES, sizeof(double), cmp_double);
-        bench_setting(taus[i], names[i], ms[i], ROUNDS * FRAMES);
+        qsort(alone[i], ROUNDS * FRAMES, sizeof(double), cmp_double);
+        bench_setting(taus[i], names[i], ms[i], alone[i], ROUNDS * FRAMES);
     }
     fclose(csv);
     for (int i = 0; i < FILES; ++i)

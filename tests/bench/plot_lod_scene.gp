@@ -1,6 +1,8 @@
 # plot_lod_scene.gp — levels of detail in bench_lod_scene's 64-object scene.
 #   gnuplot -e "dir='tests/bench/results'" tests/bench/plot_lod_scene.gp
-# Left: frame time, bytes resident and shader steps per covered pixel at each
+# Left: frame time (the whole frame, and its draws timed alone and summed:
+# the frame's own time moves between builds, README), bytes resident and
+# shader steps per covered pixel at each
 # pixel error tau, as a share of drawing the finest level everywhere (the
 # dashed goal lines are the issue's: a third of the time, a fifth of the
 # bytes). Right: mean error against the supersampled finest render (0..255
@@ -17,7 +19,7 @@ set datafile separator ","
 
 # The finest setting's value of a metric.
 finest(m) = system("awk -F, '$1==\"scene\" && $2==\"finest\" && $3==\"".m."\" {print $4}' '".csv."'") + 0
-fms = finest("ms"); fres = finest("resident"); fsteps = finest("steps_px"); fmae = finest("mae")
+fms = finest("ms"); falone = finest("ms_alone"); fres = finest("resident"); fsteps = finest("steps_px"); fmae = finest("mae")
 # One metric's rows over tau, as "tau,value" lines (a filter in `using`
 # would leave gaps that break the lines).
 sel(m) = "< awk -F, '$1==\"scene\" && $2!=\"finest\" && $3==\"".m."\" {print $2\",\"$4}' '".csv."'"
@@ -28,10 +30,11 @@ set xrange [0.4:20]
 set xtics ("0.5" 0.5, "1" 1, "2" 2, "4" 4, "8" 8, "16" 16)
 set xlabel "pixel error tau (px)"
 set grid
-set key bottom left
+set key top right
 set ylabel "share of the finest level everywhere"
 set yrange [0:1.1]
 plot sel("ms") using 1:($2 / fms) with linespoints lw 2 title "frame time", \
+     sel("ms_alone") using 1:($2 / falone) with linespoints lw 2 title "draws timed alone, summed", \
      sel("resident") using 1:($2 / fres) with linespoints lw 2 title "bytes resident", \
      sel("steps_px") using 1:($2 / fsteps) with linespoints lw 2 title "steps per covered pixel", \
      1.0 / 3 with lines dt 2 lc rgb "#444444" title "goal: time at 1 px", \
