@@ -13,9 +13,12 @@
  * the moment the reader is opened: a read of bytes not yet arrived answers
  * MESO_IO_PENDING (meso_io, meso_file.h). The host loop is the plain one:
  * meso_file_open_io and meso_rt_load_object_levels are retried until they
- * no longer answer MESO_ERR_PENDING, then one meso_rt_draw a frame at
- * pixel_error 1 (the torus fills most of a 320 x 240 view, so the finest
- * level is wanted), synchronous loads (meso_rt_desc.stream_requests 0).
+ * no longer answer MESO_ERR_PENDING, then one meso_rt_draw a frame asking
+ * for the finest level (pixel_error < 0; at 1 px the torus, which fills
+ * most of a 320 x 240 view, wants level 6 since errors are projected at
+ * the nearest point of a level's box, 1.58 away where its bounding sphere
+ * was 0.86), synchronous loads (meso_rt_desc.stream_requests 0); its
+ * parts (mesobake's default) each want their level 0.
  *
  * Measured, on the clock from the first byte:
  *   first_image_s / _arrived / _share   the first frame with a covered pixel,
@@ -23,7 +26,15 @@
  *   first_image_read   bytes libmeso had read for the object by then;
  *   level_L_s / level_L_arrived         the first frame that drew level L;
  *   frame_ms_median / frame_ms_max      frame times (a synchronous load's
- *                 read and upload land in the frame that wants the level).
+ *                 read and upload land in the frame that wants the level);
+ * then the same stream through stream requests, uploads at 4 MB a call:
+ *   req_gl_ms_median / _max   the GL thread's time a frame (draw, give,
+ *                 upload; the requests' reads and decodes, run on the same
+ *                 thread here, are timed apart: req_run_s_total);
+ *   req_upload_ms_max / req_upload_bytes_max  the largest upload call: the
+ *                 budget is checked between levels, so one level larger
+ *                 than it is uploaded whole in one call;
+ *   req_level_0_s             when level 0 was drawn.
  * Output: one CSV (metric, value).
  * usage: bench_stream RESULTS_CSV MESOBAKE WORK_DIR [SIDE [MB_PER_S]] */
 #include <math.h>
@@ -207,7 +218,7 @@ int main(int argc, char** argv)
     const double eye[3] = {0, -2.2, 1.6}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
     meso_camera_look_at(d.view, eye, at, up);
     meso_camera_perspective(d.proj, 40.0 * M_PI / 180.0, (double)W / H, 0.05, 100.0);
-    d.pixel_error = 1.0f;
+    d.pixel_error = -1.0f;
     d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
     for (int i = 0; i < 16; ++i)
         d.model[i] = i % 5 == 0 ? 1.0f : 0.0f;
@@ -260,6 +271,84 @@ int main(int argc, char** argv)
     qsort(frames, (size_t)nframes, sizeof(double), cmp_double);
     row("frame_ms_median", frames[nframes / 2]);
     row("frame_ms_max", frames[nframes - 1]);
+    meso_rt_release_object(rt, o);
+    meso_rt_destroy(rt);
+    meso_file_close(f);
+    const int ok = first && seen[0];
+
+    /* The same stream through requests (meso_rt_desc.stream_requests): the
+     * draw only files them; the host takes them, runs them (reads and
+     * decodes: here on the GL thread too, timed apart, where a host would
+     * use a worker), gives them back and uploads at UPLOAD_BUDGET bytes a
+     * call. What the GL thread spends a frame (draw, give, upload) and the
+     * largest single upload call, in ms and bytes against the budget. */
+    enum { UPLOAD_BUDGET = 4 << 20 };
+    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) != MESO_OK)
+        die("libmeso context");
+    s.t0 = meso_seconds();
+    while ((r = meso_file_open_io(&io, NULL, &f, NULL)) == MESO_ERR_PENDING)
+        sleep_ms(1);
+    if (r != MESO_OK)
+        die("requests: open");
+    while ((r = meso_rt_load_object_levels(rt, f, rec.id, &o)) == MESO_ERR_PENDING)
+        sleep_ms(1);
+    if (r != MESO_OK)
+        die("requests: load");
+    double gl_max = 0.0, up_max = 0.0, run_total = 0.0, draw_max = 0.0;
+    int draw_max_frame = 0;
+    uint64_t up_bytes_max = 0;
+    int req_frames = 0, req_level0 = 0;
+    nframes = 0;
+    for (;;) {
+        const double t = meso_seconds();
+        test_fbo_clear(&fbo, 0, 0, 0);
+        if (meso_rt_draw(rt, o, &d) != MESO_OK)
+            die("requests: draw");
+        meso_rt_frame_end(rt);
+        fbo.Finish();
+        const double draw_ms = 1e3 * (meso_seconds() - t);
+        draw_max = draw_ms > draw_max ? draw_ms : draw_max;
+        draw_max_frame = draw_ms >= draw_max ? req_frames : draw_max_frame;
+        meso_rt_request* reqs[16];
+        const uint32_t taken = meso_rt_stream_take(rt, reqs, 16);
+        const double tr = meso_seconds();
+        for (uint32_t i = 0; i < taken; ++i)
+            meso_rt_stream_run(reqs[i]);
+        const double run_s = meso_seconds() - tr;
+        run_total += run_s;
+        meso_rt_stream_give(rt, reqs, taken);
+        const double tu = meso_seconds();
+        const uint64_t sent = meso_rt_stream_upload(rt, UPLOAD_BUDGET);
+        fbo.Finish();
+        const double up_ms = 1e3 * (meso_seconds() - tu), gl_ms = 1e3 * (meso_seconds() - t - run_s);
+        up_max = up_ms > up_max ? up_ms : up_max;
+        up_bytes_max = sent > up_bytes_max ? sent : up_bytes_max;
+        gl_max = gl_ms > gl_max ? gl_ms : gl_max;
+        if (nframes < 100000)
+            frames[nframes++] = gl_ms;
+        ++req_frames;
+        meso_rt_levels_state ls;
+        meso_rt_levels_state_get(rt, o, &ls);
+        if (ls.last_drawn == 0) {
+            req_level0 = 1;
+            row("req_level_0_s", meso_seconds() - s.t0);
+            break;
+        }
+        if (meso_seconds() - s.t0 > limit)
+            break;
+        if (!taken && !sent)
+            sleep_ms(1);
+    }
+    qsort(frames, (size_t)nframes, sizeof(double), cmp_double);
+    row("req_upload_budget_bytes", UPLOAD_BUDGET);
+    row("req_frames", req_frames);
+    row("req_gl_ms_median", frames[nframes / 2]);
+    row("req_gl_ms_max", gl_max);
+    row("req_draw_ms_max", draw_max);
+    row("req_draw_ms_max_frame", draw_max_frame);
+    row("req_upload_ms_max", up_max);
+    row("req_upload_bytes_max", (double)up_bytes_max);
+    row("req_run_s_total", run_total);
     fclose(csv);
     free(frames);
     free(depth);
@@ -269,5 +358,5 @@ int main(int argc, char** argv)
     test_fbo_destroy(&fbo);
     meso_egl_destroy(egl);
     free(data);
-    return first && seen[0] ? 0 : 1;
+    return ok && req_level0 ? 0 : 1;
 }
