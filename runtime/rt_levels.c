@@ -357,11 +357,12 @@ uint32_t mesoi_levels_per_instance(meso_rt* rt, meso_rt_object h, const meso_rt_
     return distinct;
 }
 
-/* The finest whole level whose stated error is below `error`, uploaded,
- * or (no stream requests) uploaded now; -1 when there is none. */
-static int32_t whole_finer_than(meso_rt* rt, mesoi_levels* lv, double error)
+/* The finest whole level from `from` on whose stated error is below
+ * `error`, uploaded, or (no stream requests) uploaded now; -1 when there
+ * is none. */
+static int32_t whole_finer_than(meso_rt* rt, mesoi_levels* lv, uint32_t from, double error)
 {
-    for (uint32_t l = 0; l < lv->count && (double)lv->info[l].rec.error < error; ++l) {
+    for (uint32_t l = from; l < lv->count && (double)lv->info[l].rec.error < error; ++l) {
         if (lv->slot[l].id)
             return (int32_t)l;
         if (!rt->stream_requests && !lv->failed[l] && mesoi_make_room(rt, lv->info[l].bytes) &&
@@ -415,7 +416,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         meso_rt_object ph;
         const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
         const double fallback = pr == MESO_OK ? mesoi_parts_fallback_error(lv->parts) : -1.0;
-        const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, fallback) : -1;
+        const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, 0, fallback) : -1;
         if (whole >= 0) {
             lv->last_drawn = whole;
             lv->used[whole] = rt->frame + 1;
@@ -436,13 +437,23 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     }
     /* Coarser than level 0, or a shell none of whose parts wants its
      * prisms: the parts instead where their own levels hold fewer bytes
-     * than the whole level (rt_parts.c), no native level needed. */
+     * than the whole level (rt_parts.c), no native level needed; but, as
+     * above, a whole level (the wanted one or coarser) with a smaller error
+     * than the worst part drawn where some part had to fall back. */
     if (lv->parts && (want > 0 || lv->parts->shell) && !prisms_wanted && parts_bytes < lv->info[want].bytes) {
         meso_rt_object ph;
         const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
         if (pr == MESO_ERR_OUT_OF_MEMORY)
             return pr;
         const int finest = pr == MESO_OK ? mesoi_parts_finest_patch(lv->parts) : -1;
+        const double fallback = finest >= 0 ? mesoi_parts_fallback_error(lv->parts) : -1.0;
+        const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, want, fallback) : -1;
+        if (whole >= 0) {
+            lv->last_drawn = whole;
+            lv->used[whole] = rt->frame + 1;
+            *out = lv->slot[whole];
+            return MESO_OK;
+        }
         if (finest >= 0) {
             lv->last_drawn = finest;
             lv->parts_frame = rt->frame + 1;

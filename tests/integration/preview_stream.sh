@@ -16,6 +16,11 @@
 #  - it read no more than had arrived, and its stats carry bytes_resident,
 #    bytes_read, steps_per_pixel, gpu_ms and stream_bytes = N;
 # and one byte less than the coarsest level's prefix draws nothing (exit 5).
+# At a coarser pixel error (3 px, the mesh): where the whole file draws
+# level W (as a bake without parts draws it), each prefix of level L draws
+# the whole level max(W, L), or parts; parts that fell back from what the
+# whole file draws (their finer levels not arrived) have no part drawn with
+# a larger error than that whole level's.
 set -u
 MB=$1
 MI=$2
@@ -78,6 +83,44 @@ PY
     done
     run "$MI" preview "$T/$name.meso" -o "$T/p.png" --size 96x96 --stream-bytes $((coarsest - 1))
     expect_rc 5 "$name: one byte short of the coarsest level draws nothing"
+done
+
+# The mesh at 3 px: W from a bake without parts, the parts' levels from the whole file.
+bake mesh_np mesh -i "$DATA/spot_uv.obj" --parts none
+tau=3
+run "$MI" preview "$T/mesh_np.meso" -o "$T/p.png" --size 256x256 --pixel-error $tau --stats "$T/w.json"
+expect_rc 0 "mesh without parts at $tau px"
+run "$MI" preview "$T/mesh.meso" -o "$T/p.png" --size 256x256 --pixel-error $tau --stats "$T/full.json"
+expect_rc 0 "mesh at $tau px"
+for lp in $(python3 -c 'import json, sys; print(" ".join("%d:%d" % (l["lod"], l["prefix_bytes"]) for l in json.load(open(sys.argv[1]))["objects"][0]["levels"]))' "$T/mesh.json"); do
+    lod=${lp%%:*}
+    n=${lp#*:}
+    run "$MI" preview "$T/mesh.meso" -o "$T/p.png" --size 256x256 --pixel-error $tau --stream-bytes "$n" \
+        --stats "$T/s.json"
+    expect_rc 0 "mesh: the first $n bytes at $tau px"
+    run python3 - "$T/mesh.json" "$T/w.json" "$T/full.json" "$T/s.json" "$lod" <<'PY'
+import json, sys
+info, w, full, st = (json.load(open(a)) for a in sys.argv[1:5])
+L = int(sys.argv[5])
+o = info["objects"][0]
+err = {l["lod"]: l["error"] for l in o["levels"]}
+W = w["objects"][0]["levels_drawn"]
+whole = max(W, L)
+s = st["objects"][0]
+def fail(msg): print(msg); sys.exit(1)
+if "part_levels_drawn" in s:
+    fp = full["objects"][0].get("part_levels_drawn")
+    if fp and any(a > b for a, b in zip(s["part_levels_drawn"], fp)):  # fell back
+        perr = {(p["part"], p["lod"]): p["error"] for p in o["parts"]["levels"]}
+        worst = max(perr[(q + 1, lv)] for q, lv in enumerate(s["part_levels_drawn"]))
+        if worst > err[whole]:
+            fail("parts %r drawn, worst error %g, where the whole level %d (%g) has arrived" %
+                 (s["part_levels_drawn"], worst, whole, err[whole]))
+elif s["levels_drawn"] != whole:
+    fail("whole level %d drawn, not %d (W %d, arrived %d)" % (s["levels_drawn"], whole, W, L))
+print("ok")
+PY
+    expect_rc 0 "mesh at $tau px, the first $n bytes: $(cat "$T/out")"
 done
 
 echo "preview_stream: $checks checks, $failures failures"
