@@ -472,6 +472,9 @@ typedef struct mesoi_parts {
     uint8_t* drawn;          /* [part_count]: the level each drew */
     meso_rt_object parent;   /* the slot picks hand out (kind MESH, no GL resources) */
     uint64_t bytes_wanted;   /* the last pick's wanted part levels' bytes */
+    double fallback_error;   /* where the last pick drew some part coarser than it wanted (its level not
+                                uploaded: still arriving, or no room), the largest stated error of the
+                                part levels it drew; else -1 */
     uint64_t bytes_read;
     uint64_t pick_frame;     /* the frame (rt->frame + 1) of the last pick */
     /* A shell's parts: each part's lod 0 is its prisms, drawn by the
@@ -512,10 +515,6 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
 int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
 void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i);
 uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read);
-/* Where the last pick drew some part coarser than it wanted (its level
- * not uploaded: still arriving, or no room), the largest stated error of
- * the part levels it drew; else -1. */
-double mesoi_parts_fallback_error(const mesoi_parts* p);
 /* Whether the last pick drew some part coarser than its lod 0, and every
  * part at the level it wanted (a shell whose parts are still arriving
  * draws its whole native level, which is finer). */

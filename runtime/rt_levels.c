@@ -372,6 +372,29 @@ static int32_t whole_finer_than(meso_rt* rt, mesoi_levels* lv, uint32_t from, do
     return -1;
 }
 
+/* The parts the last pick chose (`ph`, its finest part level `finest`)
+ * draw, unless some part had to draw coarser than it wanted (its level
+ * still arriving): then the finest whole level from `from` on with a
+ * smaller error than the worst part drawn, if one is there, draws instead
+ * (a prefix of the file holds whole levels before the parts' finer ones). */
+static void draw_parts(meso_rt* rt, mesoi_levels* lv, uint32_t from, int finest, meso_rt_object ph,
+                       meso_rt_object* out)
+{
+    const double fallback = lv->parts->fallback_error;
+    const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, from, fallback) : -1;
+    if (whole >= 0) {
+        lv->last_drawn = whole;
+        lv->used[whole] = rt->frame + 1;
+        *out = lv->slot[whole];
+        return;
+    }
+    lv->last_drawn = finest;
+    lv->parts_frame = rt->frame + 1;
+    lv->parts_last = 1;
+    lv->parts_native = 0;
+    *out = ph;
+}
+
 void mesoi_levels_draw_begin(meso_rt* rt, meso_rt_object h)
 {
     mesoi_object* o = mesoi_lookup(rt, h);
@@ -406,29 +429,13 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     const uint64_t parts_bytes =
         lv->parts ? mesoi_parts_want(lv->parts, d, inst, count, tau * rt->tau_scale, height, &prisms_wanted) : 0;
     /* Level 0 of a mesh object stored with parts: each part at its own
-     * level (rt_parts.c), when every part has one to draw. Where some part
-     * had to draw coarser than it wanted (its level still arriving), a
-     * whole level with a smaller error than the worst part drawn, if one
-     * is there, draws instead: a prefix of the file holds whole levels
-     * before the parts' finer ones. */
+     * level (rt_parts.c), when every part has one to draw (draw_parts). */
     int parts_pending = 0; /* streamed parts arriving: no whole level asked for meanwhile */
     if (want == 0 && lv->parts && !lv->parts->shell) {
         meso_rt_object ph;
         const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
-        const double fallback = pr == MESO_OK ? mesoi_parts_fallback_error(lv->parts) : -1.0;
-        const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, 0, fallback) : -1;
-        if (whole >= 0) {
-            lv->last_drawn = whole;
-            lv->used[whole] = rt->frame + 1;
-            *out = lv->slot[whole];
-            return MESO_OK;
-        }
         if (pr == MESO_OK) {
-            lv->last_drawn = mesoi_parts_finest_patch(lv->parts);
-            lv->parts_frame = rt->frame + 1;
-            lv->parts_last = 1;
-            lv->parts_native = 0;
-            *out = ph;
+            draw_parts(rt, lv, 0, mesoi_parts_finest_patch(lv->parts), ph, out);
             return MESO_OK;
         }
         if (pr == MESO_ERR_OUT_OF_MEMORY)
@@ -437,29 +444,16 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     }
     /* Coarser than level 0, or a shell none of whose parts wants its
      * prisms: the parts instead where their own levels hold fewer bytes
-     * than the whole level (rt_parts.c), no native level needed; but, as
-     * above, a whole level (the wanted one or coarser) with a smaller error
-     * than the worst part drawn where some part had to fall back. */
+     * than the whole level (rt_parts.c), no native level needed; a whole
+     * level from the wanted one on where some part fell back (draw_parts). */
     if (lv->parts && (want > 0 || lv->parts->shell) && !prisms_wanted && parts_bytes < lv->info[want].bytes) {
         meso_rt_object ph;
         const meso_result pr = mesoi_parts_pick(rt, lv, (meso_rt_object){0}, &ph);
         if (pr == MESO_ERR_OUT_OF_MEMORY)
             return pr;
         const int finest = pr == MESO_OK ? mesoi_parts_finest_patch(lv->parts) : -1;
-        const double fallback = finest >= 0 ? mesoi_parts_fallback_error(lv->parts) : -1.0;
-        const int32_t whole = fallback > 0.0 ? whole_finer_than(rt, lv, want, fallback) : -1;
-        if (whole >= 0) {
-            lv->last_drawn = whole;
-            lv->used[whole] = rt->frame + 1;
-            *out = lv->slot[whole];
-            return MESO_OK;
-        }
         if (finest >= 0) {
-            lv->last_drawn = finest;
-            lv->parts_frame = rt->frame + 1;
-            lv->parts_last = 1;
-            lv->parts_native = 0;
-            *out = ph;
+            draw_parts(rt, lv, want, finest, ph, out);
             return MESO_OK;
         }
         parts_pending |= pr == MESO_ERR_PENDING;

@@ -41,7 +41,6 @@
  */
 #include "rt_internal.h"
 
-#include <math.h>
 #include <string.h>
 
 
@@ -319,6 +318,7 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
     mesoi_parts* p = lv->parts;
     p->pick_frame = rt->frame + 1;
     p->native = native;
+    p->fallback_error = -1.0;
     /* p->want: mesoi_parts_want's, for this draw. A shell none of whose
      * parts is far enough for its patch draws its whole native level:
      * nothing to read or upload. */
@@ -335,6 +335,8 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
      * With stream requests, the finest of them that can still be had is
      * requested (every part's, before any answer) and not read here. */
     p->bytes_wanted = 0;
+    int fell_back = 0;
+    double worst = 0.0; /* the largest stated error drawn */
     meso_result missing = MESO_OK; /* MESO_ERR_PENDING: some part waits for its request; MESO_ERR_NOT_FOUND: cannot be had */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], n = p->first[q + 1] - a, w = p->want[q];
@@ -371,6 +373,8 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
         p->chosen[q] = prisms(p, a + (uint32_t)got) ? native : p->slot[a + (uint32_t)got];
         p->drawn[q] = (uint8_t)(got > 255 ? 255 : got);
         p->used[a + (uint32_t)got] = rt->frame + 1;
+        fell_back |= (uint32_t)got > w;
+        worst = (double)p->lv[a + (uint32_t)got].rec.error > worst ? (double)p->lv[a + (uint32_t)got].rec.error : worst;
     }
     for (uint32_t q = 0; p->shell && q < p->part_count; ++q)
         if (p->want[q] == 0) { /* the list, once */
@@ -379,6 +383,7 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
         }
     if (missing != MESO_OK)
         return missing; /* a whole level instead */
+    p->fallback_error = fell_back ? worst : -1.0;
     if (p->shell)
         prism_subset(p);
     *out = p->parent;
@@ -420,17 +425,6 @@ int mesoi_parts_finest_patch(const mesoi_parts* p)
         finest = p->drawn[q] < finest ? p->drawn[q] : finest;
     }
     return finest;
-}
-
-double mesoi_parts_fallback_error(const mesoi_parts* p)
-{
-    int fell_back = 0;
-    double worst = 0.0;
-    for (uint32_t q = 0; q < p->part_count; ++q) {
-        fell_back |= p->drawn[q] > p->want[q];
-        worst = fmax(worst, (double)p->lv[p->first[q] + p->drawn[q]].rec.error);
-    }
-    return fell_back ? worst : -1.0;
 }
 
 int mesoi_parts_coarse(const mesoi_parts* p)

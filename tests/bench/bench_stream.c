@@ -141,6 +141,35 @@ static int cmp_double(const void* a, const void* b)
     return (x > y) - (x < y);
 }
 
+/* Opens the streamed file and loads its object `id` into rt, each retried
+ * while its bytes have not arrived. */
+static meso_file* open_and_load(const meso_io* io, meso_rt* rt, uint32_t id, meso_rt_object* o)
+{
+    meso_file* f = NULL;
+    meso_result r;
+    while ((r = meso_file_open_io(io, NULL, &f, NULL)) == MESO_ERR_PENDING)
+        sleep_ms(1);
+    if (r != MESO_OK)
+        die("open");
+    while ((r = meso_rt_load_object_levels(rt, f, id, o)) == MESO_ERR_PENDING)
+        sleep_ms(1);
+    if (r != MESO_OK)
+        die("load");
+    return f;
+}
+
+/* One frame: a cleared framebuffer, the draw, frame end, glFinish; its ms. */
+static double draw_frame(meso_rt* rt, meso_rt_object o, const meso_rt_draw_desc* d, test_fbo* fbo)
+{
+    const double t = meso_seconds();
+    test_fbo_clear(fbo, 0, 0, 0);
+    if (meso_rt_draw(rt, o, d) != MESO_OK)
+        die("draw");
+    meso_rt_frame_end(rt);
+    fbo->Finish();
+    return 1e3 * (meso_seconds() - t);
+}
+
 int main(int argc, char** argv)
 {
     if (argc < 4 || argc > 6) {
@@ -229,14 +258,9 @@ int main(int argc, char** argv)
     int nframes = 0, first = 0, seen[MAX_LEVELS] = {0};
     const double limit = (double)size / rate + 120.0;
     for (;;) {
-        const double t = meso_seconds();
-        test_fbo_clear(&fbo, 0, 0, 0);
-        if (meso_rt_draw(rt, o, &d) != MESO_OK)
-            die("draw");
-        meso_rt_frame_end(rt);
-        fbo.Finish();
+        const double ms = draw_frame(rt, o, &d, &fbo);
         if (nframes < 100000)
-            frames[nframes++] = 1e3 * (meso_seconds() - t);
+            frames[nframes++] = ms;
         meso_rt_levels_state ls;
         meso_rt_levels_state_get(rt, o, &ls);
         const double now = meso_seconds() - s.t0;
@@ -286,29 +310,18 @@ int main(int argc, char** argv)
     if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) != MESO_OK)
         die("libmeso context");
     s.t0 = meso_seconds();
-    while ((r = meso_file_open_io(&io, NULL, &f, NULL)) == MESO_ERR_PENDING)
-        sleep_ms(1);
-    if (r != MESO_OK)
-        die("requests: open");
-    while ((r = meso_rt_load_object_levels(rt, f, rec.id, &o)) == MESO_ERR_PENDING)
-        sleep_ms(1);
-    if (r != MESO_OK)
-        die("requests: load");
+    f = open_and_load(&io, rt, rec.id, &o);
     double gl_max = 0.0, up_max = 0.0, run_total = 0.0, draw_max = 0.0;
     int draw_max_frame = 0;
     uint64_t up_bytes_max = 0;
     int req_frames = 0, req_level0 = 0;
     nframes = 0;
     for (;;) {
-        const double t = meso_seconds();
-        test_fbo_clear(&fbo, 0, 0, 0);
-        if (meso_rt_draw(rt, o, &d) != MESO_OK)
-            die("requests: draw");
-        meso_rt_frame_end(rt);
-        fbo.Finish();
-        const double draw_ms = 1e3 * (meso_seconds() - t);
-        draw_max = draw_ms > draw_max ? draw_ms : draw_max;
-        draw_max_frame = draw_ms >= draw_max ? req_frames : draw_max_frame;
+        const double t = meso_seconds(), draw_ms = draw_frame(rt, o, &d, &fbo);
+        if (draw_ms > draw_max) {
+            draw_max = draw_ms;
+            draw_max_frame = req_frames;
+        }
         meso_rt_request* reqs[16];
         const uint32_t taken = meso_rt_stream_take(rt, reqs, 16);
         const double tr = meso_seconds();
