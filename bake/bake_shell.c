@@ -29,6 +29,7 @@
 #include "mesh_chunk.h"
 #include "meso_clock.h"
 #include "shell_allowed.h"
+#include "shell_base_levels.h"
 #include "shell_bend.h"
 #include "shell_envelope.h"
 #include "shell_hybrid.h"
@@ -899,27 +900,106 @@ static meso_result native_errors(shell_bake* s, const meso_mesh* base, const flo
     return r;
 }
 
-/* The native levels kept (lv->native, native_errors) and their chunks:
- * each level's TX2D or TX3D and DIST at its own lod, appended to
- * chunks[0..n-1]; the chunks every level shares (SDIR, STHK, COLR, CMAP)
- * move to lod N, the coarsest native level, which levels 0..N all resolve
- * them to (FORMAT.md §7.10: per type the smallest lod >= the level); the
- * MESH they draw is the stand-in's copy at lod N + 1 (standin_levels.c).
+/* A shell's coarser base meshes (shell_base_levels.h) and their MESH chunks. */
+typedef struct base_levels {
+    mesoi_shell_base_level* lv;
+    uint32_t count;
+    meso_mesh_chunk chunk[MESOI_SHELL_BASE_LEVELS_MAX];
+} base_levels;
+
+static void base_levels_free(base_levels* b)
+{
+    mesoi_shell_base_levels_free(b->lv, b->count);
+    for (uint32_t c = 0; c < MESOI_SHELL_BASE_LEVELS_MAX; ++c)
+        free(b->chunk[c].data);
+    memset(b, 0, sizeof *b);
+}
+
+/* The coarser base meshes as native levels after the texture levels
+ * (lv->native of them, native_errors): level N + c draws base mesh c with
+ * level N's texture function. Its error is level N's plus D_c, the largest
+ * distance between the two mappings (shell_base_levels.c: Φ_c(T) is within
+ * D_c of Φ(T), which is within level N's error of level 0's surface), plus
+ * as much float slack as the texture levels allow; made non-decreasing,
+ * and kept while it is below the stand-in's. Static texture functions
+ * only (an animated one's frames would need moving too); at most what
+ * --levels leaves after the stand-ins. */
+static meso_result base_levels_make(shell_bake* s, const meso_mesh* base, const float* sdir, int sdir_layers,
+                                    const float* thick, const float lo[3], const float hi[3],
+                                    mesoi_standin_levels* lv, base_levels* bl, cJSON* rep, meso_error* err)
+{
+    memset(bl, 0, sizeof *bl);
+    if (!s->a.texture || s->a.frames)
+        return MESO_OK;
+    const uint32_t N = lv->native, total = s->a.levels ? (uint32_t)s->a.levels : MESOI_STANDIN_MAX_LEVELS,
+                   used = 1 + N + lv->count;
+    const double e1 = lv->e0, e_tex = N ? lv->native_error[N - 1] : 0.0;
+    double extent = 0.0;
+    for (int k = 0; k < 3; ++k)
+        extent = fmax(extent, fmax(fabs((double)lo[k]), fabs((double)hi[k])));
+    const double slack = 4.0 * FLT_EPSILON * (extent + longest_span(sdir, base->vertex_count, sdir_layers));
+    const double t = meso_seconds();
+    const mesoi_shell_base_levels_input in = {.base = base, .sdir = sdir, .layers = sdir_layers, .thick = thick,
+                                              .max_levels = total > used ? total - used : 0,
+                                              .limit = e1 - e_tex - slack};
+    const char* why = NULL;
+    double too_far = -1.0;
+    meso_result r = mesoi_shell_base_levels_build(&in, &bl->lv, &bl->count, &why, &too_far, err);
+    uint32_t kept = 0;
+    double prev = e_tex;
+    for (; r == MESO_OK && kept < bl->count; ++kept) {
+        const float f = mesoi_f32_up(fmax(prev, e_tex + bl->lv[kept].distance + slack));
+        if (!(f < e1)) {
+            why = "its distance to level 0 is not below the stand-in's error";
+            too_far = bl->lv[kept].distance;
+            break;
+        }
+        r = meso_bake_mesh_chunk(&bl->lv[kept].mesh, NULL, &bl->chunk[kept], err);
+        lv->native_error[N + kept] = prev = f;
+        lv->native_mesh[N + kept] = &bl->lv[kept].mesh;
+        lv->native_mesh_bytes[N + kept] = bl->chunk[kept].size;
+    }
+    if (r != MESO_OK)
+        return r;
+    lv->native = N + kept;
+    cJSON* jb = cJSON_AddObjectToObject(rep, "base_levels");
+    cJSON_AddNumberToObject(jb, "count", kept);
+    if (why)
+        cJSON_AddStringToObject(jb, "stopped", why);
+    if (too_far >= 0.0) {
+        cJSON_AddNumberToObject(jb, "distance", too_far);
+        cJSON_AddNumberToObject(jb, "standin_error", e1);
+    }
+    char far[96] = "";
+    if (too_far >= 0.0)
+        snprintf(far, sizeof far, ": %.3g, the stand-in's %.3g", too_far, e1);
+    if (in.max_levels)
+        mesoi_run_stage(&s->run, "levels", 0.99, 0.99, "%u coarser base meshes kept%s%s%s%s (%.0f ms)", kept,
+                        why ? " (the next: " : "", why ? why : "", far, why ? ")" : "", 1e3 * (meso_seconds() - t));
+    return MESO_OK;
+}
+
+/* The native levels kept (lv->native, native_errors, base_levels_make) and
+ * their chunks, appended to chunks[0..n-1]. T texture levels, then C
+ * coarser base meshes (lv->native = T + C):
+ * - each texture level's TX2D or TX3D and DIST at its own lod 1..T;
+ * - the base mesh's SDIR and STHK at lod T, which levels 0..T all resolve
+ *   them to (FORMAT.md §7.10: per type the smallest lod >= the level), and
+ *   its MESH too where a later level has a MESH of its own (the coarser
+ *   bases, or level T + C + 1 when the stand-in is not the base mesh);
+ * - each coarser base's MESH, SDIR and STHK at lod T + c;
+ * - what is drawn in texture space, level T's texture function and its
+ *   distance map, COLR and CMAP, at lod T + C, which levels T..T + C share.
  * Returns the chunks appended. */
-static size_t native_chunks(const shell_bake* s, const mesoi_standin_levels* lv, mesoi_chunk* chunks, size_t n)
+static size_t native_chunks(const shell_bake* s, const mesoi_standin_levels* lv, const base_levels* bl,
+                            mesoi_chunk* chunks, size_t n)
 {
     const mesoi_shell_texture* tx = &s->tx;
-    const uint32_t N = lv->native;
+    const uint32_t N = lv->native, C = bl->count < N ? bl->count : N, T = N - C;
     if (N == 0)
         return 0;
-    for (size_t k = 0; k < n; ++k) {
-        const uint32_t t = chunks[k].desc.type;
-        if (t == MESO_CHUNK_SDIR || t == MESO_CHUNK_STHK || t == MESO_CHUNK_COLR || t == MESO_CHUNK_CMAP ||
-            (t == MESO_CHUNK_MESH && lv->standin_mesh)) /* level 1 is not the base mesh: the base at lod N */
-            chunks[k].desc.lod = (uint16_t)N;
-    }
     size_t m = 0;
-    for (uint32_t l = 1; l <= N; ++l) {
+    for (uint32_t l = 1; l <= T; ++l) {
         const mesoi_height_level* t = &tx->native[l - 1];
         chunks[n + m++] = (mesoi_chunk){
             .desc = {.type = tx->fn.kind == MESO_TEXFN_DENSITY ? MESO_CHUNK_TX3D : MESO_CHUNK_TX2D, .object = 1,
@@ -930,6 +1010,32 @@ static size_t native_chunks(const shell_bake* s, const mesoi_standin_levels* lv,
             .desc = {.type = MESO_CHUNK_DIST, .object = 1, .lod = (uint16_t)l, .dtype = t->dist.dtype,
                      .components = 1, .dims = {t->dist.dims[0], t->dist.dims[1], t->dist.dims[2]}},
             .data = t->dist.encoded, .size = t->dist.encoded_size};
+    }
+    for (size_t k = 0; k < n + m; ++k) {
+        meso_chunk_desc* d = &chunks[k].desc;
+        if (d->type == MESO_CHUNK_SDIR || d->type == MESO_CHUNK_STHK ||
+            (d->type == MESO_CHUNK_MESH && (lv->standin_mesh || C)))
+            d->lod = (uint16_t)T;
+        else if (d->type == MESO_CHUNK_COLR || d->type == MESO_CHUNK_CMAP ||
+                 ((d->type == MESO_CHUNK_TX2D || d->type == MESO_CHUNK_TX3D || d->type == MESO_CHUNK_DIST) &&
+                  d->lod == T))
+            d->lod = (uint16_t)N;
+    }
+    for (uint32_t c = 0; c < C; ++c) {
+        const mesoi_shell_base_level* b = &bl->lv[c];
+        const uint32_t nv = b->mesh.vertex_count, L = (uint32_t)(s->a.kind == MESO_SHELL_EXTERIOR ? 1 : 2);
+        const uint16_t lod = (uint16_t)(T + 1 + c);
+        chunks[n + m++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED,
+                                                 .object = 1, .lod = lod, .encoding = bl->chunk[c].encoding,
+                                                 .decoded_size = bl->chunk[c].decoded_size},
+                                        .data = bl->chunk[c].data, .size = bl->chunk[c].size};
+        chunks[n + m++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SDIR, .flags = MESO_CHUNK_FLAG_REQUIRED,
+                                                 .object = 1, .lod = lod, .dtype = MESO_DTYPE_F32, .components = 3,
+                                                 .dims = {nv, L, 1}},
+                                        .data = b->sdir, .size = sizeof(float) * 3 * (size_t)nv * L};
+        chunks[n + m++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_STHK, .object = 1, .lod = lod,
+                                                 .dtype = MESO_DTYPE_F32, .components = 1, .dims = {nv, 1, 1}},
+                                        .data = b->thick, .size = sizeof(float) * (size_t)nv};
     }
     return m;
 }
@@ -1107,6 +1213,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     meso_mesh_chunk chunk = {0}, mid_chunk = {0};
     mesoi_standin_levels standins = {0};
     mesoi_shell_parts parts = {0};
+    base_levels bases = {0};
     mesoi_chunk* all = NULL;
     meso_mesh base, mid_mesh;
     mesoi_chunk mid;
@@ -1194,7 +1301,8 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
                                      .scale = {base_map ? (float)(1.0 / a->tiling[0]) : 1.0f,
                                                base_map ? (float)(1.0 / a->tiling[1]) : 1.0f}};
         meso_cmap_record_encode(&cr, cmap);
-        mesoi_chunk chunks[11 + 2 * MESOI_HEIGHT_MAX_NATIVE + 2 * MESOI_STANDIN_MAX_LEVELS] = { /* stand-ins: MESH and VCOL each */
+        mesoi_chunk chunks[11 + 2 * MESOI_HEIGHT_MAX_NATIVE + 3 * MESOI_SHELL_BASE_LEVELS_MAX +
+                           2 * MESOI_STANDIN_MAX_LEVELS] = { /* stand-ins: MESH and VCOL each */
             {.desc = {.type = MESO_CHUNK_MESH, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1,
                       .encoding = chunk.encoding, .decoded_size = chunk.decoded_size},
              .data = chunk.data, .size = chunk.size},
@@ -1290,7 +1398,10 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             if (r == MESO_OK)
                 r = native_errors(s, &base, sdir_out ? sdir_out : sdir, sdir_layers, &standins, err);
             if (r == MESO_OK)
-                n += native_chunks(s, &standins, chunks, n);
+                r = base_levels_make(s, &base, sdir_out ? sdir_out : sdir, sdir_layers, thick, rec.bbox_min,
+                                     rec.bbox_max, &standins, &bases, rep, err);
+            if (r == MESO_OK)
+                n += native_chunks(s, &standins, &bases, chunks, n);
             if (r == MESO_OK)
                 n += mesoi_standin_levels_append(&standins, &base, &chunks[0], rec.bbox_min, rec.bbox_max,
                                                  chunks + n, rep);
@@ -1347,6 +1458,7 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
     cJSON_Delete(meta);
     cJSON_Delete(rep);
     mesoi_standin_levels_free(&standins);
+    base_levels_free(&bases);
     mesoi_shell_parts_free(&parts);
     free(all);
     free(chunk.data);

@@ -309,6 +309,16 @@ static size_t drop_duplicate_faces(uint32_t* idx, size_t n, face_key* keys, uint
     return out;
 }
 
+size_t mesoi_drop_duplicate_faces(uint32_t* idx, size_t n)
+{
+    face_key* keys = malloc(sizeof(face_key) * (n / 3 ? n / 3 : 1));
+    uint8_t* keep = malloc(n / 3 ? n / 3 : 1);
+    const size_t out = keys && keep ? drop_duplicate_faces(idx, n, keys, keep) : SIZE_MAX;
+    free(keys);
+    free(keep);
+    return out;
+}
+
 static meso_result build_chain(const meso_mesh* m, const meso_mesh_levels_options* o, int max_levels,
                                meso_mesh_level** levels, uint32_t* count, meso_error* err)
 {

@@ -6,6 +6,7 @@
 #ifndef MESO_MESH_LEVELS_H
 #define MESO_MESH_LEVELS_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "meso_bake.h"
@@ -51,4 +52,8 @@ void meso_mesh_levels_free(meso_mesh_level* levels, uint32_t count);
  * (corner_uvs NULL). MESO_ERR_OUT_OF_MEMORY (and *out zeroed) on failure. */
 meso_result meso_mesh_subset(const meso_mesh* m, const uint32_t* corners, uint32_t nt, meso_mesh* out);
 
+/* Of the faces idx[0..n) (3 indices each) left twice on the same three
+ * vertices, the first stays (mesh_levels.c drop_duplicate_faces says why);
+ * returns the new index count, SIZE_MAX when out of memory. */
+size_t mesoi_drop_duplicate_faces(uint32_t* idx, size_t n);
 #endif /* MESO_MESH_LEVELS_H */

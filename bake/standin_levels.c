@@ -148,8 +148,9 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
                                 .form = native ? MESO_LEVEL_NATIVE : MESO_LEVEL_MESH};
         const meso_mesh* l1 = lv->standin_mesh ? lv->standin_mesh : base;
         const mesoi_chunk* c1 = lv->standin_chunk ? lv->standin_chunk : base_chunk;
-        const meso_mesh* lm = native ? base : S == 1 ? l1 : &lv->chain[S - 2].mesh;
-        size_t bytes = native ? base_chunk->size : c1->size, vbytes = 0;
+        const meso_mesh* own = native && L ? lv->native_mesh[L - 1] : NULL;
+        const meso_mesh* lm = own ? own : native ? base : S == 1 ? l1 : &lv->chain[S - 2].mesh;
+        size_t bytes = own ? lv->native_mesh_bytes[L - 1] : native ? base_chunk->size : c1->size, vbytes = 0;
         double e = 0;
         if (native) {
             memcpy(lr.bbox_min, l0_min, sizeof lr.bbox_min);

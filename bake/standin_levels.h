@@ -52,6 +52,11 @@ typedef struct mesoi_standin_levels {
      * mesoi_standin_levels_append; 1 + native + count <= MESOI_STANDIN_MAX_LEVELS. */
     uint32_t native;
     double native_error[MESOI_STANDIN_MAX_LEVELS];
+    /* The mesh native level L draws and its MESH chunk's size, at index
+     * L - 1, where it is not `base` (a shell's coarser base meshes:
+     * shell_base_levels.h); NULL: base. */
+    const meso_mesh* native_mesh[MESOI_STANDIN_MAX_LEVELS];
+    size_t native_mesh_bytes[MESOI_STANDIN_MAX_LEVELS];
     double e0;               /* level 1's error (the base mesh's, or standin_mesh's when set) */
     /* What the chain's errors add to their own distance to the base mesh:
      * the base mesh's error (0: e0). A shell whose level 1 is not the base

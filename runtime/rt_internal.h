@@ -455,6 +455,9 @@ typedef struct mesoi_levels {
     uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
     int parts_native;          /* they drew with the whole native level (a shell's prisms) */
     int parts_last;            /* the last pick drew parts (meso_rt_parts_state_get) */
+    uint8_t* own_base;         /* [count]: a shell's native level with a base mesh of its own (FORMAT.md §7.10:
+                                  its MESH is not level 0's), drawn only by the smooth mapping it was measured
+                                  for (rt_levels.c usable) */
 } mesoi_levels;
 /* rt_parts.c: a levelled mesh object's parts (here for rt_stream.c, which
  * files and uploads part levels as it does levels). */

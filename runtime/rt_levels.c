@@ -42,6 +42,7 @@ static void levels_free(meso_rt* rt, mesoi_levels* lv)
     mesoi_rt_free(rt, lv->used);
     mesoi_rt_free(rt, lv->pending);
     mesoi_rt_free(rt, lv->request);
+    mesoi_rt_free(rt, lv->own_base);
     mesoi_rt_free(rt, lv);
 }
 
@@ -108,7 +109,8 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         lv->used = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
         lv->pending = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
         lv->request = mesoi_rt_alloc(rt, sizeof(struct meso_rt_request*) * lv->count);
-        if (!lv->info || !lv->slot || !lv->failed || !lv->used || !lv->pending || !lv->request)
+        lv->own_base = mesoi_rt_alloc(rt, lv->count);
+        if (!lv->info || !lv->slot || !lv->failed || !lv->used || !lv->pending || !lv->request || !lv->own_base)
             r = MESO_ERR_OUT_OF_MEMORY;
     }
     if (r == MESO_OK) {
@@ -119,6 +121,10 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         memset(lv->request, 0, sizeof(struct meso_rt_request*) * lv->count);
         if ((r = meso_file_levels(f, object_id, lv->info, lv->count, &lv->count, &err)) != MESO_OK)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
+        const int32_t mesh0 = meso_file_find_level(f, MESO_CHUNK_MESH, object_id, 0);
+        for (uint32_t l = 0; l < lv->count; ++l)
+            lv->own_base[l] = lv->rec.kind == MESO_OBJECT_SHELL && lv->info[l].rec.form == MESO_LEVEL_NATIVE &&
+                              meso_file_find_level(f, MESO_CHUNK_MESH, object_id, (uint16_t)l) != mesh0;
     }
     /* A mesh or shell object's parts table (rt_parts.c), read with the levels
      * table: no draw reads the file under stream requests. */
@@ -213,8 +219,18 @@ double mesoi_projected_px(double error, const float lo[3], const float hi[3], co
     return error * focal / sqrt(dist2);
 }
 
+/* Whether a draw with `d` may draw level l: a shell level with a base
+ * mesh of its own was measured for the smooth mapping (and what shares it:
+ * segment only, slices), not for the curved or tetra mappings, which move
+ * differently with the base (bake/shell_base_levels.c). */
+static int usable(const mesoi_levels* lv, uint32_t l, const meso_rt_draw_desc* d)
+{
+    return !lv->own_base[l] || (d->shell.technique != MESO_SHELL_CURVED && d->shell.technique != MESO_SHELL_TETRA);
+}
+
 /* The coarsest level whose projected error is at most `tau` pixels (for
- * every instance); 0 when none is, or tau < 0. */
+ * every instance) and that this draw may draw (usable); 0 when none is,
+ * or tau < 0. */
 static uint32_t choose(const mesoi_levels* lv, const meso_rt_draw_desc* d, const meso_rt_instance* inst,
                        uint32_t count, double tau, double height)
 {
@@ -222,6 +238,8 @@ static uint32_t choose(const mesoi_levels* lv, const meso_rt_draw_desc* d, const
         return 0;
     for (uint32_t l = lv->count - 1; l > 0; --l) {
         const meso_level_record* r = &lv->info[l].rec;
+        if (!usable(lv, l, d))
+            continue;
         double px = 0.0;
         if (inst)
             for (uint32_t i = 0; i < count && px <= tau; ++i)
@@ -464,7 +482,9 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
     int32_t got = -1;
     int waiting = parts_pending; /* some level (or part level) is still arriving */
     for (uint32_t l = want; got < 0 && l < lv->count; ++l) {
-        if (lv->slot[l].id) {
+        if (!usable(lv, l, d)) {
+            continue;
+        } else if (lv->slot[l].id) {
             got = (int32_t)l;
         } else if (lv->failed[l] || parts_pending) {
             continue; /* parts arriving: whole levels only as uploaded */
@@ -484,7 +504,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
         }
     }
     for (uint32_t l = want; got < 0 && l-- > 0;)
-        if (lv->slot[l].id)
+        if (lv->slot[l].id && usable(lv, l, d))
             got = (int32_t)l;
     if (got < 0) {
         out->id = 0; /* nothing has arrived yet: nothing to draw */
@@ -499,8 +519,10 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
      * the prisms of a subset are drawn in the order the whole set is
      * sorted in, which tetra and segment do not use (their ties on shared
      * faces keep the mesh's order), and only where there is a sorted copy
-     * to draw them from (rt->hull_reject_ok). */
-    if (lv->parts && lv->parts->shell && lv->info[got].rec.form == MESO_LEVEL_NATIVE && rt->hull_reject_ok &&
+     * to draw them from (rt->hull_reject_ok). The parts' prism lists
+     * number level 0's base triangles: not with a level's own base mesh. */
+    if (lv->parts && lv->parts->shell && lv->info[got].rec.form == MESO_LEVEL_NATIVE && !lv->own_base[got] &&
+        rt->hull_reject_ok &&
         (d->shell.technique == MESO_SHELL_SMOOTH || d->shell.technique == MESO_SHELL_CURVED)) {
         meso_rt_object ph;
         const meso_result pr = mesoi_parts_pick(rt, lv, *out, &ph);

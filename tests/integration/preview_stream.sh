@@ -20,7 +20,9 @@
 # level W (as a bake without parts draws it), each prefix of level L draws
 # the whole level max(W, L), or parts; parts that fell back from what the
 # whole file draws (their finer levels not arrived) have no part drawn with
-# a larger error than that whole level's.
+# a larger error than that whole level's. A thick torus shell whose coarser
+# levels have base meshes of their own streams the same way, and is drawn
+# at those levels only by the smooth mapping they were measured for.
 set -u
 MB=$1
 MI=$2
@@ -41,8 +43,11 @@ bake mesh mesh -i "$DATA/spot_uv.obj"
 bake shell shell -i "$DATA/spot_uv.obj" --texture bricks:64 --thickness-rel 0.02
 bake cells cells -i "$DATA/spot_low_resolution.obj"
 bake frusta frusta -i "$DATA/saguaro.skel" --relief bricks:64
+# A thick shell over torus_uv: its native levels after level 0 have base
+# meshes of their own (bake/shell_base_levels.c), with no texture level.
+bake shellbase shell -i "$DATA/torus_uv.obj" --texture bricks:64 --thickness-rel 0.1
 
-for name in mesh shell cells frusta; do
+for name in mesh shell cells frusta shellbase; do
     run "$MI" info --format json "$T/$name.meso"
     expect_rc 0 "$name: info --format json"
     cp "$T/out" "$T/$name.json"
@@ -121,6 +126,22 @@ elif s["levels_drawn"] != whole:
 print("ok")
 PY
     expect_rc 0 "mesh at $tau px, the first $n bytes: $(cat "$T/out")"
+done
+
+# Levels with a base mesh of their own are measured for the smooth mapping
+# (and segment, slices): far away the smooth draw picks one, the curved and
+# tetra draws never do (rt_levels.c usable).
+own=$(python3 -c 'import json, sys; print(" ".join(str(l["lod"]) for l in json.load(open(sys.argv[1]))["objects"][0]["levels"] if l["lod"] > 0 and l["form"] == "native"))' "$T/shellbase.json")
+[ -n "$own" ] || fail "shellbase: no native level with its own base mesh"
+for tech in smooth curved tetra; do
+    run "$MI" preview "$T/shellbase.meso" -o "$T/p.png" --zoom 0.1 --technique $tech --stats "$T/s.json"
+    expect_rc 0 "shellbase far away, $tech"
+    drawn=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["objects"][0]["levels_drawn"])' "$T/s.json")
+    case " $own " in
+    *" $drawn "*) [ $tech = smooth ] || fail "shellbase: $tech drew level $drawn, whose base mesh is its own" ;;
+    *) [ $tech != smooth ] || fail "shellbase: smooth drew level $drawn, not one of $own" ;;
+    esac
+    ok
 done
 
 echo "preview_stream: $checks checks, $failures failures"
