@@ -153,9 +153,15 @@ typedef struct meso_rt_desc {
      * shading [NULL] */
     const char* shading_hook;
     uint32_t shading_hook_binding; /* uniform buffer binding point of the hook's MesoHook block [0] */
-    /* Levels of detail (meso_rt_load_object_levels): the bytes every
-     * levelled object's uploaded levels may hold together, counted as the
-     * file bytes of their chunks (meso_level_info.bytes). A draw that would
+    /* Levels of detail (meso_rt_load_object_levels): the GPU bytes every
+     * levelled object's uploaded levels may hold together: the texels of
+     * their textures (every mip level, at the internal format's size) and
+     * the bytes of their buffers, as libmeso creates them (frame resources
+     * shared by every object, shaders and the host's memory are not
+     * counted). A level not uploaded yet counts as an estimate no smaller
+     * (4/3 of its chunks' decoded bytes, the mip chain's share; twice that
+     * for 16-bit textures that go up as floats), replaced by what it holds
+     * once uploaded (meso_rt_levels_state). A draw that would
      * go over evicts levels no draw of the current frame used, least
      * recently used first, and otherwise draws a level already uploaded;
      * meso_rt_frame_end raises the pixel error of every draw by a common
@@ -255,8 +261,9 @@ MESO_API meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* file, ui
                                                 meso_rt_object* out);
 
 /* What a levelled object holds: its level count, which are uploaded, the
- * level its last draw used and the file bytes of the uploaded levels'
- * chunks. A plain object reports one level, uploaded and drawn. */
+ * level its last draw used, the file bytes of the uploaded levels'
+ * chunks and what they hold on the GPU. A plain object reports one level,
+ * uploaded and drawn. */
 typedef struct meso_rt_levels_state {
     uint32_t level_count;
     uint32_t resident_mask;   /* bit L: level L is uploaded (levels >= 32 are not reported) */
@@ -265,6 +272,11 @@ typedef struct meso_rt_levels_state {
     uint64_t bytes_resident;  /* sum of the uploaded levels' chunk bytes (meso_level_info.bytes) */
     uint64_t bytes_read;      /* every byte read from the file for this object, uploads that failed included
                                  (reads that found their bytes not arrived yet are not counted) */
+    uint64_t gpu_bytes_resident;  /* what the uploaded levels' (and parts') textures and buffers hold on the
+                                     GPU: texels (every mip level) and buffer bytes, as created; the unit
+                                     of meso_rt_desc.memory_budget */
+    uint64_t gpu_bytes_estimated; /* the uploaded levels' estimates before upload (no smaller than what they
+                                     hold: what the budget makes room for) */
 } meso_rt_levels_state;
 MESO_API meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object obj, meso_rt_levels_state* out);
 /* A levelled mesh object stored with parts (FORMAT.md §7.11) draws its
@@ -305,8 +317,9 @@ MESO_API meso_result meso_rt_parts_state_get(const meso_rt* rt, meso_rt_object o
 MESO_API void meso_rt_frame_end(meso_rt* rt);
 typedef struct meso_rt_budget_state {
     uint64_t budget;          /* meso_rt_desc.memory_budget */
-    uint64_t bytes_resident;  /* over every levelled object */
-    uint64_t bytes_wanted;    /* the levels the last frame's draws wanted */
+    uint64_t bytes_resident;  /* GPU bytes, over every levelled object (the budget's unit) */
+    uint64_t bytes_wanted;    /* GPU bytes of the levels the last frame's draws wanted (estimated for those not
+                                 uploaded yet: meso_rt_desc.memory_budget) */
     double pixel_error_scale; /* the factor, >= 1 */
     uint64_t frames;          /* meso_rt_frame_end calls */
     uint64_t evictions;       /* levels evicted so far */

@@ -112,6 +112,7 @@ static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* 
         *out = 0;
         return MESO_ERR_GL;
     }
+    rt->gpu_count += (uint64_t)c->dims[0] * c->dims[1] * c->dims[2] * mesoi_internal_bytes(internal);
     return MESO_OK;
 }
 

@@ -215,8 +215,37 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
     if (r != MESO_OK) {
         gl->DeleteTextures(1, out);
         *out = 0;
+    } else {
+        uint64_t texels = 0;
+        for (int l = 0; l < levels; ++l)
+            texels += (uint64_t)mesoi_mip_size(dims[0], l) * mesoi_mip_size(dims[1], l) *
+                      (dims3 ? mesoi_mip_size(dims[2], l) : 1);
+        rt->gpu_count += texels * mesoi_internal_bytes(internal);
     }
     return r;
+}
+
+uint64_t mesoi_gpu_estimate(const meso_rt* rt, const meso_chunk_info* c)
+{
+    const uint64_t widen = c->dtype == MESO_DTYPE_U16 && !rt->norm16 ? 2 : 1; /* R32F for R16 */
+    return c->decoded_size * widen * 4 / 3 + 64;
+}
+
+size_t mesoi_internal_bytes(GLint internal)
+{
+    switch (internal) {
+    case GL_R8:
+    case GL_R8UI:
+        return 1;
+    case GL_R16:
+    case GL_R16F:
+    case GL_R16UI:
+        return 2;
+    case GL_RGBA32F:
+        return 16;
+    default: /* R32F, R32UI, SRGB8_ALPHA8, RGBA8 */
+        return 4;
+    }
 }
 
 meso_result mesoi_upload_texels(meso_rt* rt, const uint32_t dims[3], uint16_t dtype, int dims3, int nearest,
@@ -283,6 +312,8 @@ GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t
     gl->TexBuffer(GL_TEXTURE_BUFFER, format, *buf);
     gl->BindTexture(GL_TEXTURE_BUFFER, (GLuint)prev_tex);
     gl->BindBuffer(GL_TEXTURE_BUFFER, 0);
+    if ((size_t)stored == size)
+        rt->gpu_count += size;
     if ((size_t)stored != size) { /* out of memory: no store; the error queue stays the host's */
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %zu-byte buffer could not be created", size);
         gl->DeleteTextures(1, &tex);

@@ -20,6 +20,7 @@ typedef struct mesoi_object {
     int vertex_colours; /* MESO_OBJECT_MESH: a VCOL in the buffer (attribute 2): 0 none, 1 albedo and
                            occlusion, 2 occlusion alone */
     float bbox_min[3], bbox_max[3];
+    uint64_t gpu_bytes;  /* what its textures and buffers hold (mesoi_load_slot, mesoi_parts_upload) */
     struct mesoi_levels* levels; /* meso_rt_load_object_levels: the levels, each its own slot (rt_levels.c);
                                     such an object has no GL resources of its own */
     struct mesoi_parts* parts;   /* the slot a parts pick hands out (rt_parts.c): its mesh draw draws the
@@ -99,7 +100,10 @@ struct meso_rt {
     int in_list;               /* inside meso_rt_draw_list: the list saved the state, the draws do not */
     uint16_t load_lod;         /* the level a load reads (mesoi_find_chunk); 0 outside rt_levels.c's loads */
     /* The memory budget of levelled objects (rt_levels.c). */
-    uint64_t budget, bytes_resident, bytes_wanted, frame, evictions;
+    uint64_t budget, bytes_resident, bytes_wanted, frame, evictions; /* bytes_resident: GPU bytes of the
+                                                                         uploaded levels and part levels */
+    uint64_t gpu_count;        /* GPU bytes every object texture and buffer created so far holds (mesoi_gpu_add):
+                                  a load's are the difference across it */
     double tau_scale;
     /* Streaming (rt_stream.c): meso_rt_desc.stream_requests, every request
      * not freed (oldest first), the one being uploaded, levels uploaded. */
@@ -221,6 +225,13 @@ meso_result mesoi_upload_srgba8(meso_rt* rt, const uint32_t dims[3], int dims3, 
 /* A texture buffer over a new buffer object holding `size` bytes of `data`;
  * 0 (logged, *buf 0, nothing left behind) when GL could not store them. */
 GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t size, GLuint* buf);
+/* Bytes per texel of a texture's internal format (the GPU bytes counts:
+ * meso_rt.gpu_count). */
+size_t mesoi_internal_bytes(GLint internal);
+/* An upper bound of the GPU bytes of what resolves to `chunk`s (decoded
+ * sizes, 4/3 for mip chains, U16 textures twice where they go up as
+ * floats): a level's estimate before its upload (rt_levels.c). */
+uint64_t mesoi_gpu_estimate(const meso_rt* rt, const meso_chunk_info* chunk);
 /* Around a sequence of uploads: begin saves the texture buffer binding
  * (returns it); end restores it and returns r. Only with check_gl_errors
  * (meso_rt_desc) do they read the GL error queue: begin drains it, end turns
@@ -455,6 +466,8 @@ typedef struct mesoi_levels {
     uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
     int parts_native;          /* they drew with the whole native level (a shell's prisms) */
     int parts_last;            /* the last pick drew parts (meso_rt_parts_state_get) */
+    uint64_t* gpu;             /* [count]: the level's GPU bytes, measured once uploaded (mesoi_object.gpu_bytes),
+                                  until then an estimate no smaller (mesoi_gpu_estimate) */
     uint8_t* own_base;         /* [count]: a shell's native level with a base mesh of its own (FORMAT.md §7.10:
                                   its MESH is not level 0's), drawn only by the smooth mapping it was measured
                                   for (rt_levels.c usable) */
@@ -485,6 +498,9 @@ typedef struct mesoi_parts {
      * its prisms: the PTRI list (read once, as lod 0's "upload"). */
     int shell;
     uint32_t* tri;           /* the PTRI list, tri_count entries; NULL before it is read */
+    uint64_t* gpu;           /* [level_count]: what the part level holds on the GPU (rt_levels.c
+                                mesoi_level_gpu's rule): measured once uploaded, until then estimated (a
+                                shell's prisms: the PTRI list's bytes, in host memory) */
     uint32_t tri_count;
     meso_rt_object native;
     uint32_t* subset;        /* [tri_count]: the prisms the last pick draws (subset_count), by part */
@@ -518,6 +534,9 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
 int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
 void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i);
 uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read);
+/* The GPU bytes its uploaded part levels hold (and a shell's prism list);
+ * *estimated gets what they were estimated at before upload. */
+uint64_t mesoi_parts_gpu(const meso_rt* rt, meso_file* f, const mesoi_parts* p, uint64_t* estimated);
 /* Whether the last pick drew some part coarser than its lod 0, and every
  * part at the level it wanted (a shell whose parts are still arriving
  * draws its whole native level, which is finer). */

@@ -43,7 +43,31 @@ static void levels_free(meso_rt* rt, mesoi_levels* lv)
     mesoi_rt_free(rt, lv->pending);
     mesoi_rt_free(rt, lv->request);
     mesoi_rt_free(rt, lv->own_base);
+    mesoi_rt_free(rt, lv->gpu);
     mesoi_rt_free(rt, lv);
+}
+
+/* A level's GPU bytes before its upload: no fewer than it will hold. A
+ * mesh level (form mesh) draws its MESH and VCOL; a native level whatever
+ * its kind resolves at its lod (FORMAT.md §7.10), of every type the object
+ * has but the parts' and those read into host memory only. */
+static uint64_t level_estimate(const meso_rt* rt, meso_file* f, uint32_t id, const meso_level_info* info)
+{
+    uint64_t sum = 0;
+    const uint16_t lod = info->rec.lod;
+    for (uint32_t i = 0; i < meso_file_chunk_count(f); ++i) {
+        const meso_chunk_info* c = meso_file_chunk(f, i);
+        const uint32_t t = c->type;
+        if (c->object != id || t == MESO_CHUNK_PRTS || t == MESO_CHUNK_PTRI || t == MESO_CHUNK_PMSH ||
+            t == MESO_CHUNK_PVCL || t == MESO_CHUNK_ANIM || t == MESO_CHUNK_TXFR || t == MESO_CHUNK_DSFR ||
+            (info->rec.form == MESO_LEVEL_MESH && t != MESO_CHUNK_MESH && t != MESO_CHUNK_VCOL))
+            continue;
+        const int32_t k = meso_file_find_level(f, t, id, lod);
+        if (k != (int32_t)i)
+            continue; /* not the chunk of this type the level resolves to */
+        sum += mesoi_gpu_estimate(rt, c);
+    }
+    return sum;
 }
 
 /* Upload level `l` into its own slot. A failure is remembered (a file that
@@ -63,7 +87,8 @@ meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l)
     if (!rt->prefetch && r != MESO_ERR_PENDING)
         lv->bytes_read += lv->info[l].bytes; /* a request counts its own reads */
     if (r == MESO_OK) {
-        rt->bytes_resident += lv->info[l].bytes;
+        lv->gpu[l] = mesoi_lookup(rt, lv->slot[l])->gpu_bytes;
+        rt->bytes_resident += lv->gpu[l];
     } else if (r == MESO_ERR_PENDING) {
         lv->pending[l] = rt->frame + 1;
     } else {
@@ -110,7 +135,9 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         lv->pending = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
         lv->request = mesoi_rt_alloc(rt, sizeof(struct meso_rt_request*) * lv->count);
         lv->own_base = mesoi_rt_alloc(rt, lv->count);
-        if (!lv->info || !lv->slot || !lv->failed || !lv->used || !lv->pending || !lv->request || !lv->own_base)
+        lv->gpu = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
+        if (!lv->info || !lv->slot || !lv->failed || !lv->used || !lv->pending || !lv->request || !lv->own_base ||
+            !lv->gpu)
             r = MESO_ERR_OUT_OF_MEMORY;
     }
     if (r == MESO_OK) {
@@ -122,9 +149,11 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         if ((r = meso_file_levels(f, object_id, lv->info, lv->count, &lv->count, &err)) != MESO_OK)
             mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
         const int32_t mesh0 = meso_file_find_level(f, MESO_CHUNK_MESH, object_id, 0);
-        for (uint32_t l = 0; l < lv->count; ++l)
+        for (uint32_t l = 0; l < lv->count; ++l) {
             lv->own_base[l] = lv->rec.kind == MESO_OBJECT_SHELL && lv->info[l].rec.form == MESO_LEVEL_NATIVE &&
                               meso_file_find_level(f, MESO_CHUNK_MESH, object_id, (uint16_t)l) != mesh0;
+            lv->gpu[l] = level_estimate(rt, f, object_id, &lv->info[l]);
+        }
     }
     /* A mesh or shell object's parts table (rt_parts.c), read with the levels
      * table: no draw reads the file under stream requests. */
@@ -164,7 +193,7 @@ void mesoi_levels_release(meso_rt* rt, mesoi_object* o)
     for (uint32_t l = 0; l < lv->count; ++l)
         if (lv->slot[l].id) {
             meso_rt_release_object(rt, lv->slot[l]);
-            rt->bytes_resident -= lv->info[l].bytes;
+            rt->bytes_resident -= lv->gpu[l];
         }
     levels_free(rt, lv);
 }
@@ -287,7 +316,7 @@ int mesoi_evict_one(meso_rt* rt)
     }
     meso_rt_release_object(rt, best->slot[best_l]);
     best->slot[best_l].id = 0;
-    rt->bytes_resident -= best->info[best_l].bytes;
+    rt->bytes_resident -= best->gpu[best_l];
     rt->evictions++;
     return 1;
 }
@@ -311,15 +340,15 @@ void meso_rt_frame_end(meso_rt* rt)
         const mesoi_levels* lv = rt->objects[i].live ? rt->objects[i].levels : NULL;
         if (!lv || lv->want_frame != rt->frame + 1)
             continue;
-        const uint64_t coarsest = lv->info[lv->count - 1].bytes;
-        uint64_t wanted = lv->info[lv->want_now].bytes; /* or the parts this frame drew instead (a shell's
-                                                           prisms draw with its native level) */
+        const uint64_t coarsest = lv->gpu[lv->count - 1];
+        uint64_t wanted = lv->gpu[lv->want_now]; /* or the parts this frame drew instead (a shell's prisms
+                                                    draw with its native level) */
         if (lv->parts && lv->parts_frame == rt->frame + 1) {
             mesoi_parts_bytes(lv->parts, &wanted, NULL);
-            wanted += lv->parts_native ? lv->info[lv->want_now].bytes : 0;
+            wanted += lv->parts_native ? lv->gpu[lv->want_now] : 0;
         }
         now += wanted + (lv->want_now + 1 < lv->count ? coarsest : 0);
-        lower += lv->info[lv->want_lower].bytes + (lv->want_lower + 1 < lv->count ? coarsest : 0);
+        lower += lv->gpu[lv->want_lower] + (lv->want_lower + 1 < lv->count ? coarsest : 0);
     }
     rt->bytes_wanted = now;
     if (rt->budget) {
@@ -383,7 +412,7 @@ static int32_t whole_finer_than(meso_rt* rt, mesoi_levels* lv, uint32_t from, do
     for (uint32_t l = from; l < lv->count && (double)lv->info[l].rec.error < error; ++l) {
         if (lv->slot[l].id)
             return (int32_t)l;
-        if (!rt->stream_requests && !lv->failed[l] && mesoi_make_room(rt, lv->info[l].bytes) &&
+        if (!rt->stream_requests && !lv->failed[l] && mesoi_make_room(rt, lv->gpu[l]) &&
             mesoi_levels_upload(rt, lv, l) == MESO_OK)
             return (int32_t)l;
     }
@@ -496,7 +525,7 @@ meso_result mesoi_levels_pick(meso_rt* rt, meso_rt_object h, const meso_rt_draw_
             waiting = 1;
         } else if (lv->pending[l] == rt->frame + 1) {
             waiting = 1; /* asked this frame already: no eviction for it */
-        } else if (mesoi_make_room(rt, lv->info[l].bytes)) {
+        } else if (mesoi_make_room(rt, lv->gpu[l])) {
             const meso_result r = mesoi_levels_upload(rt, lv, l);
             if (r == MESO_OK)
                 got = (int32_t)l;
@@ -559,11 +588,15 @@ meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object h, meso_r
         out->bytes_resident += mesoi_parts_bytes(lv->parts, NULL, &read);
         out->bytes_read += read;
     }
+    if (lv->parts)
+        out->gpu_bytes_resident += mesoi_parts_gpu(rt, lv->file, lv->parts, &out->gpu_bytes_estimated);
     for (uint32_t l = 0; l < lv->count; ++l)
         if (lv->slot[l].id) {
             if (l < 32)
                 out->resident_mask |= 1u << l;
             out->bytes_resident += lv->info[l].bytes;
+            out->gpu_bytes_resident += lv->gpu[l];
+            out->gpu_bytes_estimated += level_estimate(rt, lv->file, lv->rec.id, &lv->info[l]);
         }
     return MESO_OK;
 }

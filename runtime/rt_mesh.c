@@ -142,6 +142,7 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
     o->index_count = (GLsizei)mv.layout.index_count;
     o->indices_offset = mv.layout.indices_offset;
     o->vertex_colours = vcol ? (nc == 4 ? 1 : 2) : 0;
+    rt->gpu_count += total;
     return MESO_OK;
 }
 

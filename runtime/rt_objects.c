@@ -92,6 +92,7 @@ meso_result mesoi_load_slot(meso_rt* rt, meso_file* f, const meso_object_record*
     if (!o)
         return MESO_ERR_OUT_OF_MEMORY;
     rt->load_lod = lod;
+    const uint64_t before = rt->gpu_count;
     const meso_result r = kind == MESO_OBJECT_MESH     ? mesoi_mesh_upload(rt, f, rec->id, 1, o)
                           : kind == MESO_OBJECT_SHELL  ? mesoi_shell_load(rt, f, rec->id, o)
                           : kind == MESO_OBJECT_FRUSTA ? mesoi_frusta_load(rt, f, rec->id, o)
@@ -102,6 +103,7 @@ meso_result mesoi_load_slot(meso_rt* rt, meso_file* f, const meso_object_record*
     o->generation = next_generation(o->generation);
     o->live = 1;
     o->kind = kind;
+    o->gpu_bytes = rt->gpu_count - before;
     memcpy(o->bbox_min, rec->bbox_min, sizeof(o->bbox_min));
     memcpy(o->bbox_max, rec->bbox_max, sizeof(o->bbox_max));
     out->id = slot | (o->generation << 16);

@@ -44,6 +44,20 @@
 #include <string.h>
 
 
+/* Part level i's GPU bytes before its upload, no fewer than it will hold
+ * (mesoi_gpu_estimate); a shell's prisms, the PTRI list, in host memory:
+ * its bytes. */
+static uint64_t part_estimate(const meso_rt* rt, meso_file* f, const mesoi_parts* p, uint32_t i)
+{
+    const meso_part_level* L = &p->lv[i];
+    if (p->shell && L->rec.lod == 0)
+        return L->bytes;
+    uint64_t b = L->chunk >= 0 ? mesoi_gpu_estimate(rt, meso_file_chunk(f, (uint32_t)L->chunk)) : 0;
+    if (L->colours >= 0)
+        b += mesoi_gpu_estimate(rt, meso_file_chunk(f, (uint32_t)L->colours));
+    return b;
+}
+
 void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
 {
     if (!p)
@@ -51,10 +65,10 @@ void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
     for (uint32_t i = 0; p->slot && i < p->level_count; ++i)
         if (p->slot[i].id) {
             meso_rt_release_object(rt, p->slot[i]);
-            rt->bytes_resident -= p->lv[i].bytes;
+            rt->bytes_resident -= p->gpu[i];
         }
     if (p->tri)
-        rt->bytes_resident -= p->lv[p->first[0]].bytes;
+        rt->bytes_resident -= p->gpu[p->first[0]];
     mesoi_object* o = mesoi_lookup(rt, p->parent);
     if (o)
         o->parts = NULL;
@@ -69,6 +83,7 @@ void mesoi_parts_free(meso_rt* rt, mesoi_parts* p)
     mesoi_rt_free(rt, p->want);
     mesoi_rt_free(rt, p->chosen);
     mesoi_rt_free(rt, p->drawn);
+    mesoi_rt_free(rt, p->gpu);
     mesoi_rt_free(rt, p->tri);
     mesoi_rt_free(rt, p->subset);
     mesoi_rt_free(rt, p);
@@ -105,7 +120,9 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
     p->want = mesoi_rt_alloc(rt, sizeof(uint32_t) * np);
     p->chosen = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * np);
     p->drawn = mesoi_rt_alloc(rt, np);
-    r = p->lv && p->first && p->edges && p->slot && p->failed && p->used && p->request && p->want && p->chosen && p->drawn
+    p->gpu = mesoi_rt_alloc(rt, sizeof(uint64_t) * nl);
+    r = p->lv && p->first && p->edges && p->slot && p->failed && p->used && p->request && p->want && p->chosen && p->drawn &&
+                p->gpu
             ? MESO_OK
             : MESO_ERR_OUT_OF_MEMORY;
     if (r == MESO_OK) {
@@ -129,6 +146,8 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
     if (r == MESO_OK)
         r = mesoi_empty_slot(rt, rec, &p->parent);
     p->shell = rec->kind == MESO_OBJECT_SHELL;
+    for (uint32_t i = 0; r == MESO_OK && i < nl; ++i) /* estimates until uploaded (rt_levels.c's rule) */
+        p->gpu[i] = part_estimate(rt, f, p, i);
     if (r == MESO_OK && p->shell) {
         p->subset = mesoi_rt_alloc(rt, sizeof(uint32_t) * (nl ? nl : 1)); /* grown when the list is read */
         r = p->subset ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
@@ -174,7 +193,7 @@ static meso_result read_prisms(meso_rt* rt, meso_file* f, const meso_object_reco
         mesoi_rt_free(rt, p->subset);
         p->subset = grown;
         p->subset_key = 0; /* holds nothing yet: the next pick fills it */
-        rt->bytes_resident += p->lv[i0].bytes;
+        rt->bytes_resident += p->gpu[i0];
         if (!rt->prefetch)
             p->bytes_read += p->lv[i0].bytes;
         return MESO_OK;
@@ -208,10 +227,12 @@ meso_result mesoi_parts_upload(meso_rt* rt, meso_file* f, const meso_object_reco
     o->kind = MESO_OBJECT_MESH;
     memcpy(o->bbox_min, p->lv[i].rec.bbox_min, sizeof(o->bbox_min));
     memcpy(o->bbox_max, p->lv[i].rec.bbox_max, sizeof(o->bbox_max));
+    const uint64_t before = rt->gpu_count;
     r = mesoi_mesh_upload_chunk(rt, f, p->lv[i].chunk, rec->id, p->lv[i].colours, o);
     if (r == MESO_OK) {
         p->slot[i] = h;
-        rt->bytes_resident += p->lv[i].bytes;
+        p->gpu[i] = o->gpu_bytes = rt->gpu_count - before;
+        rt->bytes_resident += p->gpu[i];
         if (!rt->prefetch)
             p->bytes_read += p->lv[i].bytes; /* a request counts its own reads */
         return MESO_OK;
@@ -242,7 +263,7 @@ void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i)
 {
     meso_rt_release_object(rt, p->slot[i]);
     p->slot[i].id = 0;
-    rt->bytes_resident -= p->lv[i].bytes;
+    rt->bytes_resident -= p->gpu[i];
     rt->evictions++;
 }
 
@@ -340,7 +361,7 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
     meso_result missing = MESO_OK; /* MESO_ERR_PENDING: some part waits for its request; MESO_ERR_NOT_FOUND: cannot be had */
     for (uint32_t q = 0; q < p->part_count; ++q) {
         const uint32_t a = p->first[q], n = p->first[q + 1] - a, w = p->want[q];
-        p->bytes_wanted += prisms(p, a + w) ? 0 : p->lv[a + w].bytes;
+        p->bytes_wanted += prisms(p, a + w) ? 0 : p->gpu[a + w];
         int32_t got = -1;
         int requested = 0;
         for (uint32_t l = w; got < 0 && l < n; ++l) {
@@ -350,7 +371,7 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
                     if (!requested && mesoi_stream_request_part(rt, lv, prisms(p, i) ? p->first[0] : i) != MESO_OK)
                         return MESO_ERR_OUT_OF_MEMORY;
                     requested = 1;
-                } else if (mesoi_make_room(rt, p->lv[i].bytes)) {
+                } else if (mesoi_make_room(rt, p->gpu[i])) {
                     const meso_result r = mesoi_parts_upload(rt, lv->file, &lv->rec, p, i);
                     if (r == MESO_ERR_OUT_OF_MEMORY)
                         return r;
@@ -378,7 +399,7 @@ meso_result mesoi_parts_pick(meso_rt* rt, mesoi_levels* lv, meso_rt_object nativ
     }
     for (uint32_t q = 0; p->shell && q < p->part_count; ++q)
         if (p->want[q] == 0) { /* the list, once */
-            p->bytes_wanted += p->lv[p->first[0]].bytes;
+            p->bytes_wanted += p->gpu[p->first[0]];
             break;
         }
     if (missing != MESO_OK)
@@ -436,6 +457,18 @@ int mesoi_parts_coarse(const mesoi_parts* p)
         coarse |= p->drawn[q] != 0;
     }
     return coarse;
+}
+
+uint64_t mesoi_parts_gpu(const meso_rt* rt, meso_file* f, const mesoi_parts* p, uint64_t* estimated)
+{
+    uint64_t b = p->tri ? p->gpu[p->first[0]] : 0;
+    *estimated = b;
+    for (uint32_t i = 0; i < p->level_count; ++i)
+        if (p->slot[i].id) {
+            b += p->gpu[i];
+            *estimated += part_estimate(rt, f, p, i);
+        }
+    return b;
 }
 
 uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read)

@@ -311,7 +311,7 @@ static uint64_t upload_part(meso_rt* rt, meso_rt_request* q)
     mesoi_levels* lv = q->lv;
     mesoi_parts* p = lv->parts;
     const uint32_t i = q->level, part = p->lv[i].rec.object - 1;
-    const int room = p->slot[i].id || mesoi_make_room(rt, p->lv[i].bytes);
+    const int room = p->slot[i].id || mesoi_make_room(rt, p->gpu[i]);
     if (!room && p->pick_frame >= rt->frame && p->want[part] <= p->lv[i].rec.lod)
         return 0; /* still wanted: tried again on the next call */
     uint64_t done = 0;
@@ -341,7 +341,7 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
             const uint32_t l = q->level;
             /* The coarsest level always stays (meso_rt_desc.memory_budget):
              * it is uploaded whatever the budget, as a synchronous load does. */
-            const int room = lv->slot[l].id || l + 1 == lv->count || mesoi_make_room(rt, lv->info[l].bytes);
+            const int room = lv->slot[l].id || l + 1 == lv->count || mesoi_make_room(rt, lv->gpu[l]);
             /* No room under the budget: kept decoded, and tried again on
              * the next call, while the last frame's or this frame's draws
              * still want this level (or a finer one); dropped once they

@@ -17,7 +17,9 @@
  *              builds that draw the same (README);
  *   steps_px   shader steps per covered pixel (one counted frame, untimed;
  *              0 where the context cannot count; meshes count none);
- *   resident   file bytes of the uploaded levels (meso_rt_budget_state);
+ *   resident   file bytes of the uploaded levels (meso_rt_levels_state);
+ *   gpu_resident  what they hold on the GPU, the memory budget's unit
+ *              (meso_rt_budget_state);
  *   read       file bytes read for them (every level uploaded so far);
  *   mae        mean absolute difference, 0..255 per channel over all
  *              pixels, from the finest levels rendered at 2x2 the pixels
@@ -368,19 +370,21 @@ static void bench_setting(float tau, const char* name, const double* ms, const d
         covered += depth[p] < 1.0f;
     meso_rt_budget_state bs;
     meso_rt_budget_state_get(s.rt, &bs);
-    uint64_t read = 0;
+    uint64_t read = 0, resident = 0;
     int level_sum = 0;
     for (int k = 0; k < N; ++k) {
         meso_rt_levels_state ls;
         meso_rt_levels_state_get(s.rt, s.obj[k], &ls);
         read += ls.bytes_read;
+        resident += ls.bytes_resident;
         level_sum += ls.last_drawn;
     }
     row("scene", name, "ms", ms[count / 2]);
     row("scene", name, "ms_alone", alone[count / 2]);
     row("scene", name, "steps_px", sum.supported && covered ? (double)sum.steps / (double)covered : 0.0);
     row("scene", name, "frags_px", sum.supported && covered ? (double)sum.fragments / (double)covered : 0.0);
-    row("scene", name, "resident", (double)bs.bytes_resident);
+    row("scene", name, "resident", (double)resident);
+    row("scene", name, "gpu_resident", (double)bs.bytes_resident);
     row("scene", name, "read", (double)read);
     row("scene", name, "mae", abs_sum / (3.0 * W * H));
     row("scene", name, "bad_px", (double)bad / ((double)W * H));

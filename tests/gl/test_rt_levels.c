@@ -207,6 +207,17 @@ static void error_holds_in_pixels_where_chosen(meso_rt* rt, meso_file* f)
     for (int k = 0; k < LEVELS; ++k)
         all += li[k].bytes;
     assert(st.bytes_resident == all && st.bytes_read == all);
+    /* On the GPU each level of a mesh holds one buffer of its MESH as
+     * decoded (no vertex colours here): the memory budget's unit, and the
+     * estimate the budget made room for before each upload is no smaller. */
+    uint64_t gpu = 0;
+    for (int k = 0; k < LEVELS; ++k) {
+        assert(meso_file_find_vertex_colours(f, 1, (uint16_t)k) < 0);
+        gpu += meso_file_chunk(f, (uint32_t)meso_file_find_level(f, MESO_CHUNK_MESH, 1, (uint16_t)k))->decoded_size;
+    }
+    printf("  GPU bytes of all levels: %llu (estimated %llu before upload)\n", (unsigned long long)st.gpu_bytes_resident,
+           (unsigned long long)st.gpu_bytes_estimated);
+    assert(st.gpu_bytes_resident == gpu && st.gpu_bytes_estimated >= gpu);
     meso_rt_release_object(rt, obj);
 }
 

@@ -15,6 +15,8 @@
 #    the whole level L, which has arrived, is the better picture);
 #  - it read no more than had arrived, and its stats carry bytes_resident,
 #    bytes_read, steps_per_pixel, gpu_ms and stream_bytes = N;
+#  - what the uploads hold on the GPU is no more than libmeso's estimate
+#    before them (its memory budget makes room by the estimate);
 # and one byte less than the coarsest level's prefix draws nothing (exit 5).
 # At a coarser pixel error (3 px, the mesh): where the whole file draws
 # level W (as a bake without parts draws it), each prefix of level L draws
@@ -75,6 +77,10 @@ if st["stream_bytes"] != n: fail("stream_bytes %d, not %d" % (st["stream_bytes"]
 if st["bytes_read"] > n: fail("read %d bytes of the %d that had arrived" % (st["bytes_read"], n))
 if st["covered_pixels"] <= 0: fail("nothing drawn")
 s = st["objects"][0]
+# GPU bytes: what the uploads hold, never above what the budget made room for
+if not 0 < s["gpu_bytes_resident"] <= s["gpu_bytes_estimated"]:
+    fail("GPU bytes %d, estimated %d" % (s["gpu_bytes_resident"], s["gpu_bytes_estimated"]))
+if st["gpu_bytes_resident"] != s["gpu_bytes_resident"]: fail("the total GPU bytes are not the object's")
 if "part_levels_drawn" in s:
     perr = {(p["part"], p["lod"]): p["error"] for p in o["parts"]["levels"]}
     worst = max(perr[(q + 1, lv)] for q, lv in enumerate(s["part_levels_drawn"]))

@@ -162,7 +162,10 @@ static const char* const usage_preview_levels =
     "      --stats FILE    write what the draw cost as JSON: per object levels_drawn (its\n"
     "                      lod; drawn in parts, the finest part's), level_count and bytes\n"
     "                      (drawn in parts: also part_levels_drawn, each part's level);\n"
-    "                      bytes_resident and bytes_read over\n"
+    "                      bytes_resident (file bytes), gpu_bytes_resident (what the\n"
+    "                      uploads hold on the GPU, the unit of libmeso's memory budget;\n"
+    "                      per object also gpu_bytes_estimated, the budget's estimate\n"
+    "                      before upload) and bytes_read over\n"
     "                      all objects; steps_per_pixel and fragments_per_pixel (shader\n"
     "                      work per covered pixel of the rendered image, which is 2x2\n"
     "                      the PNG's; 0 where the context cannot count); gpu_ms (wall time\n"
@@ -431,7 +434,7 @@ done:
 static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const uint32_t* ids, int n, uint64_t steps,
                                 uint64_t fragments, int counted, uint64_t covered, double gpu_ms, uint64_t stream)
 {
-    size_t cap = 512 + (size_t)n * 192, len = 0;
+    size_t cap = 512 + (size_t)n * 288, len = 0;
     for (int i = 0; i < n; ++i) { /* room for each part's level (FORMAT.md 7.11) */
         uint32_t parts = 0;
         meso_rt_parts_state_get(rt, objs[i], NULL, 0, &parts);
@@ -440,18 +443,21 @@ static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const u
     char* s = malloc(cap);
     if (!s)
         return NULL;
-    uint64_t resident = 0, read = 0;
+    uint64_t resident = 0, read = 0, gpu = 0;
     len += (size_t)snprintf(s + len, cap - len, "{\n  \"objects\": [");
     for (int i = 0; i < n; ++i) {
         meso_rt_levels_state ls;
         meso_rt_levels_state_get(rt, objs[i], &ls);
         resident += ls.bytes_resident;
         read += ls.bytes_read;
+        gpu += ls.gpu_bytes_resident;
         len += (size_t)snprintf(s + len, cap - len,
                                 "%s\n    {\"id\": %u, \"levels_drawn\": %d, \"level_count\": %u, "
-                                "\"bytes_resident\": %llu",
+                                "\"bytes_resident\": %llu, \"gpu_bytes_resident\": %llu, "
+                                "\"gpu_bytes_estimated\": %llu",
                                 i ? "," : "", ids[i], (int)ls.last_drawn, ls.level_count,
-                                (unsigned long long)ls.bytes_resident);
+                                (unsigned long long)ls.bytes_resident, (unsigned long long)ls.gpu_bytes_resident,
+                                (unsigned long long)ls.gpu_bytes_estimated);
         /* Drawn in parts: the level each part drew (rt_parts.c); not
          * where the draw drew a whole level. */
         uint32_t parts = 0;
@@ -469,11 +475,13 @@ static char* preview_stats_json(meso_rt* rt, const meso_rt_object* objs, const u
     }
     const double per = covered ? 1.0 / (double)covered : 0.0;
     len += (size_t)snprintf(s + len, cap - len,
-                            "\n  ],\n  \"bytes_resident\": %llu,\n  \"bytes_read\": %llu,\n"
+                            "\n  ],\n  \"bytes_resident\": %llu,\n  \"gpu_bytes_resident\": %llu,\n"
+                            "  \"bytes_read\": %llu,\n"
                             "  \"stream_bytes\": %llu,\n  \"covered_pixels\": %llu,\n"
                             "  \"steps_per_pixel\": %.4f,\n  \"fragments_per_pixel\": %.4f,\n"
                             "  \"counted\": %s,\n  \"gpu_ms\": %.3f\n}\n",
-                            (unsigned long long)resident, (unsigned long long)read, (unsigned long long)stream,
+                            (unsigned long long)resident, (unsigned long long)gpu, (unsigned long long)read,
+                            (unsigned long long)stream,
                             (unsigned long long)covered, counted ? (double)steps * per : 0.0,
                             counted ? (double)fragments * per : 0.0, counted ? "true" : "false", gpu_ms);
     (void)len;
