@@ -70,6 +70,7 @@
 #include <meshoptimizer.h>
 #endif
 
+#include "box_grid.h"
 #include "mesh_levels.h"
 #include "shell_validate.h"
 
@@ -170,108 +171,70 @@ static int clip(double poly[][2], int n, const double a[2], const double b[2])
     return m;
 }
 
+/* The uv box of triangle t, z 0 (box_grid.h is 3D). */
+static void uv_box(const tri_uv* t, double lo[3], double hi[3])
+{
+    for (int k = 0; k < 2; ++k) {
+        lo[k] = fmin(fmin(t->p[0][k], t->p[1][k]), t->p[2][k]);
+        hi[k] = fmax(fmax(t->p[0][k], t->p[1][k]), t->p[2][k]);
+    }
+    lo[2] = hi[2] = 0.0;
+}
+
 double mesoi_shell_map_distance(const meso_mesh* fine, const float* fine_bottom, const float* fine_span,
                                 const uint32_t* chart, const meso_mesh* coarse, const float* coarse_bottom,
                                 const float* coarse_span, const uint32_t* coarse_chart)
 {
     const uint32_t nc = coarse->triangle_count;
-    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-    for (uint32_t v = 0; v < coarse->vertex_count; ++v)
-        for (int k = 0; k < 2; ++k) {
-            lo[k] = fmin(lo[k], coarse->uvs[2 * (size_t)v + (size_t)k]);
-            hi[k] = fmax(hi[k], coarse->uvs[2 * (size_t)v + (size_t)k]);
-        }
-    /* A uniform grid over the coarse triangles' uv boxes. */
-    const int G = (int)fmin(256.0, fmax(1.0, ceil(sqrt((double)nc))));
-    const double cw[2] = {fmax(hi[0] - lo[0], 1e-30) / G, fmax(hi[1] - lo[1], 1e-30) / G};
-    uint32_t* start = calloc((size_t)G * G + 1, sizeof(uint32_t));
-    uint32_t* stamp = malloc(sizeof(uint32_t) * (nc ? nc : 1));
-    int(*box)[4] = malloc(sizeof(*box) * (nc ? nc : 1));
-    uint32_t* list = NULL;
-    double result = -1.0;
-    if (!start || !stamp || !box)
-        goto done;
-    for (int pass = 0; pass < 2; ++pass) {
-        if (pass == 1) {
-            for (int c = 1; c <= G * G; ++c)
-                start[c] += start[c - 1];
-            list = malloc(sizeof(uint32_t) * (start[G * G] ? start[G * G] : 1));
-            if (!list)
-                goto done;
-        }
-        for (uint32_t t = 0; t < nc; ++t) {
-            if (pass == 0) {
-                const tri_uv c = tri_of(coarse, t);
-                for (int k = 0; k < 2; ++k) {
-                    const double a = fmin(fmin(c.p[0][k], c.p[1][k]), c.p[2][k]);
-                    const double b = fmax(fmax(c.p[0][k], c.p[1][k]), c.p[2][k]);
-                    box[t][k] = (int)fmin(G - 1, fmax(0.0, floor((a - lo[k]) / cw[k])));
-                    box[t][2 + k] = (int)fmin(G - 1, fmax(0.0, floor((b - lo[k]) / cw[k])));
-                }
-            }
-            for (int y = box[t][1]; y <= box[t][3]; ++y)
-                for (int x = box[t][0]; x <= box[t][2]; ++x) {
-                    const size_t cell = (size_t)y * (size_t)G + (size_t)x;
-                    if (pass == 0)
-                        ++start[cell + 1];
-                    else
-                        list[start[cell]++] = t;
-                }
-        }
-        if (pass == 1) /* start[c] ran on to the next cell's start: shift back */
-            for (int c = G * G; c > 0; --c)
-                start[c] = start[c - 1];
-        if (pass == 1)
-            start[0] = 0;
+    /* The coarse triangles' uv boxes in a grid of cells about their mean size. */
+    double lo[3], hi[3], extent = 0.0;
+    for (uint32_t t = 0; t < nc; ++t) {
+        const tri_uv c = tri_of(coarse, t);
+        uv_box(&c, lo, hi);
+        extent += fmax(hi[0] - lo[0], hi[1] - lo[1]);
     }
-    for (uint32_t t = 0; t < nc; ++t)
-        stamp[t] = UINT32_MAX;
-    result = 0.0;
-    for (uint32_t f = 0; f < fine->triangle_count; ++f) {
+    meso_box_grid* g = meso_box_grid_create(nc, nc && extent > 0.0 ? extent / nc : 1.0);
+    int ok = g != NULL;
+    for (uint32_t t = 0; ok && t < nc; ++t) {
+        const tri_uv c = tri_of(coarse, t);
+        uv_box(&c, lo, hi);
+        ok = meso_box_grid_set(g, t, lo, hi);
+    }
+    uint32_t* near = NULL;
+    size_t cap = 0;
+    double result = 0.0;
+    for (uint32_t f = 0; ok && f < fine->triangle_count; ++f) {
         const tri_uv F = tri_of(fine, f);
-        const uint32_t ch = chart[f];
-        int fb[4];
-        for (int k = 0; k < 2; ++k) {
-            const double a = fmin(fmin(F.p[0][k], F.p[1][k]), F.p[2][k]);
-            const double b = fmax(fmax(F.p[0][k], F.p[1][k]), F.p[2][k]);
-            fb[k] = (int)fmin(G - 1, fmax(0.0, floor((a - lo[k]) / cw[k])));
-            fb[2 + k] = (int)fmin(G - 1, fmax(0.0, floor((b - lo[k]) / cw[k])));
-        }
-        for (int y = fb[1]; y <= fb[3]; ++y)
-            for (int x = fb[0]; x <= fb[2]; ++x) {
-                const size_t cell = (size_t)y * (size_t)G + (size_t)x;
-                for (uint32_t i = start[cell]; i < start[cell + 1]; ++i) {
-                    const uint32_t t = list[i];
-                    if (stamp[t] == f || coarse_chart[t] != ch)
-                        continue;
-                    stamp[t] = f;
-                    const tri_uv C = tri_of(coarse, t);
-                    double poly[12][2];
-                    memcpy(poly, F.p, sizeof F.p);
-                    int n = 3;
-                    for (int e = 0; e < 3 && n > 0; ++e)
-                        n = clip(poly, n, C.p[e], C.p[(e + 1) % 3]);
-                    for (int j = 0; j < n; ++j) {
-                        double bf[3], bc[3], pf[6], pc[6];
-                        bary(&F, poly[j], bf);
-                        bary(&C, poly[j], bc);
-                        phi(fine, fine_bottom, fine_span, f, bf, pf);
-                        phi(coarse, coarse_bottom, coarse_span, t, bc, pc);
-                        for (int w = 0; w < 2; ++w) {
-                            const double dx = pf[3 * w] - pc[3 * w], dy = pf[3 * w + 1] - pc[3 * w + 1],
-                                         dz = pf[3 * w + 2] - pc[3 * w + 2];
-                            result = fmax(result, sqrt(dx * dx + dy * dy + dz * dz));
-                        }
-                    }
+        uv_box(&F, lo, hi);
+        size_t n = 0;
+        ok = meso_box_grid_query(g, lo, hi, &near, &n, &cap);
+        for (size_t i = 0; ok && i < n; ++i) {
+            const uint32_t t = near[i];
+            if (coarse_chart[t] != chart[f])
+                continue;
+            const tri_uv C = tri_of(coarse, t);
+            double poly[12][2];
+            memcpy(poly, F.p, sizeof F.p);
+            int m = 3;
+            for (int e = 0; e < 3 && m > 0; ++e)
+                m = clip(poly, m, C.p[e], C.p[(e + 1) % 3]);
+            for (int j = 0; j < m; ++j) {
+                double bf[3], bc[3], pf[6], pc[6];
+                bary(&F, poly[j], bf);
+                bary(&C, poly[j], bc);
+                phi(fine, fine_bottom, fine_span, f, bf, pf);
+                phi(coarse, coarse_bottom, coarse_span, t, bc, pc);
+                for (int w = 0; w < 2; ++w) {
+                    const double dx = pf[3 * w] - pc[3 * w], dy = pf[3 * w + 1] - pc[3 * w + 1],
+                                 dz = pf[3 * w + 2] - pc[3 * w + 2];
+                    result = fmax(result, sqrt(dx * dx + dy * dy + dz * dz));
                 }
             }
+        }
     }
-done:
-    free(start);
-    free(stamp);
-    free(box);
-    free(list);
-    return result;
+    free(near);
+    meso_box_grid_destroy(g);
+    return ok ? result : -1.0;
 }
 
 /* >>chain ------------------------------------------------------------------- */

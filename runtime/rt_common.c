@@ -228,7 +228,7 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
 uint64_t mesoi_gpu_estimate(const meso_rt* rt, const meso_chunk_info* c)
 {
     const uint64_t widen = c->dtype == MESO_DTYPE_U16 && !rt->norm16 ? 2 : 1; /* R32F for R16 */
-    return c->decoded_size * widen * 4 / 3 + 64;
+    return c->decoded_size * widen * 4 / 3 + 16; /* + a mesh buffer's alignment of its VCOL (rt_mesh.c) */
 }
 
 size_t mesoi_internal_bytes(GLint internal)
@@ -312,9 +312,9 @@ GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t
     gl->TexBuffer(GL_TEXTURE_BUFFER, format, *buf);
     gl->BindTexture(GL_TEXTURE_BUFFER, (GLuint)prev_tex);
     gl->BindBuffer(GL_TEXTURE_BUFFER, 0);
-    if ((size_t)stored == size)
+    if ((size_t)stored == size) {
         rt->gpu_count += size;
-    if ((size_t)stored != size) { /* out of memory: no store; the error queue stays the host's */
+    } else { /* out of memory: no store; the error queue stays the host's */
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %zu-byte buffer could not be created", size);
         gl->DeleteTextures(1, &tex);
         gl->DeleteBuffers(1, buf);

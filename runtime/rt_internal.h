@@ -102,8 +102,9 @@ struct meso_rt {
     /* The memory budget of levelled objects (rt_levels.c). */
     uint64_t budget, bytes_resident, bytes_wanted, frame, evictions; /* bytes_resident: GPU bytes of the
                                                                          uploaded levels and part levels */
-    uint64_t gpu_count;        /* GPU bytes every object texture and buffer created so far holds (mesoi_gpu_add):
-                                  a load's are the difference across it */
+    uint64_t gpu_count;        /* GPU bytes every object texture and buffer created so far holds (counted where
+                                  rt_common.c, rt_mesh.c and rt_cells.c make them): a load's are the difference
+                                  across it */
     double tau_scale;
     /* Streaming (rt_stream.c): meso_rt_desc.stream_requests, every request
      * not freed (oldest first), the one being uploaded, levels uploaded. */
@@ -466,8 +467,9 @@ typedef struct mesoi_levels {
     uint64_t parts_frame;      /* the frame (rt->frame + 1) the last pick drew parts */
     int parts_native;          /* they drew with the whole native level (a shell's prisms) */
     int parts_last;            /* the last pick drew parts (meso_rt_parts_state_get) */
-    uint64_t* gpu;             /* [count]: the level's GPU bytes, measured once uploaded (mesoi_object.gpu_bytes),
-                                  until then an estimate no smaller (mesoi_gpu_estimate) */
+    uint64_t* gpu;             /* [2 count]: the level's GPU bytes, measured once uploaded (mesoi_object.gpu_bytes),
+                                  until then its estimate; gpu[count + l]: the estimate (level_estimate), no
+                                  smaller */
     uint8_t* own_base;         /* [count]: a shell's native level with a base mesh of its own (FORMAT.md §7.10:
                                   its MESH is not level 0's), drawn only by the smooth mapping it was measured
                                   for (rt_levels.c usable) */
@@ -487,7 +489,7 @@ typedef struct mesoi_parts {
     meso_rt_object* chosen;  /* [part_count]: the slots the last pick drew */
     uint8_t* drawn;          /* [part_count]: the level each drew */
     meso_rt_object parent;   /* the slot picks hand out (kind MESH, no GL resources) */
-    uint64_t bytes_wanted;   /* the last pick's wanted part levels' bytes */
+    uint64_t bytes_wanted;   /* the last pick's wanted part levels' GPU bytes (mesoi_parts.gpu) */
     double fallback_error;   /* where the last pick drew some part coarser than it wanted (its level not
                                 uploaded: still arriving, or no room), the largest stated error of the
                                 part levels it drew; else -1 */
@@ -498,9 +500,9 @@ typedef struct mesoi_parts {
      * its prisms: the PTRI list (read once, as lod 0's "upload"). */
     int shell;
     uint32_t* tri;           /* the PTRI list, tri_count entries; NULL before it is read */
-    uint64_t* gpu;           /* [level_count]: what the part level holds on the GPU (rt_levels.c
-                                mesoi_level_gpu's rule): measured once uploaded, until then estimated (a
-                                shell's prisms: the PTRI list's bytes, in host memory) */
+    uint64_t* gpu;           /* [2 level_count]: what the part level holds on the GPU, measured once uploaded,
+                                until then its estimate; gpu[level_count + i]: the estimate (part_estimate;
+                                a shell's prisms: the PTRI list's bytes, held in host memory) */
     uint32_t tri_count;
     meso_rt_object native;
     uint32_t* subset;        /* [tri_count]: the prisms the last pick draws (subset_count), by part */
@@ -533,10 +535,12 @@ meso_result mesoi_parts_draw(meso_rt* rt, const mesoi_parts* p, const meso_rt_dr
                              const meso_rt_instance* inst, uint32_t count);
 int mesoi_parts_oldest(const meso_rt* rt, const mesoi_parts* p, uint64_t* oldest, uint32_t* which);
 void mesoi_parts_evict(meso_rt* rt, mesoi_parts* p, uint32_t i);
-uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read);
+/* The file bytes of its uploaded part levels (and a shell's prism list);
+ * *read gets every byte read for them. */
+uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* read);
 /* The GPU bytes its uploaded part levels hold (and a shell's prism list);
  * *estimated gets what they were estimated at before upload. */
-uint64_t mesoi_parts_gpu(const meso_rt* rt, meso_file* f, const mesoi_parts* p, uint64_t* estimated);
+uint64_t mesoi_parts_gpu(const mesoi_parts* p, uint64_t* estimated);
 /* Whether the last pick drew some part coarser than its lod 0, and every
  * part at the level it wanted (a shell whose parts are still arriving
  * draws its whole native level, which is finer). */

@@ -135,7 +135,7 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         lv->pending = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
         lv->request = mesoi_rt_alloc(rt, sizeof(struct meso_rt_request*) * lv->count);
         lv->own_base = mesoi_rt_alloc(rt, lv->count);
-        lv->gpu = mesoi_rt_alloc(rt, sizeof(uint64_t) * lv->count);
+        lv->gpu = mesoi_rt_alloc(rt, sizeof(uint64_t) * 2 * lv->count);
         if (!lv->info || !lv->slot || !lv->failed || !lv->used || !lv->pending || !lv->request || !lv->own_base ||
             !lv->gpu)
             r = MESO_ERR_OUT_OF_MEMORY;
@@ -152,7 +152,7 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         for (uint32_t l = 0; l < lv->count; ++l) {
             lv->own_base[l] = lv->rec.kind == MESO_OBJECT_SHELL && lv->info[l].rec.form == MESO_LEVEL_NATIVE &&
                               meso_file_find_level(f, MESO_CHUNK_MESH, object_id, (uint16_t)l) != mesh0;
-            lv->gpu[l] = level_estimate(rt, f, object_id, &lv->info[l]);
+            lv->gpu[l] = lv->gpu[lv->count + l] = level_estimate(rt, f, object_id, &lv->info[l]);
         }
     }
     /* A mesh or shell object's parts table (rt_parts.c), read with the levels
@@ -344,7 +344,7 @@ void meso_rt_frame_end(meso_rt* rt)
         uint64_t wanted = lv->gpu[lv->want_now]; /* or the parts this frame drew instead (a shell's prisms
                                                     draw with its native level) */
         if (lv->parts && lv->parts_frame == rt->frame + 1) {
-            mesoi_parts_bytes(lv->parts, &wanted, NULL);
+            wanted = lv->parts->bytes_wanted;
             wanted += lv->parts_native ? lv->gpu[lv->want_now] : 0;
         }
         now += wanted + (lv->want_now + 1 < lv->count ? coarsest : 0);
@@ -585,18 +585,18 @@ meso_result meso_rt_levels_state_get(const meso_rt* rt, meso_rt_object h, meso_r
     out->bytes_read = lv->bytes_read;
     if (lv->parts) {
         uint64_t read = 0;
-        out->bytes_resident += mesoi_parts_bytes(lv->parts, NULL, &read);
+        out->bytes_resident += mesoi_parts_bytes(lv->parts, &read);
         out->bytes_read += read;
     }
     if (lv->parts)
-        out->gpu_bytes_resident += mesoi_parts_gpu(rt, lv->file, lv->parts, &out->gpu_bytes_estimated);
+        out->gpu_bytes_resident += mesoi_parts_gpu(lv->parts, &out->gpu_bytes_estimated);
     for (uint32_t l = 0; l < lv->count; ++l)
         if (lv->slot[l].id) {
             if (l < 32)
                 out->resident_mask |= 1u << l;
             out->bytes_resident += lv->info[l].bytes;
             out->gpu_bytes_resident += lv->gpu[l];
-            out->gpu_bytes_estimated += level_estimate(rt, lv->file, lv->rec.id, &lv->info[l]);
+            out->gpu_bytes_estimated += lv->gpu[lv->count + l];
         }
     return MESO_OK;
 }

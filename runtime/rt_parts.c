@@ -120,7 +120,7 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
     p->want = mesoi_rt_alloc(rt, sizeof(uint32_t) * np);
     p->chosen = mesoi_rt_alloc(rt, sizeof(meso_rt_object) * np);
     p->drawn = mesoi_rt_alloc(rt, np);
-    p->gpu = mesoi_rt_alloc(rt, sizeof(uint64_t) * nl);
+    p->gpu = mesoi_rt_alloc(rt, sizeof(uint64_t) * 2 * nl);
     r = p->lv && p->first && p->edges && p->slot && p->failed && p->used && p->request && p->want && p->chosen && p->drawn &&
                 p->gpu
             ? MESO_OK
@@ -147,7 +147,7 @@ meso_result mesoi_parts_load(meso_rt* rt, meso_file* f, const meso_object_record
         r = mesoi_empty_slot(rt, rec, &p->parent);
     p->shell = rec->kind == MESO_OBJECT_SHELL;
     for (uint32_t i = 0; r == MESO_OK && i < nl; ++i) /* estimates until uploaded (rt_levels.c's rule) */
-        p->gpu[i] = part_estimate(rt, f, p, i);
+        p->gpu[i] = p->gpu[nl + i] = part_estimate(rt, f, p, i);
     if (r == MESO_OK && p->shell) {
         p->subset = mesoi_rt_alloc(rt, sizeof(uint32_t) * (nl ? nl : 1)); /* grown when the list is read */
         r = p->subset ? MESO_OK : MESO_ERR_OUT_OF_MEMORY;
@@ -459,25 +459,23 @@ int mesoi_parts_coarse(const mesoi_parts* p)
     return coarse;
 }
 
-uint64_t mesoi_parts_gpu(const meso_rt* rt, meso_file* f, const mesoi_parts* p, uint64_t* estimated)
+uint64_t mesoi_parts_gpu(const mesoi_parts* p, uint64_t* estimated)
 {
     uint64_t b = p->tri ? p->gpu[p->first[0]] : 0;
-    *estimated = b;
+    *estimated += b;
     for (uint32_t i = 0; i < p->level_count; ++i)
         if (p->slot[i].id) {
             b += p->gpu[i];
-            *estimated += part_estimate(rt, f, p, i);
+            *estimated += p->gpu[p->level_count + i];
         }
     return b;
 }
 
-uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* wanted, uint64_t* read)
+uint64_t mesoi_parts_bytes(const mesoi_parts* p, uint64_t* read)
 {
     uint64_t b = p->tri ? p->lv[p->first[0]].bytes : 0; /* a shell's prisms: the list, once */
     for (uint32_t i = 0; i < p->level_count; ++i)
         b += p->slot[i].id ? p->lv[i].bytes : 0;
-    if (wanted)
-        *wanted = p->bytes_wanted;
     if (read)
         *read = p->bytes_read;
     return b;
