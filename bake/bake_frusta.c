@@ -6,9 +6,9 @@
  * optional relief map (§3) and colour map (sampled at the relief
  * coordinates), as one .meso frusta object: SKEL, FRUS, FSEG, BALL, RELF
  * and COLR (FORMAT.md §7.2 kind 4); with levels (the default), native
- * relief levels (the relief map halved, relief_levels below), then a
- * triangle tessellation (a MESH, frusta_standin.h) and its simplifications,
- * and LODS.
+ * relief levels (the relief map halved, relief_levels below), coarser
+ * skeletons (frusta_skeleton_levels.h), then a triangle tessellation (a
+ * MESH, frusta_standin.h) and its simplifications, and LODS.
  */
 #include "bake_internal.h"
 
@@ -22,6 +22,7 @@
 
 #include "color_map.h"
 #include "frusta_chunks.h"
+#include "frusta_skeleton_levels.h"
 #include "frusta_standin.h"
 #include "height_field_levels.h"
 #include "standin_levels.h"
@@ -180,6 +181,12 @@ static void report_json(cJSON* rep, const meso_bake_frusta_report* s)
     cJSON_AddNumberToObject(rep, "seam_gap_max", s->seam_gap_max);
     cJSON_AddNumberToObject(rep, "seam_gap_mean", s->seam_gap_mean);
     cJSON_AddNumberToObject(rep, "radius_change_max", s->radius_change_max);
+    if (s->level_count > 1) {
+        cJSON* k = cJSON_AddObjectToObject(rep, "skeleton_levels");
+        cJSON_AddNumberToObject(k, "count", s->skeleton_levels);
+        if (s->skeleton_levels_stopped)
+            cJSON_AddStringToObject(k, "stopped", s->skeleton_levels_stopped);
+    }
     if (!strcmp(src->input, "mesh")) {
         cJSON_AddNumberToObject(rep, "tolerance", src->tolerance);
         cJSON_AddNumberToObject(rep, "bbox_diagonal", src->bbox_diagonal);
@@ -235,17 +242,36 @@ static meso_result relief_levels(const meso_bake_frusta_options* a, const meso_f
     return MESO_OK;
 }
 
+/* Frees encoded FRUS, FSEG and BALL payloads: level 0's and K coarser
+ * skeletons'. */
+static void free_records(uint8_t* frus, uint8_t* fseg, uint8_t* ball, uint8_t* coarse[][3], uint32_t K)
+{
+    free(frus);
+    free(fseg);
+    free(ball);
+    for (uint32_t k = 0; k < K; ++k)
+        for (int i = 0; i < 3; ++i)
+            free(coarse[k][i]);
+}
+
 /* The file: META, RPRT, OBJT, SKEL, FRUS, FSEG, BALL (when there are balls),
- * RELF (with a relief), COLR (with a colour map). */
+ * RELF (with a relief), COLR (with a colour map); with levels, the relief
+ * levels' RELF, the coarser skeletons' FRUS, FSEG and BALL, the stand-ins
+ * and LODS. */
 static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta_object* obj,
                             const meso_texfn* relief, const meso_color_map* color, const meso_frusta_standin* st,
-                            const native_levels* nl, meso_bake_frusta_report* s, meso_bake_output** out,
-                            meso_error* err)
+                            const native_levels* nl, const mesoi_skeleton_level* sl, uint32_t K,
+                            meso_bake_frusta_report* s, meso_bake_output** out, meso_error* err)
 {
     uint8_t *frus = NULL, *fseg = NULL, *ball = NULL;
+    uint8_t* coarse[MESOI_SKELETON_LEVELS_MAX][3] = {{NULL}};
     meso_result r = meso_frusta_object_encode(obj, &frus, &fseg, &ball, err);
-    if (r != MESO_OK)
+    for (uint32_t k = 0; r == MESO_OK && k < K; ++k)
+        r = meso_frusta_object_encode(&sl[k].obj, &coarse[k][0], &coarse[k][1], &coarse[k][2], err);
+    if (r != MESO_OK) {
+        free_records(frus, fseg, ball, coarse, K);
         return r;
+    }
     meso_object_record rec = {.id = 1, .kind = MESO_OBJECT_FRUSTA};
     memcpy(rec.bbox_min, obj->bbox_min, sizeof(rec.bbox_min));
     memcpy(rec.bbox_max, obj->bbox_max, sizeof(rec.bbox_max));
@@ -284,7 +310,7 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
             r = mesoi_standin_levels_build(&st->mesh, st->error,
                                            (a->levels && a->levels < MESOI_STANDIN_MAX_LEVELS ? a->levels
                                                                                          : MESOI_STANDIN_MAX_LEVELS) -
-                                               (int)nl->count,
+                                               (int)(nl->count + K),
                                            a->common.threads, &lv, err);
         /* The stand-ins' vertex colours (FORMAT.md §7.3 VCOL): with a
          * colour map, its colour and the relief's occlusion. Not for a
@@ -300,11 +326,25 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
             r = mesoi_standin_levels_appearance(&lv, &st->mesh, 0.25 * meso_mesh_mean_edge(&st->mesh), &shows,
                                                 a->common.threads, err);
         }
-        lv.native = nl->count;
+        lv.native = nl->count + K;
         for (uint32_t k = 0; k < nl->count; ++k)
             lv.native_error[k] = nl->error[k];
-        s->level_count = lv.count + 1 + nl->count;
+        /* A coarser skeleton draws the coarsest relief: its distance to
+         * the full skeleton with that relief plus that relief's error
+         * (the triangle inequality). */
+        const double eN = nl->count ? nl->error[nl->count - 1] : 0;
+        for (uint32_t k = 0; k < K; ++k) {
+            const uint32_t i = nl->count + k;
+            lv.native_error[i] = mesoi_f32_up(eN + sl[k].distance);
+            lv.native_bbox[i] = 1;
+            for (int c = 0; c < 3; ++c) {
+                lv.native_min[i][c] = fminf(obj->bbox_min[c], sl[k].obj.bbox_min[c]);
+                lv.native_max[i][c] = fmaxf(obj->bbox_max[c], sl[k].obj.bbox_max[c]);
+            }
+        }
+        s->level_count = lv.count + 1 + nl->count + K;
         s->native_levels = nl->count;
+        s->skeleton_levels = K;
         s->standin_triangles = st->mesh.triangle_count;
         s->standin_vertices = st->mesh.vertex_count;
         s->standin_bytes = mc.size;
@@ -315,7 +355,8 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     }
     cJSON* rep = cJSON_CreateObject();
     report_json(rep, s);
-    mesoi_chunk chunks[7 + MESOI_HEIGHT_MAX_NATIVE + 2 * MESOI_STANDIN_MAX_LEVELS]; /* stand-ins: MESH and VCOL each */
+    mesoi_chunk chunks[7 + MESOI_HEIGHT_MAX_NATIVE + 3 * MESOI_SKELETON_LEVELS_MAX +
+                       2 * MESOI_STANDIN_MAX_LEVELS]; /* stand-ins: MESH and VCOL each */
     int count = 0;
     chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_SKEL, .object = 1, .dims = {obj->node_count, 1, 1}},
                                     .data = obj->skel, .size = (size_t)obj->node_count * MESO_SKEL_RECORD_SIZE};
@@ -337,19 +378,43 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_COLR, .object = 1, .dtype = MESO_DTYPE_U8,
                                                  .components = 4, .dims = {color->width, color->height, 1}},
                                         .data = color->rgba, .size = 4 * (size_t)color->width * color->height};
-    if (r == MESO_OK && st && nl->count) {
-        /* Native relief levels: each its own RELF at lod l; the records and
-         * the colour, which every level shares, once at lod N, which levels
-         * 0..N all resolve them to (FORMAT.md §7.10). */
-        for (int k = 0; k < count; ++k)
-            if (chunks[k].desc.type != MESO_CHUNK_RELF)
-                chunks[k].desc.lod = (uint16_t)nl->count;
-        for (uint32_t l = 1; l <= nl->count; ++l) {
+    const uint32_t N = nl->count, T = N + K;
+    if (r == MESO_OK && st && T) {
+        /* Native relief levels 1..N: each its own RELF at lod l; then the
+         * coarser skeletons N + 1..T: each its own FRUS, FSEG and BALL at
+         * its lod, drawing level N's relief. What every level shares (SKEL,
+         * the colour) is stored once at lod T, level 0's records at lod N,
+         * and the coarsest relief at lod T, which levels N..T resolve it to
+         * (FORMAT.md §7.10: a level takes each type at the smallest lod
+         * >= its own). Without coarser skeletons (K = 0) this is the layout
+         * of relief levels alone. */
+        for (int k = 0; k < count; ++k) {
+            const uint32_t type = chunks[k].desc.type;
+            const int records = type == MESO_CHUNK_FRUS || type == MESO_CHUNK_FSEG || type == MESO_CHUNK_BALL;
+            if (type != MESO_CHUNK_RELF || N == 0)
+                chunks[k].desc.lod = (uint16_t)(records ? N : T);
+        }
+        for (uint32_t l = 1; l <= N; ++l) {
             const meso_texfn* t = &nl->level[l - 1].fn;
-            chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_RELF, .object = 1, .lod = (uint16_t)l,
-                                                     .dtype = t->dtype, .components = 1,
-                                                     .dims = {t->dims[0], t->dims[1], 1}},
+            chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_RELF, .object = 1,
+                                                     .lod = (uint16_t)(l == N ? T : l), .dtype = t->dtype,
+                                                     .components = 1, .dims = {t->dims[0], t->dims[1], 1}},
                                             .data = t->encoded, .size = t->encoded_size};
+        }
+        for (uint32_t k = 0; k < K; ++k) {
+            const meso_frusta_object* o = &sl[k].obj;
+            const uint16_t lod = (uint16_t)(N + 1 + k);
+            chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_FRUS, .flags = MESO_CHUNK_FLAG_REQUIRED,
+                                                     .object = 1, .lod = lod, .dims = {o->count, 1, 1}},
+                                            .data = coarse[k][0], .size = (size_t)o->count * MESO_FRUS_RECORD_SIZE};
+            chunks[count++] = (mesoi_chunk){.desc = {.type = MESO_CHUNK_FSEG, .flags = MESO_CHUNK_FLAG_REQUIRED,
+                                                     .object = 1, .lod = lod, .dims = {o->count, 1, 1}},
+                                            .data = coarse[k][1], .size = (size_t)o->count * MESO_FSEG_RECORD_SIZE};
+            if (o->ball_count)
+                chunks[count++] = (mesoi_chunk){
+                    .desc = {.type = MESO_CHUNK_BALL, .flags = MESO_CHUNK_FLAG_REQUIRED, .object = 1, .lod = lod,
+                             .dims = {o->ball_count, 1, 1}},
+                    .data = coarse[k][2], .size = (size_t)o->ball_count * MESO_BALL_RECORD_SIZE};
         }
     }
     if (r == MESO_OK && st) {
@@ -366,14 +431,28 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
         cJSON_AddNumberToObject(l1, "chord_error", s->standin_chord_error);
         cJSON_AddNumberToObject(l1, "cells_around_min", st->nu_min);
         cJSON_AddNumberToObject(l1, "cells_around_max", st->nu_max);
-        /* A native relief level draws no MESH: its relief instead. */
-        for (uint32_t l = 1; l <= nl->count; ++l) {
+        /* A native level draws no MESH: its relief or its frusta instead. */
+        for (uint32_t l = 1; l <= T; ++l) {
             cJSON* o = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(rep, "levels"), (int)l);
             cJSON_DeleteItemFromObjectCaseSensitive(o, "triangles");
             cJSON_DeleteItemFromObjectCaseSensitive(o, "mesh_bytes");
-            cJSON_AddNumberToObject(o, "relief_width", nl->level[l - 1].fn.dims[0]);
-            cJSON_AddNumberToObject(o, "relief_height", nl->level[l - 1].fn.dims[1]);
-            cJSON_AddNumberToObject(o, "relief_bytes", (double)nl->level[l - 1].fn.encoded_size);
+            const meso_texfn* t = l <= N ? &nl->level[l - 1].fn : N ? &nl->level[N - 1].fn : a->relief ? relief : NULL;
+            if (t) {
+                cJSON_AddNumberToObject(o, "relief_width", t->dims[0]);
+                cJSON_AddNumberToObject(o, "relief_height", t->dims[1]);
+            }
+            if (l <= N) {
+                cJSON_AddNumberToObject(o, "relief_bytes", (double)t->encoded_size);
+                continue;
+            }
+            const mesoi_skeleton_level* k = &sl[l - N - 1];
+            cJSON_AddNumberToObject(o, "frusta", k->obj.count);
+            cJSON_AddNumberToObject(o, "balls", k->obj.ball_count);
+            cJSON_AddNumberToObject(o, "skeleton_nodes", k->nodes);
+            cJSON_AddNumberToObject(o, "skeleton_distance", k->distance);
+            cJSON_AddNumberToObject(o, "records_bytes",
+                                    (double)k->obj.count * (MESO_FRUS_RECORD_SIZE + MESO_FSEG_RECORD_SIZE) +
+                                        (double)k->obj.ball_count * MESO_BALL_RECORD_SIZE);
         }
     }
     if (r == MESO_OK)
@@ -382,9 +461,7 @@ static meso_result assemble(const meso_bake_frusta_options* a, const meso_frusta
     mesoi_standin_levels_free(&lv);
     cJSON_Delete(meta);
     cJSON_Delete(rep);
-    free(frus);
-    free(fseg);
-    free(ball);
+    free_records(frus, fseg, ball, coarse, K);
     return r;
 }
 
@@ -490,12 +567,11 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
     }
     if (r == MESO_OK && a.relief_color)
         r = meso_color_map_load_png(a.relief_color, run.common.max_memory, &color, err);
-    if (r == MESO_OK) {
-        meso_frustum_options fo = {.keep_cap_intersections = a.keep_cap_intersections,
-                                   .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle,
-                                   .twist_per_length = a.twist * (M_PI / 180)};
+    const meso_frustum_options fo = {.keep_cap_intersections = a.keep_cap_intersections,
+                                     .no_minor_axis_fit = a.no_fit, .max_joint_angle_deg = a.max_joint_angle,
+                                     .twist_per_length = a.twist * (M_PI / 180)};
+    if (r == MESO_OK)
         r = meso_frustum_model_build(skel, &fo, &m, err);
-    }
     if (r == MESO_OK)
         r = check_twists(skel, &m, a.twist, err);
     if (r == MESO_OK)
@@ -519,10 +595,9 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
                                "--relief needs --relief-depth: every radius is 0, so no default depth");
     }
     s->relief_depth = depth;
-    if (r == MESO_OK) {
-        meso_frusta_relief_params rp = {.depth = depth, .u_repeat = a.relief_repeat};
+    const meso_frusta_relief_params rp = {.depth = depth, .u_repeat = a.relief_repeat};
+    if (r == MESO_OK)
         r = meso_frusta_object_build(skel, &m, &rp, &obj, err);
-    }
     meso_frusta_standin st = {0};
     int with_standin = 0;
     s->level_count = 1;
@@ -555,10 +630,37 @@ meso_result meso_bake_frusta(const meso_bake_frusta_options* o, meso_bake_output
                             nl.level[nl.count - 1].fn.dims[0], nl.level[nl.count - 1].fn.dims[1],
                             nl.error[nl.count - 1], 1e3 * (meso_seconds() - t));
     }
+    mesoi_skeleton_level* sl = NULL;
+    uint32_t K = 0;
+    if (r == MESO_OK && with_standin) {
+        const double t = meso_seconds();
+        const uint32_t room = mesoi_native_wanted(a.levels, MESOI_STANDIN_MAX_LEVELS - 2);
+        const meso_texfn* drawn = nl.count ? &nl.level[nl.count - 1].fn : a.relief ? &relief : NULL;
+        mesoi_skeleton_levels_input in = {
+            .sk = skel, .fo = &fo, .rp = &rp, .fine = &obj, .free_u = !a.relief && !a.relief_color,
+            .max_levels = room > nl.count ? (room - nl.count < MESOI_SKELETON_LEVELS_MAX ? room - nl.count
+                                                                                       : MESOI_SKELETON_LEVELS_MAX)
+                                          : 0,
+            .limit = st.error - (nl.count ? nl.error[nl.count - 1] : 0)};
+        if (drawn)
+            meso_frusta_height_range(drawn, &in.h_lo, &in.h_hi);
+        r = mesoi_skeleton_levels_build(&in, &sl, &K, &s->skeleton_levels_stopped, err);
+        if (r == MESO_OK && K)
+            mesoi_run_stage(&run, "levels", 0.94, 0.94,
+                            "%u coarser skeletons, down to %u frusta (of %u), distance %.4g%s%s (%.0f ms)", K,
+                            sl[K - 1].obj.count, obj.count, sl[K - 1].distance,
+                            s->skeleton_levels_stopped ? "; stopped: " : "",
+                            s->skeleton_levels_stopped ? s->skeleton_levels_stopped : "", 1e3 * (meso_seconds() - t));
+        else if (r == MESO_OK)
+            mesoi_run_stage(&run, "levels", 0.94, 0.94, "no coarser skeleton: %s (%.0f ms)",
+                            s->skeleton_levels_stopped ? s->skeleton_levels_stopped : "no room for one",
+                            1e3 * (meso_seconds() - t));
+    }
     if (r == MESO_OK) {
         fill_report(&m, &obj, s);
-        r = assemble(&a, &obj, &relief, &color, with_standin ? &st : NULL, &nl, s, out, err);
+        r = assemble(&a, &obj, &relief, &color, with_standin ? &st : NULL, &nl, sl, K, s, out, err);
     }
+    mesoi_skeleton_levels_free(sl, K);
     mesoi_height_levels_free(nl.level, nl.count);
     meso_frusta_standin_free(&st);
     meso_texfn_free(&relief);

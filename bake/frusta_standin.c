@@ -27,8 +27,7 @@ void meso_frusta_standin_free(meso_frusta_standin* s)
     memset(s, 0, sizeof(*s));
 }
 
-/* Lowest and highest stored texel, normalised (1 and 0 without texels). */
-static void height_range(const meso_texfn* t, double* lo, double* hi)
+void meso_frusta_height_range(const meso_texfn* t, double* lo, double* hi)
 {
     *lo = 1;
     *hi = 0;
@@ -148,7 +147,7 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
 {
     memset(out, 0, sizeof(*out));
     double hlo, hhi;
-    height_range(relief, &hlo, &hhi);
+    meso_frusta_height_range(relief, &hlo, &hhi);
     const int has_relief = hhi >= hlo;
     double hm = has_relief ? 0.5 * (hlo + hhi) : 0;
     /* Term 1: the relief. */

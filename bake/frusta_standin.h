@@ -89,6 +89,10 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
 
 void meso_frusta_standin_free(meso_frusta_standin* s);
 
+/* Lowest and highest stored texel of a height field, normalised (1 and 0
+ * without texels). */
+void meso_frusta_height_range(const meso_texfn* t, double* lo, double* hi);
+
 /* What level 0 of `obj` shows on the stand-in `st` and its simplifications
  * (standin_appearance.h), as frusta_frag.glsl shades a hit: a frustum's
  * point shows the colour map bilinear (wrapping, in linear light) at the

@@ -468,6 +468,21 @@ static void find_joints(incidence* g, meso_frustum_model* m)
     }
 }
 
+/* Joints at a node `ball_nodes` names are ball joints too: last, after the
+ * fit and the cap-intersection handling, so every other joint is fitted as
+ * without them. */
+static void ball_named_joints(meso_frustum_model* m, const uint8_t* ball_nodes)
+{
+    for (uint32_t ji = 0; ji < m->joint_count; ++ji) {
+        meso_frustum_joint* j = &m->joints[ji];
+        if (!j->ball && ball_nodes[j->node]) {
+            j->ball = 1;
+            m->stats.ball_joints++;
+            joint_apply(m, ji);
+        }
+    }
+}
+
 /* Joints bending more than max_deg (> 0) are ball joints. */
 static void ball_sharp_joints(meso_frustum_model* m, double max_deg)
 {
@@ -719,6 +734,8 @@ meso_result meso_frustum_model_build(const meso_skeleton* sk, const meso_frustum
     handle_cap_intersections(&m, o.keep_cap_intersections);
     if (!o.no_minor_axis_fit)
         ball_open_seams(&m);
+    if (o.ball_nodes)
+        ball_named_joints(&m, o.ball_nodes);
     make_balls(&g, &m);
     m.stats.segments = m.segment_count;
     m.stats.joints = m.joint_count;

@@ -164,6 +164,8 @@ typedef struct meso_frustum_options {
     double max_joint_angle_deg; /* joints bending more than this become ball joints; <= 0: no limit */
     double twist_per_length;    /* radians of twist per unit of segment length (default 0); a node's
                                    twist_deg replaces it for the segment ending there */
+    const uint8_t* ball_nodes;  /* NULL, or per skeleton node: 1 makes a joint there a ball joint (a coarser
+                                   skeleton keeps level 0's balls: frusta_skeleton_levels.c) */
 } meso_frustum_options;
 
 typedef struct meso_frustum_stats {

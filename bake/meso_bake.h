@@ -662,6 +662,8 @@ typedef struct meso_bake_frusta_report {
     double standin_error;      /* its stated error (object units): relief + chord + rounding terms */
     double standin_relief_error, standin_chord_error; /* the first two terms */
     uint32_t native_levels;    /* relief-map levels before the stand-in (bake/height_field_levels.h), lod 1.. */
+    uint32_t skeleton_levels;  /* coarser skeletons after them (bake/frusta_skeleton_levels.h) */
+    const char* skeleton_levels_stopped; /* why fewer were made (static string), or NULL */
 } meso_bake_frusta_report;
 
 /* The CLI's defaults (max_joint_angle 150, relief_repeat 1). Zero-initialised

@@ -125,25 +125,8 @@ static meso_result make_output(const mesoi_fit_state* f, meso_skeleton* out, mes
                 stack[top++] = f->kids[k - 1];
         }
     }
-    /* Children grouped per parent, in node order: count, offsets, fill. */
-    uint32_t* cnt = index;
-    memset(cnt, 0, sizeof(uint32_t) * nk);
-    for (uint32_t i = 0; i < nk; ++i)
-        if (out->nodes[i].parent >= 0)
-            cnt[out->nodes[i].parent]++;
-    uint32_t first = 0;
-    for (uint32_t i = 0; i < nk; ++i) {
-        out->nodes[i].first_child = first;
-        first += cnt[i];
-    }
-    for (uint32_t i = 0; i < nk; ++i) {
-        const int32_t p = out->nodes[i].parent;
-        if (p >= 0) {
-            meso_skeleton_node* pn = &out->nodes[p];
-            out->children[pn->first_child + pn->child_count++] = i;
-        }
-    }
     out->node_count = nk;
+    meso_skeleton_group_children(out, index);
     out->root_count = nroots;
     free(stack);
     free(index);

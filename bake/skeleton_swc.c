@@ -356,6 +356,28 @@ done:
     return r;
 }
 
+void meso_skeleton_group_children(meso_skeleton* s, uint32_t* count)
+{
+    const uint32_t n = s->node_count;
+    memset(count, 0, sizeof(uint32_t) * n);
+    for (uint32_t i = 0; i < n; ++i)
+        if (s->nodes[i].parent >= 0)
+            count[s->nodes[i].parent]++;
+    uint32_t first = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        s->nodes[i].first_child = first;
+        s->nodes[i].child_count = 0;
+        first += count[i];
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        const int32_t p = s->nodes[i].parent;
+        if (p >= 0) {
+            meso_skeleton_node* pn = &s->nodes[p];
+            s->children[pn->first_child + pn->child_count++] = i;
+        }
+    }
+}
+
 meso_result meso_skeleton_parse(const char* text, size_t len, meso_skeleton_format fmt, meso_skeleton* out,
     meso_error* err)
 {

@@ -145,6 +145,11 @@ meso_result meso_skeleton_load(const char* path, meso_skeleton_format fmt, meso_
  * message names a line of the input. */
 meso_result meso_skeleton_require_drawable(const meso_skeleton* s, meso_error* err);
 
+/* Fills first_child, child_count and children from the nodes' parents
+ * (children grouped per parent, in node order); `count` is scratch for
+ * node_count entries. */
+void meso_skeleton_group_children(meso_skeleton* s, uint32_t* count);
+
 /* Frees the arrays and zeroes the struct. NULL is allowed. */
 void meso_skeleton_free(meso_skeleton* s);
 

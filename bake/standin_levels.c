@@ -153,8 +153,9 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
         size_t bytes = own ? lv->native_mesh_bytes[L - 1] : native ? base_chunk->size : c1->size, vbytes = 0;
         double e = 0;
         if (native) {
-            memcpy(lr.bbox_min, l0_min, sizeof lr.bbox_min);
-            memcpy(lr.bbox_max, l0_max, sizeof lr.bbox_max);
+            const int own_box = L && lv->native_bbox[L - 1];
+            memcpy(lr.bbox_min, own_box ? lv->native_min[L - 1] : l0_min, sizeof lr.bbox_min);
+            memcpy(lr.bbox_max, own_box ? lv->native_max[L - 1] : l0_max, sizeof lr.bbox_max);
             e = L ? lv->native_error[L - 1] : 0;
         } else if (S == 1) {
             double lo[3], hi[3];

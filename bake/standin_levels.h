@@ -57,6 +57,10 @@ typedef struct mesoi_standin_levels {
      * shell_base_levels.h); NULL: base. */
     const meso_mesh* native_mesh[MESOI_STANDIN_MAX_LEVELS];
     size_t native_mesh_bytes[MESOI_STANDIN_MAX_LEVELS];
+    /* The bounds of native level L, at index L - 1, where native_bbox[L - 1]
+     * is set (a frusta object's coarser skeletons); else level 0's. */
+    uint8_t native_bbox[MESOI_STANDIN_MAX_LEVELS];
+    float native_min[MESOI_STANDIN_MAX_LEVELS][3], native_max[MESOI_STANDIN_MAX_LEVELS][3];
     double e0;               /* level 1's error (the base mesh's, or standin_mesh's when set) */
     /* What the chain's errors add to their own distance to the base mesh:
      * the base mesh's error (0: e0). A shell whose level 1 is not the base

@@ -67,6 +67,17 @@ static inline meso_file* test_bake_open(const char* mesobake, const char* kind, 
     return f;
 }
 
+/* A bake report (JSON text, under `size` bytes) into buf, NUL-ended. */
+static inline void test_read_report(const char* path, char* buf, size_t size)
+{
+    FILE* rf = fopen(path, "rb");
+    assert(rf);
+    const size_t n = fread(buf, 1, size - 1, rf);
+    assert(n < size - 1);
+    buf[n] = 0;
+    fclose(rf);
+}
+
 /* The file at `path` (a bake with --levels 1) has one level and no LODS. */
 static inline void test_assert_one_level(const char* path)
 {

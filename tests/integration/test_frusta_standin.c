@@ -29,8 +29,7 @@
 
 #include <string.h>
 
-#include "camera.h"
-#include "frustum_reference.h"
+#include "frusta_views.h"
 #include "meso_file.h"
 #include "meso_layout.h"
 #include "standin_check.h"
@@ -79,25 +78,15 @@ static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, uin
 
     meso_ref_frusta rm;
     assert(meso_ref_frusta_load(f, 1, &rm, NULL) == MESO_OK);
-    double c[3], radius = 0;
-    for (int k = 0; k < 3; ++k) {
-        c[k] = 0.5 * ((double)rm.bbox_min[k] + rm.bbox_max[k]);
+    double radius = 0;
+    for (int k = 0; k < 3; ++k)
         radius += 0.25 * ((double)rm.bbox_max[k] - rm.bbox_min[k]) * ((double)rm.bbox_max[k] - rm.bbox_min[k]);
-    }
     radius = sqrt(radius);
     /* Native to stand-in. */
     double worst_native = 0;
     size_t hits = 0;
-    static const double dirs[3][3] = {{0, 0.1, 1}, {0.8, 0.45, -0.4}, {-0.6, -0.7, 0.4}};
     for (int e = 0; e < 3; ++e) {
-        meso_ref_view v = {.width = 40, .height = 40, .threads = 1};
-        double eye[3];
-        const double dl = sqrt(dirs[e][0] * dirs[e][0] + dirs[e][1] * dirs[e][1] + dirs[e][2] * dirs[e][2]);
-        for (int k = 0; k < 3; ++k)
-            eye[k] = c[k] + 2.6 * radius * dirs[e][k] / dl;
-        static const double up[3] = {0, 1, 0};
-        meso_camera_look_at_d(v.view, eye, c, up);
-        meso_camera_perspective_d(v.proj, 45.0 * M_PI / 180.0, 1.0, 0.2 * radius, 5.0 * radius);
+        const meso_ref_view v = test_frusta_view(&rm, e, 40, 1);
         meso_ref_image img;
         assert(meso_ref_frusta_render(&rm, &v, &img) == MESO_OK);
         for (int p = 0; p < v.width * v.height; ++p) {
@@ -299,12 +288,8 @@ static void check(const char* mesobake, const char* dir, const char* name, const
     uint32_t S = 1;
     const uint32_t n = test_standin_chain(f, li, 3, &S);
     /* The report lists the levels with the stored error. */
-    FILE* rf = fopen(report, "rb");
-    assert(rf);
-    char json[65536];
-    const size_t jn = fread(json, 1, sizeof json - 1, rf);
-    json[jn] = 0;
-    fclose(rf);
+    static char json[65536];
+    test_read_report(report, json, sizeof json);
     const char* lv = strstr(json, "\"levels\"");
     assert(lv && strstr(lv, "\"mesh\"") && strstr(lv, "\"triangles\"") && strstr(lv, "\"chord_error\""));
     meso_mesh_view mv1;
