@@ -35,8 +35,11 @@ static inline int cloud_cell(const cloud* c, const double p[3], int k)
     return i < 0 ? 0 : i >= c->dim[k] ? c->dim[k] - 1 : i;
 }
 
+/* Buckets the points in cells of `cell` (again: the last grid is freed). */
 static inline void cloud_grid(cloud* c, double cell)
 {
+    free(c->start);
+    free(c->item);
     double hi[3];
     for (int k = 0; k < 3; ++k) {
         c->lo[k] = INFINITY;
