@@ -248,8 +248,10 @@ void meso_rt_destroy(meso_rt* rt)
 {
     if (!rt)
         return;
+    /* Requests first (those of released objects the host held, and levels
+     * part way up, whose objects they release while the table is whole). */
+    mesoi_stream_destroy(rt);
     mesoi_objects_destroy(rt);
-    mesoi_stream_destroy(rt); /* requests of released objects the host held */
     /* A deleted program stays current (MESO_STATE_HOST_OWNS leaves the last
      * one bound) and its name turns invalid: unbind ours first, so the
      * host's next glGetIntegerv(GL_CURRENT_PROGRAM) / glUseProgram pair

@@ -353,7 +353,12 @@ MESO_API void meso_rt_budget_state_get(const meso_rt* rt, meso_rt_budget_state* 
  * file's decoders (meso_open_desc) there, so those must then be
  * thread-safe, as malloc and the Draco adapter are.
  * `upload` turns decoded levels into GL objects, oldest first, until
- * `max_bytes` of chunk bytes are uploaded (at least one level per call).
+ * `max_bytes` bytes are uploaded. A level larger than what is left of the
+ * call's budget goes up over several calls: its textures and buffers are
+ * made at once and their data follows in pieces (bands of texel rows,
+ * ranges of a buffer; mip levels are built once a texture's level 0 is
+ * whole), and the level is drawn only once all of it is up. A part level
+ * (a mesh's or a shell's) goes up whole.
  * A request whose object is released meanwhile is freed when given back.
  * Every taken request must be given back before meso_rt_destroy. */
 typedef struct meso_rt_request meso_rt_request;
@@ -366,15 +371,18 @@ MESO_API uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32
 MESO_API meso_result meso_rt_stream_run(meso_rt_request* req);
 /* Gives taken requests back, run or not (a request not run is taken again). */
 MESO_API void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n);
-/* Uploads decoded requests until `max_bytes` chunk bytes are uploaded (0:
- * all). Returns the chunk bytes uploaded. A level with no room under
+/* Uploads decoded requests until `max_bytes` bytes are uploaded (0: all):
+ * a whole level or part level counts its chunk bytes, a piece of a level
+ * going up over several calls the bytes it hands to GL; every call moves
+ * at least one texel row or 64 KB of a buffer, so the last piece may pass
+ * the budget by that much. Returns the bytes uploaded. A level with no room under
  * meso_rt_desc.memory_budget stays decoded (host memory) and is tried again
  * on later calls while draws still want it; it is dropped once they want a
  * coarser level or stop drawing the object. */
 MESO_API uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes);
 /* Requests waiting to be taken, taken, and decoded waiting for upload. */
 typedef struct meso_rt_stream_state {
-    uint32_t waiting, taken, decoded;
+    uint32_t waiting, taken, decoded; /* decoded: waiting for upload, or part way up */
     uint64_t uploads;        /* levels uploaded through requests so far */
 } meso_rt_stream_state;
 MESO_API void meso_rt_stream_state_get(const meso_rt* rt, meso_rt_stream_state* out);

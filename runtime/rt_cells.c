@@ -97,7 +97,7 @@ static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* 
     gl->GenTextures(1, out);
     gl->BindTexture(GL_TEXTURE_3D, *out);
     gl->TexImage3D(GL_TEXTURE_3D, 0, internal, (GLsizei)c->dims[0], (GLsizei)c->dims[1], (GLsizei)c->dims[2], 0,
-                   format, type, data);
+                   format, type, rt->defer ? NULL : data); /* deferred: the data later (rt_transfer.c) */
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAX_LEVEL, 0);
@@ -113,6 +113,9 @@ static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* 
         return MESO_ERR_GL;
     }
     rt->gpu_count += (uint64_t)c->dims[0] * c->dims[1] * c->dims[2] * mesoi_internal_bytes(internal);
+    if (rt->defer)
+        mesoi_defer_texture(rt, *out, GL_TEXTURE_3D, 0, c->dims, format, type, mesoi_internal_bytes(internal), 0,
+                            data); /* the source texels are the internal format's size (the call sites) */
     return MESO_OK;
 }
 

@@ -131,7 +131,9 @@ static meso_result upload_levels_host(meso_rt* rt, GLenum target, const uint32_t
         mesoi_mip_box(fine, fd, components, type, coarse);
         for (int k = 0; k < 3; ++k)
             fd[k] = mesoi_mip_size(fd[k], 1);
-        if (dims3)
+        if (rt->defer) /* the storage is there (upload_image) */
+            mesoi_defer_texture(rt, 0, target, l, fd, format, type, bytes, 0, coarse);
+        else if (dims3)
             gl->TexImage3D(target, l, internal, (GLsizei)fd[0], (GLsizei)fd[1], (GLsizei)fd[2], 0, format, type,
                            coarse);
         else
@@ -181,11 +183,16 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
     mesoi_unpack_default(rt, &unpack);
     gl->GenTextures(1, out);
     gl->BindTexture(target, *out);
-    if (dims3)
-        gl->TexImage3D(target, 0, internal, (GLsizei)dims[0], (GLsizei)dims[1], (GLsizei)dims[2], 0, format, type,
-                       data);
-    else
-        gl->TexImage2D(target, 0, internal, (GLsizei)dims[0], (GLsizei)dims[1], 0, format, type, data);
+    /* Deferred (rt_transfer.c): every level's storage now, the data later. */
+    const int defer = rt->defer != NULL;
+    for (int l = 0; l < (defer ? levels : 1); ++l) {
+        const uint32_t w = mesoi_mip_size(dims[0], l), h = mesoi_mip_size(dims[1], l);
+        if (dims3)
+            gl->TexImage3D(target, l, internal, (GLsizei)w, (GLsizei)h, (GLsizei)mesoi_mip_size(dims[2], l), 0,
+                           format, type, defer ? NULL : data);
+        else
+            gl->TexImage2D(target, l, internal, (GLsizei)w, (GLsizei)h, 0, format, type, defer ? NULL : data);
+    }
     gl->TexParameteri(target, GL_TEXTURE_MIN_FILTER, levels > 1 ? GL_LINEAR_MIPMAP_LINEAR : filter);
     gl->TexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
     gl->TexParameteri(target, GL_TEXTURE_WRAP_S, GL_REPEAT);
@@ -198,7 +205,9 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
     GLint width = 0, last = 1;
     gl->GetTexLevelParameteriv(target, 0, GL_TEXTURE_WIDTH, &width);
     meso_result r = MESO_OK;
-    if (levels > 1 && width == (GLint)dims[0]) {
+    if (defer && levels > 1 && width == (GLint)dims[0]) {
+        gl->GetTexLevelParameteriv(target, levels - 1, GL_TEXTURE_WIDTH, &last);
+    } else if (levels > 1 && width == (GLint)dims[0]) {
         if (gl_generates(rt, internal))
             gl->GenerateMipmap(target);
         else
@@ -211,6 +220,19 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
         mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_GL_ERROR, "a %ux%ux%u texture could not be created%s", dims[0],
                   dims[1], dims[2], width == (GLint)dims[0] ? " (its mip levels)" : "");
         r = MESO_ERR_GL;
+    }
+    if (r == MESO_OK && defer) { /* the texture is sound: its data (and host-built levels) queued */
+        int components = 1;
+        const size_t texel = texel_bytes(format, type, &components);
+        const int generates = levels > 1 && gl_generates(rt, internal);
+        const uint32_t first = rt->defer->count;
+        mesoi_defer_texture(rt, *out, target, 0, dims, format, type, texel, generates, data);
+        if (levels > 1 && !generates)
+            r = upload_levels_host(rt, target, dims, dims3, levels, internal, format, type, data);
+        for (uint32_t k = first; k < rt->defer->count; ++k)
+            rt->defer->item[k].name = *out;
+        if (r != MESO_OK) /* the texture goes: so does its data */
+            mesoi_transfers_drop(rt, rt->defer, first);
     }
     if (r != MESO_OK) {
         gl->DeleteTextures(1, out);
@@ -305,8 +327,10 @@ GLuint mesoi_texture_buffer(meso_rt* rt, GLenum format, const void* data, size_t
     gl->GetIntegerv(GL_TEXTURE_BINDING_BUFFER, &prev_tex); /* the active unit's: the host's */
     gl->GenBuffers(1, buf);
     gl->BindBuffer(GL_TEXTURE_BUFFER, *buf);
-    gl->BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)size, data, GL_DYNAMIC_DRAW);
+    gl->BufferData(GL_TEXTURE_BUFFER, (GLsizeiptr)size, rt->defer ? NULL : data, GL_DYNAMIC_DRAW);
     gl->GetBufferParameteriv(GL_TEXTURE_BUFFER, GL_BUFFER_SIZE, &stored);
+    if (rt->defer && (size_t)stored == size)
+        mesoi_defer_buffer(rt, *buf, 0, size, data);
     gl->GenTextures(1, &tex);
     gl->BindTexture(GL_TEXTURE_BUFFER, tex);
     gl->TexBuffer(GL_TEXTURE_BUFFER, format, *buf);

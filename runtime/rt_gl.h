@@ -66,6 +66,8 @@
     X(PFNGLTEXBUFFERPROC, TexBuffer)                                         \
     X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                       \
     X(PFNGLTEXIMAGE3DPROC, TexImage3D)                                       \
+    X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                                 \
+    X(PFNGLTEXSUBIMAGE3DPROC, TexSubImage3D)                                 \
     X(PFNGLTEXPARAMETERIPROC, TexParameteri)                                 \
     X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                               \
     X(PFNGLPIXELSTOREIPROC, PixelStorei)                                     \

@@ -112,6 +112,7 @@ struct meso_rt {
     struct meso_rt_request* requests;
     struct meso_rt_request* prefetch;
     uint64_t stream_uploads;
+    struct mesoi_transfers* defer; /* non-NULL: uploads queue their data there (rt_transfer.c) */
     mesoi_object* objects;
     uint32_t object_capacity;
 };
@@ -389,6 +390,44 @@ typedef struct mesoi_unpack {
 void mesoi_unpack_default(meso_rt* rt, mesoi_unpack* u);
 void mesoi_unpack_restore(meso_rt* rt, const mesoi_unpack* u);
 
+/* rt_transfer.c: a level's texel and buffer data moved to GL over several
+ * meso_rt_stream_upload calls, each under its byte budget. While
+ * rt->defer is set, the upload sites (rt_common.c, rt_cells.c, rt_mesh.c)
+ * make each texture's and buffer's storage with no data and queue the data
+ * (a copy) here; mesoi_transfers_run moves it later, a row band of a
+ * texture or a range of a buffer at a time, and builds a texture's mip
+ * levels by glGenerateMipmap once its level 0 is whole where the upload
+ * would have. */
+typedef struct mesoi_transfer {
+    GLuint name;
+    int buffer;           /* 1: a buffer (data at `offset`), 0: a texture level */
+    GLenum target;        /* GL_TEXTURE_2D or GL_TEXTURE_3D */
+    GLint level;
+    uint32_t dims[3];     /* the level's texels (2D: dims[2] = 1) */
+    GLenum format, type;
+    int mips;             /* 1: glGenerateMipmap once this level 0 is whole */
+    size_t offset;        /* buffer: where the data goes */
+    size_t row;           /* bytes per row of texels (buffer: 1) */
+    size_t size, done;    /* bytes, and how many have gone up */
+    uint8_t* data;        /* owned copy (the context's allocator) */
+} mesoi_transfer;
+typedef struct mesoi_transfers {
+    mesoi_transfer* item;
+    uint32_t count, cap, next; /* next: the first not whole */
+    int failed;                /* out of memory while queueing */
+} mesoi_transfers;
+/* Queue (a copy of) `data` for texture `tex`'s level, whose storage exists. */
+void mesoi_defer_texture(meso_rt* rt, GLuint tex, GLenum target, GLint level, const uint32_t dims[3], GLenum format,
+                         GLenum type, size_t texel, int mips, const void* data);
+/* Queue (a copy of) `size` bytes for buffer `buf` at `offset`. */
+void mesoi_defer_buffer(meso_rt* rt, GLuint buf, size_t offset, size_t size, const void* data);
+/* Moves queued data until about `budget` bytes have gone (0: all); at least
+ * one row or 64 KB. Returns the bytes moved. */
+uint64_t mesoi_transfers_run(meso_rt* rt, mesoi_transfers* t, uint64_t budget);
+void mesoi_transfers_free(meso_rt* rt, mesoi_transfers* t);
+/* Drops the transfers queued from `first` on (their object went). */
+void mesoi_transfers_drop(meso_rt* rt, mesoi_transfers* t, uint32_t first);
+
 /* rt_mip_box.c: mip levels on the host (for formats glGenerateMipmap may
  * not take). mip_size: an axis of `n` texels at `level` (halved, rounded
  * down, at least 1); mip_levels: the levels of a full chain for `dims`
@@ -556,6 +595,10 @@ int mesoi_evict_one(meso_rt* rt);
  * uploaded, rt->prefetch); MESO_ERR_PENDING when its bytes have not arrived
  * (not remembered), another error is remembered in lv->failed. */
 meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l);
+/* mesoi_levels_upload in two steps: the load into *slot (its GPU bytes
+ * counted resident, a failure remembered), and making it the level's. */
+meso_result mesoi_levels_load(meso_rt* rt, mesoi_levels* lv, uint32_t l, meso_rt_object* slot, uint64_t* gpu);
+void mesoi_levels_publish(mesoi_levels* lv, uint32_t l, meso_rt_object slot, uint64_t gpu);
 /* Room for `bytes` more under the memory budget (a level or a part level),
  * evicting levels this frame does not use; 0 when it cannot be made. */
 int mesoi_make_room(meso_rt* rt, uint64_t bytes);

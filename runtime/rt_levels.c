@@ -78,17 +78,33 @@ meso_result mesoi_levels_upload(meso_rt* rt, mesoi_levels* lv, uint32_t l)
 {
     if (lv->slot[l].id)
         return MESO_OK;
+    meso_rt_object slot = {0};
+    uint64_t gpu = 0;
+    const meso_result r = mesoi_levels_load(rt, lv, l, &slot, &gpu);
+    if (r == MESO_OK)
+        mesoi_levels_publish(lv, l, slot, gpu);
+    return r;
+}
+
+void mesoi_levels_publish(mesoi_levels* lv, uint32_t l, meso_rt_object slot, uint64_t gpu)
+{
+    lv->slot[l] = slot;
+    lv->gpu[l] = gpu;
+}
+
+meso_result mesoi_levels_load(meso_rt* rt, mesoi_levels* lv, uint32_t l, meso_rt_object* slot, uint64_t* gpu)
+{
     if (lv->failed[l])
         return MESO_ERR_NOT_FOUND;
     if (lv->pending[l] == rt->frame + 1 && !rt->prefetch)
         return MESO_ERR_PENDING; /* asked already this frame */
     const uint32_t kind = lv->info[l].rec.form == MESO_LEVEL_MESH ? (uint32_t)MESO_OBJECT_MESH : lv->rec.kind;
-    const meso_result r = mesoi_load_slot(rt, lv->file, &lv->rec, kind, lv->info[l].rec.lod, &lv->slot[l]);
+    const meso_result r = mesoi_load_slot(rt, lv->file, &lv->rec, kind, lv->info[l].rec.lod, slot);
     if (!rt->prefetch && r != MESO_ERR_PENDING)
         lv->bytes_read += lv->info[l].bytes; /* a request counts its own reads */
     if (r == MESO_OK) {
-        lv->gpu[l] = mesoi_lookup(rt, lv->slot[l])->gpu_bytes;
-        rt->bytes_resident += lv->gpu[l];
+        *gpu = mesoi_lookup(rt, *slot)->gpu_bytes;
+        rt->bytes_resident += *gpu;
     } else if (r == MESO_ERR_PENDING) {
         lv->pending[l] = rt->frame + 1;
     } else {

@@ -108,8 +108,12 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
     gl->GenBuffers(1, &o->buffer);
     gl->BindVertexArray(o->vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, o->buffer);
-    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)total, vcol ? NULL : data, GL_STATIC_DRAW);
-    if (vcol) {
+    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)total, vcol || rt->defer ? NULL : data, GL_STATIC_DRAW);
+    if (rt->defer) { /* the data later (rt_transfer.c) */
+        mesoi_defer_buffer(rt, o->buffer, 0, size, data);
+        if (vcol)
+            mesoi_defer_buffer(rt, o->buffer, vcol_offset, vcol_size, vcol);
+    } else if (vcol) {
         gl->BufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)size, data);
         gl->BufferSubData(GL_ARRAY_BUFFER, (GLintptr)vcol_offset, (GLsizeiptr)vcol_size, vcol);
     }

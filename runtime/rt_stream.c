@@ -11,7 +11,13 @@
  * map's skip radii, rt_cells_skip.c) -> given back
  * (GL thread): DECODED, or WAITING again when its bytes had not arrived, or
  * freed with its level marked failed -> uploaded (meso_rt_stream_upload, GL
- * thread, oldest first, up to a byte budget per call).
+ * thread, oldest first, up to a byte budget per call). A whole level larger
+ * than what is left of a call's budget is loaded with rt->defer set
+ * (rt_transfer.c: its GL objects made, their data queued) into a slot of
+ * the request's own -> FILLING, its data moved by this and later calls'
+ * budgets -> made the level's (drawable) once all of it is up. Until then
+ * draws see it as not uploaded (and ask for it no more: one request per
+ * level); a FILLING request whose object is released frees what it made.
  *
  * The upload runs the kind's ordinary loader with rt->prefetch set: every
  * chunk the loader asks for through mesoi_read_whole is handed over from
@@ -31,9 +37,10 @@
 #include "rt_cells_skip.h"
 #include "rt_internal.h"
 
+#include <stdio.h>
 #include <string.h>
 
-enum { REQ_WAITING = 0, REQ_TAKEN, REQ_DECODED };
+enum { REQ_WAITING = 0, REQ_TAKEN, REQ_DECODED, REQ_FILLING };
 
 struct meso_rt_request {
     struct meso_rt_request* next; /* rt->requests, oldest first */
@@ -56,6 +63,11 @@ struct meso_rt_request {
     int id_bits;                    /* CELLS: tile's skip radii (rt_cells_skip.h), 0 none */
     uint64_t bytes;                 /* stored bytes read */
     meso_result result;
+    /* REQ_FILLING: the level loaded with its data deferred (rt_transfer.c),
+     * not the level's until the data is all up. */
+    meso_rt_object filling;
+    uint64_t filling_gpu;
+    mesoi_transfers xfer;
 };
 
 static void* req_alloc(const meso_rt_request* q, size_t n) { return q->alloc.alloc_fn(n ? n : 1, q->alloc.user); }
@@ -101,6 +113,11 @@ static void req_destroy(meso_rt* rt, meso_rt_request* q)
         }
     if (q->lv)
         *req_slot(q) = NULL;
+    if (q->filling.id) { /* dropped part way up: its GPU storage goes */
+        meso_rt_release_object(rt, q->filling);
+        rt->bytes_resident -= q->filling_gpu;
+    }
+    mesoi_transfers_free(rt, &q->xfer);
     req_clear(q);
     mesoi_rt_free(rt, q);
 }
@@ -328,13 +345,63 @@ static uint64_t upload_part(meso_rt* rt, meso_rt_request* q)
     return done;
 }
 
+/* Moves a filling level's data, up to `budget` bytes (0: all); once all
+ * of it is up, the level is the object's (drawable) and q is freed.
+ * Returns the bytes moved. */
+static uint64_t fill(meso_rt* rt, meso_rt_request* q, uint64_t budget)
+{
+    const GLint prev = mesoi_upload_begin(rt);
+    const uint64_t moved = mesoi_transfers_run(rt, &q->xfer, budget);
+    char what[64];
+    snprintf(what, sizeof what, "uploading object %u level %u", q->object, q->level);
+    const meso_result r = mesoi_upload_end(rt, prev, MESO_OK, what);
+    mesoi_levels* lv = q->lv;
+    if (r != MESO_OK) {
+        lv->failed[q->level] = 1;
+        req_destroy(rt, q); /* releases what was made */
+    } else if (q->xfer.next == q->xfer.count) {
+        mesoi_levels_publish(lv, q->level, q->filling, q->filling_gpu);
+        q->filling.id = 0;
+        rt->stream_uploads++;
+        req_destroy(rt, q);
+    }
+    return moved;
+}
+
+/* Loads decoded level q with its data deferred (rt->defer), then moves what
+ * `budget` allows. Returns the bytes moved; q is freed when it failed. */
+static uint64_t start_filling(meso_rt* rt, meso_rt_request* q, uint64_t budget)
+{
+    mesoi_levels* lv = q->lv;
+    rt->prefetch = q;
+    rt->defer = &q->xfer;
+    meso_result r = mesoi_levels_load(rt, lv, q->level, &q->filling, &q->filling_gpu);
+    rt->defer = NULL;
+    rt->prefetch = NULL;
+    req_clear(q); /* the decoded chunks: what the level needs is queued */
+    if (r == MESO_OK && q->xfer.failed) {
+        mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
+                  "object %u: level %u could not be queued for upload (out of memory)", q->object, q->level);
+        lv->failed[q->level] = 1;
+        r = MESO_ERR_OUT_OF_MEMORY;
+    }
+    if (r != MESO_OK) {
+        req_destroy(rt, q);
+        return 0;
+    }
+    q->state = REQ_FILLING;
+    return fill(rt, q, budget);
+}
+
 uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
 {
     uint64_t done = 0;
     meso_rt_request* q = rt ? rt->requests : NULL;
     while (q && (max_bytes == 0 || done < max_bytes)) {
         meso_rt_request* next = q->next;
-        if (q->state == REQ_DECODED && q->part) {
+        if (q->state == REQ_FILLING) {
+            done += fill(rt, q, max_bytes ? max_bytes - done : 0);
+        } else if (q->state == REQ_DECODED && q->part) {
             done += upload_part(rt, q);
         } else if (q->state == REQ_DECODED) {
             mesoi_levels* lv = q->lv;
@@ -349,6 +416,13 @@ uint64_t meso_rt_stream_upload(meso_rt* rt, uint64_t max_bytes)
              * pixel-error factor, or the object is out of view). Dropping
              * it at once made every frame read and decode it again. */
             if (!room && lv->want_frame >= rt->frame && lv->want_now <= l) {
+                q = next;
+                continue;
+            }
+            /* More than this call's budget left: the level goes up over
+             * several calls (rt_transfer.c), drawn once it is whole. */
+            if (room && !lv->slot[l].id && max_bytes && lv->info[l].bytes > max_bytes - done) {
+                done += start_filling(rt, q, max_bytes - done);
                 q = next;
                 continue;
             }
@@ -378,7 +452,7 @@ void meso_rt_stream_state_get(const meso_rt* rt, meso_rt_stream_state* out)
     for (const meso_rt_request* q = rt ? rt->requests : NULL; q; q = q->next) {
         out->waiting += q->state == REQ_WAITING;
         out->taken += q->state == REQ_TAKEN;
-        out->decoded += q->state == REQ_DECODED;
+        out->decoded += q->state == REQ_DECODED || q->state == REQ_FILLING;
     }
     out->uploads = rt ? rt->stream_uploads : 0;
 }

@@ -799,7 +799,13 @@ static int run_all(void* arg)
     return 0;
 }
 
-static void test_streamed_one(ctx* c, const char* name, const char* args, meso_cells_mode mode)
+/* Streamed through requests at `budget` bytes per upload call (0: all):
+ * the image drawn once level 0 has come is a synchronous load's, bit for
+ * bit. With a budget smaller than a level, the level goes up over several
+ * calls (rt_transfer.c): no call moves more than the budget (plus one
+ * texel row or 64 KB of a buffer, the smallest piece), and the level is
+ * not drawn before all of it is up. */
+static void test_streamed_one(ctx* c, const char* name, const char* args, meso_cells_mode mode, uint64_t budget)
 {
     const char* p = bake(c, name, "sphere.obj", args);
     loaded l = load(c, p);
@@ -819,8 +825,12 @@ static void test_streamed_one(ctx* c, const char* name, const char* args, meso_c
     CHECK(meso_file_open_path(p, NULL, &f, NULL) == MESO_OK);
     meso_rt_object obj;
     CHECK(meso_rt_load_object_levels(rt, f, 1, &obj) == MESO_OK);
-    meso_rt_levels_state st = {0};
-    for (int round = 0; round < 4 && st.last_drawn != 0; ++round) {
+    meso_rt_levels_state st = {.last_drawn = -1}; /* nothing drawn yet */
+    meso_level_info li[16];
+    uint32_t levels = 0;
+    CHECK(meso_file_levels(f, 1, li, 16, &levels, NULL) == MESO_OK && levels > 1);
+    uint64_t most = 0, calls = 0, moved = 0;
+    for (int round = 0; round < 4000 && st.last_drawn != 0; ++round) {
         test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
         CHECK(meso_rt_draw(rt, obj, &d) == MESO_OK); /* requests the level it wants, draws what is there */
         meso_rt_request* reqs[5] = {0};
@@ -828,13 +838,30 @@ static void test_streamed_one(ctx* c, const char* name, const char* args, meso_c
         thrd_t t;
         CHECK(thrd_create(&t, run_all, reqs) == thrd_success && thrd_join(t, NULL) == thrd_success);
         meso_rt_stream_give(rt, reqs, n);
-        meso_rt_stream_upload(rt, 0);
+        meso_rt_stream_state ss;
+        meso_rt_stream_state_get(rt, &ss);
+        const uint64_t up = meso_rt_stream_upload(rt, budget);
+        most = up > most ? up : most;
+        calls += ss.decoded > 0;
+        moved += up;
         meso_rt_frame_end(rt);
         test_fbo_clear(&c->fbo, 0.0f, 0.0f, 0.0f);
         CHECK(meso_rt_draw(rt, obj, &d) == MESO_OK);
         CHECK(meso_rt_levels_state_get(rt, obj, &st) == MESO_OK);
+        /* Drawn only once whole: a level drawn has had all its bytes moved. */
+        CHECK(st.last_drawn < 0 || (uint32_t)st.last_drawn + 1 == levels || !budget ||
+              moved >= li[st.last_drawn].bytes);
     }
     CHECK_MSG(st.last_drawn == 0, "streamed cells: level %d drawn", st.last_drawn);
+    if (budget) {
+        printf("cells streamed at %llu bytes per call: %llu calls with decoded levels, at most %llu bytes a call, "
+               "%llu moved (level 0's chunks: %llu bytes)\n",
+               (unsigned long long)budget, (unsigned long long)calls, (unsigned long long)most,
+               (unsigned long long)moved, (unsigned long long)li[0].bytes);
+        CHECK(most <= budget + (64u << 10));
+        CHECK(calls * (budget + (64u << 10)) >= li[0].bytes); /* level 0 took as many calls as its size asks */
+        CHECK(calls >= 3);
+    }
     test_fbo_read(&c->fbo, c->rgba, NULL);
     size_t differ = 0;
     for (size_t i = 0; i < (size_t)W * H * 4; ++i)
@@ -854,9 +881,12 @@ static void test_streamed_one(ctx* c, const char* name, const char* args, meso_c
  * its INSIDE tiles may not be crossed whole when a ray looks for empty. */
 static void test_streamed(ctx* c)
 {
-    test_streamed_one(c, "streamed", "--tiles 3 --tile-res 8", MESO_CELLS_FIRST_HIT);
+    test_streamed_one(c, "streamed", "--tiles 3 --tile-res 8", MESO_CELLS_FIRST_HIT, 0);
     test_streamed_one(c, "streamed_spheres", "--tiles 4 --tile-res 16 --tile-map spheres:4:0.45",
-                      MESO_CELLS_REFRACT);
+                      MESO_CELLS_REFRACT, 0);
+    /* 2 KB a call: every level of it goes up over several calls. */
+    test_streamed_one(c, "streamed_budget", "--tiles 4 --tile-res 16 --tile-map spheres:4:0.45",
+                      MESO_CELLS_REFRACT, 2048);
 }
 
 /* Loads `bytes` and expects a refusal, logged, with no object. */

@@ -85,10 +85,14 @@ static double view_distance(float z)
     return 2.0 * n * f / (f + n - ndc * (f - n));
 }
 
-/* The stream: one request a frame (taken, run, given back, uploaded)
- * until none is left; then the draw's depth image and part levels. */
+/* The stream: one request a frame (taken, run, given back, uploaded at
+ * `budget` bytes a frame, 0: all) until none is left; then the draw's
+ * depth image and part levels. With a budget, the shell's whole levels
+ * (textures with their mips, texture buffers) go up over several frames
+ * (rt_transfer.c) and no frame moves more than the budget plus one row
+ * or 64 KB of a buffer. */
 static void streamed_settles(meso_file* f, const meso_rt_draw_desc* d, const float* want, const uint8_t* want_lev,
-                             uint32_t np)
+                             uint32_t np, uint64_t budget)
 {
     meso_rt* rt = NULL;
     assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .stream_requests = 1}, &rt) ==
@@ -99,8 +103,9 @@ static void streamed_settles(meso_file* f, const meso_rt_draw_desc* d, const flo
     uint8_t* lev = malloc(np);
     assert(got && lev);
     int frames = 0;
+    uint64_t most = 0;
     for (;; ++frames) {
-        assert(frames < 60);
+        assert(frames < (budget ? 4000 : 60));
         draw(rt, obj, d, NULL, got);
         meso_rt_frame_end(rt);
         meso_rt_request* reqs[1];
@@ -108,10 +113,11 @@ static void streamed_settles(meso_file* f, const meso_rt_draw_desc* d, const flo
         for (uint32_t i = 0; i < taken; ++i)
             assert(meso_rt_stream_run(reqs[i]) == MESO_OK);
         meso_rt_stream_give(rt, reqs, taken);
-        meso_rt_stream_upload(rt, 0);
+        const uint64_t up = meso_rt_stream_upload(rt, budget);
+        most = up > most ? up : most;
         meso_rt_stream_state ss;
         meso_rt_stream_state_get(rt, &ss);
-        if (taken == 0 && ss.waiting == 0 && ss.decoded == 0)
+        if (taken == 0 && up == 0 && ss.waiting == 0 && ss.decoded == 0) /* a level that came up asks for more */
             break;
     }
     draw(rt, obj, d, NULL, got);
@@ -122,9 +128,10 @@ static void streamed_settles(meso_file* f, const meso_rt_draw_desc* d, const flo
     assert(memcmp(lev, want_lev, np) == 0);
     assert(memcmp(got, want, sizeof(float) * W * H) == 0);
     assert(st.bytes_read == st.bytes_resident);
-    printf("streamed, one request a frame: %d frames, then the synchronous part levels and depth image bit for bit "
-           "(%llu bytes read, all held)\n",
-           frames, (unsigned long long)st.bytes_read);
+    printf("streamed, one request a frame, %llu bytes a frame (0: all): %d frames, at most %llu bytes moved in "
+           "one; then the synchronous part levels and depth image bit for bit (%llu bytes read, all held)\n",
+           (unsigned long long)budget, frames, (unsigned long long)most, (unsigned long long)st.bytes_read);
+    assert(!budget || most <= budget + (64u << 10));
     meso_rt_release_object(rt, obj);
     meso_rt_destroy(rt);
     free(got);
@@ -412,7 +419,8 @@ int main(int argc, char** argv)
         free(lev2);
     }
 
-    streamed_settles(f, &d, part, lev, np);
+    streamed_settles(f, &d, part, lev, np, 0);
+    streamed_settles(f, &d, part, lev, np, 8192);
 
     uint32_t issue = damaged_issue(data, size, MESO_CHUNK_PTRI, twice);
     printf("a prism list with an entry twice: issue %u\n", issue);
