@@ -113,9 +113,11 @@ static meso_result upload_3d(meso_rt* rt, const meso_chunk_info* c, const void* 
         return MESO_ERR_GL;
     }
     rt->gpu_count += (uint64_t)c->dims[0] * c->dims[1] * c->dims[2] * mesoi_internal_bytes(internal);
-    if (rt->defer)
-        mesoi_defer_texture(rt, *out, GL_TEXTURE_3D, 0, c->dims, format, type, mesoi_internal_bytes(internal), 0,
-                            data); /* the source texels are the internal format's size (the call sites) */
+    if (rt->defer) {
+        int components = 1;
+        mesoi_defer_texture(rt, *out, GL_TEXTURE_3D, 0, c->dims, format, type,
+                            mesoi_texel_bytes(format, type, &components), 0, data);
+    }
     return MESO_OK;
 }
 

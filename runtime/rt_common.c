@@ -99,7 +99,7 @@ float* mesoi_unorm16_to_float(meso_rt* rt, const void* texels, size_t count)
 }
 
 /* Bytes of one texel of (format, type) as the uploads use them. */
-static size_t texel_bytes(GLenum format, GLenum type, int* components)
+size_t mesoi_texel_bytes(GLenum format, GLenum type, int* components)
 {
     *components = format == GL_RGBA ? 4 : format == GL_RG ? 2 : 1;
     const size_t size = type == GL_UNSIGNED_BYTE ? 1 : type == GL_UNSIGNED_SHORT ? 2 : 4;
@@ -113,7 +113,7 @@ static meso_result upload_levels_host(meso_rt* rt, GLenum target, const uint32_t
 {
     mesoi_gl* gl = &rt->gl;
     int components = 1;
-    const size_t bytes = texel_bytes(format, type, &components);
+    const size_t bytes = mesoi_texel_bytes(format, type, &components);
     uint32_t d1[3];
     for (int k = 0; k < 3; ++k)
         d1[k] = mesoi_mip_size(dims[k], 1); /* a 2D texture has dims[2] = 1 */
@@ -223,7 +223,7 @@ static meso_result upload_image(meso_rt* rt, const uint32_t dims[3], int dims3, 
     }
     if (r == MESO_OK && defer) { /* the texture is sound: its data (and host-built levels) queued */
         int components = 1;
-        const size_t texel = texel_bytes(format, type, &components);
+        const size_t texel = mesoi_texel_bytes(format, type, &components);
         const int generates = levels > 1 && gl_generates(rt, internal);
         const uint32_t first = rt->defer->count;
         mesoi_defer_texture(rt, *out, target, 0, dims, format, type, texel, generates, data);
@@ -263,6 +263,8 @@ size_t mesoi_internal_bytes(GLint internal)
     case GL_R16F:
     case GL_R16UI:
         return 2;
+    case GL_RG32F:
+        return 8;
     case GL_RGBA32F:
         return 16;
     default: /* R32F, R32UI, SRGB8_ALPHA8, RGBA8 */

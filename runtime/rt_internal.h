@@ -416,6 +416,8 @@ typedef struct mesoi_transfers {
     uint32_t count, cap, next; /* next: the first not whole */
     int failed;                /* out of memory while queueing */
 } mesoi_transfers;
+/* Bytes of one texel of (format, type) as handed to GL (components: set). */
+size_t mesoi_texel_bytes(GLenum format, GLenum type, int* components);
 /* Queue (a copy of) `data` for texture `tex`'s level, whose storage exists. */
 void mesoi_defer_texture(meso_rt* rt, GLuint tex, GLenum target, GLint level, const uint32_t dims[3], GLenum format,
                          GLenum type, size_t texel, int mips, const void* data);
