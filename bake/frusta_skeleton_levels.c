@@ -77,6 +77,7 @@
 
 #include "bake_internal.h"
 #include "frusta_tessellation.h"
+#include "vec3d.h"
 
 enum { U_SAMPLES = 512, TAU_TRIES = 12, BALL_RETRIES = 32 };
 
@@ -89,23 +90,11 @@ void mesoi_skeleton_levels_free(mesoi_skeleton_level* levels, uint32_t count)
     free(levels);
 }
 
-static double dist3(const double a[3], const double b[3])
-{
-    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
-
 /* >>distance ---------------------------------------------------------------- */
-
-static double constant_height(const void* ctx, double s, double t)
-{
-    (void)s;
-    (void)t;
-    return *(const double*)ctx;
-}
 
 static void point(const meso_frustum_rec* r, double h, double u, double v, double p[3])
 {
-    meso_frusta_tess_point(r, constant_height, &h, u, v, p);
+    meso_frusta_tess_point(r, meso_frusta_height_constant, &h, u, v, p);
 }
 
 /* Largest |p_f(u, vf) − p_c(u, vc)| over u at relief height h (sampled, with
@@ -126,9 +115,8 @@ static double end_distance(const meso_frustum_rec* f, double vf, const meso_frus
         } else {
             memcpy(d, first, sizeof d); /* u = 1 is u = 0 */
         }
-        const double zero[3] = {0, 0, 0};
         if (k < U_SAMPLES)
-            worst = fmax(worst, dist3(d, zero));
+            worst = fmax(worst, len3(d));
         if (k > 0)
             step = fmax(step, dist3(d, prev));
         else
@@ -164,6 +152,38 @@ static double ball_distance(const meso_frusta_object* f, const meso_frusta_objec
     return worst;
 }
 
+/* Level 0's frustum ending at each SKEL node (-1: none); NULL when out of
+ * memory. */
+static int32_t* records_by_child(const meso_frusta_object* fine)
+{
+    int32_t* of_child = malloc(sizeof(int32_t) * (fine->node_count + (size_t)1));
+    if (!of_child)
+        return NULL;
+    for (uint32_t i = 0; i < fine->node_count; ++i)
+        of_child[i] = -1;
+    for (uint32_t j = 0; j < fine->count; ++j)
+        if (fine->recs[j].node[1] < fine->node_count)
+            of_child[fine->recs[j].node[1]] = (int32_t)j;
+    return of_child;
+}
+
+/* Level 0's frusta from c's node0 to node1, the one at node1 first, into
+ * chain (room for all of level 0's); how many, 0 when they do not link up
+ * (zero-length pieces). */
+static uint32_t chain_of(const meso_frusta_object* fine, const int32_t* of_child, const meso_frustum_rec* c,
+                         uint32_t* chain)
+{
+    uint32_t m = 0, y = c->node[1];
+    while (y != c->node[0]) {
+        const int32_t j = y < fine->node_count ? of_child[y] : -1;
+        if (j < 0 || m == fine->count)
+            return 0;
+        chain[m++] = (uint32_t)j;
+        y = fine->recs[j].node[0];
+    }
+    return m;
+}
+
 /* Where node n lies along c's axis, from 0 at centre 0 to 1 at centre 1,
  * clamped. */
 static double along(const meso_frustum_rec* c, const float* node_pos, uint32_t n)
@@ -187,9 +207,7 @@ static double u_shift(const meso_frustum_rec* f, const meso_frustum_rec* c)
     meso_frustum_rec_frame(c, &fc);
     double w[3];
     meso_frustum_frame_radial(&ff, 2 * M_PI * f->u_offset, w);
-    const double x = w[0] * fc.x[0] + w[1] * fc.x[1] + w[2] * fc.x[2];
-    const double z = w[0] * fc.z[0] + w[1] * fc.z[1] + w[2] * fc.z[2];
-    return atan2(x, z) / (2 * M_PI) - c->u_offset;
+    return atan2(dot3(w, fc.x), dot3(w, fc.z)) / (2 * M_PI) - c->u_offset;
 }
 
 double mesoi_skeleton_level_distance(const meso_frusta_object* fine, const meso_frusta_object* coarse, double h_lo,
@@ -198,33 +216,18 @@ double mesoi_skeleton_level_distance(const meso_frusta_object* fine, const meso_
     if (fine->node_count != coarse->node_count)
         return -1;
     double worst = ball_distance(fine, coarse);
-    int32_t* of_child = malloc(sizeof(int32_t) * (fine->node_count + (size_t)1));
+    int32_t* of_child = records_by_child(fine);
     uint32_t* chain = malloc(sizeof(uint32_t) * (fine->count + (size_t)1));
     if (!of_child || !chain)
         worst = -1;
-    for (uint32_t i = 0; worst >= 0 && i < fine->node_count; ++i)
-        of_child[i] = -1;
-    for (uint32_t j = 0; worst >= 0 && j < fine->count; ++j) {
-        if (fine->recs[j].node[1] >= fine->node_count || fine->recs[j].twist != 0)
+    for (uint32_t j = 0; worst >= 0 && j < fine->count; ++j)
+        if (fine->recs[j].twist != 0)
             worst = -1;
-        else
-            of_child[fine->recs[j].node[1]] = (int32_t)j;
-    }
     const int relief = h_hi > h_lo || h_hi > 0;
     for (uint32_t ci = 0; worst >= 0 && ci < coarse->count; ++ci) {
         const meso_frustum_rec* c = &coarse->recs[ci];
-        /* The chain of level 0's frusta from node0 to node1, walked up. */
-        uint32_t m = 0, y = c->node[1];
-        while (worst >= 0 && y != c->node[0]) {
-            const int32_t j = y < fine->node_count ? of_child[y] : -1;
-            if (j < 0 || m == fine->count)
-                worst = -1;
-            else {
-                chain[m++] = (uint32_t)j;
-                y = fine->recs[j].node[0];
-            }
-        }
-        if (worst < 0 || m == 0 || c->twist != 0) {
+        const uint32_t m = chain_of(fine, of_child, c, chain);
+        if (m == 0 || c->twist != 0) {
             worst = -1;
             break;
         }
@@ -485,31 +488,24 @@ static meso_result build_level(const mesoi_skeleton_levels_input* in, const uint
             r = MESO_ERR_UNSUPPORTED;
     }
     /* Relief coordinates: each frustum its chain's (the header). */
-    int32_t* of_child = r == MESO_OK ? malloc(sizeof(int32_t) * (fine->node_count + (size_t)1)) : NULL;
-    if (r == MESO_OK && !of_child)
+    int32_t* of_child = r == MESO_OK ? records_by_child(fine) : NULL;
+    uint32_t* chain = r == MESO_OK ? malloc(sizeof(uint32_t) * (fine->count + (size_t)1)) : NULL;
+    if (r == MESO_OK && (!of_child || !chain))
         r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "skeleton levels: out of memory");
-    if (r == MESO_OK) {
-        for (uint32_t i = 0; i < fine->node_count; ++i)
-            of_child[i] = -1;
-        for (uint32_t j = 0; j < fine->count; ++j)
-            of_child[fine->recs[j].node[1]] = (int32_t)j;
-        for (uint32_t f = 0; f < o.count && r == MESO_OK; ++f) {
-            meso_frustum_rec* rec = &o.recs[f];
-            double vs = 0;
-            int32_t j = -1;
-            uint32_t y = rec->node[1], steps = 0;
-            while (y != rec->node[0] && (j = of_child[y]) >= 0 && steps++ <= fine->count) {
-                vs += fine->recs[j].v_scale;
-                y = fine->recs[j].node[0];
-            }
-            if (y != rec->node[0] || j < 0)
-                r = MESO_ERR_UNSUPPORTED; /* no chain of level 0 (zero-length pieces) */
-            else {
-                rec->v_offset = fine->recs[j].v_offset;
-                rec->v_scale = (float)vs;
-            }
+    for (uint32_t f = 0; r == MESO_OK && f < o.count; ++f) {
+        meso_frustum_rec* rec = &o.recs[f];
+        const uint32_t links = chain_of(fine, of_child, rec, chain);
+        double vs = 0;
+        for (uint32_t k = 0; k < links; ++k)
+            vs += fine->recs[chain[k]].v_scale;
+        if (links == 0)
+            r = MESO_ERR_UNSUPPORTED; /* no chain of level 0 (zero-length pieces) */
+        else {
+            rec->v_offset = fine->recs[chain[links - 1]].v_offset;
+            rec->v_scale = (float)vs;
         }
     }
+    free(chain);
     free(of_child);
     free(to_fine);
     free(pos);

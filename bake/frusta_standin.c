@@ -47,13 +47,6 @@ void meso_frusta_height_range(const meso_texfn* t, double* lo, double* hi)
     *hi = top / full;
 }
 
-static double constant_height(const void* ctx, double s, double t)
-{
-    (void)s;
-    (void)t;
-    return *(const double*)ctx;
-}
-
 static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /* G_f (frusta_standin.h, term 1): the largest |∂p/∂δ| over the frustum's
@@ -194,7 +187,7 @@ meso_result meso_frusta_standin_build(const meso_frusta_object* obj, const meso_
     }
     double sag = 0;
     const meso_frusta_tess_grid g = {.nu = cells, .nv = cells + nf, .ball_nu = cells + 2 * (size_t)nf,
-                                     .height = has_relief ? constant_height : NULL, .height_ctx = &hm,
+                                     .height = has_relief ? meso_frusta_height_constant : NULL, .height_ctx = &hm,
                                      .edge_sag = &sag};
     meso_frusta_tess_mesh t;
     const int ok = meso_frusta_tessellate(obj->recs, nf, obj->balls, nb, &g, &t);

@@ -11,6 +11,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+double meso_frusta_height_constant(const void* ctx, double s, double t)
+{
+    (void)s;
+    (void)t;
+    return *(const double*)ctx;
+}
+
 void meso_frusta_tess_point(const meso_frustum_rec* f, meso_frusta_height_fn height, const void* ctx, double u,
     double v, double p[3])
 {

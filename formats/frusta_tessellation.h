@@ -39,6 +39,9 @@ extern "C" {
 /* Relief height in [0, 1] at texture coordinates (s, t). */
 typedef double (*meso_frusta_height_fn)(const void* ctx, double s, double t);
 
+/* A height function of one height everywhere: *(const double*)ctx. */
+double meso_frusta_height_constant(const void* ctx, double s, double t);
+
 /* An indexed triangle mesh (malloc'd arrays; free with meso_frusta_tess_free). */
 typedef struct meso_frusta_tess_mesh {
     uint32_t vertex_count, index_count;

@@ -28,6 +28,7 @@
 #include "meso_layout.h"
 #include "point_cloud.h"
 #include "standin_check.h"
+#include "vec3d.h"
 
 /* The reference's frustum as the format's record (frusta_pose.h), for
  * meso_frusta_tess_point. */
@@ -55,18 +56,6 @@ static meso_frustum_rec as_rec(const meso_ref_frustum* f)
 static double relief_at(const void* ctx, double s, double t)
 {
     return meso_ref_relief_height(ctx, s, t, NULL, NULL);
-}
-
-static double constant_at(const void* ctx, double s, double t)
-{
-    (void)s;
-    (void)t;
-    return *(const double*)ctx;
-}
-
-static double dist3(const double a[3], const double b[3])
-{
-    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 enum { WALL = 8, MAX_CELLS = 1024 };
@@ -116,7 +105,7 @@ static void surface_samples(const meso_ref_frusta* m, double h, cloud* c, double
             for (int a = 0; a < NU; ++a) {
                 const double u = (double)a / NU, zero = 0;
                 double rim[3], top[3];
-                meso_frusta_tess_point(&r, constant_at, &zero, u, e, rim);
+                meso_frusta_tess_point(&r, meso_frusta_height_constant, &zero, u, e, rim);
                 meso_frusta_tess_point(&r, relief ? relief_at : NULL, hctx, u, e, top);
                 for (int k = 0; k <= NR; ++k) {
                     const double l = (double)k / NR;
