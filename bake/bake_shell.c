@@ -1127,18 +1127,26 @@ static meso_result chain_take(shell_bake* s, mesoi_standin_levels* out, meso_err
         }
         out->chunk[k] = p->chain_chunk[k]; /* the bytes move to `out` */
         p->chain_chunk[k].data = NULL;
-        /* Its positions and triangles, for its vertex colours (the
-         * appearance reads nothing else); a mesh left empty gets none. */
+        /* The mesh, for its vertex colours and baked normals (its MESH is
+         * encoded again with them: standin_levels.c); a mesh left empty
+         * gets none. */
         meso_mesh_view mv;
         const meso_mesh_chunk* mc = &out->chunk[k];
         if (mc->encoding == MESO_ENCODING_RAW && meso_mesh_parse(mc->data, mc->size, &mv, NULL) == MESO_OK) {
             const uint32_t nv = mv.layout.vertex_count, ni = mv.layout.index_count;
             c->mesh.positions = malloc(sizeof(float) * 3 * (size_t)nv);
             c->mesh.indices = malloc(sizeof(uint32_t) * (ni ? (size_t)ni : 1));
-            if (!c->mesh.positions || !c->mesh.indices)
+            c->mesh.normals = mv.normals ? malloc(sizeof(float) * 3 * (size_t)nv) : NULL;
+            c->mesh.uvs = mv.uvs ? malloc(sizeof(float) * 2 * (size_t)nv) : NULL;
+            if (!c->mesh.positions || !c->mesh.indices || (mv.normals && !c->mesh.normals) ||
+                (mv.uvs && !c->mesh.uvs))
                 return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "update: out of memory");
             memcpy(c->mesh.positions, mv.positions, sizeof(float) * 3 * (size_t)nv);
             memcpy(c->mesh.indices, mv.indices, sizeof(uint32_t) * (size_t)ni);
+            if (mv.normals)
+                memcpy(c->mesh.normals, mv.normals, sizeof(float) * 3 * (size_t)nv);
+            if (mv.uvs)
+                memcpy(c->mesh.uvs, mv.uvs, sizeof(float) * 2 * (size_t)nv);
             c->mesh.vertex_count = nv;
         }
     }
@@ -1387,8 +1395,9 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             mesoi_appearance shows;
             if (r == MESO_OK && a->texture && base.uvs && !a->frames) {
                 const double tc = meso_seconds();
-                mesoi_shell_appearance(&base, &s->tx.fn, s->col.rgba ? &s->col : NULL, (const double[2]){cr.scale[0], cr.scale[1]}, &sc,
-                                       &shows);
+                mesoi_shell_appearance(&base, &s->tx.fn, s->col.rgba ? &s->col : NULL,
+                                       (const double[2]){cr.scale[0], cr.scale[1]}, sdir_out ? sdir_out : sdir,
+                                       sdir_layers, &sc, &shows);
                 r = mesoi_standin_levels_appearance(&standins, &base, 0.25 * meso_mesh_mean_edge(&base), &shows,
                                                     s->run.common.threads, err);
                 if (r == MESO_OK)
@@ -1416,8 +1425,13 @@ static meso_result assemble(shell_bake* s, meso_bake_output** out, meso_error* e
             /* The shell in parts (shell_parts.c): prisms near, stand-in patches far. */
             if (r == MESO_OK && a->parts >= 0 && MESO_HAVE_MESHOPTIMIZER) {
                 const double tp = meso_seconds();
+                /* The patches are the stand-in's triangles, with its baked normals. */
+                meso_mesh standin = standins.standin_mesh ? *standins.standin_mesh : base;
+                if (standins.normals)
+                    standin.normals = standins.normals;
                 const mesoi_shell_parts_input pin = {
-                    .standin = standins.standin_mesh ? standins.standin_mesh : &base,
+                    .standin = &standin,
+                    .baked_normals = standins.normals != NULL,
                     .standin_error = standins.e0,
                     .base = &base,
                     .sdir = sdir_out ? sdir_out : sdir,

@@ -282,8 +282,76 @@ static void colr_at(const mesoi_shell_color* col, const double c[3], float out[3
         out[k] = (float)rgb[k];
 }
 
+/* The unit normal (object space) of the surface Φ maps the texture
+ * function's w-crossing at (st, w) to, over base triangle ix with
+ * barycentrics b (mesoi_shell_colours). Zero where the gradient or Φ's
+ * Jacobian vanishes. */
+static void surface_normal(const mesoi_shell_colours* c, const uint32_t* ix, const double b[3], const double st[2],
+                           double w, float out[3])
+{
+    const meso_texfn* fn = c->fn;
+    const int height = fn->kind == MESO_TEXFN_HEIGHT;
+    const double ds = 1.0 / fn->dims[0], dt = 1.0 / fn->dims[1];
+    /* F's gradient in (s, t, w): F = w - h(s, t), or 1/2 - alpha(s, t, w) */
+    double g[3];
+    g[0] = -(meso_texfn_sample(fn, st[0] + ds, st[1], w) - meso_texfn_sample(fn, st[0] - ds, st[1], w)) / (2 * ds);
+    g[1] = -(meso_texfn_sample(fn, st[0], st[1] + dt, w) - meso_texfn_sample(fn, st[0], st[1] - dt, w)) / (2 * dt);
+    if (height) {
+        g[2] = 1;
+    } else {
+        const double dw = 1.0 / fn->dims[2], lo = fmax(w - dw, 0), hi = fmin(w + dw, 1);
+        g[2] = hi > lo ? -(meso_texfn_sample(fn, st[0], st[1], hi) - meso_texfn_sample(fn, st[0], st[1], lo)) / (hi - lo)
+                       : 0;
+    }
+    /* Φ's Jacobian in barycentric coordinates (b1, b2, w): columns P1 - P0,
+     * P2 - P0 and the span Σ b_k span_k, P_k = bottom_k + w span_k; the
+     * gradient with it: (g_s, g_t) · (uv_k - uv_0), and g_w. */
+    double P[3][3], span[3] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k) {
+        const size_t v = ix[k];
+        for (int i = 0; i < 3; ++i) {
+            const double top = (double)c->sdir[3 * v + (size_t)i];
+            const double bottom = c->layers == 2 ? (double)c->sdir[3 * ((size_t)c->base->vertex_count + v) + (size_t)i]
+                                                 : 0.0;
+            const double sp = top - bottom;
+            P[k][i] = (double)c->base->positions[3 * v + (size_t)i] + bottom + w * sp;
+            span[i] += b[k] * sp;
+        }
+    }
+    const float* uv = c->base->uvs;
+    double J[3][3], gb[3];
+    for (int i = 0; i < 3; ++i) {
+        J[0][i] = P[1][i] - P[0][i];
+        J[1][i] = P[2][i] - P[0][i];
+        J[2][i] = span[i];
+    }
+    for (int k = 1; k < 3; ++k)
+        gb[k - 1] = g[0] * ((double)uv[2 * (size_t)ix[k]] - uv[2 * (size_t)ix[0]]) +
+                    g[1] * ((double)uv[2 * (size_t)ix[k] + 1] - uv[2 * (size_t)ix[0] + 1]);
+    gb[2] = g[2];
+    /* J^-T gb = (gb_0 (J1 x J2) + gb_1 (J2 x J0) + gb_2 (J0 x J1)) / det J */
+    double n[3] = {0, 0, 0}, det = 0;
+    for (int k = 0; k < 3; ++k) {
+        const double* A = J[(k + 1) % 3];
+        const double* B = J[(k + 2) % 3];
+        const double x[3] = {A[1] * B[2] - A[2] * B[1], A[2] * B[0] - A[0] * B[2], A[0] * B[1] - A[1] * B[0]};
+        for (int i = 0; i < 3; ++i)
+            n[i] += gb[k] * x[i];
+        if (k == 0)
+            det = x[0] * J[0][0] + x[1] * J[0][1] + x[2] * J[0][2];
+    }
+    const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0) || det == 0 || !isfinite(len)) {
+        out[0] = out[1] = out[2] = 0;
+        return;
+    }
+    const double sgn = det > 0 ? 1 : -1;
+    for (int i = 0; i < 3; ++i)
+        out[i] = (float)(sgn * n[i] / len);
+}
+
 static void shell_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3],
-                     const double p[3], float out[4])
+                     const double p[3], float out[7])
 {
     (void)grid;
     (void)p;
@@ -326,14 +394,18 @@ static void shell_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t
     else
         out[0] = out[1] = out[2] = 1.0f; /* the draw's albedo */
     out[3] = (float)(0.25 + 0.75 * w);
+    if (a->normals)
+        surface_normal(c, ix, b, st, w, out + 4);
 }
 
 void mesoi_shell_appearance(const meso_mesh* base, const struct meso_texfn* fn, const mesoi_shell_color* col,
-                            const double scale[2], mesoi_shell_colours* ctx, struct mesoi_appearance* out)
+                            const double scale[2], const float* sdir, int layers, mesoi_shell_colours* ctx,
+                            struct mesoi_appearance* out)
 {
-    *ctx = (mesoi_shell_colours){.base = base, .fn = fn, .col = col, .scale = {scale[0], scale[1]}};
+    *ctx = (mesoi_shell_colours){
+        .base = base, .fn = fn, .col = col, .scale = {scale[0], scale[1]}, .sdir = sdir, .layers = layers};
     /* A height field is two bilinear lookups a point, a volume's march some
      * dozens: 8 x 8 and 4 x 4 sub-triangles at most. */
     *out = (mesoi_appearance){.at = shell_at, .ctx = ctx, .subdivisions = fn->kind == MESO_TEXFN_HEIGHT ? 8 : 4,
-                              .occlusion_only = col == NULL};
+                              .occlusion_only = col == NULL, .normals = sdir != NULL && base->uvs != NULL};
 }

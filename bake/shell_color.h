@@ -64,14 +64,24 @@ void mesoi_shell_color_free(mesoi_shell_color* c);
  * uvs. `col` NULL: the shell has no colour, level 0 shows the draw's albedo
  * darkened by the occlusion, and `out` says the occlusion alone
  * (occlusion_only). ctx is filled here and borrowed by `out` with the rest. */
+/* With `sdir` (the directors, `layers` of them per base vertex: FORMAT.md
+ * §7.2 SDIR) the appearance gives normals too (standin_appearance.h): the
+ * normal of the surface the prisms map there, Φ(s, t', w) =
+ * Σ λ_k (bottom_k + w span_k) (smooth-shells sec. 3.1), taken as the
+ * gradient of the texture function (a height field: w − h(s, t'); a
+ * volume: 1/2 − α), central differences one texel either side, carried
+ * to object space by Φ's inverse transpose Jacobian. */
 typedef struct mesoi_shell_colours {
     const meso_mesh* base;
     const struct meso_texfn* fn;
     const mesoi_shell_color* col;
     double scale[2];
+    const float* sdir;
+    int layers;
 } mesoi_shell_colours;
 struct mesoi_appearance;
 void mesoi_shell_appearance(const meso_mesh* base, const struct meso_texfn* fn, const mesoi_shell_color* col,
-                            const double scale[2], mesoi_shell_colours* ctx, struct mesoi_appearance* out);
+                            const double scale[2], const float* sdir, int layers, mesoi_shell_colours* ctx,
+                            struct mesoi_appearance* out);
 
 #endif

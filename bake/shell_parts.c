@@ -28,7 +28,9 @@
  *    Each has a PMSH and, when the stand-ins have vertex colours, a PVCL,
  *    so a part drawn as a mesh shades as the whole stand-in would: lod 1
  *    the stand-in's own colours, lods 2.. what the stand-in shows near
- *    each vertex, sampled as the whole chain's are (patch_colours).
+ *    each vertex, sampled as the whole chain's are (patch_colours). The
+ *    patches have the stand-in's baked normals (standin_levels.h): lod 1
+ *    its own, lods 2.. averaged from them as their colours are.
  *  - Where a part drawn as prisms meets one drawn as its stand-in patch,
  *    the two surfaces meet along the patch border within the stand-in's
  *    error (the prisms' side faces are closed, and the patch ends on
@@ -142,7 +144,7 @@ static meso_result joined_level(const meso_mesh_parts* P, uint32_t l, meso_mesh*
  * for the whole stand-in (not each patch's, 8x the samples), and a border
  * vertex pools both sides' samples, so neighbouring patches agree on its
  * colour. */
-static meso_result patch_colours(const mesoi_shell_parts_input* in, const meso_mesh_parts* P, const uint32_t* list,
+static meso_result patch_colours(const mesoi_shell_parts_input* in, meso_mesh_parts* P, const uint32_t* list,
                                  const uint32_t* first, uint8_t** pvcl, meso_error* err)
 {
     const int nc = in->vcol_components;
@@ -175,17 +177,23 @@ static meso_result patch_colours(const mesoi_shell_parts_input* in, const meso_m
             break;
         const meso_mesh* one = &joined;
         uint8_t* vcol = NULL;
-        r = mesoi_standin_colours(in->standin, in->shows, &one, 1, in->colour_spacing, nc, in->threads, &vcol, err);
+        float* nrm = NULL;
+        r = mesoi_standin_colours(in->standin, in->shows, in->baked_normals ? in->standin->normals : NULL, &one, 1,
+                                  in->colour_spacing, nc, in->threads, &vcol, &nrm, err);
         for (uint32_t p = 0; r == MESO_OK && p < P->count; ++p) {
             if (voff[p] == UINT32_MAX)
                 continue;
-            const size_t bytes = (size_t)nc * P->part[p].level[l].mesh.vertex_count;
+            meso_mesh* pm = &P->part[p].level[l].mesh;
+            const size_t bytes = (size_t)nc * pm->vertex_count;
             if (!(pvcl[kbase[p] + l] = malloc(bytes ? bytes : 1)))
                 r = MESO_ERR_OUT_OF_MEMORY;
             else
                 memcpy(pvcl[kbase[p] + l], vcol + (size_t)nc * voff[p], bytes);
+            if (nrm && pm->normals)
+                memcpy(pm->normals, nrm + 3 * (size_t)voff[p], sizeof(float) * 3 * pm->vertex_count);
         }
         free(vcol);
+        free(nrm);
         meso_mesh_free(&joined);
     }
     free(shows);

@@ -23,6 +23,8 @@ typedef struct mesoi_shell_parts_input {
     int layers;
     const float* shows;         /* what level 0 shows over each standin vertex (RGBA linear), or NULL */
     int vcol_components;        /* 4 or 1, with shows */
+    int baked_normals;          /* 1: standin's normals are baked (standin_levels.h): the patches' simplified
+                                   levels take them as they take the colours */
     double colour_spacing;      /* the stand-ins' colour sampling */
     uint32_t object;
     uint32_t part_triangles;    /* 0 = MESO_MESH_PARTS_TRIANGLES */

@@ -8,10 +8,17 @@
  * object covers few pixels per stand-in triangle and what is left to show
  * is the mean colour of each vertex's neighbourhood: a hat-weighted mean
  * (the L2 projection onto the piecewise-linear colours with a lumped mass
- * matrix), not a point sample, which would alias on bricks. Normals are
- * the stand-in's own: a mean of the finer surface's normals shaded by
- * Lambert is not the mean of its shading, and the error of shading a
- * smooth normal is measured, not bounded (test_rt_standin_colour).
+ * matrix), not a point sample, which would alias on bricks. A kind that
+ * says so (a shell) also gives its surface's normal, and a stand-in vertex
+ * takes the hat-weighted mean of it, normalised: where the relief tilts
+ * over a vertex's part of the surface (a slope, a large bump, anything
+ * coarser than the stand-in's triangles) the stand-in shades as that part
+ * faces, where its own geometry (the base mesh, the mid-surface) is flat
+ * (tests/integration/test_shell_standin_normals.c). What varies within
+ * the part — bricks' mortar, texel-sized bumps — a mean normal cannot
+ * show: the mean of Lambert shadings is not the shading of the mean
+ * normal, and that error is measured, not bounded (test_rt_standin_colour).
+ * Kinds without normals (cells, frusta) keep the stand-in's own.
  *
  * Each triangle's sums are computed on its own (in parallel) and added
  * into its vertices in triangle order afterwards, so the bytes do not
@@ -26,7 +33,7 @@
 #include "bake_threads.h"
 #include "srgb.h"
 
-enum { DEFAULT_SUBDIVISIONS = 4, SUMS = 5 }; /* per corner: w occ albedo (3), w occ, w */
+enum { DEFAULT_SUBDIVISIONS = 4, SUMS = 8 }; /* per corner: w occ albedo (3), w occ, w, w normal (3) */
 
 /* About this many samples a level at most: a large mesh's triangles get
  * fewer sub-triangles, at least 2 x 2 on the base stand-in (about 24
@@ -79,7 +86,7 @@ static void triangle_sums(const meso_mesh* m, uint32_t t, double spacing, int mo
                 double p[3];
                 for (int k = 0; k < 3; ++k)
                     p[k] = b[0] * P[0][k] + b[1] * P[1][k] + b[2] * P[2][k];
-                float v[4];
+                float v[7] = {0, 0, 0, 0, 0, 0, 0};
                 if (mine_src) { /* a simplified level: what the base stand-in shows nearest */
                     uint32_t bt = 0;
                     double bw[2] = {0, 0};
@@ -102,6 +109,8 @@ static void triangle_sums(const meso_mesh* m, uint32_t t, double spacing, int mo
                         sc[k] += b[c] * (double)v[3] * (double)v[k];
                     sc[3] += b[c] * (double)v[3];
                     sc[4] += b[c];
+                    for (int k = 0; k < 3; ++k)
+                        sc[5 + k] += b[c] * (double)v[4 + k];
                 }
             }
     /* Every sub-triangle has the same area: the triangle's over n². */
@@ -154,7 +163,7 @@ static int pool_copies(const meso_mesh* m, double* acc)
     }
     qsort(keys, m->vertex_count, sizeof *keys, vkey_cmp);
     for (uint32_t i = 0, j; i < m->vertex_count; i = j) {
-        double pooled[SUMS] = {0, 0, 0, 0, 0};
+        double pooled[SUMS] = {0};
         for (j = i; j < m->vertex_count && same_place(&keys[j], &keys[i]); ++j)
             for (int k = 0; k < SUMS; ++k)
                 pooled[k] += acc[SUMS * (size_t)keys[j].v + k];
@@ -167,7 +176,8 @@ static int pool_copies(const meso_mesh* m, double* acc)
 }
 
 meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const mesoi_appearance* a,
-                                    const mesoi_tri_grid* source_grid, int threads, float* shows, meso_error* err)
+                                    const mesoi_tri_grid* source_grid, int threads, float* shows, float* normals,
+                                    meso_error* err)
 {
     double* sums = malloc(sizeof(double) * 3 * SUMS * (m->triangle_count ? m->triangle_count : 1));
     if (!sums)
@@ -224,6 +234,13 @@ meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const me
         for (int k = 0; k < 3; ++k)
             o[k] = (float)(s[3] > 0 ? s[k] / s[3] : s[4] > 0 ? 0 : 0.5);
         o[3] = (float)(s[4] > 0 ? s[3] / s[4] : 1);
+        if (normals) {
+            const double len = sqrt(s[5] * s[5] + s[6] * s[6] + s[7] * s[7]);
+            for (int k = 0; k < 3; ++k)
+                normals[3 * (size_t)v + k] = len > 1e-12 ? (float)(s[5 + k] / len)
+                                             : m->normals ? m->normals[3 * (size_t)v + k]
+                                                          : 0.0f;
+        }
     }
     free(acc);
     free(sums);

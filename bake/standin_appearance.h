@@ -19,17 +19,20 @@
  * (barycentrics b of its corners): out[0..2] the linear albedo, out[3] the
  * occlusion (the factor the kind's shading darkens its albedo by, 1 for
  * none; negative: nothing is drawn there, the point is left out of the
- * means). `grid`: this thread's copy of `a->grid` (private query stamps), or
+ * means); with `normals` set, out[4..6] the unit normal of the surface
+ * level 0 draws there (object space; zero where it has none). out arrives
+ * zeroed. `grid`: this thread's copy of `a->grid` (private query stamps), or
  * NULL when a->grid is NULL. Called from several threads at once. */
 typedef struct mesoi_appearance mesoi_appearance;
 struct mesoi_appearance {
     void (*at)(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3], const double p[3],
-               float out[4]);
+               float out[7]);
     const mesoi_tri_grid* grid; /* a grid `at` queries, or NULL */
     const void* ctx;
     int subdivisions;           /* the most sub-triangles along an edge (below); 0: 4 */
     int occlusion_only;         /* 1: level 0 shows the draw's albedo (no colour of its own), darkened by
                                    the occlusion: VCOL holds the occlusion alone (U8 x 1) */
+    int normals;                /* 1: `at` gives level 0's normal too (a shell: shell_color.h) */
 };
 
 /* Per vertex of `m`, what `a` shows around it (4 floats per vertex, as
@@ -45,9 +48,14 @@ struct mesoi_appearance {
  * source_grid non-NULL (a grid over the base stand-in), `m` is a
  * simplified level: each of its points takes what `a` shows at the nearest
  * point of the base stand-in. threads <= 0: all cores; the result does not
- * depend on it. */
+ * depend on it.
+ * `normals` (3 floats per vertex; NULL: not wanted; needs a->normals): the
+ * stand-in's baked normal, N = ∫ w_v n dA normalised (n level 0's unit
+ * normal: the way the vertex's part of the surface faces as a whole, what
+ * a vertex normal can hold of a relief finer than the stand-in), or the
+ * mesh's own normal where no sample gave one. */
 meso_result mesoi_vertex_appearance(const meso_mesh* m, double spacing, const mesoi_appearance* a,
-                                    const mesoi_tri_grid* source_grid, int threads, float* shows,
+                                    const mesoi_tri_grid* source_grid, int threads, float* shows, float* normals,
                                     meso_error* err);
 
 /* The same as VCOL stores it (FORMAT.md §7.3): components 4, RGBA8 (rgb

@@ -48,25 +48,31 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
  * (cheaper than asking the kind again, and as coarse levels should be,
  * smoothed once more). */
 static void base_at(const mesoi_appearance* a, mesoi_tri_grid* grid, uint32_t t, const double b[3], const double p[3],
-                    float out[4])
+                    float out[7])
 {
     (void)grid;
     (void)p;
     const meso_mesh* base = ((const void* const*)a->ctx)[0];
     const float* shows = ((const void* const*)a->ctx)[1];
+    const float* normals = ((const void* const*)a->ctx)[2];
     const uint32_t* ix = base->indices + 3 * (size_t)t;
     for (int k = 0; k < 4; ++k)
         out[k] = (float)(b[0] * shows[4 * (size_t)ix[0] + k] + b[1] * shows[4 * (size_t)ix[1] + k] +
                          b[2] * shows[4 * (size_t)ix[2] + k]);
+    for (int k = 0; normals && k < 3; ++k)
+        out[4 + k] = (float)(b[0] * normals[3 * (size_t)ix[0] + k] + b[1] * normals[3 * (size_t)ix[1] + k] +
+                             b[2] * normals[3 * (size_t)ix[2] + k]);
 }
 
-meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, const meso_mesh* const* meshes,
-                                  uint32_t count, double spacing, int components, int threads, uint8_t** out,
-                                  meso_error* err)
+meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, const float* from_normals,
+                                  const meso_mesh* const* meshes, uint32_t count, double spacing, int components,
+                                  int threads, uint8_t** out, float** normals_out, meso_error* err)
 {
     uint32_t most = 1;
     for (uint32_t k = 0; k < count; ++k) {
         out[k] = NULL;
+        if (from_normals)
+            normals_out[k] = NULL;
         most = meshes[k]->vertex_count > most ? meshes[k]->vertex_count : most;
     }
     float* level = malloc(sizeof(float) * 4 * (size_t)most);
@@ -83,15 +89,16 @@ meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, con
     mesoi_tri_grid g;
     meso_result r = mesoi_tri_grid_build(xyz, from->indices, from->triangle_count, lo, hi, &g, err);
     const int built = r == MESO_OK; /* a failed build has freed g */
-    const void* ctx[2] = {from, shows};
-    const mesoi_appearance from_base = {.at = base_at, .ctx = ctx, .subdivisions = 8};
+    const void* ctx[3] = {from, shows, from_normals};
+    const mesoi_appearance from_base = {.at = base_at, .ctx = ctx, .subdivisions = 8, .normals = from_normals != NULL};
     for (uint32_t k = 0; r == MESO_OK && k < count; ++k) {
         const meso_mesh* m = meshes[k];
         if (!m->vertex_count || !m->positions || !m->indices)
             continue; /* a kept chain level that could not be read back: no colours */
-        if (!(out[k] = malloc((size_t)components * m->vertex_count)))
+        float* nk = from_normals ? (normals_out[k] = malloc(sizeof(float) * 3 * m->vertex_count)) : NULL;
+        if (!(out[k] = malloc((size_t)components * m->vertex_count)) || (from_normals && !nk))
             r = meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
-        else if ((r = mesoi_vertex_appearance(m, spacing, &from_base, &g, threads, level, err)) == MESO_OK)
+        else if ((r = mesoi_vertex_appearance(m, spacing, &from_base, &g, threads, level, nk, err)) == MESO_OK)
             mesoi_appearance_encode(level, m->vertex_count, components, out[k]);
     }
     if (built)
@@ -102,7 +109,27 @@ meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, con
         for (uint32_t k = 0; k < count; ++k) {
             free(out[k]);
             out[k] = NULL;
+            if (from_normals) {
+                free(normals_out[k]);
+                normals_out[k] = NULL;
+            }
         }
+    return r;
+}
+
+/* `m` with `normals` as its MESH chunk (raw) into *out, whose old bytes are
+ * freed. */
+static meso_result encode_with_normals(const meso_mesh* m, float* normals, meso_mesh_chunk* out,
+                                       meso_error* err)
+{
+    meso_mesh with = *m;
+    with.normals = normals;
+    meso_mesh_chunk c = {0};
+    const meso_result r = meso_bake_mesh_chunk(&with, NULL, &c, err);
+    if (r == MESO_OK) {
+        free(out->data);
+        *out = c;
+    }
     return r;
 }
 
@@ -113,15 +140,28 @@ meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso
     lv->shows = malloc(sizeof(float) * 4 * ((size_t)base->vertex_count + 1));
     if (!lv->shows || !(lv->vcol[0] = malloc((size_t)nc * base->vertex_count + 1)))
         return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
-    meso_result r = mesoi_vertex_appearance(base, spacing, a, NULL, threads, lv->shows, err);
+    if (a->normals && !(lv->normals = malloc(sizeof(float) * 3 * ((size_t)base->vertex_count + 1))))
+        return meso_bake_fail(err, MESO_ERR_OUT_OF_MEMORY, 0, "stand-in appearance: out of memory");
+    meso_result r = mesoi_vertex_appearance(base, spacing, a, NULL, threads, lv->shows, lv->normals, err);
     if (r == MESO_OK)
         mesoi_appearance_encode(lv->shows, base->vertex_count, nc, lv->vcol[0]);
     /* The simplified levels: at the nearest point of the base mesh. */
     const meso_mesh* chain[MESOI_STANDIN_MAX_LEVELS];
+    float* chain_normals[MESOI_STANDIN_MAX_LEVELS] = {NULL};
     for (uint32_t S = 1; S < lv->count; ++S)
         chain[S - 1] = &lv->chain[S - 1].mesh;
     if (r == MESO_OK && lv->count > 1)
-        r = mesoi_standin_colours(base, lv->shows, chain, lv->count - 1, spacing, nc, threads, lv->vcol + 1, err);
+        r = mesoi_standin_colours(base, lv->shows, lv->normals, chain, lv->count - 1, spacing, nc, threads,
+                                  lv->vcol + 1, chain_normals, err);
+    /* The MESH chunks again, with the baked normals: level 1's its own
+     * (it shared level 0's bytes), the chain's in place. */
+    if (r == MESO_OK && lv->normals)
+        r = encode_with_normals(lv->standin_mesh ? lv->standin_mesh : base, lv->normals, &lv->l1_chunk, err);
+    for (uint32_t k = 0; r == MESO_OK && lv->normals && k + 1 < lv->count; ++k)
+        if (chain_normals[k] && chain[k]->vertex_count)
+            r = encode_with_normals(chain[k], chain_normals[k], &lv->chunk[k], err);
+    for (uint32_t k = 0; k + 1 < lv->count; ++k)
+        free(chain_normals[k]);
     return r;
 }
 
@@ -166,7 +206,14 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
             }
             e = lv->e0;
             chunks[n] = *c1;
-            chunks[n++].desc.lod = (uint16_t)L;
+            chunks[n].desc.lod = (uint16_t)L;
+            if (lv->l1_chunk.data) { /* its own bytes: the baked normals */
+                chunks[n].data = lv->l1_chunk.data;
+                chunks[n].size = bytes = lv->l1_chunk.size;
+                chunks[n].desc.encoding = lv->l1_chunk.encoding;
+                chunks[n].desc.decoded_size = lv->l1_chunk.decoded_size;
+            }
+            ++n;
             if (lv->vcol[0]) {
                 chunks[n] = vcol_chunk(lv, 0, l1, base_chunk->desc.object, (uint16_t)L);
                 vbytes = chunks[n++].size;
@@ -217,5 +264,7 @@ void mesoi_standin_levels_free(mesoi_standin_levels* lv)
         free(lv->vcol[k]);
     }
     free(lv->shows);
+    free(lv->normals);
+    free(lv->l1_chunk.data);
     memset(lv, 0, sizeof *lv);
 }

@@ -84,6 +84,12 @@ typedef struct mesoi_standin_levels {
     uint8_t* vcol[MESOI_STANDIN_MAX_LEVELS];
     int vcol_components;
     float* shows;            /* what level 0 shows over each base vertex (RGBA, linear), or NULL */
+    /* With an appearance that gives normals (a shell's): each base vertex's
+     * baked normal (3 floats), which level 1's MESH (l1_chunk, encoded anew)
+     * and, interpolated and averaged again, the chain's MESH chunks carry
+     * instead of the mesh's own; else NULL. */
+    float* normals;
+    meso_mesh_chunk l1_chunk;
 } mesoi_standin_levels;
 
 /* The stand-ins of `base` whose own error is e0. levels: 0 = auto (the base
@@ -96,7 +102,9 @@ meso_result mesoi_standin_levels_build(const meso_mesh* base, double e0, int lev
 /* Gives every stand-in of `lv` (built for `base`) its vertex colours:
  * what `a` says level 0 shows over each vertex's part of the base mesh,
  * sampled `spacing` apart at most (standin_appearance.h); the simplified
- * levels take it at the nearest point of the base mesh. */
+ * levels take it at the nearest point of the base mesh. With a->normals,
+ * the baked normals too (lv->normals; the stand-ins' MESH chunks encoded
+ * again with them): set lv->standin_mesh first. */
 meso_result mesoi_standin_levels_appearance(mesoi_standin_levels* lv, const meso_mesh* base, double spacing,
                                             const mesoi_appearance* a, int threads, meso_error* err);
 
@@ -113,10 +121,12 @@ size_t mesoi_standin_levels_append(mesoi_standin_levels* lv, const meso_mesh* ba
 /* Vertex colours of meshes near `from` (a stand-in with `shows`, RGBA
  * linear per vertex): at each vertex of meshes[k], what `from` shows at
  * the nearest point, sampled as the simplified levels' are; out[k] gets
- * `components` bytes per vertex (malloc'd, as VCOL stores them). */
-meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, const meso_mesh* const* meshes,
-                                  uint32_t count, double spacing, int components, int threads, uint8_t** out,
-                                  meso_error* err);
+ * `components` bytes per vertex (malloc'd, as VCOL stores them). With
+ * from_normals (3 floats per vertex of `from`; else NULL), normals_out[k]
+ * gets meshes[k]'s baked normals the same way (malloc'd, 3 floats each). */
+meso_result mesoi_standin_colours(const meso_mesh* from, const float* shows, const float* from_normals,
+                                  const meso_mesh* const* meshes, uint32_t count, double spacing, int components,
+                                  int threads, uint8_t** out, float** normals_out, meso_error* err);
 
 void mesoi_standin_levels_free(mesoi_standin_levels* lv);
 
