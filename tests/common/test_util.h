@@ -39,6 +39,21 @@ static inline void test_temp_dir_remove(const char* dir)
     assert(system(cmd) == 0);
 }
 
+/* The whole file at `path` (malloc'd, *n bytes); aborts when unreadable. */
+static inline uint8_t* test_read_file(const char* path, size_t* n)
+{
+    FILE* f = fopen(path, "rb");
+    assert(f);
+    assert(fseek(f, 0, SEEK_END) == 0);
+    const long len = ftell(f);
+    assert(len >= 0 && fseek(f, 0, SEEK_SET) == 0);
+    *n = (size_t)len;
+    uint8_t* b = malloc(*n ? *n : 1);
+    assert(b && fread(b, 1, *n, f) == *n);
+    fclose(f);
+    return b;
+}
+
 /* xorshift64*: deterministic pseudo-random numbers for sampling tests. */
 static inline uint64_t test_rng_next(uint64_t* s)
 {

@@ -123,19 +123,6 @@ static double farthest_hit(const meso_ref_shell* from, const cloud* to, size_t* 
     return worst;
 }
 
-static uint8_t* read_all(const char* path, size_t* n)
-{
-    FILE* f = fopen(path, "rb");
-    assert(f);
-    fseek(f, 0, SEEK_END);
-    *n = (size_t)ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t* b = malloc(*n);
-    assert(b && fread(b, 1, *n, f) == *n);
-    fclose(f);
-    return b;
-}
-
 int main(int argc, char** argv)
 {
     assert(argc == 2);
@@ -151,7 +138,7 @@ int main(int argc, char** argv)
     snprintf(p1, sizeof p1, "%s/torus_j1.meso", dir);
     snprintf(p2, sizeof p2, "%s/torus.meso", dir);
     size_t n1 = 0, n2 = 0;
-    uint8_t *b1 = read_all(p1, &n1), *b2 = read_all(p2, &n2);
+    uint8_t *b1 = test_read_file(p1, &n1), *b2 = test_read_file(p2, &n2);
     assert(n1 == n2 && memcmp(b1, b2, n1) == 0); /* rule 7: whatever the thread count */
     free(b1);
     free(b2);
