@@ -13,7 +13,9 @@
  *    finest that has arrived; an object stored in parts may draw parts
  *    instead, each with an error no larger than L's (the whole level L,
  *    which has arrived, is otherwise the better picture);
- *  - it read no more than the cut;
+ *  - it read no more than the cut, and what its uploads hold on the GPU is
+ *    no more than libmeso's estimate before them (the memory budget makes
+ *    room by the estimate);
  *  - one byte short of the coarsest level's prefix, the load is refused
  *    cleanly (no object).
  * A bake the data cannot make is listed with the exit code mesobake gives
@@ -21,7 +23,8 @@
  * and every bundled mesh and skeleton must have its bakes in the list
  * below, so a file added to tests/data is not left out silently.
  * preview_stream.sh checks the same through `mesoinspect preview
- * --stream-bytes` for a few bakes, with the stats it prints.
+ * --stream-bytes` for a mesh, a shell and a cells bake, with the stats it
+ * prints.
  * usage: test_rt_prefixes MESOBAKE */
 #include "test_util.h"
 
@@ -174,6 +177,8 @@ static void object_prefixes(meso_rt* rt, const uint8_t* data, size_t size, const
         assert(worst >= 0 || st.last_drawn == (int)L);
         assert(worst <= (double)li[L].rec.error);
         assert(st.bytes_read <= li[L].prefix_bytes);
+        /* what the uploads hold on the GPU, never above what the budget made room for */
+        assert(st.gpu_bytes_resident > 0 && st.gpu_bytes_resident <= st.gpu_bytes_estimated);
         meso_rt_release_object(rt, obj);
         meso_file_close(f);
         ++prefixes;

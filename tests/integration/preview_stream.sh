@@ -2,9 +2,10 @@
 # preview_stream.sh MESOBAKE MESOINSPECT DATA_DIR
 #
 # Every prefix at a level boundary draws (issue 14, Deliver 5), through
-# `mesoinspect preview --stream-bytes N --stats` (Deliver 4): one file of
-# each kind baked from the bundled data (a mesh and a shell stored with
-# parts, cells, frusta, frusta with coarser skeletons). For each level L, the first prefix_bytes of L
+# `mesoinspect preview --stream-bytes N --stats` (Deliver 4): a mesh and a
+# shell stored with parts and a cells object baked from the bundled data
+# (test_rt_prefixes does the same in one process for every bundled mesh and
+# skeleton as every kind, frusta included). For each level L, the first prefix_bytes of L
 # (mesoinspect info --format json; FORMAT.md §7.10) are fed to preview at
 # --pixel-error 0 (the finest level that has arrived, everywhere):
 #  - it exits 0, says nothing on stderr (bytes not arrived yet are not an
@@ -44,15 +45,11 @@ bake() { # NAME ARGS...: bakes $T/NAME.meso, 77 when this build cannot
 bake mesh mesh -i "$DATA/spot_uv.obj"
 bake shell shell -i "$DATA/spot_uv.obj" --texture bricks:64 --thickness-rel 0.02
 bake cells cells -i "$DATA/spot_low_resolution.obj"
-bake frusta frusta -i "$DATA/saguaro.skel" --relief bricks:64
-# A vine whose levels after its relief levels are coarser skeletons (their
-# own FRUS, FSEG at their lod: bake/frusta_skeleton_levels.c).
-bake vine frusta -i "$DATA/vine.skel" --relief bricks:32
 # A thick shell over torus_uv: its native levels after level 0 have base
 # meshes of their own (bake/shell_base_levels.c), with no texture level.
 bake shellbase shell -i "$DATA/torus_uv.obj" --texture bricks:64 --thickness-rel 0.1
 
-for name in mesh shell cells frusta vine shellbase; do
+for name in mesh shell cells shellbase; do
     run "$MI" info --format json "$T/$name.meso"
     expect_rc 0 "$name: info --format json"
     cp "$T/out" "$T/$name.json"
