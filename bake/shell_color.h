@@ -63,8 +63,8 @@ void mesoi_shell_color_free(mesoi_shell_color* c);
  * nothing (the point is left out of the means). `base` has the MESH's
  * uvs. `col` NULL: the shell has no colour, level 0 shows the draw's albedo
  * darkened by the occlusion, and `out` says the occlusion alone
- * (occlusion_only). ctx is filled here and borrowed by `out` with the rest. */
-/* With `sdir` (the directors, `layers` of them per base vertex: FORMAT.md
+ * (occlusion_only). ctx is filled here and borrowed by `out` with the rest.
+ * With `sdir` (the directors, `layers` of them per base vertex: FORMAT.md
  * §7.2 SDIR) the appearance gives normals too (standin_appearance.h): the
  * normal of the surface the prisms map there, Φ(s, t', w) =
  * Σ λ_k (bottom_k + w span_k) (smooth-shells sec. 3.1), taken as the

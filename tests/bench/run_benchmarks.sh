@@ -152,8 +152,9 @@ fi
 # Levels of detail (issue 14): the 64-object scene at pixel errors 0.5..16
 # and the finest level everywhere (lod_scene.csv, lod_scene.png, the chart
 # lod_scene_chart.png; ~10 min), and a ~105 MB mesh file streamed at
-# 10 MB/s (stream.csv; ~3 min, most of it the 2.2M-triangle bake). Skip
-# with MESO_BENCH_SKIP_LOD=1.
+# 10 MB/s (stream.csv; ~3 min, most of it the 2.2M-triangle bake), and the
+# frusta stand-in's cost against the native level's (frusta_standin_cost.csv).
+# Skip with MESO_BENCH_SKIP_LOD=1.
 if [ "${MESO_BENCH_SKIP_LOD:-0}" != 1 ]; then
     ninja -C "$build" tests/bench/bench_lod_scene tests/bench/bench_stream tools/mesobake
     echo "== bench_lod_scene"
@@ -162,4 +163,11 @@ if [ "${MESO_BENCH_SKIP_LOD:-0}" != 1 ]; then
     gnuplot -e "dir='$results'" "$src/tests/bench/plot_lod_scene.gp"
     echo "== bench_stream"
     "$build/tests/bench/bench_stream" "$results/stream.csv" "$build/tools/mesobake" "$build/tests/bench"
+    # A frusta object's tessellated stand-in against its native level where
+    # libmeso switches to it, per bundled skeleton (~30 s; the checked-in
+    # frusta_standin_cost.csv is the median of 3 runs).
+    ninja -C "$build" tests/bench/bench_frusta_standin_cost
+    echo "== bench_frusta_standin_cost"
+    MESA_SHADER_CACHE_DISABLE=true "$build/tests/bench/bench_frusta_standin_cost" "$results/frusta_standin_cost.csv" \
+        "$build/tools/mesobake" "$src/tests/data" "$build/tests/bench"
 fi
