@@ -1,7 +1,9 @@
 /* Every prefix at a level boundary of every bundled file draws (issue 14,
  * Deliver 5): each mesh the repo bundles (the .obj files of tests/data, the
  * glTF files of tests/data/gltf but the bad_ ones) baked by mesobake (argv[1])
- * as a mesh, a brick shell and a cells object, and each skeleton
+ * as a mesh, a brick shell and a cells object (a glTF holding another
+ * bundled file's geometry in another container: as a mesh, its reader's
+ * path), and each skeleton
  * (the .skel and .swc files) as a frusta object with a brick relief; the
  * file of each bake read into memory and, for every object and every
  * level L, cut at L's prefix_bytes (FORMAT.md §7.10) and given to libmeso
@@ -47,33 +49,35 @@ typedef struct input {
     const char* path; /* under tests/data */
     int skeleton;
     int shell_refused;
-    int cells_empty; /* no voxel inside: the cells object draws nothing (mesobake warns) */
+    int cells_empty;  /* no voxel inside: the cells object draws nothing (mesobake warns) */
+    int mesh_only;    /* another container of a bundled file's geometry (tests/data/gltf/README.md): its
+                         reader's path is the mesh bake's; its shell and cells are that file's */
 } input;
 static const input inputs[] = {
-    {"blub_fish_low_resolution.obj", 0, 0, 0},
-    {"cube_no_bottom.obj", 0, 0, 0},
-    {"saddle.obj", 0, 0, 1}, /* an open sheet: no voxel inside */
-    {"sphere.obj", 0, 0, 0},
-    {"spot_low_resolution.obj", 0, 0, 0},
-    {"spot_uv.obj", 0, 0, 0},
-    {"torus.obj", 0, 0, 0},
-    {"torus_uv.obj", 0, 0, 0},
-    {"wingnut.obj", 0, 3, 0}, /* E3114: the surface intersects itself */
-    {"gltf/big_texture.gltf", 0, 0, 0},
-    {"gltf/box.glb", 0, 0, 0},
-    {"gltf/box.gltf", 0, 0, 0},
-    {"gltf/box_draco.glb", 0, 0, 0},
-    {"gltf/box_embedded.gltf", 0, 0, 0},
-    {"gltf/cube8.gltf", 0, 0, 0},
-    {"gltf/scene.gltf", 0, 0, 0},
-    {"gltf/sphere.glb", 0, 0, 0},
-    {"saguaro.skel", 1, 0, 0},
-    {"vine.skel", 1, 0, 0},
-    {"morphio_soma_single_frustum.swc", 1, 0, 0},
-    {"morphio_three_point_soma.swc", 1, 0, 0},
-    {"neurom_Neuron.swc", 1, 0, 0},
-    {"neurom_fat_end.swc", 1, 0, 0},
-    {"neurom_simple.swc", 1, 0, 0},
+    {"blub_fish_low_resolution.obj", 0, 0, 0, 0},
+    {"cube_no_bottom.obj", 0, 0, 0, 0},
+    {"saddle.obj", 0, 0, 1, 0}, /* an open sheet: no voxel inside */
+    {"sphere.obj", 0, 0, 0, 0},
+    {"spot_low_resolution.obj", 0, 0, 0, 0},
+    {"spot_uv.obj", 0, 0, 0, 0},
+    {"torus.obj", 0, 0, 0, 0},
+    {"torus_uv.obj", 0, 0, 0, 0},
+    {"wingnut.obj", 0, 3, 0, 0}, /* E3114: the surface intersects itself */
+    {"gltf/big_texture.gltf", 0, 0, 0, 1}, /* box.gltf with a larger texture */
+    {"gltf/box.glb", 0, 0, 0, 1}, /* box.gltf as .glb */
+    {"gltf/box.gltf", 0, 0, 0, 0},
+    {"gltf/box_draco.glb", 0, 0, 0, 1}, /* box.gltf, Draco-compressed */
+    {"gltf/box_embedded.gltf", 0, 0, 0, 1}, /* box.gltf, its buffer a data: URI */
+    {"gltf/cube8.gltf", 0, 0, 0, 0},
+    {"gltf/scene.gltf", 0, 0, 0, 0},
+    {"gltf/sphere.glb", 0, 0, 0, 1}, /* sphere.obj as .glb */
+    {"saguaro.skel", 1, 0, 0, 0},
+    {"vine.skel", 1, 0, 0, 0},
+    {"morphio_soma_single_frustum.swc", 1, 0, 0, 0},
+    {"morphio_three_point_soma.swc", 1, 0, 0, 0},
+    {"neurom_Neuron.swc", 1, 0, 0, 0},
+    {"neurom_fat_end.swc", 1, 0, 0, 0},
+    {"neurom_simple.swc", 1, 0, 0, 0},
 };
 enum { INPUTS = sizeof inputs / sizeof inputs[0] };
 
@@ -251,6 +255,8 @@ int main(int argc, char** argv)
             continue;
         }
         bake_and_check(rt, argv[1], dir, in, "mesh", "", 0, 0);
+        if (in->mesh_only)
+            continue;
         bake_and_check(rt, argv[1], dir, in, "shell", "--texture bricks:16 -j 2", in->shell_refused, 0);
         /* 8 tiles of 16 voxels along the longest axis (the default 32):
          * the levels as the defaults make them, at a fraction of the
