@@ -34,9 +34,11 @@
  * (white the finest, then blue, green, yellow, orange, magenta, violet).
  * With MESO_BENCH_OBJECTS=T in the environment it prints, instead, each
  * object's distance, level drawn, resident bytes, draw time (alone,
- * median of 5) and ray-casting fragments and steps per fragment (one
- * counted frame; 0 where not counted: meshes) at pixel error T (what a setting's bytes and time are made
- * of) and writes only the stream rows.
+ * median of 5), ray-casting fragments, steps per fragment and (shells) hull
+ * fragments rejected before their ray cast (one counted frame; 0 where not
+ * counted: meshes) at pixel error T (what a setting's bytes and time are
+ * made of) and writes only the stream rows; MESO_BENCH_NO_HULL_REJECT=1
+ * draws the shells without the rejection.
  * usage: bench_lod_scene RESULTS_CSV MESOBAKE DATA_DIR WORK_DIR [PNG] */
 #include <math.h>
 #include <stdio.h>
@@ -170,6 +172,10 @@ static meso_rt_draw_desc scene_desc(float tau)
     camera(&d);
     d.pixel_error = tau;
     d.light_dir[0] = 0.3f, d.light_dir[1] = 0.8f, d.light_dir[2] = 0.5f;
+    /* MESO_BENCH_NO_HULL_REJECT=1: shells ray cast every hull fragment (what
+     * the rejection saves, with MESO_BENCH_OBJECTS) */
+    const char* nr = getenv("MESO_BENCH_NO_HULL_REJECT");
+    d.shell.no_hull_reject = nr && atoi(nr) ? 1 : 0;
     return d;
 }
 
@@ -426,7 +432,7 @@ static void objects_at(float tau)
     meso_rt_frame_end(s.rt);
     uint64_t total = 0;
     double total_ms = 0.0;
-    printf("object  file     distance  lod  resident_bytes      ms  fragments  steps/fragment\n");
+    printf("object  file     distance  lod  resident_bytes      ms  fragments  steps/fragment  rejected\n");
     for (int k = 0; k < N; ++k) {
         int fi;
         float model[16];
@@ -436,10 +442,11 @@ static void objects_at(float tau)
         total += ls.bytes_resident;
         qsort(ms[k], REPEAT, sizeof(double), cmp_double);
         total_ms += ms[k][REPEAT / 2];
-        printf("%6d  %-7s  %8.2f  %3d  %14llu  %6.2f  %9llu  %14.1f\n", k, files[fi].name,
+        printf("%6d  %-7s  %8.2f  %3d  %14llu  %6.2f  %9llu  %14.1f  %8llu\n", k, files[fi].name,
                2.0 * pow(100.0, k / (double)(N - 1)), ls.last_drawn, (unsigned long long)ls.bytes_resident,
                ms[k][REPEAT / 2], (unsigned long long)st[k].fragments,
-               st[k].fragments ? (double)st[k].steps / (double)st[k].fragments : 0.0);
+               st[k].fragments ? (double)st[k].steps / (double)st[k].fragments : 0.0,
+               (unsigned long long)st[k].rejected);
     }
     printf("total %llu bytes, %.1f ms (medians of %d, summed) at %g px\n", (unsigned long long)total, total_ms, REPEAT,
            (double)tau);
