@@ -32,6 +32,7 @@
 #include "gl_fbo.h"
 #include "meso_clock.h"
 #include "meso_rt.h"
+#include "prefix_io.h"
 
 enum { W = 320, H = 240, REPS = 9 };
 
@@ -47,20 +48,6 @@ static int cmp_double(const void* a, const void* b)
 {
     const double x = *(const double*)a, y = *(const double*)b;
     return (x > y) - (x < y);
-}
-
-typedef struct cut {
-    const uint8_t* data;
-    uint64_t limit;
-} cut;
-
-static int cut_read(void* user, uint64_t off, void* dst, size_t n)
-{
-    const cut* c = user;
-    if (off > c->limit || n > c->limit - off)
-        return MESO_IO_PENDING;
-    memcpy(dst, c->data + off, n);
-    return 0;
 }
 
 /* Median ms of REPS draws of `obj` (after 2 warm-ups); *covered its pixels. */
@@ -87,10 +74,10 @@ static double time_draw(meso_rt* rt, meso_rt_object obj, const meso_rt_draw_desc
 }
 
 static meso_rt_object load_cut(meso_rt* rt, const uint8_t* data, size_t size, uint64_t limit, meso_file** f,
-                               cut* c)
+                               prefix_io* c)
 {
-    *c = (cut){data, limit};
-    const meso_io io = {.read_fn = cut_read, .size = size, .user = c};
+    *c = (prefix_io){data, limit};
+    const meso_io io = {.read_fn = prefix_read_pending, .size = size, .user = c};
     meso_rt_object obj = {0};
     if (meso_file_open_io(&io, NULL, f, NULL) != MESO_OK || meso_rt_load_object_levels(rt, *f, 1, &obj) != MESO_OK)
         die("cannot load a cut file");
@@ -210,7 +197,7 @@ int main(int argc, char** argv)
             const double eye[3] = {c[0] + 0.6 * dist, c[1] + 0.2 * dist, c[2] + 0.77 * dist}, up[3] = {0, 1, 0};
             meso_camera_look_at(d.view, eye, c, up);
             meso_camera_perspective(d.proj, 40.0 * M_PI / 180.0, (double)W / H, 0.01 * R, dist + 4 * R);
-            cut cn, ct, cw;
+            prefix_io cn, ct, cw;
             meso_file *fn = NULL, *ft = NULL, *fw = NULL;
             meso_rt_object on = load_cut(rt, data, size, li[T - 1].prefix_bytes, &fn, &cn);
             meso_rt_object ot = load_cut(rt, data, size, li[T].prefix_bytes, &ft, &ct);
