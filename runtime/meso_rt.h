@@ -476,6 +476,11 @@ typedef struct meso_rt_shell_draw {
                             meso_rt_draw_list, which draw as HOST_OWNS: a list under another depth function
                             sets depth_func or this. The hit stored per pixel is per pixel, not per sample:
                             with MSAA or stencil z-fail operations, set this [0] */
+    int no_prism_walk;   /* MESO_SHELL_SMOOTH with hull rejection: 1: every prism rasterises all its entry
+                            faces, as before (for comparison); 0: sides two prisms share are not
+                            rasterised, and a ray that leaves a prism through one goes on in the
+                            neighbour (rt_prism_walk.c), so a pixel gets a fragment for each time its ray
+                            enters the shell, not for each prism it crosses [0] */
     int slices;          /* MESO_SHELL_SLICES: slice polygons per prism (along the chosen family: levels
                             w = m / (slices - 1), or λ_i = m / slices), 2..1024 [16] */
     meso_slice_interp slice_interp; /* MESO_SHELL_SLICES [MESO_SLICE_TEXCOORD] */

@@ -36,7 +36,7 @@ typedef struct mesoi_object {
     X(view) X(proj) X(model) X(light_dir)                              /* mesh */                          \
     X(uv_scale) X(tex_kind) X(has_dist) X(tex_size) X(err_scale) X(max_steps) X(bisect_steps)             \
     X(segment_steps) X(fixed_step) X(min_step) X(slices) X(slice_axis) X(prism_count) /* shell, slices */                \
-    X(has_color) X(color_scale) X(hull_reject)                         /* shell colour, hull rejection */  \
+    X(has_color) X(color_scale) X(hull_reject) X(walk) X(near) X(no_bottom)                        /* shell colour, hull rejection */  \
     X(relief_size) X(relief_steps) X(color_size) X(ball_color)          /* frusta */                        \
     X(has_env) X(env_rot) X(origin) X(h) X(tiles) X(res) X(class_words) X(words) X(map_full) X(id_bits) X(from_near)  \
     X(mode) X(bounces) X(refl) X(ior) X(tau) X(step) X(bisect) X(grid_size) X(footprint_rays) /* cells */                              \
@@ -145,6 +145,13 @@ typedef struct mesoi_shell {
      * cell or the shell moves (order_stale). */
     uint32_t* indices;
     GLuint order_buf, order_tex; /* the sorted copy (R32UI texture buffer); 0 without hull rejection */
+    /* The walk (rt_prism_walk.c): neighbours[3 t + k] the triangle across
+     * side k of triangle t (-1: none), host copy; adj_buf (R32I texture
+     * buffer, with order_buf) the same per slot of order_buf, as slots. */
+    int32_t* neighbours;
+    GLuint adj_buf, adj_tex;
+    float box_min[3], box_max[3]; /* every prism corner lies inside (fill_vertex_texels) */
+    int closed;                   /* every edge of two triangles (mesoi_prism_neighbours) */
     int32_t sort_cell;
     int order_stale;
     /* Set by a parts draw (rt_parts.c) for one draw: only these prisms
@@ -172,6 +179,10 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
 void mesoi_slices_destroy(meso_rt* rt);
 
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
+/* Fills out[3 t + k] (3 per triangle) with the triangle across side k of
+ * triangle t, -1 for none; *closed: every edge has two triangles
+ * (rt_prism_walk.c). */
+meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, int32_t* out, int* closed);
 void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
 /* The kinds' draws: one object (inst NULL: desc->model, uniforms), or
  * `count` instances in one instanced draw call (rt_instances.c). */

@@ -51,7 +51,8 @@ static void levels_free(meso_rt* rt, mesoi_levels* lv)
  * mesh level (form mesh) draws its MESH and VCOL; a native level whatever
  * its kind resolves at its lod (FORMAT.md §7.10), of every type the object
  * has but the parts' and those read into host memory only. */
-static uint64_t level_estimate(const meso_rt* rt, meso_file* f, uint32_t id, const meso_level_info* info)
+static uint64_t level_estimate(const meso_rt* rt, meso_file* f, uint32_t id, uint32_t kind,
+                               const meso_level_info* info)
 {
     uint64_t sum = 0;
     const uint16_t lod = info->rec.lod;
@@ -66,6 +67,13 @@ static uint64_t level_estimate(const meso_rt* rt, meso_file* f, uint32_t id, con
         if (k != (int32_t)i)
             continue; /* not the chunk of this type the level resolves to */
         sum += mesoi_gpu_estimate(rt, c);
+        /* A native shell level also holds its prisms sorted and their
+         * neighbours (rt_shell.c order_buf, adj_buf): 24 bytes a triangle,
+         * counted as the MESH's decoded bytes once more (12 of those a
+         * triangle, 24 or more a vertex, about half a vertex a triangle). */
+        if (t == MESO_CHUNK_MESH && kind == MESO_OBJECT_SHELL && info->rec.form == MESO_LEVEL_NATIVE &&
+            rt->hull_reject_ok)
+            sum += c->decoded_size;
     }
     return sum;
 }
@@ -168,7 +176,7 @@ meso_result meso_rt_load_object_levels(meso_rt* rt, meso_file* f, uint32_t objec
         for (uint32_t l = 0; l < lv->count; ++l) {
             lv->own_base[l] = lv->rec.kind == MESO_OBJECT_SHELL && lv->info[l].rec.form == MESO_LEVEL_NATIVE &&
                               meso_file_find_level(f, MESO_CHUNK_MESH, object_id, (uint16_t)l) != mesh0;
-            lv->gpu[l] = lv->gpu[lv->count + l] = level_estimate(rt, f, object_id, &lv->info[l]);
+            lv->gpu[l] = lv->gpu[lv->count + l] = level_estimate(rt, f, object_id, lv->rec.kind, &lv->info[l]);
         }
     }
     /* A mesh or shell object's parts table (rt_parts.c), read with the levels

@@ -33,10 +33,11 @@ static void shell_free(meso_rt* rt, mesoi_shell* s)
     if (!s)
         return;
     mesoi_gl* gl = &rt->gl;
-    GLuint tex[6] = {s->vert_tex, s->index_tex, s->func_tex, s->dist_tex, s->color_tex, s->order_tex};
-    GLuint buf[3] = {s->vert_buf, s->index_buf, s->order_buf};
-    gl->DeleteTextures(6, tex);
-    gl->DeleteBuffers(3, buf);
+    GLuint tex[7] = {s->vert_tex, s->index_tex, s->func_tex, s->dist_tex, s->color_tex, s->order_tex, s->adj_tex};
+    GLuint buf[4] = {s->vert_buf, s->index_buf, s->order_buf, s->adj_buf};
+    gl->DeleteTextures(7, tex);
+    gl->DeleteBuffers(4, buf);
+    mesoi_rt_free(rt, s->neighbours);
     mesoi_rt_free(rt, s->positions);
     mesoi_rt_free(rt, s->directors);
     mesoi_rt_free(rt, s->uvs);
@@ -52,9 +53,14 @@ void mesoi_shell_release(meso_rt* rt, mesoi_object* o)
     o->shell = NULL;
 }
 
-/* (bottom.xyz, s), (top.xyz, t') per vertex, FORMAT.md §7.2. */
-static void fill_vertex_texels(const mesoi_shell* s, float* out)
+/* (bottom.xyz, s), (top.xyz, t') per vertex, FORMAT.md §7.2; and the box
+ * of the corners. */
+static void fill_vertex_texels(mesoi_shell* s, float* out)
 {
+    for (int k = 0; k < 3; ++k) {
+        s->box_min[k] = INFINITY;
+        s->box_max[k] = -INFINITY;
+    }
     for (uint32_t v = 0; v < s->vertex_count; ++v) {
         const float* p = s->positions + 3 * (size_t)v;
         const float* d0 = s->directors + 3 * (size_t)v;
@@ -66,7 +72,42 @@ static void fill_vertex_texels(const mesoi_shell* s, float* out)
         }
         o[3] = s->uvs[2 * (size_t)v];
         o[7] = s->uvs[2 * (size_t)v + 1];
+        for (int k = 0; k < 3; ++k) {
+            s->box_min[k] = fminf(s->box_min[k], fminf(o[k], o[4 + k]));
+            s->box_max[k] = fmaxf(s->box_max[k], fmaxf(o[k], o[4 + k]));
+        }
     }
+}
+
+/* Whether any point of the box (object space) may lie on the eye's side of
+ * the near plane (shell_vert.glsl reaches_near) for ds's mvp: one corner
+ * there is enough, as the side away from the eye is convex. */
+static int box_reaches_near(const mesoi_draw* ds, const float* model, const float lo[3], const float hi[3])
+{
+    /* clip z's and w's rows of pv · model (model all zero: identity) */
+    int identity = 1;
+    for (int i = 0; i < 16; ++i)
+        identity = identity && model[i] == 0.0f;
+    double row[2][4];
+    for (int r = 0; r < 2; ++r)
+        for (int c = 0; c < 4; ++c) {
+            double v = 0.0;
+            for (int k = 0; k < 4; ++k)
+                v += ds->pv[4 * k + 2 + r] * (identity ? (double)(k == c) : (double)model[4 * c + k]);
+            row[r][c] = v;
+        }
+    const double sgn = ds->depth_ndc[0] > ds->depth_ndc[2] ? -1.0 : 1.0;
+    for (int c = 0; c < 8; ++c) {
+        const double p[3] = {c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1], c & 4 ? hi[2] : lo[2]};
+        double z = row[0][3], w = row[1][3];
+        for (int k = 0; k < 3; ++k) {
+            z += row[0][k] * p[k];
+            w += row[1][k] * p[k];
+        }
+        if (!(sgn * (z - ds->depth_ndc[0] * w) >= 0.0)) /* NaN: may */
+            return 1;
+    }
+    return 0;
 }
 
 /* The stored frames of an animated texture function (FORMAT.md §7.2
@@ -254,10 +295,16 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
         s->vert_tex = mesoi_texture_buffer(rt, GL_RGBA32F, texels, sizeof(float) * 8 * nv, &s->vert_buf);
         s->index_tex = mesoi_texture_buffer(rt, GL_R32UI, mv.indices, sizeof(uint32_t) * 3 * (size_t)s->triangle_count,
                                       &s->index_buf);
-        if (rt->hull_reject_ok)
+        if (rt->hull_reject_ok) {
             s->order_tex = mesoi_texture_buffer(rt, GL_R32UI, mv.indices,
                                                 sizeof(uint32_t) * 3 * (size_t)s->triangle_count, &s->order_buf);
-        if (!s->vert_tex || !s->index_tex || (rt->hull_reject_ok && !s->order_tex))
+            s->neighbours = mesoi_rt_alloc(rt, sizeof(int32_t) * 3 * (size_t)s->triangle_count);
+            r = s->neighbours ? mesoi_prism_neighbours(rt, s, s->neighbours, &s->closed) : MESO_ERR_OUT_OF_MEMORY;
+            if (r == MESO_OK) /* slots = triangles until the first sort */
+                s->adj_tex = mesoi_texture_buffer(rt, GL_R32I, s->neighbours,
+                                                  sizeof(int32_t) * 3 * (size_t)s->triangle_count, &s->adj_buf);
+        }
+        if (r == MESO_OK && (!s->vert_tex || !s->index_tex || (rt->hull_reject_ok && (!s->order_tex || !s->adj_tex))))
             r = MESO_ERR_GL;
     }
     mesoi_rt_free(rt, texels);
@@ -307,8 +354,13 @@ meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object h, const float* pos
     if (!texels)
         return MESO_ERR_OUT_OF_MEMORY;
     fill_vertex_texels(s, texels);
-    const meso_result r = mesoi_buffer_update(rt, s->vert_buf, texels, sizeof(float) * 8 * nv, "meso_rt_shell_update");
+    meso_result r = mesoi_buffer_update(rt, s->vert_buf, texels, sizeof(float) * 8 * nv, "meso_rt_shell_update");
     mesoi_rt_free(rt, texels);
+    /* which prisms are folded, and which vertices one corner, may change
+     * with the shape (rt_prism_walk.c): found again, uploaded with the
+     * next sort */
+    if (r == MESO_OK && s->neighbours)
+        r = mesoi_prism_neighbours(rt, s, s->neighbours, &s->closed);
     s->order_stale = 1;
     return r;
 }
@@ -461,8 +513,9 @@ meso_result meso_rt_shell_anim_info(const meso_rt* rt, meso_rt_object h, uint32_
 
 /* Programs per technique, with or without the stats counters (atomics
  * cost time, so draws that do not ask for stats run without them). */
-static const char* const shell_samplers[SHELL_UNIT_COUNT + 1] = {"u_verts", "u_index", "u_height",   "u_volume",
-                                                                 "u_dist",  "u_color", "u_instances"};
+enum { UNIT_INSTANCES = SHELL_UNIT_COUNT, UNIT_ADJ, SHELL_UNITS_ALL };
+static const char* const shell_samplers[SHELL_UNITS_ALL] = {"u_verts", "u_index", "u_height",    "u_volume",
+                                                            "u_dist",  "u_color", "u_instances", "u_adj"};
 
 static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, int stats, meso_rt_pass pass)
 {
@@ -488,7 +541,7 @@ static const mesoi_program* shell_program(meso_rt* rt, meso_shell_technique t, i
     const mesoi_program_src src = {.vs = vs, .vs_count = 5, .vs_file = "shell_vert.glsl", .pre = pre,
                                    .pre_count = 4, .frag = mesoi_glsl_shell_frag, .frag_file = "shell_frag.glsl",
                                    .name = names[pass][t], .samplers = shell_samplers,
-                                   .sampler_count = SHELL_UNIT_COUNT + 1};
+                                   .sampler_count = SHELL_UNITS_ALL};
     return mesoi_program_build(rt, p, pass, &src);
 }
 
@@ -646,6 +699,17 @@ static meso_result instance_frames(meso_rt* rt, const mesoi_shell* s, const meso
  * from the draws before it; the prisms are re-sorted (on the CPU, into a
  * copy of the index buffer, order_buf) when the cell changes, after
  * meso_rt_shell_update, and on the first draw.
+ * The walk (smooth shells, rt_prism_walk.c): the prisms' entry faces
+ * still gave a pixel one fragment for every prism its ray crosses (9.2 a
+ * covered pixel at Table 1's reference setup, 7.2 of them rejected, each
+ * about 1 µs on llvmpipe: its 4x4 blocks run the shader on every lane), so
+ * a side two prisms share is not drawn; the ray crossing it goes on in the
+ * neighbour in the same fragment (shell_frag.glsl main), and a pixel gets a
+ * fragment for each time its ray enters the shell: tests/gl/
+ * test_rt_shell_reject.c measures 1.9 rasterised a covered pixel where
+ * there were 7.3, the image unchanged. Prisms at the near plane keep all
+ * their faces and do not walk. adj_buf holds the neighbours by slot of
+ * order_buf, re-uploaded with it.
  * An instanced draw sorts for its first instance. Tetra and segment only
  * keep the mesh's order: their depths often lie on faces two neighbours
  * share (tetra's hits on the faces between tetrahedra, segment only's hull
@@ -740,9 +804,13 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
     const uint32_t n = s->subset ? s->subset_count : s->triangle_count, nv = s->vertex_count;
     prism_key* keys = mesoi_rt_alloc(rt, sizeof(prism_key) * n);
     uint32_t* sorted = mesoi_rt_alloc(rt, sizeof(uint32_t) * 3 * (size_t)n);
-    if (!keys || !sorted) {
+    int32_t* slot = mesoi_rt_alloc(rt, sizeof(int32_t) * s->triangle_count); /* triangle -> slot, -1: not drawn */
+    int32_t* adj = mesoi_rt_alloc(rt, sizeof(int32_t) * 3 * (size_t)n);
+    if (!keys || !sorted || !slot || !adj) {
         mesoi_rt_free(rt, keys);
         mesoi_rt_free(rt, sorted);
+        mesoi_rt_free(rt, slot);
+        mesoi_rt_free(rt, adj);
         return MESO_ERR_OUT_OF_MEMORY;
     }
     uint32_t m = 0; /* prisms kept */
@@ -762,18 +830,31 @@ static meso_result order_prisms(meso_rt* rt, mesoi_shell* s, const mesoi_draw* d
         keys[m++].tri = t;
     }
     qsort(keys, m, sizeof(prism_key), by_key);
-    for (uint32_t t = 0; t < m; ++t)
+    for (uint32_t t = 0; t < s->triangle_count; ++t)
+        slot[t] = -1;
+    for (uint32_t t = 0; t < m; ++t) {
         memcpy(sorted + 3 * (size_t)t, s->indices + 3 * (size_t)keys[t].tri, 3 * sizeof(uint32_t));
+        slot[keys[t].tri] = (int32_t)t;
+    }
+    for (uint32_t t = 0; t < m; ++t) /* the walk's neighbours, as slots (rt_prism_walk.c) */
+        for (int k = 0; k < 3; ++k) {
+            const int32_t nb = s->neighbours[3 * (size_t)keys[t].tri + (size_t)k];
+            adj[3 * (size_t)t + (size_t)k] = nb >= 0 ? slot[nb] : -1;
+        }
     mesoi_gl* gl = &rt->gl;
     GLint prev = 0;
     if (ds->restore)
         gl->GetIntegerv(GL_TEXTURE_BUFFER_BINDING, &prev);
     gl->BindBuffer(GL_TEXTURE_BUFFER, s->order_buf);
     gl->BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)(sizeof(uint32_t) * 3 * (size_t)m), sorted);
+    gl->BindBuffer(GL_TEXTURE_BUFFER, s->adj_buf);
+    gl->BufferSubData(GL_TEXTURE_BUFFER, 0, (GLsizeiptr)(sizeof(int32_t) * 3 * (size_t)m), adj);
     if (ds->restore)
         gl->BindBuffer(GL_TEXTURE_BUFFER, (GLuint)prev);
     mesoi_rt_free(rt, keys);
     mesoi_rt_free(rt, sorted);
+    mesoi_rt_free(rt, slot);
+    mesoi_rt_free(rt, adj);
     s->sort_cell = cell;
     s->sorted_key = key;
     s->sorted_count = m;
@@ -852,16 +933,20 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     }
     float max_tex = fmaxf(s->tex_size[0], fmaxf(s->tex_size[1], s->tex_size[2]));
 
-    static const GLenum unit_target[SHELL_UNIT_COUNT + 1] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
-                                                             GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_3D,
-                                                             GL_TEXTURE_BUFFER};
-    const GLuint bind[SHELL_UNIT_COUNT + 1] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
-                                               s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, s->color_tex, inst_tex};
-    mesoi_draw_begin(rt, &ds, prog, 1, inst ? SHELL_UNIT_COUNT + 1 : SHELL_UNIT_COUNT, unit_target, bind);
+    static const GLenum unit_target[SHELL_UNITS_ALL] = {GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER, GL_TEXTURE_2D,
+                                                        GL_TEXTURE_3D,     GL_TEXTURE_3D,     GL_TEXTURE_3D,
+                                                        GL_TEXTURE_BUFFER, GL_TEXTURE_BUFFER};
+    const GLuint bind[SHELL_UNITS_ALL] = {s->vert_tex, s->index_tex, s->tex_kind == 1 ? s->func_tex : 0,
+                                          s->tex_kind == 2 ? s->func_tex : 0, s->dist_tex, s->color_tex, inst_tex,
+                                          s->adj_tex};
+    mesoi_draw_begin(rt, &ds, prog, 1, SHELL_UNITS_ALL, unit_target, bind);
     const GLint* u = prog->loc;
     float axis[3] = {0.0f, 0.0f, 1.0f};
     const int reject = rt->hull_reject_ok && !k->no_hull_reject && ds.viewport[2] > 0 && ds.viewport[3] > 0 &&
                        nearer_wins(&ds) && depth_axis(&ds, inst ? inst[0].model : ds.model, axis);
+    /* The walk (rt_prism_walk.c): smooth shells, with rejection (it draws
+     * the entry faces the walk leaves out of the shared sides). */
+    const int walk = reject && k->technique == MESO_SHELL_SMOOTH && !k->no_prism_walk && s->adj_tex;
     mesoi_image_unit prev_image;
     if (reject && ds.restore)
         mesoi_image_save(rt, &prev_image);
@@ -879,6 +964,17 @@ meso_result mesoi_shell_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     if (reject)
         hit_image_begin(rt, &ds, bind[SHELL_UNIT_HEIGHT]);
     gl->Uniform1i(u[MESOI_U_hull_reject], reject);
+    gl->Uniform1i(u[MESOI_U_walk], walk);
+    /* No prism reaches the near plane (the usual case; instanced: of any
+     * instance): the vertex shader skips the test per prism and per
+     * neighbour. */
+    int near = 0;
+    for (uint32_t i = 0; i < (inst ? count : 1) && !near; ++i)
+        near = box_reaches_near(&ds, inst ? inst[i].model : ds.model, s->box_min, s->box_max);
+    gl->Uniform1i(u[MESOI_U_near], near);
+    /* The bottom caps left out (rt_prism_walk.c): a closed shell solid at
+     * w = 0, its box wholly beyond the near plane. */
+    gl->Uniform1i(u[MESOI_U_no_bottom], walk && !near && s->closed && s->tex_kind != 2);
     gl->Uniform1f(u[MESOI_U_uv_scale], k->uv_scale > 0.0f ? k->uv_scale : 1.0f);
     gl->Uniform1i(u[MESOI_U_tex_kind], s->tex_kind);
     gl->Uniform1i(u[MESOI_U_has_color], s->color_tex != 0);

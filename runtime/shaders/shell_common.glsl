@@ -10,6 +10,17 @@ uniform samplerBuffer u_verts;  // 2 texels per vertex: (bottom.xyz, s), (top.xy
 uniform usamplerBuffer u_index; // 3 per triangle
 // u_mvp, u_inv_mvp: instance.glsl
 uniform float u_uv_scale;
+#if defined(MESO_HULL_REJECT) && MESO_TECHNIQUE == 0
+// The walk (runtime/rt_prism_walk.c): per prism (as drawn), the prisms
+// across its sides 0..2 (side k: corners k, k + 1), -1 for none; u_walk 0:
+// every prism draws all its entry faces.
+uniform highp isamplerBuffer u_adj;
+uniform int u_walk;
+int side_neighbour(int prism, int side)
+{
+    return texelFetch(u_adj, 3 * prism + side).r;
+}
+#endif
 
 struct Prism {
     vec3 b[3]; // bottom vertices (w = 0)

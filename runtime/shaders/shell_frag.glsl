@@ -23,6 +23,9 @@
 
 flat in int v_prism;
 flat in int v_tet;
+#if defined(MESO_HULL_REJECT) && MESO_TECHNIQUE == 0
+flat in int v_walk; // shell_vert.glsl: 0 for a prism at the near plane
+#endif
 // Outputs per pass (o_color, o_albedo, o_normal; emit): pass_out.glsl.
 
 // The texture function, tex_st and shade: shell_texfn.glsl.
@@ -354,32 +357,22 @@ void main()
 
 #else
 // --- smooth, curved, segment only ------------------------------------------
-void main()
+
+// sec. 4.2: where the ray meets the prism's hull (the same triangulation as
+// shell_vert.glsl: hull_face of hull_prism, each side split once, by the
+// diagonal that makes it convex): entry tmin through hull face fmin, exit
+// tmax through fmax (faces 0, 1 the caps at range.x, range.y, then the
+// sides' halves); en the exit face's normal. Only when fewer than two faces
+// are hit is the origin tested against the faces' planes (camera inside the
+// shell: tmin 0, fmin -1). False for a ray that misses or grazes the hull.
+bool hull_span(Prism HP, vec3 ro, vec3 rd, out float tmin, out float tmax, out int fmin, out int fmax, out vec3 en)
 {
-#ifdef MESO_HULL_REJECT
-    if (behind_hit()) {
-        reject();
-        return;
-    }
-#endif
-    instance_begin();
-    Prism P = fetch_prism(v_prism);
-    vec3 ro, rd;
-    fragment_ray(ro, rd);
-    // sec. 4.2: entry and exit against the hull triangles (the same
-    // triangulation as shell_vert.glsl: hull_face of hull_prism).
-    vec2 range = hull_levels(P);
-    Prism HP = hull_prism(P, range);
     vec3 c[6];
     for (int k = 0; k < 3; ++k) {
         c[k] = HP.b[k];
         c[k + 3] = HP.b[k] + HP.n[k];
     }
     vec3 cen = prism_centroid(HP);
-    // Ray/triangle tests against the eight hull triangles (the same
-    // triangulation as shell_vert.glsl: each side split once, by the diagonal
-    // that makes it convex). Only when fewer than two are hit is the origin
-    // tested against the faces' planes (camera inside the shell).
     vec3 T[24];
     T[0] = c[0], T[1] = c[1], T[2] = c[2];
     T[3] = c[3], T[4] = c[4], T[5] = c[5];
@@ -394,8 +387,12 @@ void main()
         T[k] = bi, T[k + 1] = bj, T[k + 2] = diag_bt ? tj : ti;
         T[k + 3] = diag_bt ? bi : bj, T[k + 4] = tj, T[k + 5] = ti;
     }
-    float tmin = 1e30, tmax = -1e30;
-    int nhit = 0, fmin = -1, fmax = -1;
+    tmin = 1e30;
+    tmax = -1e30;
+    fmin = -1;
+    fmax = -1;
+    en = vec3(0.0);
+    int nhit = 0;
     for (int f = 0; f < 8; ++f) {
         float t = ray_triangle(ro, rd, T[3 * f], T[3 * f + 1], T[3 * f + 2]);
         if (t >= 0.0) {
@@ -418,27 +415,37 @@ void main()
                 nrm = -nrm;
             origin_inside = origin_inside && dot(nrm, ro - p0) <= 0.0;
         }
-        if (!origin_inside || nhit < 1) {
-            finish(false); // a ray grazing an edge or corner of the hull
-            return;
-        }
+        if (!origin_inside || nhit < 1)
+            return false; // a ray grazing an edge or corner of the hull
         tmin = 0.0; // the ray starts inside the hull (camera inside the shell)
         fmin = -1;
     }
+    en = cross(T[3 * fmax + 1] - T[3 * fmax], T[3 * fmax + 2] - T[3 * fmax]);
+    return true;
+}
+
+#if MESO_TECHNIQUE != 3
+// The march through one prism (sec. 4.3, 4.4). True on a hit: hq its
+// texture point (u, v, w of the smooth prism), hw the texture function's w
+// there. Else `left`: the march went through the whole prism (not out of
+// steps), so the walk may go on where the ray leaves it; g_no_span: no part
+// of the ray lies in the prism.
+bool g_no_span = false;
+bool cast_prism(Prism P, vec3 ro, vec3 rd, out vec3 hq, out float hw, out bool left, out int chord_side)
+{
+    hq = vec3(0.0);
+    hw = 0.0;
+    left = false;
+    chord_side = -1;
+    vec2 range = hull_levels(P);
+    float tmin, tmax;
+    int fmin, fmax;
+    vec3 en;
+    g_no_span = true;
+    if (!hull_span(hull_prism(P, range), ro, rd, tmin, tmax, fmin, fmax, en))
+        return false;
     vec3 q0 = hull_point_to_texture(P, ro + tmin * rd, fmin, range);
     vec3 q1 = hull_point_to_texture(P, ro + tmax * rd, fmax, range);
-#if MESO_TECHNIQUE == 3
-#if MESO_PASS == MESO_PASS_FORWARD
-    o_color = vec4(q0.z, q1.z, 0.5, 1.0); // a diagnostic: entry and exit w (no shading, no hook)
-#elif MESO_PASS == MESO_PASS_GBUFFER
-    // The hull face the depth lies on (fmax), facing the viewer.
-    vec3 hn = facing(cross(T[3 * fmax + 1] - T[3 * fmax], T[3 * fmax + 2] - T[3 * fmax]), rd);
-    emit_obj(vec3(0.0), u_albedo, 1.0, hn, ro + tmax * rd, rd);
-#endif
-    write_depth(ro + tmax * rd);
-    finish(true);
-    return;
-#else
     vec2 e1 = P.uv[1] - P.uv[0], e2 = P.uv[2] - P.uv[0];
     const bool curved = MESO_TECHNIQUE == 1;
     vec3 dq = q1 - q0;
@@ -447,9 +454,9 @@ void main()
     // are bounded loosely): clip the chord q0 -> q1 to the prism's texture
     // domain, widened by m: a margin for the ray's texture-space path, which
     // bends away from the chord (tests/gl measure no lost hits at 0.02).
+    const float m = 0.02; // barycentric / w units
+    float wlo = curved ? range.x : -m, whi = curved ? range.y : 1.0 + m;
     {
-        const float m = 0.02; // barycentric / w units
-        float wlo = curved ? range.x : -m, whi = curved ? range.y : 1.0 + m;
         float c0[5] = float[5](q0.x + m, q0.y + m, 1.0 + m - q0.x - q0.y, q0.z - wlo, whi - q0.z);
         float c1[5] = float[5](q1.x + m, q1.y + m, 1.0 + m - q1.x - q1.y, q1.z - wlo, whi - q1.z);
         float fa = 0.0, fb = 1.0;
@@ -464,10 +471,9 @@ void main()
                 fb = min(fb, -a / b);
             }
         }
-        if (!(fa <= fb)) {
-            finish(false);
-            return;
-        }
+        if (!(fa <= fb))
+            return false;
+        g_no_span = false;
         vec3 qa = q0 + fa * dq, qb = q0 + fb * dq;
         q0 = qa;
         q1 = qb;
@@ -484,7 +490,11 @@ void main()
             wq = (q.z - w0) / (w1 - w0); // eq. 2
             scale = clamp(w1 - w0, 0.05, 1.0);
         }
-        inside = inside && wq >= 0.0 && wq <= 1.0;
+        // Below w = 0 of a smooth prism lies what the base mesh encloses:
+        // solid for a height field (w <= h, h >= 0; the reference's solid
+        // reaches w = 0 exactly), so a ray that steps across w = 0 between
+        // two samples hits there and does not slip into the base mesh.
+        inside = inside && (wq >= 0.0 || (u_tex_kind != 2 && !curved)) && wq <= 1.0;
         last_inside = inside;
         vec2 st = tex_st(P, q.xy);
         ++g_steps;
@@ -531,36 +541,246 @@ void main()
         hit = true;
         q = qprev;
     }
-    if (hit) {
-        // sec. 4.4: bisection between the last empty sample and the first solid one.
-        vec3 lo = qprev, hi = q;
-        float whi = wq;
-        for (int i = 0; i < u_bisect_steps; ++i) {
-            vec3 m = 0.5 * (lo + hi);
-            vec3 mr;
-            if (onto_ray(P, m, ro, rd, mr))
-                m = mr; // bisect along the ray itself, not the chord in texture space
-            float wm = m.z;
-            if (curved) {
-                float w0 = curved_wbar(P, m.x, m.y, 0.0), w1 = curved_wbar(P, m.x, m.y, 1.0);
-                wm = (m.z - w0) / (w1 - w0);
-            }
-            ++g_steps;
-            bool in_ = m.x >= -1e-5 && m.y >= -1e-5 && m.x + m.y <= 1.0 + 1e-5 && wm >= 0.0 && wm <= 1.0;
-            if (in_ && solid(vec3(tex_st(P, m.xy), wm))) {
-                hi = m;
-                whi = wm;
-            } else {
-                lo = m;
+    if (!hit) {
+        left = !budget_spent;
+        if (left) {
+            // The side the chord q0 -> q1 leaves through: the corner weight
+            // (u, v, 1 - u - v) that falls below 0 first along it (one below
+            // 0 at q0: at once); none: a cap. Only where exit_side finds no
+            // crossing at all (rounding on a twisted side).
+            float c0[3] = float[3](q0.x, q0.y, 1.0 - q0.x - q0.y);
+            float c1[3] = float[3](q1.x, q1.y, 1.0 - q1.x - q1.y);
+            float first = 1e30;
+            for (int j = 0; j < 3; ++j) {
+                float b = c1[j] - c0[j];
+                float f = b < 0.0 && c1[j] < 1e-3 ? -c0[j] / b : 1e30;
+                if (f < first) {
+                    first = f;
+                    // corner 1's weight (u) gone: side 2; v: side 0; 1 - u - v: side 1
+                    chord_side = j == 0 ? 2 : (j == 1 ? 0 : 1);
+                }
             }
         }
-        vec3 p = phi(P, hi);
-#if MESO_PASS != MESO_PASS_DEPTH
-        shade_hit(map_jacobian(P, curved ? vec3(hi.xy, whi) : hi, curved), vec3(tex_st(P, hi.xy), whi), p, rd);
-#endif
-        write_depth(p);
+        return false;
     }
-    finish(hit);
+    // sec. 4.4: bisection between the last empty sample and the first solid one.
+    vec3 lo = qprev, hi = q;
+    float whi_ = wq;
+    for (int i = 0; i < u_bisect_steps; ++i) {
+        vec3 mm = 0.5 * (lo + hi);
+        vec3 mr;
+        if (onto_ray(P, mm, ro, rd, mr))
+            mm = mr; // bisect along the ray itself, not the chord in texture space
+        float wm = mm.z;
+        if (curved) {
+            float w0 = curved_wbar(P, mm.x, mm.y, 0.0), w1 = curved_wbar(P, mm.x, mm.y, 1.0);
+            wm = (mm.z - w0) / (w1 - w0);
+        }
+        ++g_steps;
+        bool in_ = mm.x >= -1e-5 && mm.y >= -1e-5 && mm.x + mm.y <= 1.0 + 1e-5 && (wm >= 0.0 || (u_tex_kind != 2 && !curved)) &&
+                   wm <= 1.0;
+        if (in_ && solid(vec3(tex_st(P, mm.xy), wm))) {
+            hi = mm;
+            whi_ = wm;
+        } else {
+            lo = mm;
+        }
+    }
+    hq = hi;
+    hw = whi_;
+    return true;
+}
+#endif
+
+#if defined(MESO_HULL_REJECT) && MESO_TECHNIQUE == 0
+// Where the ray leaves smooth prism P first after ray parameter t_from: the
+// side 0..2 it crosses outwards (side k: corners k, k + 1, the bilinear
+// patch B(s, w) = (1 - s)(b_k + w n_k) + s(b_k1 + w n_k1)), or -1 when that
+// is a cap (out of the shell, or into what the base mesh encloses) or
+// nothing; t_exit its parameter. Exact, not the march's chord (which
+// bends in texture space and, near a corner, picked sides the ray never
+// crosses): a side is met where the ray and the patch's line at level w
+// are coplanar, det(rd, A_k(w) - ro, A_k1(w) - A_k(w)) = 0, a quadratic in
+// w; s and t then follow from the two lines' closest points. A crossing
+// counts where the ray goes outwards: away from the opposite corner at the
+// same level for a side, up through the top cap, down through the bottom.
+// The side of P whose neighbour a ray belongs to that was rasterised on P's
+// cap but misses P (it grazes the edge two caps share, on the neighbour's
+// side): the side across from the corner whose weight is lowest where the
+// ray meets the plane of the cap (top or bottom, whichever it meets nearer
+// the triangle); -1 if none is near.
+int grazed_side(Prism P, vec3 ro, vec3 rd)
+{
+    int side = -1;
+    float best = -0.25;
+    for (int lev = 0; lev < 2; ++lev) {
+        vec3 q;
+        if (!onto_ray(P, vec3(0.0, 0.0, float(lev)), ro, rd, q))
+            continue;
+        float wgt[3] = float[3](1.0 - q.x - q.y, q.x, q.y);
+        int k = 0;
+        for (int j = 1; j < 3; ++j)
+            if (wgt[j] < wgt[k])
+                k = j;
+        if (wgt[k] > best) {
+            best = wgt[k];
+            side = k == 0 ? 1 : (k == 1 ? 2 : 0); // across from corner k
+        }
+    }
+    return side;
+}
+
+int exit_side(Prism P, vec3 ro, vec3 rd, float t_from, out float t_exit)
+{
+    const float tol = 1e-4;
+    float best = 1e30;
+    int side = -1;
+    vec3 up = P.n[0] + P.n[1] + P.n[2];
+    for (int lev = 0; lev < 2; ++lev) {
+        float w = float(lev);
+        vec3 a0 = P.b[0] + w * P.n[0], a1 = P.b[1] + w * P.n[1], a2 = P.b[2] + w * P.n[2];
+        vec3 nn = cross(a1 - a0, a2 - a0);
+        if (dot(nn, up) < 0.0)
+            nn = -nn;
+        float den = dot(nn, rd);
+        if (lev == 1 ? !(den > 0.0) : !(den < 0.0))
+            continue; // not outwards through this cap
+        float t = dot(nn, a0 - ro) / den;
+        if (!(t > t_from && t < best))
+            continue;
+        vec2 bc = barycentric(a0, a1, a2, ro + t * rd);
+        if (bc.x < -tol || bc.y < -tol || bc.x + bc.y > 1.0 + tol)
+            continue;
+        best = t;
+        side = -1;
+    }
+    for (int k = 0; k < 3; ++k) {
+        int i = k, j = k == 2 ? 0 : k + 1, o = k == 0 ? 2 : k - 1;
+        vec3 a0 = P.b[i] - ro, a1 = P.n[i], e0 = P.b[j] - P.b[i], e1 = P.n[j] - P.n[i];
+        float c0 = dot(rd, cross(a0, e0));
+        float c1 = dot(rd, cross(a0, e1) + cross(a1, e0));
+        float c2 = dot(rd, cross(a1, e1));
+        float r[2] = float[2](-1.0, -1.0);
+        if (abs(c2) <= 1e-7 * (abs(c1) + abs(c0))) {
+            if (c1 != 0.0)
+                r[0] = -c0 / c1;
+        } else {
+            float disc = c1 * c1 - 4.0 * c2 * c0;
+            if (disc >= 0.0) {
+                float q = -0.5 * (c1 + (c1 < 0.0 ? -1.0 : 1.0) * sqrt(disc));
+                r[0] = q / c2;
+                r[1] = q != 0.0 ? c0 / q : -1.0;
+            }
+        }
+        for (int n = 0; n < 2; ++n) {
+            float w = r[n];
+            if (w < -tol || w > 1.0 + tol)
+                continue;
+            vec3 A = P.b[i] + w * P.n[i], E = e0 + w * e1, rr = ro - A;
+            float b = dot(rd, E), c = dot(E, E), d = dot(rd, rr), e = dot(E, rr);
+            float den = c - b * b; // |rd| = 1
+            if (!(abs(den) > 1e-12 * c))
+                continue; // the ray runs along the patch's line
+            float t = (b * e - c * d) / den, sp = (e - b * d) / den;
+            if (sp < -tol || sp > 1.0 + tol || !(t > t_from && t < best))
+                continue;
+            vec3 nn = cross(E, mix(P.n[i], P.n[j], sp));
+            if (dot(nn, (A + sp * E) - (P.b[o] + w * P.n[o])) < 0.0)
+                nn = -nn;
+            if (!(dot(nn, rd) > 0.0))
+                continue; // inwards: where the ray enters
+            best = t;
+            side = k;
+        }
+    }
+    t_exit = best;
+    return side;
+}
+#endif
+
+void main()
+{
+#ifdef MESO_HULL_REJECT
+    if (behind_hit()) {
+        reject();
+        return;
+    }
+#endif
+    instance_begin();
+    vec3 ro, rd;
+    fragment_ray(ro, rd);
+#if MESO_TECHNIQUE == 3
+    Prism P = fetch_prism(v_prism);
+    vec2 range = hull_levels(P);
+    float tmin, tmax;
+    int fmin, fmax;
+    vec3 en;
+    if (!hull_span(hull_prism(P, range), ro, rd, tmin, tmax, fmin, fmax, en)) {
+        finish(false);
+        return;
+    }
+    vec3 q0 = hull_point_to_texture(P, ro + tmin * rd, fmin, range);
+    vec3 q1 = hull_point_to_texture(P, ro + tmax * rd, fmax, range);
+#if MESO_PASS == MESO_PASS_FORWARD
+    o_color = vec4(q0.z, q1.z, 0.5, 1.0); // a diagnostic: entry and exit w (no shading, no hook)
+#elif MESO_PASS == MESO_PASS_GBUFFER
+    // The hull face the depth lies on (fmax), facing the viewer.
+    emit_obj(vec3(0.0), u_albedo, 1.0, facing(en, rd), ro + tmax * rd, rd);
+#endif
+    write_depth(ro + tmax * rd);
+    finish(true);
+#else
+    // The walk (smooth shells, u_walk; runtime/rt_prism_walk.c): a ray that
+    // leaves its prism through a side without a hit goes on in the prism
+    // across that side, never back into the one it came from, for at most
+    // 512 prisms (a grazing ray may cross many).
+    int prism = v_prism, from = -1;
+    float t_from = 0.0; // the walk: where the ray entered this prism, about
+    for (int walked = 0; walked < 512; ++walked) {
+        Prism P = fetch_prism(prism);
+        vec3 hq;
+        float hw;
+        bool left;
+        int chord_side;
+        if (cast_prism(P, ro, rd, hq, hw, left, chord_side)) {
+            vec3 p = phi(P, hq);
+#if MESO_PASS != MESO_PASS_DEPTH
+            const bool curved = MESO_TECHNIQUE == 1;
+            shade_hit(map_jacobian(P, curved ? vec3(hq.xy, hw) : hq, curved), vec3(tex_st(P, hq.xy), hw), p, rd);
+#endif
+            write_depth(p);
+            finish(true);
+            return;
+        }
+#if defined(MESO_HULL_REJECT) && MESO_TECHNIQUE == 0
+        if (v_walk == 0 || !(left || g_no_span))
+            break;
+        float t_exit;
+        int side = exit_side(P, ro, rd, t_from, t_exit);
+        if (side < 0 && walked == 0 && g_no_span) {
+            // rasterised on P's cap, the ray misses P: it enters the
+            // neighbour across the edge the two caps share
+            side = grazed_side(P, ro, rd);
+            t_exit = t_from;
+        } else if (side < 0 && !(t_exit < 1e30)) {
+            side = chord_side; // no crossing found (rounding): the march's chord
+            t_exit = t_from;
+        }
+        if (side < 0)
+            break;
+        int next = side_neighbour(prism, side);
+        if (next < 0 || next == from)
+            break;
+        from = prism;
+        prism = next;
+        // the next prism's exit lies beyond this one (its entry here is
+        // inwards for it); a little before, for rounding
+        t_from = t_exit - 1e-5 * max(1.0, abs(t_exit));
+#else
+        break;
+#endif
+    }
+    finish(false);
 #endif
 }
 #endif

@@ -19,13 +19,43 @@
 // solid is nearer than; a solid reaching the near plane's eye side has
 // rays that start inside it, with no entry face: it keeps its exit faces,
 // moved onto the near plane (the nearest depth there is), and the
-// fragment shader finds the entry itself as before.
+// fragment shader finds the entry itself as before. With the walk (smooth
+// shells, u_walk; runtime/rt_prism_walk.c) the sides two prisms share are
+// left out: a fragment comes only where the ray enters the shell's volume.
 
 flat out int v_prism;
 flat out int v_tet;
 #ifdef MESO_HULL_REJECT
 uniform int u_hull_reject;
+uniform int u_near; // 0: no prism of the draw reaches the near plane's eye side (rt_shell.c)
+uniform int u_no_bottom; // 1: the bottom caps are never entered first (runtime/rt_bottom_caps.c)
 uniform vec4 u_depth_ndc; // raycast_common.glsl
+#if MESO_TECHNIQUE == 0
+flat out int v_walk;
+#endif
+
+// Whether a hull with corners X reaches the eye's side of the near plane:
+// clip z below (reversed-Z: above) u_depth_ndc.x * w.
+bool reaches_near(vec3 X[6], int count)
+{
+    float sgn = u_depth_ndc.x > u_depth_ndc.z ? -1.0 : 1.0;
+    bool near_side = false;
+    for (int c = 0; c < 6; ++c) {
+        if (c >= count)
+            break;
+        vec4 h = u_mvp * vec4(X[c], 1.0);
+        near_side = near_side || sgn * (h.z - u_depth_ndc.x * h.w) < 0.0;
+    }
+    return near_side;
+}
+
+bool prism_reaches_near(Prism P)
+{
+    vec3 X[6];
+    for (int c = 0; c < 6; ++c)
+        X[c] = corner_pos(P, c);
+    return reaches_near(X, 6);
+}
 #endif
 
 void main()
@@ -63,18 +93,15 @@ void main()
     bool inward = false, near_side = false;
 #ifdef MESO_HULL_REJECT
     if (u_hull_reject != 0) {
-        // The eye's side of the near plane: clip z below (reversed-Z: above)
-        // u_depth_ndc.x * w; the solid is the hull of its corners.
-        float sgn = u_depth_ndc.x > u_depth_ndc.z ? -1.0 : 1.0;
-        for (int c = 0; c < 6; ++c) {
+        if (u_near != 0) { // the solid is the hull of its corners
 #if MESO_TECHNIQUE == 2
-            if (c >= 4)
-                break;
-            vec4 h = u_mvp * vec4(corner_pos(P, T[c]), 1.0);
+            vec3 X[6];
+            for (int c = 0; c < 4; ++c)
+                X[c] = corner_pos(P, T[c]);
+            near_side = reaches_near(X, 4);
 #else
-            vec4 h = u_mvp * vec4(corner_pos(P, c), 1.0);
+            near_side = prism_reaches_near(P);
 #endif
-            near_side = near_side || sgn * (h.z - u_depth_ndc.x * h.w) < 0.0;
         }
         inward = !near_side;
     }
@@ -90,5 +117,21 @@ void main()
 #ifdef MESO_HULL_REJECT
     if (near_side)
         gl_Position.z = u_depth_ndc.x * gl_Position.w;
+#if MESO_TECHNIQUE == 0
+    // With the walk a side shared with a neighbour is crossed from prism to
+    // prism, never entered from outside the shell: not drawn (outside the
+    // clip volume). A prism at the near plane keeps all its faces and does
+    // not walk (its rays start inside it: every such prism on a pixel has a
+    // fragment of its own), so its neighbours keep the sides they share
+    // with it, where rays from it enter them.
+    v_walk = u_walk != 0 && !near_side ? 1 : 0;
+    if (u_no_bottom != 0 && face == 0) // near_side is false: u_near is 0
+        gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+    if (v_walk != 0 && face >= 2) {
+        int next = side_neighbour(prism, (face - 2) / 2);
+        if (next >= 0 && (u_near == 0 || !prism_reaches_near(fetch_prism(next))))
+            gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+    }
+#endif
 #endif
 }

@@ -176,6 +176,10 @@ static meso_rt_draw_desc scene_desc(float tau)
      * the rejection saves, with MESO_BENCH_OBJECTS) */
     const char* nr = getenv("MESO_BENCH_NO_HULL_REJECT");
     d.shell.no_hull_reject = nr && atoi(nr) ? 1 : 0;
+    /* MESO_BENCH_NO_WALK=1: every prism rasterises its entry faces (what
+     * the walk, rt_prism_walk.c, saves) */
+    const char* nw = getenv("MESO_BENCH_NO_WALK");
+    d.shell.no_prism_walk = nw && atoi(nw) ? 1 : 0;
     return d;
 }
 

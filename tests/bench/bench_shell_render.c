@@ -7,9 +7,11 @@
  *               double thickness (directors scaled through
  *               meso_rt_shell_update), 8x and 1/8 tiling (uv_scale), and
  *               the reference setup again without hull rejection
- *               (no_hull_reject: every hull fragment ray casts, issue 14);
- *               fragments_per_px counts the ray-casting ones,
- *               rejected_per_px those stopped behind a hit found already;
+ *               (no_hull_reject: every hull fragment ray casts, issue 14)
+ *               and without the walk (no_prism_walk: smooth prisms draw
+ *               all their entry faces); fragments_per_px counts the
+ *               ray-casting ones, rejected_per_px those stopped behind a
+ *               hit found already;
  *  shell_render_error.csv  each technique against the exact reference
  *               (smooth and curved mappings) at 400x300;
  *  shell_render_sweep.csv  cost against error as the knobs move: error
@@ -145,8 +147,9 @@ int main(int argc, char** argv)
         const char* name;
         int w, h;
         double thick, tiling;
-        int no_reject;
+        int no_reject; /* 1: no hull rejection; 2: rejection without the walk */
     } rows[] = {{"reference setup", 800, 600, 1, 1, 0},    {"without rejection", 800, 600, 1, 1, 1},
+                {"without the walk", 800, 600, 1, 1, 2},
                 {"screen 640x480", 640, 480, 1, 1, 0},     {"screen 1280x1024", 1280, 1024, 1, 1, 0},
                 {"half thickness", 800, 600, 0.5, 1, 0},   {"double thickness", 800, 600, 2, 1, 0},
                 {"8x tiling", 800, 600, 1, 8, 0},          {"1/8 tiling", 800, 600, 1, 0.125, 0}};
@@ -157,7 +160,8 @@ int main(int argc, char** argv)
         meso_rt_shell_update(b.rt, obj, NULL, scaled, nv);
         for (int t = 0; t < 4; ++t) {
             meso_rt_draw_desc d = {.shell = {.technique = tech_order[t], .uv_scale = (float)rows[r].tiling,
-                                             .no_hull_reject = rows[r].no_reject}};
+                                             .no_hull_reject = rows[r].no_reject == 1,
+                                             .no_prism_walk = rows[r].no_reject == 2}};
             timing tm = time_draw(&b, obj, d, reps, NULL, NULL);
             fprintf(t1, "%s,%s,%d,%d,%.2f,%.2f,%.2f,%ld,%.2f\n", rows[r].name, tech_names[tech_order[t]],
                     rows[r].w, rows[r].h, tm.ms, tm.steps_per_px, tm.frags_per_px, tm.covered, tm.rejected_per_px);
