@@ -149,9 +149,14 @@ typedef struct mesoi_shell {
      * side k of triangle t (-1: none), host copy; adj_buf (R32I texture
      * buffer, with order_buf) the same per slot of order_buf, as slots. */
     int32_t* neighbours;
+    /* mates[3 t + k]: the side (3 u + m: side m of triangle u) across side
+     * k of triangle t on the welded corners, folded or not (-1: none);
+     * found once, kept while meso_rt_shell_update leaves the corners it
+     * welded equal */
+    int32_t* mates;
     GLuint adj_buf, adj_tex;
     float box_min[3], box_max[3]; /* every prism corner lies inside (fill_vertex_texels) */
-    int closed;                   /* every edge of two triangles (mesoi_prism_neighbours) */
+    int closed;                   /* every edge of two triangles (mesoi_prism_topology) */
     int32_t sort_cell;
     int order_stale;
     /* Set by a parts draw (rt_parts.c) for one draw: only these prisms
@@ -179,10 +184,16 @@ meso_result mesoi_slices_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_d
 void mesoi_slices_destroy(meso_rt* rt);
 
 meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t object_id, mesoi_object* o);
-/* Fills out[3 t + k] (3 per triangle) with the triangle across side k of
- * triangle t, -1 for none; *closed: every edge has two triangles
- * (rt_prism_walk.c). */
-meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, int32_t* out, int* closed);
+/* The walk's neighbours (rt_prism_walk.c). mesoi_prism_topology fills
+ * mates[3 t + k] (3 per triangle) with the side 3 u + m (side m of
+ * triangle u) across side k of triangle t on the welded corners, -1 for
+ * none; *closed: every edge has two triangles. mesoi_prism_topology_holds:
+ * whether every pair of mates still shares its side's corners bit for bit
+ * (after a shape update). mesoi_prism_neighbours: out = the mates whose
+ * prisms are both regular (not folded), -1 elsewhere. */
+meso_result mesoi_prism_topology(meso_rt* rt, const mesoi_shell* s, int32_t* mates, int* closed);
+int mesoi_prism_topology_holds(const mesoi_shell* s, const int32_t* mates);
+meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, const int32_t* mates, int32_t* out);
 void mesoi_shell_release(meso_rt* rt, mesoi_object* o);
 /* The kinds' draws: one object (inst NULL: desc->model, uniforms), or
  * `count` instances in one instanced draw call (rt_instances.c). */

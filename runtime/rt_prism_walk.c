@@ -58,6 +58,18 @@
  *    every ray starts outside it, and outside what the caps enclose (an eye
  *    inside the box has corners behind it, on the near plane's eye side).
  *    A volume may be empty at w = 0: its bottom caps are always drawn.
+ *  - meso_rt_shell_update: a prism may fold, or unfold, with the shape, so
+ *    the folding is tested again (once a prism, not per shared side). The
+ *    weld is kept while every pair of neighbours still shares its side's
+ *    corners bit for bit (mesoi_prism_topology_holds, one pass), and found
+ *    again (a sort) when a pair no longer does: a shape that moves a seam's
+ *    split vertices apart opens a crack no ray may walk across
+ *    (test_rt_shell_reject.c "cracked seam"). Corners that come together
+ *    only after the load are not welded until a pair breaks: their sides
+ *    stay drawn, which is correct, only less walked. Measured on spot_uv
+ *    (5856 prisms, tests/bench/bench_anim_update.c): 0.42-0.46 ms an update,
+ *    against 2.2-2.9 ms welding again every time and 2.7 ms before, when
+ *    the folding was tested for both prisms of every side.
  *  - The shaders see the prisms in the order they are drawn (order_buf,
  *    rt_shell.c order_prisms), so the neighbours go up in that order too:
  *    adj_buf holds, per drawn slot, the slots of its neighbours. A prism
@@ -143,7 +155,21 @@ static int prism_regular(const mesoi_shell* s, uint32_t t)
     return 1;
 }
 
-meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, int32_t* out, int* closed)
+/* A vertex's corner key: bottom position, top director, second-layer
+ * director (+0.0f: -0 and 0 are one point). */
+static void corner_of(const mesoi_shell* s, uint32_t v, float key[9])
+{
+    const size_t nv = s->vertex_count;
+    memset(key, 0, sizeof(float) * 9);
+    for (int k = 0; k < 3; ++k) {
+        key[k] = s->positions[3 * (size_t)v + k] + 0.0f;
+        key[3 + k] = s->directors[3 * (size_t)v + k] + 0.0f;
+        if (s->layers == 2)
+            key[6 + k] = s->directors[3 * (nv + v) + k] + 0.0f;
+    }
+}
+
+meso_result mesoi_prism_topology(meso_rt* rt, const mesoi_shell* s, int32_t* mates, int* closed)
 {
     const uint32_t nv = s->vertex_count, nt = s->triangle_count;
     corner_key* ck = mesoi_rt_alloc(rt, sizeof(corner_key) * (nv ? nv : 1));
@@ -156,14 +182,7 @@ meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, int32_t* o
         return MESO_ERR_OUT_OF_MEMORY;
     }
     for (uint32_t v = 0; v < nv; ++v) {
-        memset(ck[v].v, 0, sizeof ck[v].v);
-        for (int k = 0; k < 3; ++k) {
-            /* +0.0f: -0 and 0 are one point */
-            ck[v].v[k] = s->positions[3 * (size_t)v + k] + 0.0f;
-            ck[v].v[3 + k] = s->directors[3 * (size_t)v + k] + 0.0f;
-            if (s->layers == 2)
-                ck[v].v[6 + k] = s->directors[3 * ((size_t)nv + v) + k] + 0.0f;
-        }
+        corner_of(s, v, ck[v].v);
         ck[v].vertex = v;
     }
     qsort(ck, nv, sizeof(corner_key), by_corner);
@@ -174,7 +193,7 @@ meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, int32_t* o
     *closed = 1;
     for (uint32_t t = 0; t < nt; ++t)
         for (uint32_t k = 0; k < 3; ++k) {
-            out[3 * (size_t)t + k] = -1;
+            mates[3 * (size_t)t + k] = -1;
             const uint32_t i = s->indices[3 * (size_t)t + k], j = s->indices[3 * (size_t)t + (k + 1) % 3];
             if (i >= nv || j >= nv) {
                 *closed = 0;
@@ -196,15 +215,67 @@ meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, int32_t* o
             ++j;
         if (j - i != 2)
             *closed = 0;
-        if (j - i == 2 && ek[i].slot / 3 != ek[i + 1].slot / 3 && prism_regular(s, ek[i].slot / 3) &&
-            prism_regular(s, ek[i + 1].slot / 3)) {
-            out[ek[i].slot] = (int32_t)(ek[i + 1].slot / 3);
-            out[ek[i + 1].slot] = (int32_t)(ek[i].slot / 3);
+        if (j - i == 2 && ek[i].slot / 3 != ek[i + 1].slot / 3) {
+            mates[ek[i].slot] = (int32_t)ek[i + 1].slot;
+            mates[ek[i + 1].slot] = (int32_t)ek[i].slot;
         }
         i = j;
     }
     mesoi_rt_free(rt, ck);
     mesoi_rt_free(rt, weld);
     mesoi_rt_free(rt, ek);
+    return MESO_OK;
+}
+
+/* Whether vertices a and b are one prism corner (corner_of's keys equal). */
+static int same_corner(const mesoi_shell* s, uint32_t a, uint32_t b)
+{
+    if (a == b)
+        return 1;
+    const size_t nv = s->vertex_count;
+    for (int k = 0; k < 3; ++k) {
+        /* +0.0f: -0 and 0 are one point; bit for bit otherwise (NaN too) */
+        const float pa = s->positions[3 * (size_t)a + k] + 0.0f, pb = s->positions[3 * (size_t)b + k] + 0.0f;
+        const float da = s->directors[3 * (size_t)a + k] + 0.0f, db = s->directors[3 * (size_t)b + k] + 0.0f;
+        if (memcmp(&pa, &pb, sizeof pa) || memcmp(&da, &db, sizeof da))
+            return 0;
+        if (s->layers == 2) {
+            const float ea = s->directors[3 * (nv + a) + k] + 0.0f, eb = s->directors[3 * (nv + b) + k] + 0.0f;
+            if (memcmp(&ea, &eb, sizeof ea))
+                return 0;
+        }
+    }
+    return 1;
+}
+
+int mesoi_prism_topology_holds(const mesoi_shell* s, const int32_t* mates)
+{
+    const uint32_t nt = s->triangle_count;
+    for (uint32_t e = 0; e < 3 * nt; ++e) {
+        const int32_t f = mates[e];
+        if (f < 0 || (uint32_t)f < e)
+            continue; /* none, or the pair checked from its other side */
+        const uint32_t t = e / 3, k = e % 3, u = (uint32_t)f / 3, m = (uint32_t)f % 3;
+        const uint32_t i = s->indices[3 * t + k], j = s->indices[3 * t + (k + 1) % 3];
+        const uint32_t c = s->indices[3 * u + m], d = s->indices[3 * u + (m + 1) % 3];
+        /* the two sides' corners still one, either way round, and apart */
+        if (same_corner(s, i, j) ||
+            !((same_corner(s, i, d) && same_corner(s, j, c)) || (same_corner(s, i, c) && same_corner(s, j, d))))
+            return 0;
+    }
+    return 1;
+}
+
+meso_result mesoi_prism_neighbours(meso_rt* rt, const mesoi_shell* s, const int32_t* mates, int32_t* out)
+{
+    const uint32_t nt = s->triangle_count;
+    uint8_t* regular = mesoi_rt_alloc(rt, nt ? nt : 1);
+    if (!regular)
+        return MESO_ERR_OUT_OF_MEMORY;
+    for (uint32_t t = 0; t < nt; ++t)
+        regular[t] = (uint8_t)prism_regular(s, t);
+    for (size_t i = 0; i < 3 * (size_t)nt; ++i)
+        out[i] = mates[i] >= 0 && regular[i / 3] && regular[mates[i] / 3] ? mates[i] / 3 : -1;
+    mesoi_rt_free(rt, regular);
     return MESO_OK;
 }

@@ -38,6 +38,7 @@ static void shell_free(meso_rt* rt, mesoi_shell* s)
     gl->DeleteTextures(7, tex);
     gl->DeleteBuffers(4, buf);
     mesoi_rt_free(rt, s->neighbours);
+    mesoi_rt_free(rt, s->mates);
     mesoi_rt_free(rt, s->positions);
     mesoi_rt_free(rt, s->directors);
     mesoi_rt_free(rt, s->uvs);
@@ -299,7 +300,11 @@ meso_result mesoi_shell_load(meso_rt* rt, meso_file* f, uint32_t id, mesoi_objec
             s->order_tex = mesoi_texture_buffer(rt, GL_R32UI, mv.indices,
                                                 sizeof(uint32_t) * 3 * (size_t)s->triangle_count, &s->order_buf);
             s->neighbours = mesoi_rt_alloc(rt, sizeof(int32_t) * 3 * (size_t)s->triangle_count);
-            r = s->neighbours ? mesoi_prism_neighbours(rt, s, s->neighbours, &s->closed) : MESO_ERR_OUT_OF_MEMORY;
+            s->mates = mesoi_rt_alloc(rt, sizeof(int32_t) * 3 * (size_t)s->triangle_count);
+            r = s->neighbours && s->mates ? mesoi_prism_topology(rt, s, s->mates, &s->closed)
+                                          : MESO_ERR_OUT_OF_MEMORY;
+            if (r == MESO_OK)
+                r = mesoi_prism_neighbours(rt, s, s->mates, s->neighbours);
             if (r == MESO_OK) /* slots = triangles until the first sort */
                 s->adj_tex = mesoi_texture_buffer(rt, GL_R32I, s->neighbours,
                                                   sizeof(int32_t) * 3 * (size_t)s->triangle_count, &s->adj_buf);
@@ -356,11 +361,14 @@ meso_result meso_rt_shell_update(meso_rt* rt, meso_rt_object h, const float* pos
     fill_vertex_texels(s, texels);
     meso_result r = mesoi_buffer_update(rt, s->vert_buf, texels, sizeof(float) * 8 * nv, "meso_rt_shell_update");
     mesoi_rt_free(rt, texels);
-    /* which prisms are folded, and which vertices one corner, may change
-     * with the shape (rt_prism_walk.c): found again, uploaded with the
-     * next sort */
+    /* Which prisms are folded may change with the shape (rt_prism_walk.c):
+     * tested again, one pass. The welded topology is kept unless a pair of
+     * mates no longer shares its corners (split vertices moved apart); then
+     * it is found again (a sort). Uploaded with the next sort. */
+    if (r == MESO_OK && s->neighbours && !mesoi_prism_topology_holds(s, s->mates))
+        r = mesoi_prism_topology(rt, s, s->mates, &s->closed);
     if (r == MESO_OK && s->neighbours)
-        r = mesoi_prism_neighbours(rt, s, s->neighbours, &s->closed);
+        r = mesoi_prism_neighbours(rt, s, s->mates, s->neighbours);
     s->order_stale = 1;
     return r;
 }

@@ -428,15 +428,16 @@ bool hull_span(Prism HP, vec3 ro, vec3 rd, out float tmin, out float tmax, out i
 // The march through one prism (sec. 4.3, 4.4). True on a hit: hq its
 // texture point (u, v, w of the smooth prism), hw the texture function's w
 // there. Else `left`: the march went through the whole prism (not out of
-// steps), so the walk may go on where the ray leaves it; g_no_span: no part
-// of the ray lies in the prism.
+// steps), so the walk may go on where the ray leaves it, and q0, q1 are
+// the ends of the march's chord; g_no_span: no part of the ray lies in the
+// prism.
 bool g_no_span = false;
-bool cast_prism(Prism P, vec3 ro, vec3 rd, out vec3 hq, out float hw, out bool left, out int chord_side)
+bool cast_prism(Prism P, vec3 ro, vec3 rd, out vec3 hq, out float hw, out bool left, out vec3 cq0, out vec3 cq1)
 {
     hq = vec3(0.0);
     hw = 0.0;
     left = false;
-    chord_side = -1;
+    cq0 = cq1 = vec3(0.0);
     vec2 range = hull_levels(P);
     float tmin, tmax;
     int fmin, fmax;
@@ -543,24 +544,8 @@ bool cast_prism(Prism P, vec3 ro, vec3 rd, out vec3 hq, out float hw, out bool l
     }
     if (!hit) {
         left = !budget_spent;
-        if (left) {
-            // The side the chord q0 -> q1 leaves through: the corner weight
-            // (u, v, 1 - u - v) that falls below 0 first along it (one below
-            // 0 at q0: at once); none: a cap. Only where exit_side finds no
-            // crossing at all (rounding on a twisted side).
-            float c0[3] = float[3](q0.x, q0.y, 1.0 - q0.x - q0.y);
-            float c1[3] = float[3](q1.x, q1.y, 1.0 - q1.x - q1.y);
-            float first = 1e30;
-            for (int j = 0; j < 3; ++j) {
-                float b = c1[j] - c0[j];
-                float f = b < 0.0 && c1[j] < 1e-3 ? -c0[j] / b : 1e30;
-                if (f < first) {
-                    first = f;
-                    // corner 1's weight (u) gone: side 2; v: side 0; 1 - u - v: side 1
-                    chord_side = j == 0 ? 2 : (j == 1 ? 0 : 1);
-                }
-            }
-        }
+        cq0 = q0;
+        cq1 = q1;
         return false;
     }
     // sec. 4.4: bisection between the last empty sample and the first solid one.
@@ -609,6 +594,28 @@ bool cast_prism(Prism P, vec3 ro, vec3 rd, out vec3 hq, out float hw, out bool l
 // side): the side across from the corner whose weight is lowest where the
 // ray meets the plane of the cap (top or bottom, whichever it meets nearer
 // the triangle); -1 if none is near.
+// The side the march's chord q0 -> q1 (texture space) leaves through: the
+// corner weight (u, v, 1 - u - v) that falls below 0 first along it (one
+// below 0 at q0: at once); -1 none: a cap. Only where exit_side finds no
+// crossing at all (rounding on a twisted side).
+int chord_side(vec3 q0, vec3 q1)
+{
+    float c0[3] = float[3](q0.x, q0.y, 1.0 - q0.x - q0.y);
+    float c1[3] = float[3](q1.x, q1.y, 1.0 - q1.x - q1.y);
+    float first = 1e30;
+    int side = -1;
+    for (int j = 0; j < 3; ++j) {
+        float b = c1[j] - c0[j];
+        float f = b < 0.0 && c1[j] < 1e-3 ? -c0[j] / b : 1e30;
+        if (f < first) {
+            first = f;
+            // corner 1's weight (u) gone: side 2; v: side 0; 1 - u - v: side 1
+            side = j == 0 ? 2 : (j == 1 ? 0 : 1);
+        }
+    }
+    return side;
+}
+
 int grazed_side(Prism P, vec3 ro, vec3 rd)
 {
     int side = -1;
@@ -741,8 +748,8 @@ void main()
         vec3 hq;
         float hw;
         bool left;
-        int chord_side;
-        if (cast_prism(P, ro, rd, hq, hw, left, chord_side)) {
+        vec3 cq0, cq1;
+        if (cast_prism(P, ro, rd, hq, hw, left, cq0, cq1)) {
             vec3 p = phi(P, hq);
 #if MESO_PASS != MESO_PASS_DEPTH
             const bool curved = MESO_TECHNIQUE == 1;
@@ -763,7 +770,7 @@ void main()
             side = grazed_side(P, ro, rd);
             t_exit = t_from;
         } else if (side < 0 && !(t_exit < 1e30)) {
-            side = chord_side; // no crossing found (rounding): the march's chord
+            side = chord_side(cq0, cq1); // no crossing found (rounding): the march's chord
             t_exit = t_from;
         }
         if (side < 0)

@@ -11,6 +11,13 @@
  * each case is also timed as update + one 16 x 16 draw, next to the same
  * draw without an update ("draw only").
  *
+ * Shape updates (meso_rt_shell_update; `res` is the vertex count, `bytes`
+ * the vertex texels uploaded) on a bake of spot_uv with the bricks height
+ * field: the directors scaled by 1 +- 1 %, alternately, so the walk's
+ * welded neighbours are kept and the folding test runs again
+ * (rt_prism_walk.c). With MESO_BENCH_LEVEL0=1 the textures have no mip
+ * levels (MESO_FILTER_LEVEL0): what the uploads cost without building them.
+ *
  * usage: bench_anim_update OUT.csv MESOBAKE TEST_DATA_DIR
  */
 #include <GL/glcorearb.h>
@@ -23,6 +30,7 @@
 #include "gl_fbo.h"
 #include "meso_clock.h"
 #include "meso_rt.h"
+#include "shell_reference.h"
 
 enum { RUNS = 25, WARM = 3 };
 
@@ -71,8 +79,8 @@ static void report(FILE* csv, const char* what, uint32_t w, size_t bytes, double
 {
     qsort(t, (size_t)n, sizeof(double), cmp_double);
     const double med = n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-    printf("%-28s %4u^3  %9zu bytes  median %7.2f ms  min %7.2f  max %7.2f  (%d updates)\n", what, w, bytes, 1e3 * med,
-           1e3 * t[0], 1e3 * t[n - 1], n);
+    printf("%-34s res %5u  %9zu bytes  median %7.2f ms  min %7.2f  max %7.2f  (%d updates)\n", what, w, bytes,
+           1e3 * med, 1e3 * t[0], 1e3 * t[n - 1], n);
     fprintf(csv, "%s,%u,%zu,%d,%.3f,%.3f,%.3f\n", what, w, bytes, n, 1e3 * med, 1e3 * t[0], 1e3 * t[n - 1]);
 }
 
@@ -110,6 +118,24 @@ static void set_time(int k, void* user)
         fail("meso_rt_shell_set_time failed");
 }
 
+/* A shape for meso_rt_shell_update: the bake's directors, and a copy
+ * changed per call. */
+typedef struct shape {
+    meso_ref_shell ref;
+    float* directors;
+} shape;
+
+static void scale_directors(int k, void* user)
+{
+    shape* sh = user;
+    const size_t n = 3 * (size_t)sh->ref.vertex_count * sh->ref.layers;
+    const float f = k & 1 ? 1.01f : 0.99f;
+    for (size_t i = 0; i < n; ++i)
+        sh->directors[i] = f * sh->ref.directors[i];
+    if (meso_rt_shell_update(rt_g, obj_g, NULL, sh->directors, sh->ref.vertex_count) != MESO_OK)
+        fail("meso_rt_shell_update failed");
+}
+
 int main(int argc, char** argv)
 {
     if (argc != 4)
@@ -124,7 +150,12 @@ int main(int argc, char** argv)
         fail("no framebuffer");
     PFNGLGETSTRINGPROC GetString = (PFNGLGETSTRINGPROC)meso_egl_proc("glGetString");
     meso_rt* rt = NULL;
-    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) != MESO_OK)
+    /* MESO_BENCH_LEVEL0=1: textures without mip levels (what an upload
+     * costs without building them) */
+    const char* l0 = getenv("MESO_BENCH_LEVEL0");
+    const meso_texture_filter filter = l0 && atoi(l0) ? MESO_FILTER_LEVEL0 : MESO_FILTER_MIPMAP;
+    if (meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc, .texture_filter = filter}, &rt) !=
+        MESO_OK)
         fail("meso_rt_create failed");
     char path[512], cmd[2048];
     snprintf(path, sizeof(path), "/tmp/bench_anim_update_%d.meso", (int)getpid());
@@ -183,6 +214,32 @@ int main(int argc, char** argv)
     time_updates(set_time, &s, t, td);
     report(csv, "set_time (stored frame)", 64, (size_t)64 * 64 * 64 + (size_t)32 * 32 * 32, t, RUNS);
     report(csv, "set_time + draw", 64, (size_t)64 * 64 * 64 + (size_t)32 * 32 * 32, td, RUNS);
+    meso_rt_release_object(rt, obj);
+
+    /* Shape updates on spot_uv (bricks). */
+    snprintf(cmd, sizeof(cmd), "'%s' shell -i '%s/spot_uv.obj' --texture bricks:32 -j 2 -o '%s' 2>/dev/null",
+             argv[2], argv[3], path);
+    shape sh = {0};
+    if (system(cmd) != 0)
+        fail("mesobake failed");
+    if (meso_file_open_path(path, NULL, &f, &err) != MESO_OK || meso_rt_load_object(rt, f, 1, &obj) != MESO_OK ||
+        meso_ref_shell_load(f, 1, &sh.ref, &err) != MESO_OK)
+        fail("loading the spot bake failed");
+    meso_file_close(f);
+    remove(path);
+    obj_g = obj;
+    sh.directors = malloc(sizeof(float) * 3 * sh.ref.vertex_count * sh.ref.layers);
+    if (!sh.directors)
+        fail("out of memory");
+    meso_rt_object_bounds(rt, obj, lo, hi);
+    const double eye2[3] = {0.0, 0.5 * (lo[1] + hi[1]), 3.0 * hi[2]};
+    meso_camera_look_at(draw_desc.view, eye2, at, up);
+    const size_t texels = (size_t)32 * sh.ref.vertex_count;
+    time_updates(scale_directors, &sh, t, td);
+    report(csv, "shell_update (directors)", sh.ref.vertex_count, texels, t, RUNS);
+    report(csv, "shell_update (directors) + draw", sh.ref.vertex_count, texels, td, RUNS);
+    free(sh.directors);
+    meso_ref_shell_free(&sh.ref);
     test_fbo_destroy(&fbo);
     fclose(csv);
     meso_rt_release_object(rt, obj);

@@ -32,7 +32,11 @@
  *    crossing behind the hit: with the prisms sorted front to back (smooth,
  *    curved) fewer than half the fragments ray cast; fewer steps for all;
  *  - nothing is rejected under a depth function that does not let the
- *    nearer fragment win (GL_ALWAYS), and the image is unchanged there too.
+ *    nearer fragment win (GL_ALWAYS), and the image is unchanged there too;
+ *  - all of this after shape updates (meso_rt_shell_update) of the closed
+ *    shell with a uv seam: grown by 5 % (the welded neighbours kept), and
+ *    with the seam's split vertices moved apart, a crack the walk must not
+ *    cross (neighbours found again; kept, 193 pixels differed).
  * With MESO_TEST_NO_HULL_REJECT set (meson runs it with GL_ARB_clear_texture
  * hidden), the fallback: nothing rejected, the counts equal.
  * Accuracy against the exact reference, with rejection (the default), is
@@ -76,9 +80,16 @@ static long covered(const frame* f)
 }
 
 /* Draws with and without rejection; checks what the header lists. */
+/* A shape update before the draws (meso_rt_shell_update's positions; NULL:
+ * none). */
+typedef struct update {
+    const float* positions;
+    uint32_t vertex_count;
+} update;
+
 static void compare_case(meso_rt* rt, test_fbo* fbo, const char* name, const uint8_t* file, size_t size,
                          const camera* cam, meso_shell_technique t, int outside, int expect_reject, int always,
-                         int closed, int exact)
+                         int closed, int exact, update up)
 {
     meso_file* f = NULL;
     meso_error err;
@@ -86,6 +97,13 @@ static void compare_case(meso_rt* rt, test_fbo* fbo, const char* name, const uin
     meso_rt_object obj;
     CHECK(meso_rt_load_object(rt, f, 1, &obj) == MESO_OK);
     meso_file_close(f);
+    if (up.positions) {
+        frame* before = malloc(sizeof(frame)); /* drawn once first: the walk's neighbours in use */
+        CHECK(before != NULL);
+        draw(rt, fbo, obj, cam, (meso_rt_draw_desc){.shell = {.technique = t}}, before);
+        free(before);
+        CHECK(meso_rt_shell_update(rt, obj, up.positions, NULL, up.vertex_count) == MESO_OK);
+    }
     static frame off, on, walkless, always_off, always_on;
     draw(rt, fbo, obj, cam, (meso_rt_draw_desc){.shell = {.technique = t, .no_hull_reject = 1}}, &off);
     draw(rt, fbo, obj, cam, (meso_rt_draw_desc){.shell = {.technique = t}}, &on);
@@ -233,7 +251,8 @@ int main(int argc, char** argv)
                                          MESO_SHELL_SEGMENT_ONLY};
     /* The fallback (no rejection at all) on one technique: the others draw alike. */
     for (int t = 0; t < (expect_reject ? 4 : 1); ++t)
-        compare_case(rt, &fbo, "sphere+height", file, size, &cam, all[t], 1, expect_reject, t == 0, 1, 1);
+        compare_case(rt, &fbo, "sphere+height", file, size, &cam, all[t], 1, expect_reject, t == 0, 1, 1,
+                     (update){0});
     free(file);
 
     /* An open shell with a uv seam (smooth): the walk stops at the hole's
@@ -243,7 +262,26 @@ int main(int argc, char** argv)
         open_seamed(&m, hole, &seamed);
         file = shell_file(&seamed, 0.12, &height, 1, &size);
         compare_case(rt, &fbo, hole ? "open+seam" : "closed+seam", file, size, &cam, MESO_SHELL_SMOOTH, 1,
-                     expect_reject, 0, !hole, 1);
+                     expect_reject, 0, !hole, 1, (update){0});
+        if (!hole) {
+            /* Shape updates (meso_rt_shell_update): grown by 5 %, the seam's
+             * split vertices stay one corner and the walk keeps its
+             * neighbours; then the x > 0 half (the split-off copies) moved
+             * 0.03 along x, a crack along the seam that no ray may walk
+             * across (the neighbours are found again). */
+            const uint32_t nv = seamed.vertex_count;
+            float* moved = malloc(sizeof(float) * 3 * nv);
+            CHECK(moved != NULL);
+            for (uint32_t v = 0; v < 3 * nv; ++v)
+                moved[v] = 1.05f * seamed.positions[v];
+            compare_case(rt, &fbo, "grown+seam", file, size, &cam, MESO_SHELL_SMOOTH, 1, expect_reject, 0, 1, 1,
+                         (update){moved, nv});
+            for (uint32_t v = nv / 2; v < nv; ++v)
+                moved[3 * v] = seamed.positions[3 * v] + 0.03f;
+            compare_case(rt, &fbo, "cracked seam", file, size, &cam, MESO_SHELL_SMOOTH, 1, expect_reject, 0, 0, 1,
+                         (update){moved, nv});
+            free(moved);
+        }
         free(file);
         meso_mesh_free(&seamed);
     }
@@ -262,7 +300,8 @@ int main(int argc, char** argv)
         uint8_t* baked = test_read_file(path, &size);
         CHECK(baked != NULL);
         const camera spot_cam = {.eye = {1.5, 1.1, 2.3}, .at = {0.0, 0.1, 0.2}, .fovy = 0.7, .zn = 0.5, .zf = 10};
-        compare_case(rt, &fbo, "spot (baked)", baked, size, &spot_cam, MESO_SHELL_SMOOTH, 1, expect_reject, 0, 0, 0);
+        compare_case(rt, &fbo, "spot (baked)", baked, size, &spot_cam, MESO_SHELL_SMOOTH, 1, expect_reject, 0, 0, 0,
+                     (update){0});
         free(baked);
         remove(path);
         rmdir(dir);
@@ -272,7 +311,8 @@ int main(int argc, char** argv)
      * their exit faces on it (shell_vert.glsl), never rejected. */
     file = shell_file(&m, 0.4, &height, 1, &size);
     const camera inside = {.eye = {0.0, 0.05, 1.3}, .at = {1.0, 0.2, 0.9}, .fovy = 1.2, .zn = 0.01, .zf = 10};
-    compare_case(rt, &fbo, "inside-shell", file, size, &inside, MESO_SHELL_SMOOTH, 0, expect_reject, 0, 1, 1);
+    compare_case(rt, &fbo, "inside-shell", file, size, &inside, MESO_SHELL_SMOOTH, 0, expect_reject, 0, 1, 1,
+                 (update){0});
     free(file);
 
     meso_mesh_free(&m);
