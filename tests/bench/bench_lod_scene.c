@@ -31,7 +31,8 @@
  * Output: one CSV (section, setting, metric, value). 320 x 240 pixels, on
  * one llvmpipe render thread (LP_NUM_THREADS=1 unless set: see main).
  * With PNG: the scene at 1 px beside the level each pixel's object drew
- * (white the finest, then blue, green, yellow, orange, magenta, violet).
+ * (white the finest, then blue, green, yellow, orange, magenta, violet, grey
+ * for 7 and coarser).
  * With MESO_BENCH_OBJECTS=T in the environment it prints, instead, each
  * object's distance, level drawn, resident bytes, draw time (alone,
  * median of 5), ray-casting fragments, steps per fragment and (shells) hull

@@ -28,7 +28,7 @@
  * entries of an older baker are never served. tests/integration/batch_cache_version.sh
  * holds known-answer digests of bakes under this number and fails when the
  * bytes change but the number did not. */
-#define MESO_BATCH_CACHE_VERSION 25
+#define MESO_BATCH_CACHE_VERSION 26
 
 /* Manifest issue codes (meso_error.code, "E<code>"; exit 3 unless noted):
  *   3450 the manifest cannot be read (exit 2)

@@ -21,7 +21,7 @@ static const char* const usage_mesh =
     "Levels of detail:\n"
     "      --levels auto|N     auto (default): simplified levels (meshoptimizer), each with half\n"
     "                          the previous one's triangles, while a level keeps under 85 % of\n"
-    "                          them and the previous had more than 256, at most 8 levels; each\n"
+    "                          them and the previous had more than 64, at most 8 levels; each\n"
     "                          level's error (its largest distance to the finest surface, both\n"
     "                          ways) is measured and stored (LODS). N (1..16): at most N levels;\n"
     "                          1 = the finest only (no LODS chunk). Vertices split at uv or\n"
