@@ -578,22 +578,6 @@ bool cast_prism(Prism P, vec3 ro, vec3 rd, out vec3 hq, out float hw, out bool l
 #endif
 
 #if defined(MESO_HULL_REJECT) && MESO_TECHNIQUE == 0
-// Where the ray leaves smooth prism P first after ray parameter t_from: the
-// side 0..2 it crosses outwards (side k: corners k, k + 1, the bilinear
-// patch B(s, w) = (1 - s)(b_k + w n_k) + s(b_k1 + w n_k1)), or -1 when that
-// is a cap (out of the shell, or into what the base mesh encloses) or
-// nothing; t_exit its parameter. Exact, not the march's chord (which
-// bends in texture space and, near a corner, picked sides the ray never
-// crosses): a side is met where the ray and the patch's line at level w
-// are coplanar, det(rd, A_k(w) - ro, A_k1(w) - A_k(w)) = 0, a quadratic in
-// w; s and t then follow from the two lines' closest points. A crossing
-// counts where the ray goes outwards: away from the opposite corner at the
-// same level for a side, up through the top cap, down through the bottom.
-// The side of P whose neighbour a ray belongs to that was rasterised on P's
-// cap but misses P (it grazes the edge two caps share, on the neighbour's
-// side): the side across from the corner whose weight is lowest where the
-// ray meets the plane of the cap (top or bottom, whichever it meets nearer
-// the triangle); -1 if none is near.
 // The side the march's chord q0 -> q1 (texture space) leaves through: the
 // corner weight (u, v, 1 - u - v) that falls below 0 first along it (one
 // below 0 at q0: at once); -1 none: a cap. Only where exit_side finds no
@@ -616,6 +600,11 @@ int chord_side(vec3 q0, vec3 q1)
     return side;
 }
 
+// The side of P whose neighbour a ray belongs to that was rasterised on P's
+// cap but misses P (it grazes the edge two caps share, on the neighbour's
+// side): the side across from the corner whose weight is lowest where the
+// ray meets the plane of the cap (top or bottom, whichever it meets nearer
+// the triangle); -1 if none is near.
 int grazed_side(Prism P, vec3 ro, vec3 rd)
 {
     int side = -1;
@@ -637,6 +626,17 @@ int grazed_side(Prism P, vec3 ro, vec3 rd)
     return side;
 }
 
+// Where the ray leaves smooth prism P first after ray parameter t_from: the
+// side 0..2 it crosses outwards (side k: corners k, k + 1, the bilinear
+// patch B(s, w) = (1 - s)(b_k + w n_k) + s(b_k1 + w n_k1)), or -1 when that
+// is a cap (out of the shell, or into what the base mesh encloses) or
+// nothing; t_exit its parameter. Exact, not the march's chord (which
+// bends in texture space and, near a corner, picked sides the ray never
+// crosses): a side is met where the ray and the patch's line at level w
+// are coplanar, det(rd, A_k(w) - ro, A_k1(w) - A_k(w)) = 0, a quadratic in
+// w; s and t then follow from the two lines' closest points. A crossing
+// counts where the ray goes outwards: away from the opposite corner at the
+// same level for a side, up through the top cap, down through the bottom.
 int exit_side(Prism P, vec3 ro, vec3 rd, float t_from, out float t_exit)
 {
     const float tol = 1e-4;

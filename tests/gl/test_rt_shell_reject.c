@@ -79,7 +79,6 @@ static long covered(const frame* f)
     return n;
 }
 
-/* Draws with and without rejection; checks what the header lists. */
 /* A shape update before the draws (meso_rt_shell_update's positions; NULL:
  * none). */
 typedef struct update {
@@ -87,6 +86,7 @@ typedef struct update {
     uint32_t vertex_count;
 } update;
 
+/* Draws with and without rejection; checks what the header lists. */
 static void compare_case(meso_rt* rt, test_fbo* fbo, const char* name, const uint8_t* file, size_t size,
                          const camera* cam, meso_shell_technique t, int outside, int expect_reject, int always,
                          int closed, int exact, update up)
