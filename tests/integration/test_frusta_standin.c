@@ -104,6 +104,21 @@ static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, uin
     double worst_standin = 0;
     size_t samples = 0;
     const uint32_t stride = tris / 300 + 1;
+    static const double few[7][3] = {{1, 0, 0},   {0, 1, 0},   {0, 0, 1},               {.5, .5, 0},
+                                     {0, .5, .5}, {.5, 0, .5}, {1. / 3, 1. / 3, 1. / 3}};
+    double bary[21][3];
+    int nb = 0;
+    if (tris >= 100) {
+        memcpy(bary, few, sizeof few);
+        nb = 7;
+    } else {
+        for (int i = 0; i <= 5; ++i)
+            for (int j = 0; i + j <= 5; ++j) {
+                bary[nb][0] = i / 5.0;
+                bary[nb][1] = j / 5.0;
+                bary[nb++][2] = (5 - i - j) / 5.0;
+            }
+    }
     for (uint32_t t = 0; t < tris; t += stride) {
         const float* P[3] = {mv.positions + 3 * mv.indices[3 * t], mv.positions + 3 * mv.indices[3 * t + 1],
                              mv.positions + 3 * mv.indices[3 * t + 2]};
@@ -117,21 +132,6 @@ static void check_level(meso_file* f, const meso_level_info* li, uint32_t L, uin
         nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
         const double nl = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
         assert(nl > 0); /* the bake drops degenerate triangles */
-        static const double few[7][3] = {{1, 0, 0},   {0, 1, 0},   {0, 0, 1},               {.5, .5, 0},
-                                         {0, .5, .5}, {.5, 0, .5}, {1. / 3, 1. / 3, 1. / 3}};
-        double bary[21][3];
-        int nb = 0;
-        if (tris >= 100) {
-            memcpy(bary, few, sizeof few);
-            nb = 7;
-        } else {
-            for (int i = 0; i <= 5; ++i)
-                for (int j = 0; i + j <= 5; ++j) {
-                    bary[nb][0] = i / 5.0;
-                    bary[nb][1] = j / 5.0;
-                    bary[nb++][2] = (5 - i - j) / 5.0;
-                }
-        }
         for (int s = 0; s < nb; ++s) {
             double q[3], nn[3];
             for (int k = 0; k < 3; ++k) {
