@@ -434,9 +434,9 @@ meso_result mesoi_cells_draw(meso_rt* rt, mesoi_object* o, const meso_rt_draw_de
     gl->Uniform1i(u[MESOI_U_max_steps], k->max_steps > 0 ? k->max_steps : 4096);
     gl->Uniform1i(u[MESOI_U_footprint_rays], k->footprint_rays);
     if (inst)
-        gl->DrawElementsInstanced(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT,
+        gl->DrawElementsInstanced(GL_TRIANGLES, o->index_count, o->index_type,
                                   (const void*)(uintptr_t)o->indices_offset, (GLsizei)count);
     else
-        gl->DrawElements(GL_TRIANGLES, o->index_count, GL_UNSIGNED_INT, (const void*)(uintptr_t)o->indices_offset);
+        gl->DrawElements(GL_TRIANGLES, o->index_count, o->index_type, (const void*)(uintptr_t)o->indices_offset);
     return mesoi_draw_end(rt, &ds, d->stats, "cells");
 }

@@ -16,6 +16,7 @@ typedef struct mesoi_object {
     struct mesoi_frusta* frusta; /* MESO_OBJECT_FRUSTA only */
     struct mesoi_cells* cells;   /* MESO_OBJECT_CELLS only (vao/buffer: its base mesh) */
     GLsizei index_count;
+    GLenum index_type; /* GL_UNSIGNED_SHORT or GL_UNSIGNED_INT (rt_mesh.c mesh_repack) */
     uint64_t indices_offset;
     int vertex_colours; /* MESO_OBJECT_MESH: a VCOL in the buffer (attribute 2): 0 none, 1 albedo and
                            occlusion, 2 occlusion alone */
@@ -465,7 +466,7 @@ void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components
 
 /* rt_mesh.c */
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions
- * at attribute 0, normals at 1, the chunk's own layout). Cells use it for
+ * at attribute 0, normals at 1, repacked: rt_mesh.c). Cells use it for
  * their base mesh. */
 /* colours: also the VCOL at the MESH's lod, when there is one (a mesh or
  * stand-in draw; a cells object's base mesh takes none). */

@@ -1,8 +1,8 @@
 # plot_lod_scene.gp — levels of detail in bench_lod_scene's 64-object scene.
 #   gnuplot -e "dir='tests/bench/results'" tests/bench/plot_lod_scene.gp
 # Left: frame time (the whole frame, and its draws timed alone and summed:
-# the frame's own time moves between builds, README), bytes resident and
-# shader steps per covered pixel at each
+# the frame's own time moves between builds, README), bytes held on the
+# GPU and read from the file, and shader steps per covered pixel at each
 # pixel error tau, as a share of drawing the finest level everywhere (the
 # dashed goal lines are the issue's: a third of the time, a fifth of the
 # bytes). Right: mean error against the supersampled finest render (0..255
@@ -19,7 +19,7 @@ set datafile separator ","
 
 # The finest setting's value of a metric.
 finest(m) = system("awk -F, '$1==\"scene\" && $2==\"finest\" && $3==\"".m."\" {print $4}' '".csv."'") + 0
-fms = finest("ms"); falone = finest("ms_alone"); fres = finest("resident"); fsteps = finest("steps_px"); fmae = finest("mae")
+fms = finest("ms"); falone = finest("ms_alone"); fres = finest("resident"); fgpu = finest("gpu_resident"); fsteps = finest("steps_px"); fmae = finest("mae")
 # One metric's rows over tau, as "tau,value" lines (a filter in `using`
 # would leave gaps that break the lines).
 sel(m) = "< awk -F, '$1==\"scene\" && $2!=\"finest\" && $3==\"".m."\" {print $2\",\"$4}' '".csv."'"
@@ -35,7 +35,8 @@ set ylabel "share of the finest level everywhere"
 set yrange [0:1.1]
 plot sel("ms") using 1:($2 / fms) with linespoints lw 2 title "frame time", \
      sel("ms_alone") using 1:($2 / falone) with linespoints lw 2 title "draws timed alone, summed", \
-     sel("resident") using 1:($2 / fres) with linespoints lw 2 title "bytes resident", \
+     sel("gpu_resident") using 1:($2 / fgpu) with linespoints lw 2 title "bytes held on the GPU", \
+     sel("resident") using 1:($2 / fres) with linespoints lw 2 title "bytes read from the file", \
      sel("steps_px") using 1:($2 / fsteps) with linespoints lw 2 title "steps per covered pixel", \
      1.0 / 3 with lines dt 2 lc rgb "#444444" title "goal: time at 1 px", \
      0.2 with lines dt 3 lc rgb "#444444" title "goal: bytes at 1 px"

@@ -43,6 +43,7 @@
 #include "frustum_reference.h"
 #include "gl_api.h"
 #include "gl_fbo.h"
+#include "gpu_mesh_bytes.h"
 #include "meso_bake.h"
 #include "meso_layout.h"
 #include "meso_rt.h"
@@ -208,12 +209,13 @@ static void error_holds_in_pixels_where_chosen(meso_rt* rt, meso_file* f)
         all += li[k].bytes;
     assert(st.bytes_resident == all && st.bytes_read == all);
     /* On the GPU each level of a mesh holds one buffer of its MESH as
-     * decoded (no vertex colours here): the memory budget's unit, and the
-     * estimate the budget made room for before each upload is no smaller. */
+     * meso_rt.h states it (no vertex colours here): the memory budget's
+     * unit, and the estimate the budget made room for before each upload
+     * is no smaller. */
     uint64_t gpu = 0;
     for (int k = 0; k < LEVELS; ++k) {
         assert(meso_file_find_vertex_colours(f, 1, (uint16_t)k) < 0);
-        gpu += meso_file_chunk(f, (uint32_t)meso_file_find_level(f, MESO_CHUNK_MESH, 1, (uint16_t)k))->decoded_size;
+        gpu += gpu_mesh_bytes(f, (uint32_t)meso_file_find_level(f, MESO_CHUNK_MESH, 1, (uint16_t)k));
     }
     printf("  GPU bytes of all levels: %llu (estimated %llu before upload)\n", (unsigned long long)st.gpu_bytes_resident,
            (unsigned long long)st.gpu_bytes_estimated);
@@ -338,11 +340,14 @@ static uint32_t stream_step(meso_rt* rt)
 static void requests_decode_off_thread(const uint8_t* data, size_t size, const meso_level_info* li)
 {
     int want[LEVELS][W], top[W];
+    uint64_t coarsest_moves = 0; /* what the coarsest level hands to GL: its MESH as the GPU holds it (meso_rt.h) */
     meso_rt* rt = NULL;
     assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
     {
         meso_file* whole = NULL;
         assert(meso_file_open_memory(data, size, NULL, &whole, NULL) == MESO_OK);
+        coarsest_moves =
+            gpu_mesh_bytes(whole, (uint32_t)meso_file_find_level(whole, MESO_CHUNK_MESH, 1, (uint16_t)(LEVELS - 1)));
         for (int k = 0; k < LEVELS; k += LEVELS - 1) { /* the finest and coarsest, drawn synchronously */
             meso_rt_object o;
             assert(meso_rt_load_object_levels(rt, whole, 1, &o) == MESO_OK);
@@ -375,8 +380,10 @@ static void requests_decode_off_thread(const uint8_t* data, size_t size, const m
     assert(stream_step(rt) == 3); /* the two coarsest decode, level 0 has not arrived */
     meso_rt_stream_state_get(rt, &ss);
     assert(ss.waiting == 1 && ss.decoded == 2 && ss.taken == 0);
-    /* One byte of budget uploads one level (at least one per call). */
-    assert(meso_rt_stream_upload(rt, 1) == li[LEVELS - 1].bytes);
+    /* One byte of budget uploads one level (at least one per call), as
+     * pieces: those count the bytes handed to GL, the level's MESH as the
+     * GPU holds it; a whole level (budget 0) counts its chunk bytes. */
+    assert(meso_rt_stream_upload(rt, 1) == coarsest_moves);
     meso_rt_stream_state_get(rt, &ss);
     assert(ss.decoded == 1 && ss.uploads == 1);
     assert(meso_rt_stream_upload(rt, 0) == li[LEVELS - 1].bytes);
