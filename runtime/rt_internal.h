@@ -465,6 +465,20 @@ int mesoi_mip_levels(const uint32_t dims[3], int dims3);
 void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components, GLenum type, void* coarse);
 
 /* rt_mesh.c */
+/* A MESH-layout chunk as the GPU holds it (meso_rt.h), repacked in the
+ * chunk's own buffer: positions at 0, normals from normals_at as
+ * GL_INT_2_10_10_10_REV, indices from indices_at as index_type. */
+typedef struct mesoi_mesh_gpu {
+    size_t bytes; /* of the buffer, from its start */
+    size_t normals_at, indices_at;
+    uint32_t vertex_count, index_count;
+    GLenum index_type; /* GL_UNSIGNED_SHORT or GL_UNSIGNED_INT */
+} mesoi_mesh_gpu;
+/* Parses the decoded chunk `data` of `size` bytes and repacks it in place.
+ * Touches no context: any thread may run it (rt_stream.c runs it with a
+ * level's decode). MESO_ERR_UNSUPPORTED for a mesh without normals or with
+ * more than INT32_MAX indices; err says what was wrong. */
+meso_result mesoi_mesh_repack(void* data, size_t size, mesoi_mesh_gpu* out, meso_error* err);
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions
  * at attribute 0, normals at 1, repacked: rt_mesh.c). Cells use it for
  * their base mesh. */
@@ -652,6 +666,10 @@ meso_result mesoi_stream_request_part(meso_rt* rt, mesoi_levels* lv, uint32_t i)
 void mesoi_stream_detach(meso_rt* rt, mesoi_levels* lv);
 void mesoi_stream_destroy(meso_rt* rt);
 void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci);
+/* The MESH-layout chunk `ci` (MESH, PMSH) of the request being uploaded,
+ * parsed and repacked off the GL thread (mesoi_mesh_repack), handed over
+ * with *out; NULL when it has none. */
+void* mesoi_stream_take_mesh(meso_rt* rt, int32_t ci, mesoi_mesh_gpu* out);
 /* The CELLS check the request being uploaded ran (its TILE and MEMB copies,
  * the file's allocator's); 0 when there is none. */
 int mesoi_stream_take_cells(meso_rt* rt, uint8_t** tile, uint8_t** memb, int* id_bits);

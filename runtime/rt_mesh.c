@@ -5,7 +5,8 @@
  * (mesoi_draw_begin / mesoi_draw_end, rt_common.c).
  *
  * The decoded MESH chunk is repacked in place for the GPU before it is
- * uploaded (mesh_repack): positions as stored, normals as
+ * uploaded (mesoi_mesh_repack; a streamed level's off the GL thread, with
+ * its decode): positions as stored, normals as
  * GL_INT_2_10_10_10_REV, 16-bit indices where every index fits, and no uvs
  * (no shader here reads them). One buffer serves as vertex and index
  * buffer. A mesh of V vertices and T triangles holds about 16 V + 6 T
@@ -61,77 +62,82 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
                                    o);
 }
 
-/* The GPU's copy of a parsed MESH, made in the chunk's own buffer `data`:
- * positions at 0, normals (if any) at the next multiple of 16 as signed
- * 10-bit x, y, z, then the indices, u16 when vertex_count <= 65536, else
- * u32. Each array lands at or before where the chunk had it and is written
- * front to back, never larger per element than it was, so no element is
- * overwritten before it is read. Returns the bytes used; sets the offsets
- * and the index type. */
-static size_t mesh_repack(uint8_t* data, const meso_mesh_view* mv, size_t* normals_at, size_t* indices_at,
-                          GLenum* index_type)
+/* Positions move to 0, normals to the next multiple of 16 as
+ * signed 10-bit x, y, z, then the indices, u16 when vertex_count <= 65536,
+ * else u32. Each array lands at or before where the chunk had it and is
+ * written front to back, never larger per element than it was, so no
+ * element is overwritten before it is read. */
+meso_result mesoi_mesh_repack(void* buffer, size_t size, mesoi_mesh_gpu* out, meso_error* err)
 {
-    const meso_mesh_layout* L = &mv->layout;
+    meso_mesh_view mv;
+    const meso_result r = meso_mesh_parse(buffer, size, &mv, err);
+    if (r != MESO_OK)
+        return r;
+    const meso_mesh_layout* L = &mv.layout;
+    if (L->index_count > (uint32_t)INT32_MAX || !mv.normals) {
+        *err = (meso_error){.result = MESO_ERR_UNSUPPORTED, .chunk = -1};
+        snprintf(err->message, sizeof err->message, "MESH without normals or with too many indices (%u)",
+                 L->index_count);
+        return MESO_ERR_UNSUPPORTED;
+    }
+    uint8_t* data = buffer;
     const size_t nv = L->vertex_count, ni = L->index_count;
     memmove(data, data + L->positions_offset, 12 * nv);
     size_t at = (12 * nv + 15) & ~(size_t)15;
-    *normals_at = at;
-    if (mv->normals) {
-        const uint8_t* src = data + L->normals_offset;
-        for (size_t v = 0; v < nv; ++v) {
-            float n[3];
-            memcpy(n, src + 12 * v, 12);
-            uint32_t packed = 0;
-            for (int k = 0; k < 3; ++k) {
-                const float c = n[k] < -1.0f ? -1.0f : n[k] > 1.0f ? 1.0f : n[k];
-                packed |= ((uint32_t)(int32_t)lrintf(c * 511.0f) & 0x3FFu) << (10 * k);
-            }
-            memcpy(data + at + 4 * v, &packed, 4);
+    out->normals_at = at;
+    const uint8_t* src = data + L->normals_offset;
+    for (size_t v = 0; v < nv; ++v) {
+        float n[3];
+        memcpy(n, src + 12 * v, 12);
+        uint32_t packed = 0;
+        for (int k = 0; k < 3; ++k) {
+            const float c = n[k] < -1.0f ? -1.0f : n[k] > 1.0f ? 1.0f : n[k];
+            packed |= ((uint32_t)(int32_t)lrintf(c * 511.0f) & 0x3FFu) << (10 * k);
         }
-        at = (at + 4 * nv + 15) & ~(size_t)15;
+        memcpy(data + at + 4 * v, &packed, 4);
     }
-    *indices_at = at;
-    const uint8_t* src = data + L->indices_offset;
+    at = (at + 4 * nv + 15) & ~(size_t)15;
+    out->indices_at = at;
+    out->vertex_count = L->vertex_count;
+    out->index_count = L->index_count;
+    src = data + L->indices_offset;
     if (nv <= 65536) {
-        *index_type = GL_UNSIGNED_SHORT;
+        out->index_type = GL_UNSIGNED_SHORT;
         for (size_t i = 0; i < ni; ++i) {
             uint32_t x;
             memcpy(&x, src + 4 * i, 4);
             const uint16_t y = (uint16_t)x;
             memcpy(data + at + 2 * i, &y, 2);
         }
-        return at + 2 * ni;
+        out->bytes = at + 2 * ni;
+    } else {
+        out->index_type = GL_UNSIGNED_INT;
+        memmove(data + at, src, 4 * ni);
+        out->bytes = at + 4 * ni;
     }
-    *index_type = GL_UNSIGNED_INT;
-    memmove(data + at, src, 4 * ni);
-    return at + 4 * ni;
+    return MESO_OK;
 }
 
 meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint32_t object_id, int32_t vi,
                                     mesoi_object* o)
 {
-    void* data = NULL;
-    size_t size = 0;
-    meso_result r = mesoi_read_whole(rt, f, ci, &data, &size);
-    if (r != MESO_OK)
-        return r;
-    meso_error err;
-    meso_mesh_view mv;
-    r = meso_mesh_parse(data, size, &mv, &err);
-    if (r != MESO_OK) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "%s", err.message);
-        mesoi_rt_free(rt, data);
-        return r;
+    /* Streamed: parsed and repacked with the level's decode (rt_stream.c);
+     * else read and repacked here. */
+    mesoi_mesh_gpu mg;
+    void* data = mesoi_stream_take_mesh(rt, ci, &mg);
+    meso_result r = MESO_OK;
+    if (!data) {
+        size_t read = 0;
+        if ((r = mesoi_read_whole(rt, f, ci, &data, &read)) != MESO_OK)
+            return r;
+        meso_error err;
+        if ((r = mesoi_mesh_repack(data, read, &mg, &err)) != MESO_OK) {
+            mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED, "object %u: %s", object_id, err.message);
+            mesoi_rt_free(rt, data);
+            return r;
+        }
     }
-    if (mv.layout.index_count > (uint32_t)INT32_MAX || !mv.normals) {
-        mesoi_log(rt, MESO_LOG_ERROR, MESO_LOGITEM_CHUNK_READ_FAILED,
-                  "object %u: MESH without normals or with too many indices", object_id);
-        mesoi_rt_free(rt, data);
-        return MESO_ERR_UNSUPPORTED;
-    }
-    size_t normals_at = 0, indices_at = 0;
-    GLenum index_type = GL_UNSIGNED_INT;
-    size = mesh_repack(data, &mv, &normals_at, &indices_at, &index_type);
+    const size_t size = mg.bytes;
     /* The vertex colours (FORMAT.md 7.3 VCOL) go into the same buffer,
      * after the mesh at the next multiple of 16. One that does not fit the
      * mesh (a file not validated in full) is not drawn, and said. */
@@ -142,14 +148,14 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
         const int fits = (vc->components == 4 || vc->components == 1) &&
                          (vc->type == MESO_CHUNK_PVCL /* a part's (§7.11): BYTES, dims[0] the part */
                               ? vc->dtype == MESO_DTYPE_BYTES &&
-                                    vc->decoded_size == (uint64_t)mv.layout.vertex_count * vc->components
-                              : vc->dtype == MESO_DTYPE_U8 && vc->dims[0] == mv.layout.vertex_count &&
+                                    vc->decoded_size == (uint64_t)mg.vertex_count * vc->components
+                              : vc->dtype == MESO_DTYPE_U8 && vc->dims[0] == mg.vertex_count &&
                                     vc->dims[1] == 1 && vc->dims[2] == 1);
         if (!fits) {
             mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
                       "object %u: VCOL (chunk %d) is not U8 x 4 or x 1 for each of the MESH's %u vertices; drawn "
                       "without it",
-                      object_id, (int)vi, mv.layout.vertex_count);
+                      object_id, (int)vi, mg.vertex_count);
         } else if ((r = mesoi_read_whole(rt, f, vi, &vcol, &vcol_size)) != MESO_OK) {
             mesoi_rt_free(rt, data);
             return r;
@@ -177,7 +183,7 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
     gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, o->buffer);
     gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, NULL);
     gl->EnableVertexAttribArray(0);
-    gl->VertexAttribPointer(1, 4, GL_INT_2_10_10_10_REV, GL_TRUE, 4, (const void*)(uintptr_t)normals_at);
+    gl->VertexAttribPointer(1, 4, GL_INT_2_10_10_10_REV, GL_TRUE, 4, (const void*)(uintptr_t)mg.normals_at);
     gl->EnableVertexAttribArray(1);
     const GLint nc = vi >= 0 ? (GLint)meso_file_chunk(f, (uint32_t)vi)->components : 0;
     if (vcol) {
@@ -199,9 +205,9 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
         o->vao = o->buffer = 0;
         return MESO_ERR_GL;
     }
-    o->index_count = (GLsizei)mv.layout.index_count;
-    o->indices_offset = indices_at;
-    o->index_type = index_type;
+    o->index_count = (GLsizei)mg.index_count;
+    o->indices_offset = mg.indices_at;
+    o->index_type = mg.index_type;
     o->vertex_colours = vcol ? (nc == 4 ? 1 : 2) : 0;
     rt->gpu_count += total;
     return MESO_OK;

@@ -6,7 +6,8 @@
  * files a request for it (one per level, rt_levels.c) and draws the best
  * level uploaded. A request moves WAITING -> TAKEN (meso_rt_stream_take, GL
  * thread) -> run (any thread: reads, CRC checks and decodes every chunk the
- * level draws into memory, and for a CELLS level the whole
+ * level draws into memory, repacking a MESH drawn as a mesh for the GPU
+ * (rt_mesh.c), and for a CELLS level the whole
  * meso_file_check_cells, whose TILE and MEMB copies it keeps, and the tile
  * map's skip radii, rt_cells_skip.c) -> given back
  * (GL thread): DECODED, or WAITING again when its bytes had not arrived, or
@@ -61,6 +62,8 @@ struct meso_rt_request {
     uint8_t *tile, *memb;           /* CELLS: the check's copies (the file's allocator) */
     int cells_checked;
     int id_bits;                    /* CELLS: tile's skip radii (rt_cells_skip.h), 0 none */
+    int32_t mesh_chunk;             /* the MESH-layout chunk run repacked for the GPU (mesh_gpu), -1 none */
+    mesoi_mesh_gpu mesh_gpu;
     uint64_t bytes;                 /* stored bytes read */
     meso_result result;
     /* REQ_FILLING: the level loaded with its data deferred (rt_transfer.c),
@@ -94,6 +97,7 @@ static void req_clear(meso_rt_request* q)
     }
     q->tile = q->memb = NULL;
     q->cells_checked = q->id_bits = 0;
+    q->mesh_chunk = -1;
     q->bytes = 0;
 }
 
@@ -133,6 +137,7 @@ static meso_result req_file(meso_rt* rt, mesoi_levels* lv, uint32_t l, int part)
     q->lv = lv;
     q->level = l;
     q->part = part;
+    q->mesh_chunk = -1;
     q->state = REQ_WAITING;
     meso_rt_request** p = &rt->requests;
     while (*p)
@@ -179,10 +184,23 @@ void mesoi_stream_destroy(meso_rt* rt)
 void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci)
 {
     meso_rt_request* q = rt->prefetch;
-    for (uint32_t k = 0; q && k < q->count; ++k)
+    for (uint32_t k = 0; q && ci != q->mesh_chunk && k < q->count; ++k) /* a repacked mesh: take_mesh's */
         if (q->chunk[k] == ci && q->data[k]) {
             void* p = q->data[k];
             q->data[k] = NULL;
+            return p;
+        }
+    return NULL;
+}
+
+void* mesoi_stream_take_mesh(meso_rt* rt, int32_t ci, mesoi_mesh_gpu* out)
+{
+    meso_rt_request* q = rt->prefetch;
+    for (uint32_t k = 0; q && ci == q->mesh_chunk && k < q->count; ++k)
+        if (q->chunk[k] == ci && q->data[k]) {
+            void* p = q->data[k];
+            q->data[k] = NULL;
+            *out = q->mesh_gpu;
             return p;
         }
     return NULL;
@@ -265,6 +283,15 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
             break;
         }
         r = meso_file_read_chunk(f, i, p, (size_t)c->decoded_size, &err);
+        /* A mesh or stand-in level's MESH, a part's PMSH, a cells object's
+         * hull: drawn by rt_mesh.c, repacked for the GPU here. A shell's
+         * native MESH is its base mesh, read as stored. */
+        const int drawn_as_mesh =
+            c->type == MESO_CHUNK_PMSH || (c->type == MESO_CHUNK_MESH && q->kind != MESO_OBJECT_SHELL);
+        if (r == MESO_OK && drawn_as_mesh) {
+            r = mesoi_mesh_repack(p, (size_t)c->decoded_size, &q->mesh_gpu, &err);
+            q->mesh_chunk = r == MESO_OK ? (int32_t)i : -1;
+        }
         if (r != MESO_OK) {
             req_free(q, p);
             break;
