@@ -4,6 +4,7 @@
 
 #include "meso_rt.h"
 #include "rt_gl.h"
+#include "rt_mesh_repack.h"
 
 /* One uploaded object. The slot index is id & 0xFFFF, the generation
  * id >> 16, so handles to released slots are detected. */
@@ -16,7 +17,7 @@ typedef struct mesoi_object {
     struct mesoi_frusta* frusta; /* MESO_OBJECT_FRUSTA only */
     struct mesoi_cells* cells;   /* MESO_OBJECT_CELLS only (vao/buffer: its base mesh) */
     GLsizei index_count;
-    GLenum index_type; /* GL_UNSIGNED_SHORT or GL_UNSIGNED_INT (rt_mesh.c mesh_repack) */
+    GLenum index_type; /* GL_UNSIGNED_SHORT or GL_UNSIGNED_INT (rt_mesh_repack.c) */
     uint64_t indices_offset;
     int vertex_colours; /* MESO_OBJECT_MESH: a VCOL in the buffer (attribute 2): 0 none, 1 albedo and
                            occlusion, 2 occlusion alone */
@@ -465,20 +466,7 @@ int mesoi_mip_levels(const uint32_t dims[3], int dims3);
 void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components, GLenum type, void* coarse);
 
 /* rt_mesh.c */
-/* A MESH-layout chunk as the GPU holds it (meso_rt.h), repacked in the
- * chunk's own buffer: positions at 0, normals from normals_at as
- * GL_INT_2_10_10_10_REV, indices from indices_at as index_type. */
-typedef struct mesoi_mesh_gpu {
-    size_t bytes; /* of the buffer, from its start */
-    size_t normals_at, indices_at;
-    uint32_t vertex_count, index_count;
-    GLenum index_type; /* GL_UNSIGNED_SHORT or GL_UNSIGNED_INT */
-} mesoi_mesh_gpu;
-/* Parses the decoded chunk `data` of `size` bytes and repacks it in place.
- * Touches no context: any thread may run it (rt_stream.c runs it with a
- * level's decode). MESO_ERR_UNSUPPORTED for a mesh without normals or with
- * more than INT32_MAX indices; err says what was wrong. */
-meso_result mesoi_mesh_repack(void* data, size_t size, mesoi_mesh_gpu* out, meso_error* err);
+/* mesoi_mesh_repack, mesoi_mesh_gpu: rt_mesh_repack.h */
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions
  * at attribute 0, normals at 1, repacked: rt_mesh.c). Cells use it for
  * their base mesh. */

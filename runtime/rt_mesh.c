@@ -4,18 +4,10 @@
  * shaders/mesh_*.glsl), through the same state save/restore as every kind
  * (mesoi_draw_begin / mesoi_draw_end, rt_common.c).
  *
- * The decoded MESH chunk is repacked in place for the GPU before it is
- * uploaded (mesoi_mesh_repack; a streamed level's off the GL thread, with
- * its decode): positions as stored, normals as
- * GL_INT_2_10_10_10_REV, 16-bit indices where every index fits, and no uvs
- * (no shader here reads them). One buffer serves as vertex and index
- * buffer. A mesh of V vertices and T triangles holds about 16 V + 6 T
- * bytes where the chunk has 32 V + 12 T: half. On bench_lod_scene the 1 px
- * frame, mostly meshes and stand-ins, went from 0.219 of the finest
- * frame's GPU bytes to 0.185 (README, "Levels of detail"). A normal loses
- * at most 1/1022 a component, under half a level of 255 in the Lambert
- * term; the scene's error against its supersampled render did not move.
- * A stand-in
+ * The decoded MESH chunk goes up repacked for the GPU (rt_mesh_repack.c:
+ * positions, 10-bit normals, 16-bit indices where they fit, no uvs; a
+ * streamed level's repacked off the GL thread, with its decode), one
+ * buffer serving as vertex and index buffer. A stand-in
  * level's vertex colours (VCOL: sRGB albedo and occlusion per vertex, or
  * the occlusion alone, the appearance the baker averaged over each
  * vertex's part of the finer surface) follow the mesh in the same buffer;
@@ -60,62 +52,6 @@ meso_result mesoi_mesh_upload(meso_rt* rt, meso_file* f, uint32_t object_id, int
     }
     return mesoi_mesh_upload_chunk(rt, f, ci, object_id, colours ? meso_file_find_vertex_colours(f, object_id, rt->load_lod) : -1,
                                    o);
-}
-
-/* Positions move to 0, normals to the next multiple of 16 as
- * signed 10-bit x, y, z, then the indices, u16 when vertex_count <= 65536,
- * else u32. Each array lands at or before where the chunk had it and is
- * written front to back, never larger per element than it was, so no
- * element is overwritten before it is read. */
-meso_result mesoi_mesh_repack(void* buffer, size_t size, mesoi_mesh_gpu* out, meso_error* err)
-{
-    meso_mesh_view mv;
-    const meso_result r = meso_mesh_parse(buffer, size, &mv, err);
-    if (r != MESO_OK)
-        return r;
-    const meso_mesh_layout* L = &mv.layout;
-    if (L->index_count > (uint32_t)INT32_MAX || !mv.normals) {
-        *err = (meso_error){.result = MESO_ERR_UNSUPPORTED, .chunk = -1};
-        snprintf(err->message, sizeof err->message, "MESH without normals or with too many indices (%u)",
-                 L->index_count);
-        return MESO_ERR_UNSUPPORTED;
-    }
-    uint8_t* data = buffer;
-    const size_t nv = L->vertex_count, ni = L->index_count;
-    memmove(data, data + L->positions_offset, 12 * nv);
-    size_t at = (12 * nv + 15) & ~(size_t)15;
-    out->normals_at = at;
-    const uint8_t* src = data + L->normals_offset;
-    for (size_t v = 0; v < nv; ++v) {
-        float n[3];
-        memcpy(n, src + 12 * v, 12);
-        uint32_t packed = 0;
-        for (int k = 0; k < 3; ++k) {
-            const float c = n[k] < -1.0f ? -1.0f : n[k] > 1.0f ? 1.0f : n[k];
-            packed |= ((uint32_t)(int32_t)lrintf(c * 511.0f) & 0x3FFu) << (10 * k);
-        }
-        memcpy(data + at + 4 * v, &packed, 4);
-    }
-    at = (at + 4 * nv + 15) & ~(size_t)15;
-    out->indices_at = at;
-    out->vertex_count = L->vertex_count;
-    out->index_count = L->index_count;
-    src = data + L->indices_offset;
-    if (nv <= 65536) {
-        out->index_type = GL_UNSIGNED_SHORT;
-        for (size_t i = 0; i < ni; ++i) {
-            uint32_t x;
-            memcpy(&x, src + 4 * i, 4);
-            const uint16_t y = (uint16_t)x;
-            memcpy(data + at + 2 * i, &y, 2);
-        }
-        out->bytes = at + 2 * ni;
-    } else {
-        out->index_type = GL_UNSIGNED_INT;
-        memmove(data + at, src, 4 * ni);
-        out->bytes = at + 4 * ni;
-    }
-    return MESO_OK;
 }
 
 meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint32_t object_id, int32_t vi,
@@ -207,7 +143,7 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
     }
     o->index_count = (GLsizei)mg.index_count;
     o->indices_offset = mg.indices_at;
-    o->index_type = mg.index_type;
+    o->index_type = mg.index_size == 2 ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
     o->vertex_colours = vcol ? (nc == 4 ? 1 : 2) : 0;
     rt->gpu_count += total;
     return MESO_OK;
