@@ -158,7 +158,7 @@ typedef struct meso_rt_desc {
      * their textures (every mip level, at the internal format's size) and
      * the bytes of their buffers, as libmeso creates them (a MESH holds
      * 12 bytes a vertex of positions, 4 of normals and 2 an index, 4 from
-     * 65537 vertices, each array from a multiple of 16; then its vertex
+     * 65536 vertices, each array from a multiple of 16; then its vertex
      * colours, if drawn with any; frame resources
      * shared by every object, shaders and the host's memory are not
      * counted). A level not uploaded yet counts as an estimate no smaller

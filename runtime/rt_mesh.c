@@ -119,7 +119,8 @@ meso_result mesoi_mesh_upload_chunk(meso_rt* rt, meso_file* f, int32_t ci, uint3
     gl->BindBuffer(GL_ELEMENT_ARRAY_BUFFER, o->buffer);
     gl->VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 12, NULL);
     gl->EnableVertexAttribArray(0);
-    gl->VertexAttribPointer(1, 4, GL_INT_2_10_10_10_REV, GL_TRUE, 4, (const void*)(uintptr_t)mg.normals_at);
+    /* The integers as they are (511 x the unit normal): the shaders normalise. */
+    gl->VertexAttribPointer(1, 4, GL_INT_2_10_10_10_REV, GL_FALSE, 4, (const void*)(uintptr_t)mg.normals_at);
     gl->EnableVertexAttribArray(1);
     const GLint nc = vi >= 0 ? (GLint)meso_file_chunk(f, (uint32_t)vi)->components : 0;
     if (vcol) {

@@ -3,18 +3,23 @@
  * libmeso holds it on the GPU (meso_rt.h, meso_rt_desc.memory_budget),
  * made in the chunk's own buffer: positions as stored, normals as signed
  * 10-bit x, y, z (GL_INT_2_10_10_10_REV), indices in 16 bits where every
- * index fits, no uvs (no shader reads them).
+ * index is below 0xFFFF (a host's fixed primitive restart would cut at
+ * 0xFFFF), no uvs (no shader reads them).
  *
  * A mesh of V vertices and T triangles then holds about 16 V + 6 T bytes
  * where the chunk has 32 V + 12 T. On bench_lod_scene the 1 px frame,
  * mostly meshes and stand-ins, went from 0.219 of the finest frame's GPU
  * bytes to 0.185 (README, "Levels of detail").
  *
- * Decided: a normal is made unit length before it is packed (the shaders
- * normalise it, and FORMAT.md asks a file's normals only to be finite);
- * 10 bits then lose at most 1/1022 a component, under half a level of 255
- * in the Lambert term (the scene's error against its supersampled render
- * did not move). A zero normal stays zero. It touches no context, so a
+ * Decided: a normal is made unit length and scaled by 511 before it is
+ * rounded (FORMAT.md asks a file's normals only to be finite), and GL
+ * reads the integers as they are (not normalised): every shader
+ * normalises the normal, so the scale does not matter, and GL 3.3-4.1's
+ * decoding of normalised 10-bit values ((2c + 1) / 1023, which would make
+ * a zero normal non-zero) never applies. The rounding moves a component of
+ * the unit normal by at most 1/1022, under half a level of 255 in the
+ * Lambert term (the scene's error against its supersampled render did not
+ * move). A zero normal stays zero. It touches no context, so a
  * stream request repacks its level's mesh off the GL thread, with the
  * decode (rt_stream.c); tests/unit/test_mesh_repack.c checks it against
  * the chunk it came from.
@@ -26,7 +31,7 @@
 #include <string.h>
 
 /* Positions move to 0, normals to the next multiple of 16 as
- * signed 10-bit x, y, z, then the indices, u16 when vertex_count <= 65536,
+ * signed 10-bit x, y, z, then the indices, u16 when vertex_count <= 65535,
  * else u32. Each array lands at or before where the chunk had it and is
  * written front to back, never larger per element than it was, so no
  * element is overwritten before it is read. */
@@ -73,7 +78,7 @@ meso_result mesoi_mesh_repack(void* buffer, size_t size, mesoi_mesh_gpu* out, me
     out->vertex_count = L->vertex_count;
     out->index_count = L->index_count;
     src = data + L->indices_offset;
-    if (nv <= 65536) {
+    if (nv <= 65535) { /* no index is 0xFFFF, the fixed primitive-restart index (ES 3, GL 4.3) */
         out->index_size = 2;
         for (size_t i = 0; i < ni; ++i) {
             uint32_t x;

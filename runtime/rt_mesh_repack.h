@@ -11,10 +11,11 @@
 /* Where the repacked arrays lie in the chunk's buffer. */
 typedef struct mesoi_mesh_gpu {
     size_t bytes;      /* used, from the buffer's start */
-    size_t normals_at; /* positions at 0, f32 x 3; normals here, 4 bytes a vertex */
+    size_t normals_at; /* positions at 0, f32 x 3; normals here, 4 bytes a vertex: 511 x the unit
+                          normal, rounded, as signed 10-bit x, y, z (GL_INT_2_10_10_10_REV) */
     size_t indices_at; /* index_size bytes each */
     uint32_t vertex_count, index_count;
-    uint32_t index_size; /* 2 when vertex_count <= 65536, else 4 */
+    uint32_t index_size; /* 2 when vertex_count <= 65535, else 4 */
 } mesoi_mesh_gpu;
 
 /* Parses the decoded chunk `data` of `size` bytes (4-byte aligned, as

@@ -7,7 +7,7 @@
  * level uploaded. A request moves WAITING -> TAKEN (meso_rt_stream_take, GL
  * thread) -> run (any thread: reads, CRC checks and decodes every chunk the
  * level draws into memory, repacking a MESH drawn as a mesh for the GPU
- * (rt_mesh.c), and for a CELLS level the whole
+ * (rt_mesh_repack.c), and for a CELLS level the whole
  * meso_file_check_cells, whose TILE and MEMB copies it keeps, and the tile
  * map's skip radii, rt_cells_skip.c) -> given back
  * (GL thread): DECODED, or WAITING again when its bytes had not arrived, or
@@ -66,6 +66,7 @@ struct meso_rt_request {
     mesoi_mesh_gpu mesh_gpu;
     uint64_t bytes;                 /* stored bytes read */
     meso_result result;
+    char why[240];                  /* run's error message, logged when given back ("" none) */
     /* REQ_FILLING: the level loaded with its data deferred (rt_transfer.c),
      * not the level's until the data is all up. */
     meso_rt_object filling;
@@ -99,6 +100,7 @@ static void req_clear(meso_rt_request* q)
     q->cells_checked = q->id_bits = 0;
     q->mesh_chunk = -1;
     q->bytes = 0;
+    q->why[0] = 0;
 }
 
 /* Where q's level keeps its request (q->lv set). */
@@ -268,7 +270,7 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
         return q->result = MESO_ERR_OUT_OF_MEMORY;
     }
     meso_result r = MESO_OK;
-    meso_error err;
+    meso_error err = {.message = ""};
     for (uint32_t i = 0; i < total && r == MESO_OK; ++i) {
         const meso_chunk_info* c = meso_file_chunk(f, i);
         if (!level_reads(q, c, i))
@@ -283,6 +285,8 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
             break;
         }
         r = meso_file_read_chunk(f, i, p, (size_t)c->decoded_size, &err);
+        if (r == MESO_OK)
+            q->bytes += c->stored_size;
         /* A mesh or stand-in level's MESH, a part's PMSH, a cells object's
          * hull: drawn by rt_mesh.c, repacked for the GPU here. A shell's
          * native MESH is its base mesh, read as stored. */
@@ -298,7 +302,6 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
         }
         q->chunk[q->count] = (int32_t)i;
         q->data[q->count++] = p;
-        q->bytes += c->stored_size;
     }
     if (r == MESO_OK && q->kind == MESO_OBJECT_CELLS) {
         r = mesoi_file_check_cells_keep(f, q->object, q->lod, &q->tile, &q->memb, &err);
@@ -310,6 +313,7 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
         const uint64_t bytes = q->bytes; /* bytes read count, failed or not */
         req_clear(q);
         q->bytes = bytes;
+        snprintf(q->why, sizeof q->why, "%s", r == MESO_ERR_PENDING ? "" : err.message);
     }
     return q->result = r;
 }
@@ -335,13 +339,14 @@ void meso_rt_stream_give(meso_rt* rt, meso_rt_request* const* reqs, uint32_t n)
             if (q->part) {
                 q->lv->parts->failed[q->level] = 1;
                 mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
-                          "object %u: part %u level %u could not be read (%s); drawing the nearest level uploaded",
-                          q->object, q->lv->parts->lv[q->level].rec.object, q->lod, meso_result_string(q->result));
+                          "object %u: part %u level %u could not be read (%s%s%s); drawing the nearest level uploaded",
+                          q->object, q->lv->parts->lv[q->level].rec.object, q->lod, meso_result_string(q->result),
+                          q->why[0] ? ": " : "", q->why);
             } else {
                 q->lv->failed[q->level] = 1;
                 mesoi_log(rt, MESO_LOG_WARNING, MESO_LOGITEM_CHUNK_READ_FAILED,
-                          "object %u: level %u could not be read (%s); drawing the nearest level uploaded", q->object,
-                          q->level, meso_result_string(q->result));
+                          "object %u: level %u could not be read (%s%s%s); drawing the nearest level uploaded",
+                          q->object, q->level, meso_result_string(q->result), q->why[0] ? ": " : "", q->why);
             }
             req_destroy(rt, q);
         }

@@ -1,6 +1,9 @@
 /* libmeso MESH objects on llvmpipe: a baked unit sphere is streamed from a
  * .meso image in memory, uploaded and drawn; coverage and depth read back
  * from the FBO are compared with an analytic ray cast of the unit sphere.
+ * Twice: tests/data/sphere.obj, which goes up with 16-bit indices, and a
+ * generated UV sphere of 80,601 vertices, past 65535, which goes up with
+ * 32-bit ones (meso_rt.h, memory_budget).
  * Also: GL state is restored, handles are checked, Draco without a decoder
  * is refused cleanly. */
 #include "test_util.h"
@@ -57,11 +60,40 @@ static double ray_sphere(int x, int y, double radius, double* hit_depth)
  * polyhedron lies between the spheres of this radius and radius 1. */
 static double inner_radius;
 
-static uint8_t* bake_sphere(size_t* size, int draco)
+/* A UV sphere of radius 1, its normals the positions: (RINGS + 1) x
+ * (AROUND + 1) vertices (the seam and the poles repeated). */
+enum { AROUND = 400, RINGS = 200 };
+static void uv_sphere(meso_mesh* m)
+{
+    const uint32_t nv = (RINGS + 1) * (AROUND + 1), nt = 2 * RINGS * AROUND;
+    *m = (meso_mesh){.vertex_count = nv, .triangle_count = nt, .positions = malloc(12 * (size_t)nv),
+                     .normals = malloc(12 * (size_t)nv), .indices = malloc(12 * (size_t)nt)};
+    assert(m->positions && m->normals && m->indices);
+    for (uint32_t r = 0; r <= RINGS; ++r)
+        for (uint32_t a = 0; a <= AROUND; ++a) {
+            const double th = M_PI * r / RINGS, ph = 2 * M_PI * a / AROUND;
+            const float p[3] = {(float)(sin(th) * cos(ph)), (float)cos(th), (float)(sin(th) * sin(ph))};
+            memcpy(m->positions + 3 * (r * (AROUND + 1) + a), p, sizeof p);
+            memcpy(m->normals + 3 * (r * (AROUND + 1) + a), p, sizeof p);
+        }
+    uint32_t* t = m->indices;
+    for (uint32_t r = 0; r < RINGS; ++r)
+        for (uint32_t a = 0; a < AROUND; ++a) {
+            const uint32_t v = r * (AROUND + 1) + a, w = v + AROUND + 1;
+            const uint32_t quad[6] = {v, v + 1, w, v + 1, w + 1, w}; /* counter-clockwise from outside */
+            memcpy(t, quad, sizeof quad);
+            t += 6;
+        }
+}
+
+static uint8_t* bake_sphere(size_t* size, int draco, int generated)
 {
     meso_mesh m;
     meso_error err = {0};
-    assert(meso_openmesh_read(test_data("sphere.obj"), &m, NULL, &err) == MESO_OK);
+    if (generated)
+        uv_sphere(&m);
+    else
+        assert(meso_openmesh_read(test_data("sphere.obj"), &m, NULL, &err) == MESO_OK);
     inner_radius = 1.0;
     for (uint32_t t = 0; t < m.triangle_count; ++t) {
         const float* a = m.positions + 3 * m.indices[3 * t];
@@ -76,7 +108,8 @@ static uint8_t* bake_sphere(size_t* size, int draco)
         n[1] = e1[2] * e2[0] - e1[0] * e2[2];
         n[2] = e1[0] * e2[1] - e1[1] * e2[0];
         const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        inner_radius = fmin(inner_radius, fabs(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / len);
+        if (len > 0.0) /* the UV sphere's poles have degenerate triangles */
+            inner_radius = fmin(inner_radius, fabs(n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / len);
     }
     meso_mesh_chunk ch;
     meso_draco_options o = {14, 10, 12, 7};
@@ -116,10 +149,10 @@ static void setup_fbo(void)
     gl.Viewport(0, 0, W, H);
 }
 
-static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt)
+static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt, int generated)
 {
     size_t size;
-    uint8_t* img = bake_sphere(&size, 0);
+    uint8_t* img = bake_sphere(&size, 0, generated);
     meso_file* f;
     meso_error err;
     assert(meso_file_open_memory(img, size, NULL, &f, &err) == MESO_OK);
@@ -179,14 +212,15 @@ static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt)
                 ++depth_checked;
             }
         }
-    fprintf(stderr, "  inner radius %.5f; covered %d, background %d, depth checked %d (worst %.5f)\n", inner_radius,
-            inside, outside, depth_checked, worst_depth);
+    fprintf(stderr, "  %s: inner radius %.5f; covered %d, background %d, depth checked %d (worst %.5f)\n",
+            generated ? "UV sphere, 80601 vertices" : "sphere.obj", inner_radius, inside, outside, depth_checked,
+            worst_depth);
     assert(inside > 1000 && outside > 1000);
     meso_rt_release_object(rt, obj);
     assert(meso_rt_draw(rt, obj, &d) == MESO_ERR_INVALID_ARG); /* stale handle */
     meso_rt_object again;
     /* The reused slot must get a new id, so the old handle stays stale. */
-    img = bake_sphere(&size, 0);
+    img = bake_sphere(&size, 0, generated);
     assert(meso_file_open_memory(img, size, NULL, &f, &err) == MESO_OK);
     assert(meso_rt_load_object(rt, f, 7, &again) == MESO_OK);
     assert(again.id != obj.id);
@@ -200,7 +234,7 @@ static void sphere_matches_analytic_coverage_and_depth(meso_rt* rt)
 static void draco_needs_a_decoder(meso_rt* rt)
 {
     size_t size;
-    uint8_t* img = bake_sphere(&size, 1);
+    uint8_t* img = bake_sphere(&size, 1, 0);
     meso_file* f;
     meso_error err;
     assert(meso_file_open_memory(img, size, NULL, &f, &err) == MESO_OK);
@@ -237,7 +271,8 @@ int main(void)
     meso_rt* rt;
     assert(meso_rt_create(&(meso_rt_desc){.gl_get_proc_address = meso_egl_proc}, &rt) == MESO_OK);
     assert(meso_rt_gl_is_es(rt) == (test_gl_api() == MESO_EGL_GLES)); /* the API asked for */
-    sphere_matches_analytic_coverage_and_depth(rt);
+    sphere_matches_analytic_coverage_and_depth(rt, 0);
+    sphere_matches_analytic_coverage_and_depth(rt, 1);
     draco_needs_a_decoder(rt);
     meso_rt_destroy(rt);
     meso_egl_destroy(e);

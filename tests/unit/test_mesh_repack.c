@@ -2,18 +2,19 @@
  * (runtime/rt_mesh_repack.c) against the chunk it came from, element by
  * element:
  *  - the bytes and offsets are what meso_rt.h states a MESH holds (12 a
- *    vertex of positions, 4 of normals, 2 an index up to 65536 vertices
- *    and 4 beyond, each array from a multiple of 16);
+ *    vertex of positions, 4 of normals, 2 an index up to 65535 vertices
+ *    and 4 from 65536, so that no 16-bit index is the restart index
+ *    0xFFFF; each array from a multiple of 16);
  *  - positions and indices are the chunk's, bit for bit;
- *  - each normal, decoded as GL decodes GL_INT_2_10_10_10_REV
- *    (max(c / 511, -1) per component), lies within 1/1022 a component of
+ *  - each normal, the signed 10-bit integers c that GL reads as they are
+ *    (not normalised) divided by 511, lies within 1/1022 a component of
  *    the chunk's normal made unit length, whatever its length (tiny, huge,
  *    unit) and direction (float rounding allowed: 1e-6); a zero normal
  *    stays zero;
  *  - a chunk with a bad index or without normals is refused with the
  *    parse's error or MESO_ERR_UNSUPPORTED and a message.
- * Meshes: random ones of 1, 300 and 65536 vertices (u16) and 70000 (u32),
- * with and without uvs.
+ * Meshes: random ones of 1, 300 and 65535 vertices (u16), 65536 and 70000
+ * (u32), with and without uvs, and a point set (no indices).
  */
 #include "test_need.h"
 
@@ -75,13 +76,13 @@ static uint32_t* make_mesh(uint32_t nv, uint32_t ni, uint32_t attributes, meso_m
 
 static size_t up16(size_t n) { return (n + 15) / 16 * 16; }
 
-static float snorm10(uint32_t packed, int k)
+/* Component k of a packed normal over 511: the unit normal it stands for. */
+static double int10(uint32_t packed, int k)
 {
     int32_t c = (int32_t)((packed >> (10 * k)) & 0x3FFu);
     if (c >= 512)
         c -= 1024;
-    const float f = (float)c / 511.0f;
-    return f < -1.0f ? -1.0f : f;
+    return c / 511.0;
 }
 
 static void check_one(uint32_t nv, uint32_t ni, uint32_t attributes)
@@ -94,7 +95,7 @@ static void check_one(uint32_t nv, uint32_t ni, uint32_t attributes)
     mesoi_mesh_gpu g;
     meso_error err;
     need(mesoi_mesh_repack(copy, (size_t)L.size, &g, &err) == MESO_OK, "%u vertices: %s", nv, err.message);
-    const size_t isize = nv <= 65536 ? 2 : 4;
+    const size_t isize = nv <= 65535 ? 2 : 4;
     need(g.vertex_count == nv && g.index_count == ni && g.index_size == isize, "%u vertices: counts or index size",
          nv);
     need(g.normals_at == up16(12 * (size_t)nv) && g.indices_at == g.normals_at + up16(4 * (size_t)nv) &&
@@ -118,7 +119,7 @@ static void check_one(uint32_t nv, uint32_t ni, uint32_t attributes)
         memcpy(&packed, dst + g.normals_at + 4 * (size_t)v, 4);
         for (int k = 0; k < 3; ++k) {
             const double want = len > 0.0 ? n[k] / len : 0.0;
-            const double d = fabs(snorm10(packed, k) - want);
+            const double d = fabs(int10(packed, k) - want);
             worst = d > worst ? d : worst;
         }
         zeros += len == 0.0;
@@ -165,8 +166,10 @@ int main(void)
     check_one(1, 3, pn);
     check_one(300, 900, pn);
     check_one(300, 900, pn | MESO_MESH_ATTR_UVS);
-    check_one(65536, 3 * 65536, pn | MESO_MESH_ATTR_UVS);
+    check_one(65535, 3 * 65535, pn | MESO_MESH_ATTR_UVS);
+    check_one(65536, 3 * 65536, pn);
     check_one(70000, 3 * 70000, pn);
+    check_one(5, 0, pn); /* a point set */
     check_refused();
     return 0;
 }
