@@ -468,7 +468,7 @@ void mesoi_mip_box(const void* fine, const uint32_t fine_dims[3], int components
 /* rt_mesh.c */
 /* mesoi_mesh_repack, mesoi_mesh_gpu: rt_mesh_repack.h */
 /* The object's MESH chunk into o->vao / o->buffer / index_count (positions
- * at attribute 0, normals at 1, repacked: rt_mesh.c). Cells use it for
+ * at attribute 0, normals at 1, repacked: rt_mesh_repack.c). Cells use it for
  * their base mesh. */
 /* colours: also the VCOL at the MESH's lod, when there is one (a mesh or
  * stand-in draw; a cells object's base mesh takes none). */

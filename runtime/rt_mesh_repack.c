@@ -59,18 +59,13 @@ meso_result mesoi_mesh_repack(void* buffer, size_t size, mesoi_mesh_gpu* out, me
         memcpy(n, src + 12 * v, 12);
         /* The shaders normalise the normal; a file's need not be unit
          * length (FORMAT.md asks only for finite), so it is made so here,
-         * where 10 bits would otherwise clamp its direction. */
-        const float m = fmaxf(fabsf(n[0]), fmaxf(fabsf(n[1]), fabsf(n[2])));
-        for (int k = 0; k < 3 && m > 0.0f; ++k)
-            n[k] /= m; /* largest 1: the length below neither overflows nor underflows */
-        const float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        const float scale = m > 0.0f ? 511.0f / len : 0.0f;
+         * where 10 bits would otherwise clamp its direction. In double, a
+         * float's square neither overflows nor underflows. */
+        const double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+        const double scale = len > 0.0 ? 511.0 / len : 0.0;
         uint32_t packed = 0;
-        for (int k = 0; k < 3; ++k) {
-            const float c = n[k] * scale;
-            packed |= ((uint32_t)(int32_t)lrintf(c < -511.0f ? -511.0f : c > 511.0f ? 511.0f : c) & 0x3FFu)
-                      << (10 * k);
-        }
+        for (int k = 0; k < 3; ++k)
+            packed |= ((uint32_t)(int32_t)lrint(fmin(fmax(n[k] * scale, -511.0), 511.0)) & 0x3FFu) << (10 * k);
         memcpy(data + at + 4 * v, &packed, 4);
     }
     at = (at + 4 * nv + 15) & ~(size_t)15;

@@ -183,10 +183,10 @@ void mesoi_stream_destroy(meso_rt* rt)
         req_destroy(rt, rt->requests);
 }
 
-void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci)
+/* Chunk ci's decoded bytes from request q (NULL q: none), handed over. */
+static void* take(meso_rt_request* q, int32_t ci)
 {
-    meso_rt_request* q = rt->prefetch;
-    for (uint32_t k = 0; q && ci != q->mesh_chunk && k < q->count; ++k) /* a repacked mesh: take_mesh's */
+    for (uint32_t k = 0; q && k < q->count; ++k)
         if (q->chunk[k] == ci && q->data[k]) {
             void* p = q->data[k];
             q->data[k] = NULL;
@@ -195,17 +195,19 @@ void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci)
     return NULL;
 }
 
+void* mesoi_stream_take_chunk(meso_rt* rt, int32_t ci)
+{
+    const meso_rt_request* q = rt->prefetch; /* a repacked mesh is take_mesh's */
+    return q && ci == q->mesh_chunk ? NULL : take(rt->prefetch, ci);
+}
+
 void* mesoi_stream_take_mesh(meso_rt* rt, int32_t ci, mesoi_mesh_gpu* out)
 {
     meso_rt_request* q = rt->prefetch;
-    for (uint32_t k = 0; q && ci == q->mesh_chunk && k < q->count; ++k)
-        if (q->chunk[k] == ci && q->data[k]) {
-            void* p = q->data[k];
-            q->data[k] = NULL;
-            *out = q->mesh_gpu;
-            return p;
-        }
-    return NULL;
+    void* p = q && ci == q->mesh_chunk ? take(q, ci) : NULL;
+    if (p)
+        *out = q->mesh_gpu;
+    return p;
 }
 
 uint32_t meso_rt_stream_take(meso_rt* rt, meso_rt_request** out, uint32_t max)
@@ -287,11 +289,14 @@ meso_result meso_rt_stream_run(meso_rt_request* q)
         r = meso_file_read_chunk(f, i, p, (size_t)c->decoded_size, &err);
         if (r == MESO_OK)
             q->bytes += c->stored_size;
-        /* A mesh or stand-in level's MESH, a part's PMSH, a cells object's
-         * hull: drawn by rt_mesh.c, repacked for the GPU here. A shell's
-         * native MESH is its base mesh, read as stored. */
-        const int drawn_as_mesh =
-            c->type == MESO_CHUNK_PMSH || (c->type == MESO_CHUNK_MESH && q->kind != MESO_OBJECT_SHELL);
+        /* What rt_mesh.c draws is repacked for the GPU here: a mesh or
+         * stand-in level's MESH (kind MESH at take), a part's PMSH, a cells
+         * object's hull. Any other MESH (a shell's base mesh) is read as
+         * stored; one repacked nowhere else would still be repacked at
+         * upload, on the GL thread. */
+        const int drawn_as_mesh = c->type == MESO_CHUNK_PMSH ||
+                                  (c->type == MESO_CHUNK_MESH &&
+                                   (q->kind == MESO_OBJECT_MESH || q->kind == MESO_OBJECT_CELLS));
         if (r == MESO_OK && drawn_as_mesh) {
             r = mesoi_mesh_repack(p, (size_t)c->decoded_size, &q->mesh_gpu, &err);
             q->mesh_chunk = r == MESO_OK ? (int32_t)i : -1;
